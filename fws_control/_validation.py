@@ -1,0 +1,73 @@
+"""Argument checks shared by the public functions.
+
+Every check raises :class:`ValueError` naming the argument, the offending
+value and the valid range, as the design card asks.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "check_finite",
+    "check_positive",
+    "check_nonzero",
+    "check_model",
+    "MODELS",
+]
+
+MODELS = ("exact", "paper")
+
+
+def check_finite(name: str, value: Any) -> np.ndarray | float:
+    """Return `value` as float (or float array) if every element is finite."""
+    arr = np.asarray(value, dtype=float)
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite, got {value!r}")
+    return float(arr) if arr.ndim == 0 else arr
+
+
+def check_positive(name: str, value: Any) -> np.ndarray | float:
+    """Return `value` as float (array) if every element is finite and > 0."""
+    v = check_finite(name, value)
+    if not np.all(np.asarray(v) > 0):
+        raise ValueError(f"{name} must be > 0, got {value!r}")
+    return v
+
+
+def check_nonzero(name: str, value: Any) -> np.ndarray | float:
+    """Return `value` as float (array) if every element is finite and != 0."""
+    v = check_finite(name, value)
+    if np.any(np.asarray(v) == 0):
+        raise ValueError(f"{name} must be finite and nonzero, got {value!r}")
+    return v
+
+
+def check_model(model: Any) -> str:
+    """Return `model` if it names a known linearisation."""
+    if model not in MODELS:
+        raise ValueError(f"model must be one of {MODELS}, got {model!r}")
+    return model
+
+
+def check_angle_limit(name: str, value: Any) -> float | None:
+    """Steering-angle limit: None (no limit) or a number in (0, pi/2)."""
+    if value is None:
+        return None
+    v = float(value)
+    if not (math.isfinite(v) and 0.0 < v < math.pi / 2):
+        raise ValueError(f"{name} must be None or in (0, pi/2) rad, got {value!r}")
+    return v
+
+
+def check_rate_limit(name: str, value: Any) -> float | None:
+    """Steering-rate limit: None (no limit) or a finite number > 0."""
+    if value is None:
+        return None
+    v = float(value)
+    if not (math.isfinite(v) and v > 0.0):
+        raise ValueError(f"{name} must be None or a finite value > 0 rad/s, got {value!r}")
+    return v

@@ -1,0 +1,86 @@
+"""Vehicle geometry and steering limits."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ._validation import check_angle_limit, check_rate_limit
+
+__all__ = ["Vehicle"]
+
+
+@dataclass(frozen=True)
+class Vehicle:
+    """Geometry of a kinematic single-track (bicycle) vehicle with 4WS.
+
+    Parameters
+    ----------
+    wheelbase : float
+        Distance between the front and rear axle centres, paper symbol
+        :math:`f` [m]. Must be finite and > 0.
+    rear_to_cg : float
+        Distance from the rear axle centre R to the centre of gravity G,
+        paper symbol :math:`d` [m]. Must satisfy ``0 <= rear_to_cg <=
+        wheelbase``.
+    max_steer_front, max_steer_rear : float or None, optional
+        Steering-angle limits [rad], in (0, pi/2). ``None`` (default) means
+        unlimited; saturation is applied only where a limit is set.
+    max_steer_rate_front, max_steer_rate_rear : float or None, optional
+        Steering-rate limits [rad/s], > 0. ``None`` (default) means
+        unlimited.
+
+    Raises
+    ------
+    ValueError
+        If a field is not finite or out of its range; the message names the
+        field.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> veh.wheelbase, veh.rear_to_cg
+    (2.7, 1.35)
+    >>> fws.Vehicle(wheelbase=2.7, rear_to_cg=3.0)
+    Traceback (most recent call last):
+        ...
+    ValueError: rear_to_cg must be in [0, wheelbase=2.7] m, got 3.0
+    """
+
+    wheelbase: float
+    rear_to_cg: float
+    max_steer_front: float | None = None
+    max_steer_rear: float | None = None
+    max_steer_rate_front: float | None = None
+    max_steer_rate_rear: float | None = None
+
+    def __post_init__(self) -> None:
+        f = float(self.wheelbase)
+        if not (math.isfinite(f) and f > 0.0):
+            raise ValueError(f"wheelbase must be finite and > 0 m, got {self.wheelbase!r}")
+        d = float(self.rear_to_cg)
+        if not (math.isfinite(d) and 0.0 <= d <= f):
+            raise ValueError(
+                f"rear_to_cg must be in [0, wheelbase={f}] m, got {self.rear_to_cg!r}"
+            )
+        # Store plain floats so that equality and hashing behave for ints too.
+        object.__setattr__(self, "wheelbase", f)
+        object.__setattr__(self, "rear_to_cg", d)
+        for name in ("max_steer_front", "max_steer_rear"):
+            object.__setattr__(self, name, check_angle_limit(name, getattr(self, name)))
+        for name in ("max_steer_rate_front", "max_steer_rate_rear"):
+            object.__setattr__(self, name, check_rate_limit(name, getattr(self, name)))
+
+    @property
+    def has_limits(self) -> bool:
+        """True if any steering angle or rate limit is set."""
+        return any(
+            v is not None
+            for v in (
+                self.max_steer_front,
+                self.max_steer_rear,
+                self.max_steer_rate_front,
+                self.max_steer_rate_rear,
+            )
+        )
