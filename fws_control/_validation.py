@@ -69,5 +69,7 @@ def check_rate_limit(name: str, value: Any) -> float | None:
         return None
     v = float(value)
     if not (math.isfinite(v) and v > 0.0):
-        raise ValueError(f"{name} must be None or a finite value > 0 rad/s, got {value!r}")
+        raise ValueError(
+            f"{name} must be None or a finite value > 0 rad/s, got {value!r}"
+        )
     return v

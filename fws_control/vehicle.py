@@ -58,7 +58,9 @@ class Vehicle:
     def __post_init__(self) -> None:
         f = float(self.wheelbase)
         if not (math.isfinite(f) and f > 0.0):
-            raise ValueError(f"wheelbase must be finite and > 0 m, got {self.wheelbase!r}")
+            raise ValueError(
+                f"wheelbase must be finite and > 0 m, got {self.wheelbase!r}"
+            )
         d = float(self.rear_to_cg)
         if not (math.isfinite(d) and 0.0 <= d <= f):
             raise ValueError(

@@ -1,0 +1,100 @@
+"""Yaw acceleration and lateral acceleration of the centre of gravity.
+
+Paper eq. (13): the acceleration of G projected on the vehicle's lateral
+axis ``[-sin(psi), cos(psi)]``,
+
+.. math:: a_G^{lat} = V(\\dot\\psi + \\dot\\delta_r)\\cos\\delta_r + d\\,\\ddot\\psi,
+
+with :math:`\\ddot\\psi` obtained from eq. (10) by the chain rule, so that no
+finite difference enters. With constant speed the expression depends on the
+steering angles and their rates only, not on the position or heading.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .models import _check_steering, yaw_rate
+from .vehicle import Vehicle
+
+__all__ = ["yaw_acceleration", "lateral_acceleration"]
+
+
+def yaw_acceleration(
+    vehicle: Vehicle, speed, delta_f, delta_r, delta_f_rate, delta_r_rate
+) -> float | np.ndarray:
+    r"""Yaw acceleration :math:`\ddot\psi` from eq. (10) by the chain rule.
+
+    .. math::
+        \ddot\psi = \frac{V}{f}\left(
+        \frac{\cos\delta_r}{\cos^2\delta_f}\dot\delta_f
+        - \frac{\cos(\delta_f-\delta_r)}{\cos\delta_f}\dot\delta_r\right)
+
+    Broadcasts over array arguments. Speed is taken constant, as in the paper.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> round(fws.yaw_acceleration(veh, 5.0, 0.0, 0.0, 0.27, 0.0), 6)
+    0.5
+    """
+    df = np.asarray(delta_f, dtype=float)
+    dr = np.asarray(delta_r, dtype=float)
+    _check_steering(df)
+    cf = np.cos(df)
+    out = (speed / vehicle.wheelbase) * (
+        np.cos(dr) / cf**2 * np.asarray(delta_f_rate, dtype=float)
+        - np.cos(df - dr) / cf * np.asarray(delta_r_rate, dtype=float)
+    )
+    return float(out) if np.ndim(out) == 0 else out
+
+
+def lateral_acceleration(
+    vehicle: Vehicle, speed, delta_f, delta_r, delta_f_rate, delta_r_rate
+) -> float | np.ndarray:
+    r"""Lateral acceleration of the centre of gravity G, paper eq. (13).
+
+    .. math:: a_G^{lat} = V(\dot\psi + \dot\delta_r)\cos\delta_r + d\ddot\psi
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Geometry; ``rear_to_cg`` is :math:`d`.
+    speed : float or array_like
+        Speed :math:`V` [m/s] (constant in time).
+    delta_f, delta_r : float or array_like
+        Front and rear steering angles [rad].
+    delta_f_rate, delta_r_rate : float or array_like
+        Their time derivatives [rad/s].
+
+    Returns
+    -------
+    float or ndarray
+        Lateral acceleration [m/s^2], positive to the left of the vehicle.
+        Broadcasts over the arguments.
+
+    Raises
+    ------
+    SingularStateError
+        If any ``|delta_f| >= pi/2``.
+
+    Examples
+    --------
+    Steady cornering with front steering only gives :math:`V^2/R`:
+
+    >>> import numpy as np, fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=0.0)
+    >>> delta = fws.feedforward_steering(veh, 0.1)   # radius 10 m
+    >>> round(fws.lateral_acceleration(veh, 5.0, delta, 0.0, 0.0, 0.0), 9)
+    2.5
+    """
+    psi_dot = yaw_rate(vehicle, speed, delta_f, delta_r)
+    psi_ddot = yaw_acceleration(
+        vehicle, speed, delta_f, delta_r, delta_f_rate, delta_r_rate
+    )
+    out = (
+        speed * (psi_dot + np.asarray(delta_r_rate, dtype=float)) * np.cos(delta_r)
+        + vehicle.rear_to_cg * psi_ddot
+    )
+    return float(out) if np.ndim(out) == 0 else out

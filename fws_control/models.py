@@ -1,0 +1,267 @@
+"""Nonlinear kinematic 4WS bicycle models as :class:`control.NonlinearIOSystem`.
+
+Two frames are provided:
+
+* the global (Earth-fixed) frame, paper eqs. (8)-(10), states ``x, y, psi``
+  of the rear-axle centre R;
+* the path frame relative to a path of constant curvature, paper eqs.
+  (17)-(19) with the corrections listed in the errata (``s_dot`` carries the
+  factor ``V``; the curvature term of ``theta_dot`` is negative), states
+  ``s, e, theta``.
+
+Both take the steering angles ``delta_f, delta_r`` as inputs. The speed (and
+the path curvature) are system parameters, so they can be changed per call
+with the ``params`` argument of :func:`control.input_output_response` or
+:func:`control.linearize`. A negative speed means reversing.
+"""
+
+from __future__ import annotations
+
+import math
+
+import control as ct
+import numpy as np
+
+from ._validation import check_finite, check_nonzero
+from .vehicle import Vehicle
+
+__all__ = [
+    "SingularStateError",
+    "global_frame_model",
+    "path_frame_model",
+    "yaw_rate",
+    "feedforward_steering",
+    "GLOBAL_STATES",
+    "PATH_STATES",
+    "STEERING_INPUTS",
+]
+
+GLOBAL_STATES = ("x", "y", "psi")
+PATH_STATES = ("s", "e", "theta")
+STEERING_INPUTS = ("delta_f", "delta_r")
+
+
+class SingularStateError(ValueError):
+    """A state or input where the kinematic model is not defined.
+
+    Raised for a front steering angle with ``|delta_f| >= pi/2`` (the yaw
+    rate of eq. (10) has ``cos(delta_f)`` in the denominator) and, in the
+    path frame, for ``1 - curvature * e <= 0`` (the vehicle is at or beyond
+    the centre of curvature, where the projection onto the path is lost).
+    """
+
+
+def _check_steering(delta_f: np.ndarray) -> None:
+    if np.any(np.abs(delta_f) >= math.pi / 2):
+        raise SingularStateError(
+            f"front steering angle delta_f={delta_f!r} rad has |delta_f| >= pi/2: "
+            "the yaw rate V*sin(delta_f - delta_r)/(f*cos(delta_f)) is singular"
+        )
+
+
+def yaw_rate(
+    vehicle: Vehicle, speed: float | np.ndarray, delta_f, delta_r
+) -> float | np.ndarray:
+    r"""Yaw rate of the kinematic 4WS model, paper eq. (10).
+
+    .. math:: \dot\psi = \frac{V \sin(\delta_f - \delta_r)}{f \cos\delta_f}
+
+    Broadcasts over array arguments.
+
+    Raises
+    ------
+    SingularStateError
+        If any ``|delta_f| >= pi/2``.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> round(fws.yaw_rate(veh, 5.0, 0.1, -0.1), 6)
+    0.369753
+    """
+    df = np.asarray(delta_f, dtype=float)
+    dr = np.asarray(delta_r, dtype=float)
+    _check_steering(df)
+    out = speed * np.sin(df - dr) / (vehicle.wheelbase * np.cos(df))
+    return float(out) if np.ndim(out) == 0 else out
+
+
+def feedforward_steering(vehicle: Vehicle, curvature) -> float | np.ndarray:
+    r"""Front steering angle that holds R on a path of constant curvature.
+
+    Paper eq. (26), :math:`\delta_f^{FF} = \arctan(\kappa_C f)`, with
+    :math:`\delta_r^{FF} = 0` (eq. 27). Valid for any speed, including
+    reversing.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> round(fws.feedforward_steering(veh, 0.1), 6)
+    0.263712
+    """
+    k = check_finite("curvature", curvature)
+    out = np.arctan(np.asarray(k) * vehicle.wheelbase)
+    return float(out) if np.ndim(out) == 0 else out
+
+
+def _global_update(t, x, u, params):
+    speed = params["speed"]
+    f = params["wheelbase"]
+    psi = x[2]
+    delta_f, delta_r = u[0], u[1]
+    _check_steering(delta_f)
+    return np.array(
+        [
+            speed * math.cos(psi + delta_r),
+            speed * math.sin(psi + delta_r),
+            speed * math.sin(delta_f - delta_r) / (f * math.cos(delta_f)),
+        ]
+    )
+
+
+def _path_update(t, x, u, params):
+    speed = params["speed"]
+    f = params["wheelbase"]
+    kappa = params["curvature"]
+    e, theta = x[1], x[2]
+    delta_f, delta_r = u[0], u[1]
+    _check_steering(delta_f)
+    gap = 1.0 - kappa * e
+    if gap <= 0.0:
+        raise SingularStateError(
+            f"1 - curvature*e = {gap!r} <= 0 (curvature={kappa!r}, e={e!r}): the "
+            "vehicle is at or beyond the path's centre of curvature"
+        )
+    s_dot = speed * math.cos(theta + delta_r) / gap
+    return np.array(
+        [
+            s_dot,
+            speed * math.sin(theta + delta_r),
+            -kappa * s_dot
+            + speed * math.sin(delta_f - delta_r) / (f * math.cos(delta_f)),
+        ]
+    )
+
+
+def global_frame_model(
+    vehicle: Vehicle, speed: float = 1.0, name: str = "vehicle"
+) -> ct.NonlinearIOSystem:
+    r"""Kinematic 4WS bicycle model in the global frame, paper eqs. (8)-(10).
+
+    .. math::
+        \dot x_R = V\cos(\psi+\delta_r),\quad
+        \dot y_R = V\sin(\psi+\delta_r),\quad
+        \dot\psi = \frac{V\sin(\delta_f-\delta_r)}{f\cos\delta_f}
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Geometry (``wheelbase`` is :math:`f`).
+    speed : float, optional
+        Longitudinal speed :math:`V` [m/s] of the rear-axle centre R;
+        negative means reversing. Stored as the system parameter ``speed``.
+    name : str, optional
+        System name used by :func:`control.interconnect`.
+
+    Returns
+    -------
+    control.NonlinearIOSystem
+        States ``x, y, psi``; inputs ``delta_f, delta_r``; outputs equal to the
+        states. Parameters ``speed`` and ``wheelbase``.
+
+    Raises
+    ------
+    ValueError
+        If `speed` is not finite and nonzero.
+    SingularStateError
+        At evaluation, if ``|delta_f| >= pi/2``.
+
+    Examples
+    --------
+    >>> import numpy as np, control as ct, fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> sys = fws.global_frame_model(veh, speed=5.0)
+    >>> sys.state_labels, sys.input_labels
+    (['x', 'y', 'psi'], ['delta_f', 'delta_r'])
+    >>> sys.dynamics(0.0, [0.0, 0.0, 0.0], [0.1, 0.0]).round(4)
+    array([5.    , 0.    , 0.1858])
+    """
+    speed = check_nonzero("speed", speed)
+    return ct.nlsys(
+        _global_update,
+        None,
+        states=list(GLOBAL_STATES),
+        inputs=list(STEERING_INPUTS),
+        outputs=list(GLOBAL_STATES),
+        params={"speed": float(speed), "wheelbase": vehicle.wheelbase},
+        name=name,
+    )
+
+
+def path_frame_model(
+    vehicle: Vehicle,
+    speed: float = 1.0,
+    curvature: float = 0.0,
+    name: str = "vehicle_path",
+) -> ct.NonlinearIOSystem:
+    r"""Kinematic 4WS model relative to a path of constant curvature.
+
+    Paper eqs. (17)-(19), corrected (see the errata):
+
+    .. math::
+        \dot s = \frac{V\cos(\theta+\delta_r)}{1-\kappa e},\quad
+        \dot e = V\sin(\theta+\delta_r),\quad
+        \dot\theta = -\kappa\dot s + \frac{V\sin(\delta_f-\delta_r)}{f\cos\delta_f}
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Geometry.
+    speed : float, optional
+        Speed :math:`V` [m/s]; negative means reversing.
+    curvature : float, optional
+        Path curvature :math:`\kappa_C` [1/m]; positive turns left.
+    name : str, optional
+        System name.
+
+    Returns
+    -------
+    control.NonlinearIOSystem
+        States ``s, e, theta``; inputs ``delta_f, delta_r``; outputs equal to
+        the states. Parameters ``speed``, ``curvature`` and ``wheelbase``.
+
+    Raises
+    ------
+    ValueError
+        If `speed` is not finite and nonzero or `curvature` is not finite.
+    SingularStateError
+        At evaluation, if ``|delta_f| >= pi/2`` or ``1 - curvature*e <= 0``.
+
+    Examples
+    --------
+    On the path with the feedforward steering angle the errors stay zero:
+
+    >>> import numpy as np, fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> sys = fws.path_frame_model(veh, speed=5.0, curvature=0.1)
+    >>> u_ff = [fws.feedforward_steering(veh, 0.1), 0.0]
+    >>> np.allclose(sys.dynamics(0.0, [0.0, 0.0, 0.0], u_ff), [5.0, 0.0, 0.0])
+    True
+    """
+    speed = check_nonzero("speed", speed)
+    curvature = check_finite("curvature", curvature)
+    return ct.nlsys(
+        _path_update,
+        None,
+        states=list(PATH_STATES),
+        inputs=list(STEERING_INPUTS),
+        outputs=list(PATH_STATES),
+        params={
+            "speed": float(speed),
+            "curvature": float(curvature),
+            "wheelbase": vehicle.wheelbase,
+        },
+        name=name,
+    )

@@ -1,0 +1,172 @@
+r"""Independent symbolic derivations with sympy.
+
+Everything here is derived from the paper's starting points — the kinematic
+constraints (5)-(7), the frame transformation (14)-(16) (with the sign of the
+curvature term as it must be, see the errata) and the transport formula (11)
+— and not from the numeric code. The tests hold the numeric implementation
+equal to these expressions, so each equation has one numeric implementation
+and one independent derivation.
+
+Symbols: ``V`` speed, ``f`` wheelbase, ``d`` rear_to_cg, ``kappa``
+curvature, ``a`` ratio, ``k1, k2`` gains, ``lam0`` double root, ``lam`` the
+Laplace variable.
+"""
+
+from __future__ import annotations
+
+from functools import cache
+
+import sympy as sp
+
+__all__ = [
+    "SYMBOLS",
+    "global_frame_rhs",
+    "path_frame_rhs",
+    "jacobians",
+    "characteristic_polynomial",
+    "double_root_gains",
+    "paper_gain_formulas",
+    "lateral_acceleration",
+]
+
+V, f, d, kappa, a, k1, k2, lam0, lam = sp.symbols(
+    "V f d kappa a k1 k2 lam0 lam", real=True
+)
+t = sp.Symbol("t", real=True)
+SYMBOLS = {
+    "speed": V,
+    "wheelbase": f,
+    "rear_to_cg": d,
+    "curvature": kappa,
+    "ratio": a,
+    "k1": k1,
+    "k2": k2,
+    "pole": lam0,
+    "lam": lam,
+}
+
+_x, _y, _psi, _e, _theta, _s = sp.symbols("x y psi e theta s", real=True)
+_df, _dr = sp.symbols("delta_f delta_r", real=True)
+
+
+@cache
+def global_frame_rhs() -> sp.Matrix:
+    """``[x_dot, y_dot, psi_dot]`` solved from the constraints (5)-(7)."""
+    xd, yd, pd = sp.symbols("xd yd pd")
+    eqs = [
+        (xd - f * pd * sp.sin(_psi)) * sp.sin(_psi + _df)
+        - (yd + f * pd * sp.cos(_psi)) * sp.cos(_psi + _df),
+        xd * sp.sin(_psi + _dr) - yd * sp.cos(_psi + _dr),
+        xd * sp.cos(_psi + _dr) + yd * sp.sin(_psi + _dr) - V,
+    ]
+    sol = sp.solve(eqs, [xd, yd, pd], dict=True)[0]
+    return sp.Matrix(
+        [
+            sp.simplify(sol[xd]),
+            sp.simplify(sol[yd]),
+            sp.simplify(sp.expand_trig(sol[pd])),
+        ]
+    )
+
+
+@cache
+def path_frame_rhs() -> sp.Matrix:
+    """``[s_dot, e_dot, theta_dot]`` from (14)-(16) with ``psi = theta + psi_C``.
+
+    Eq. (16) is used as ``theta_dot = psi_dot - kappa*s_dot``, the
+    consequence of ``theta = psi - psi_C`` and ``psi_C_dot = kappa*s_dot``.
+    """
+    psi_c = sp.Symbol("psi_C", real=True)
+    xd, yd, pd = global_frame_rhs().subs(_psi, _theta + psi_c)
+    s_dot = (xd * sp.cos(psi_c) + yd * sp.sin(psi_c)) / (1 - kappa * _e)
+    e_dot = -xd * sp.sin(psi_c) + yd * sp.cos(psi_c)
+    theta_dot = pd - kappa * s_dot
+    return sp.Matrix([sp.simplify(s_dot), sp.simplify(e_dot), sp.simplify(theta_dot)])
+
+
+@cache
+def jacobians(model: str = "exact") -> tuple[sp.Matrix, sp.Matrix]:
+    """``(A, B)`` of the ``(e, theta)`` dynamics at the feedforward point.
+
+    ``model="exact"`` differentiates :func:`path_frame_rhs` at
+    ``e = theta = delta_r = 0, delta_f = atan(kappa*f)``; ``model="paper"``
+    returns eq. (33) as printed.
+    """
+    if model == "paper":
+        return (
+            sp.Matrix([[0, V], [-V * kappa**2, 0]]),
+            sp.Matrix([[0, V], [V / f, -V / f]]),
+        )
+    if model != "exact":
+        raise ValueError(f"model must be 'exact' or 'paper', got {model!r}")
+    rhs = path_frame_rhs()[1:, :]
+    point = {_e: 0, _theta: 0, _dr: 0, _df: sp.atan(kappa * f)}
+    A = rhs.jacobian([_e, _theta]).subs(point)
+    B = rhs.jacobian([_df, _dr]).subs(point)
+    return sp.simplify(A), sp.simplify(B)
+
+
+@cache
+def characteristic_polynomial(model: str = "exact") -> sp.Poly:
+    """``det(lam*I - A - B*K)`` with ``K = -[[k1, k2], [a*k1, a*k2]]``."""
+    A, B = jacobians(model)
+    K = -sp.Matrix([[k1, k2], [a * k1, a * k2]])
+    return sp.Poly(sp.expand((lam * sp.eye(2) - A - B * K).det()), lam)
+
+
+@cache
+def double_root_gains(model: str = "exact") -> dict[sp.Symbol, sp.Expr]:
+    """``{k1: ..., k2: ...}`` matching ``(lam - lam0)**2`` (eqs. 39-40)."""
+    p = characteristic_polynomial(model).all_coeffs()
+    target = sp.Poly((lam - lam0) ** 2, lam).all_coeffs()
+    sol = sp.solve([p[1] - target[1], p[2] - target[2]], [k1, k2], dict=True)
+    (only,) = sol
+    return {k: sp.simplify(v) for k, v in only.items()}
+
+
+def paper_gain_formulas() -> dict[str, dict[sp.Symbol, sp.Expr]]:
+    """The paper's printed gain formulas, eqs. (41), (42), (44), (45)-(46).
+
+    Returned verbatim (including the wrong k1 of eq. 42) so that the errata
+    tests can show where they differ from :func:`double_root_gains`.
+    """
+    den = V**2 * (a**2 * f**2 * kappa**2 + (1 - a) ** 2)
+    num = V**2 * a * f * kappa**2 - 2 * V * lam0 * (1 - a) - a * f * lam0**2
+    K2 = f * num / den
+    K1 = -2 * lam0 / (V * a) + num / den * (1 - 1 / a)
+    return {
+        "41": {
+            k1: f * lam0**2 / (V**2 * (1 - a)),
+            k2: -lam0 * f / (V * (1 - a)) * (2 + lam0 * a * f / (V * (1 - a))),
+        },
+        "42": {k1: -2 * lam0 / f},
+        "44": {k1: f * (lam0**2 / V**2 - kappa**2), k2: -2 * lam0 * f / V},
+        "45-46": {k1: K1, k2: K2},
+    }
+
+
+@cache
+def lateral_acceleration() -> sp.Expr:
+    """Lateral acceleration of G from eqs. (11)-(12), projected as in (13).
+
+    Differentiates the velocity of G (transport formula 11) in time with
+    ``x_R, y_R, psi, delta_f, delta_r`` functions of time and eq. (8)-(9)
+    for the velocity of R, then projects on ``[-sin psi, cos psi]``. The
+    result is expressed with symbols ``psi_dot, psi_ddot, delta_r,
+    delta_r_dot``.
+    """
+    psi = sp.Function("psi", real=True)(t)
+    dr = sp.Function("delta_r", real=True)(t)
+    v_r = sp.Matrix([V * sp.cos(psi + dr), V * sp.sin(psi + dr), 0])
+    omega = sp.Matrix([0, 0, psi.diff(t)])
+    r_rg = sp.Matrix([d * sp.cos(psi), d * sp.sin(psi), 0])
+    v_g = v_r + omega.cross(r_rg)
+    a_g = v_g.diff(t)
+    lat = -a_g[0] * sp.sin(psi) + a_g[1] * sp.cos(psi)
+    pdot, pddot, drs, drdot = sp.symbols("psi_dot psi_ddot delta_r delta_r_dot")
+    lat = (
+        lat.subs({psi.diff(t, 2): pddot, dr.diff(t): drdot})
+        .subs({psi.diff(t): pdot})
+        .subs({dr: drs})
+    )
+    return sp.simplify(lat)
