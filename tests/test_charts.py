@@ -1,0 +1,207 @@
+"""Stability charts: the closed-form mask against eigenvalues, plots, Figs. 2-4."""
+
+import control as ct
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+
+import fws_control as fws
+from fws_control.charts import PAPER_CURVATURES
+
+
+def _eig_mask(veh, speed, curvature, ratio, k1, k2, model):
+    """Reference: max real part of eig(A + B K) at every grid point.
+
+    A and B come from ct.linearize of the nonlinear path-frame model for the
+    exact model (independent of linear.py) and from eq. (33) for the paper's.
+    """
+    if model == "exact":
+        sys = fws.path_frame_model(veh, speed, curvature)
+        u0 = [fws.feedforward_steering(veh, curvature), 0.0]
+        lin = ct.linearize(sys, [0.0, 0.0, 0.0], u0)
+        A, B = lin.A[1:, 1:], lin.B[1:, :]
+    else:
+        f = veh.wheelbase
+        A = np.array([[0.0, speed], [-speed * curvature**2, 0.0]])
+        B = np.array([[0.0, speed], [speed / f, -speed / f]])
+    K1, K2 = np.meshgrid(k1, k2)
+    b = B @ np.array([1.0, ratio])
+    # A - b [k1 k2] for every grid point, stacked: shape (n2, n1, 2, 2).
+    M = A - b[:, None] * np.stack([K1, K2], axis=-1)[..., None, :]
+    return np.linalg.eigvals(M).real.max(axis=-1)
+
+
+CASES = [
+    (5.0, 0.0, -1.0, "exact"),
+    (5.0, 0.1, -1.0, "exact"),
+    (5.0, 0.1, -1.0, "paper"),
+    (20.0, 0.01, 0.5, "exact"),
+    (5.0, 0.2, 1.0, "exact"),
+    (5.0, 0.1, 1.0, "paper"),
+    (5.0, 0.0, 1.5, "exact"),
+    (20.0, 0.05, 1.5, "paper"),
+    (-5.0, 0.1, -0.5, "exact"),  # reversing: condition (35) flips
+    (-3.0, 0.0, 0.0, "paper"),
+]
+
+
+@pytest.mark.parametrize("speed, curvature, ratio, model", CASES)
+def test_mask_matches_eigenvalues(veh, speed, curvature, ratio, model):
+    k1 = np.linspace(-2.0, 2.0, 83)
+    k2 = np.linspace(-3.0, 2.5, 71)  # non-square on purpose: checks orientation
+    ch = fws.stability_chart(veh, curvature, ratio, speed, k1, k2, model=model)
+    assert ch.stable.shape == (71, 83)
+    re = _eig_mask(veh, speed, curvature, ratio, k1, k2, model)
+    clear = np.abs(re) > 1e-7  # points on a boundary are decided by rounding
+    assert clear.mean() > 0.9
+    np.testing.assert_array_equal(ch.stable[clear], (re < 0)[clear])
+
+
+def test_hand_derived_front_steering(veh):
+    # a = 0, kappa = 0: p1 = V k2 / f, p0 = V^2 k1 / f.
+    k = np.linspace(-1, 1, 41)
+    ch = fws.stability_chart(veh, 0.0, 0.0, 5.0, k, k)
+    K1, K2 = np.meshgrid(k, k)
+    np.testing.assert_array_equal(ch.stable, (K1 > 0) & (K2 > 0))
+    rev = fws.stability_chart(veh, 0.0, 0.0, -5.0, k, k)
+    np.testing.assert_array_equal(rev.stable, (K1 > 0) & (K2 < 0))
+
+
+def test_default_grid_and_large_grid(veh):
+    ch = fws.stability_chart(veh, 0.1, -1.0, 5.0)
+    assert ch.k1[0] == -1.0 and ch.k1[-1] == 1.0 and ch.stable.shape == (401, 401)
+    k = np.linspace(-1, 1, 1000)
+    big = fws.stability_chart(veh, 0.1, -1.0, 5.0, k, k)
+    assert big.stable.shape == (1000, 1000)
+    # Same verdict as is_stable on an explicit meshgrid.
+    K1, K2 = np.meshgrid(k, k)
+    np.testing.assert_array_equal(
+        big.stable, fws.is_stable(veh, 5.0, 0.1, K1, K2, ratio=-1.0)
+    )
+
+
+@pytest.mark.parametrize(
+    "speed, curvature, ratio, model",
+    [(5.0, 0.1, -1.0, "exact"), (20.0, 0.01, 0.5, "paper"), (5.0, 0.1, 1.0, "paper")],
+)
+def test_boundaries_are_zero_sets(veh, speed, curvature, ratio, model):
+    ch = fws.stability_chart(veh, curvature, ratio, speed, model=model)
+    for b, which in zip(ch.boundaries, (1, 2), strict=True):
+        seg = b.segment((-1, 1), (-1, 1))
+        assert seg is not None
+        for t in np.linspace(0, 1, 5):
+            k1, k2 = seg[0] + t * (seg[1] - seg[0])
+            g = fws.SteeringGains(k1, k2, ratio)
+            poly = fws.characteristic_polynomial(veh, speed, curvature, g, model)
+            assert abs(poly[which]) < 1e-9 * max(1.0, speed**2)
+
+
+def test_design_point_gives_double_root(veh):
+    ch = fws.stability_chart(veh, 0.1, -1.0, 5.0, pole=-1.0)
+    g = ch.design
+    assert ch.design_error is None and ch.design_on_chart
+    poles = np.linalg.eigvals(fws.closed_loop(veh, 5.0, 0.1, g).A)
+    # A double root is sensitive: eigenvalues move by sqrt(rounding).
+    np.testing.assert_allclose(poles, [-1.0, -1.0], atol=1e-6)
+    # And the design lies inside the stable region of its own chart.
+    i = np.searchsorted(ch.k2, float(g.k2))
+    j = np.searchsorted(ch.k1, float(g.k1))
+    assert ch.stable[i, j]
+
+
+def test_uncontrollable_design_is_recorded_not_marked(veh):
+    ch = fws.stability_chart(veh, 0.0, 1.0, 20.0, pole=-1.0)
+    assert ch.design is None
+    assert "uncontrollable" in ch.design_error
+    # p0 is identically zero: a pole at the origin, never asymptotically stable.
+    assert ch.empty
+    assert ch.boundaries[1].degenerate
+    ax = ch.plot()
+    assert not any(line.get_marker() == "o" for line in ax.lines)
+    texts = " ".join(t.get_text() for t in ax.texts)
+    assert "uncontrollable" in texts and "no stable gains" in texts
+    plt.close(ax.figure)
+
+
+def test_plot_labels_legend_and_marker(veh):
+    ch = fws.stability_chart(veh, 0.1, -1.0, 5.0, pole=-1.0)
+    ax = ch.plot()
+    assert ax.get_xlabel() == "$k_1$ [rad/m]" and ax.get_ylabel() == "$k_2$ [-]"
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any("eq. 35" in s for s in labels) and any("eq. 36" in s for s in labels)
+    assert "a = -1" in ax.get_title() and "V = 5" in ax.get_title()
+    (marker,) = [line for line in ax.lines if line.get_marker() == "o"]
+    np.testing.assert_allclose(marker.get_xydata()[0], [ch.design.k1, ch.design.k2])
+    plt.close(ax.figure)
+
+
+def test_vertical_and_horizontal_boundaries_are_drawn(veh):
+    # Paper model, a = 1, curved path: k1 = 0 (eq. 38) and k2 = 1 (erratum 4).
+    ch = fws.stability_chart(veh, 0.1, 1.0, 5.0, model="paper")
+    b1, b0 = ch.boundaries
+    assert b1.vertical
+    np.testing.assert_allclose(b0.k2_at([-0.5, 0.5]), [1.0, 1.0])
+    ax = ch.plot()
+    xs = [line.get_xdata() for line in ax.lines if line.get_linestyle() == "-"]
+    assert any(np.allclose(x, 0.0) for x in xs)
+    plt.close(ax.figure)
+    K1, K2 = np.meshgrid(ch.k1, ch.k2)
+    np.testing.assert_array_equal(ch.stable, (K1 > 0) & (K2 < 1.0))
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"speed": 0.0}, "speed"),
+        ({"k1": np.zeros((3, 3))}, "k1"),
+        ({"k2": [0.0, 1.0, 0.5]}, "k2"),
+        ({"model": "linear"}, "model"),
+        ({"pole": 1.0}, "pole"),
+        ({"curvature": np.nan}, "curvature"),
+    ],
+)
+def test_bad_input(veh, kwargs, match):
+    args = {"curvature": 0.1, "ratio": -1.0, "speed": 5.0} | kwargs
+    with pytest.raises(ValueError, match=match):
+        fws.stability_chart(veh, **args)
+
+
+def test_paper_figure_panels_contents():
+    p2 = fws.paper_figure_panels(2, npoints=21)
+    assert [[c.ratio for c in p.charts] for p in p2] == [
+        [-1.5, -1.0, -0.5, 0.0],
+        [-1.5, -1.0, -0.5],
+        [0.0, 0.5, 1.0, 1.5],
+    ]
+    assert [p.charts[0].speed for p in p2] == [5.0, 20.0, 20.0]
+    assert all(c.curvature == 0.0 and c.pole == -1.0 for p in p2 for c in p.charts)
+    for n, V in ((3, 5.0), (4, 20.0)):
+        panels = fws.paper_figure_panels(n, model="paper", npoints=21)
+        assert [p.charts[0].ratio for p in panels] == [-1.5, -1, -0.5, 0, 0.5, 1, 1.5]
+        for p in panels:
+            assert tuple(c.curvature for c in p.charts) == PAPER_CURVATURES[n]
+            assert all(c.speed == V and c.model == "paper" for c in p.charts)
+    with pytest.raises(ValueError, match="n must be 2, 3 or 4"):
+        fws.paper_figure_panels(5)
+
+
+def test_paper_panels_show_the_designs_in_range():
+    # The paper: the lambda0 = -1 gains lie in [-1, 1] for a <= 0 at 5 m/s
+    # except a = 0 (k2 = 2*f/V = 1.08), which the grid must still show.
+    (pa, _, _) = fws.paper_figure_panels(2, npoints=21)
+    a0 = pa.charts[-1]
+    assert a0.design_on_chart
+    np.testing.assert_allclose(float(a0.design.k2), 2 * 2.7 / 5.0)
+
+
+@pytest.mark.parametrize("n, naxes", [(2, 3), (3, 8), (4, 8)])
+def test_plot_paper_figure(n, naxes, tmp_path):
+    fig = fws.plot_paper_figure(n, npoints=41)
+    assert len(fig.axes) == naxes
+    assert f"Fig. {n}" in fig.get_suptitle()
+    for ax in fig.axes[:7 if n > 2 else 3]:
+        assert ax.get_xlabel() == "$k_1$ [rad/m]"
+    out = tmp_path / f"fig{n}.png"
+    fig.savefig(out, dpi=40)
+    plt.close(fig)
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
