@@ -9,6 +9,13 @@ stability and double-root pole placement.
 
 from . import symbolic
 from .acceleration import lateral_acceleration, yaw_acceleration
+from .charts import (
+    ChartPanel,
+    StabilityChart,
+    paper_figure_panels,
+    plot_paper_figure,
+    stability_chart,
+)
 from .design import UncontrollableError, double_root_gains
 from .gains import SteeringGains
 from .linear import (
@@ -53,5 +60,10 @@ __all__ = [
     "StabilityBoundary",
     "stability_boundaries",
     "symbolic",
+    "StabilityChart",
+    "stability_chart",
+    "ChartPanel",
+    "paper_figure_panels",
+    "plot_paper_figure",
 ]
 __version__ = "0.1.0"

@@ -199,7 +199,7 @@ def test_plot_paper_figure(n, naxes, tmp_path):
     fig = fws.plot_paper_figure(n, npoints=41)
     assert len(fig.axes) == naxes
     assert f"Fig. {n}" in fig.get_suptitle()
-    for ax in fig.axes[:7 if n > 2 else 3]:
+    for ax in fig.axes[: 7 if n > 2 else 3]:
         assert ax.get_xlabel() == "$k_1$ [rad/m]"
     out = tmp_path / f"fig{n}.png"
     fig.savefig(out, dpi=40)
