@@ -154,7 +154,9 @@ def closed_loop(
     gains: SteeringGains,
     model: str = "exact",
 ) -> ct.StateSpace:
-    r"""Linear closed loop :math:`\dot x = (\mathbf A + \mathbf B\mathbf K)x + \mathbf B w`.
+    r"""Linear closed loop with the structured feedback ``u = K x + w``.
+
+    .. math:: \dot x = (\mathbf A + \mathbf B\mathbf K) x + \mathbf B w
 
     Parameters
     ----------

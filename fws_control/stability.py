@@ -208,14 +208,10 @@ def stability_boundaries(
     ):
         alpha, beta, gamma = float(alpha), float(beta), float(gamma)
         norm = float(np.hypot(alpha, beta))
-        # Exact zeros (a = c, kappa = 0) arise from cancellation of equal
-        # floats; treat tiny residues as zero so the line type is right.
-        scale = max(abs(alpha), abs(beta), abs(gamma), 1e-300)
-        if norm <= 1e-14 * scale or norm == 0.0:
+        # No tolerance: a = c on a straight path cancels to an exact 0.0, and
+        # any fuzz would make the lines disagree with is_stable near them.
+        if norm == 0.0:
             out.append(StabilityBoundary(0.0, 0.0, float(np.sign(gamma)), cond))
             continue
-        a_n, b_n, g_n = alpha / norm, beta / norm, gamma / norm
-        a_n = 0.0 if abs(a_n) < 1e-14 else a_n
-        b_n = 0.0 if abs(b_n) < 1e-14 else b_n
-        out.append(StabilityBoundary(a_n, b_n, g_n, cond))
+        out.append(StabilityBoundary(alpha / norm, beta / norm, gamma / norm, cond))
     return out[0], out[1]

@@ -1,0 +1,147 @@
+"""One test per erratum of docs/errata.md: the difference shown numerically.
+
+Each test computes what the paper prints and what the physics gives, and
+asserts that they differ (and that the library follows the physics).
+"""
+
+import control as ct
+import numpy as np
+import pytest
+import sympy as sp
+from conftest import lambdify
+from scipy.integrate import solve_ivp
+
+import fws_control as fws
+from fws_control import symbolic as S
+
+VEH = fws.Vehicle(2.7, 1.35)
+
+
+def _arc_errors(x, y, psi, k):
+    radius = 1.0 / k
+    phi = np.unwrap(np.arctan2(y - radius, x))
+    return radius * (phi + np.pi / 2), radius - np.hypot(x, y - radius), psi - phi - np.pi / 2
+
+
+def _drive_on_arc(speed, k, delta_f, duration=3.0):
+    """Global-frame motion from (0, -1, 0.1) with constant steering."""
+    glob = fws.global_frame_model(VEH, speed)
+    t = np.linspace(0.0, duration, 301)
+    sol = solve_ivp(lambda t, x: glob.dynamics(t, x, [delta_f, 0.0]), (0, duration),
+                    [0.0, -1.0, 0.1], t_eval=t, rtol=1e-12, atol=1e-12)
+    return t, _arc_errors(*sol.y, k)
+
+
+def test_erratum_1_sign_of_curvature_term_eq16():
+    """theta_dot = psi_dot - kappa*s_dot; eq. (16) prints + kappa*s_dot."""
+    speed, k, delta = 5.0, 0.1, 0.3
+    t, (s, e, theta) = _drive_on_arc(speed, k, delta)
+    theta_dot_geo = np.gradient(theta, t, edge_order=2)
+    s_dot = speed * np.cos(theta) / (1 - k * e)
+    psi_dot = fws.yaw_rate(VEH, speed, delta, 0.0)
+    corrected = psi_dot - k * s_dot
+    printed = psi_dot + k * s_dot
+    assert np.max(np.abs(theta_dot_geo - corrected)[5:-5]) < 1e-5
+    assert np.min(np.abs(theta_dot_geo - printed)) > 0.5  # = 2 kappa s_dot ~ 1 rad/s
+
+
+def test_erratum_2_missing_speed_in_eq17():
+    """s_dot = V cos(theta + delta_r)/(1 - kappa e); eq. (17) lacks V."""
+    speed, k = 5.0, 0.1
+    t, (s, e, theta) = _drive_on_arc(speed, k, 0.3)
+    s_dot_geo = np.gradient(s, t, edge_order=2)
+    corrected = speed * np.cos(theta) / (1 - k * e)
+    printed = np.cos(theta) / (1 - k * e)
+    assert np.max(np.abs(s_dot_geo - corrected)[5:-5]) < 1e-5
+    assert np.min(np.abs(s_dot_geo - printed)) > 3.0
+
+
+def _nonlinear_closed_loop_poles(speed, k, gains):
+    """Poles of the *nonlinear* path-frame closed loop, linearised numerically."""
+    plant = fws.path_frame_model(VEH, speed, k)
+    ff = fws.feedforward_steering(VEH, k)
+
+    def rhs(t, x, u, params):
+        d_fb, r_fb = gains.steering(x[1], x[2])
+        return plant.dynamics(t, x, [ff + d_fb, r_fb])
+
+    sys = ct.nlsys(rhs, None, states=3, inputs=0, outputs=3)
+    lin = ct.linearize(sys, np.zeros(3), [], eps=1e-8)
+    return np.sort_complex(np.linalg.eigvals(lin.A[1:, 1:]))
+
+
+@pytest.mark.parametrize("ratio", [-1.0, -0.5, 0.0, 0.5, 1.0])
+def test_erratum_3_paper_gains_miss_the_double_root_on_a_curve(ratio):
+    """V = 5 m/s, kappa = 0.1: paper gains for lam0 = -1 do not give -1, -1."""
+    speed, k, lam0 = 5.0, 0.1, -1.0
+    paper = fws.double_root_gains(VEH, speed, k, ratio, lam0, model="paper")
+    exact = fws.double_root_gains(VEH, speed, k, ratio, lam0, model="exact")
+    true_paper = _nonlinear_closed_loop_poles(speed, k, paper)
+    true_exact = _nonlinear_closed_loop_poles(speed, k, exact)
+    # the exact design lands on the double root of the nonlinear model ...
+    np.testing.assert_allclose(true_exact, [lam0, lam0], atol=2e-3)
+    # ... the paper's misses it by >= 0.2 1/s (a real or imaginary split)
+    assert np.max(np.abs(true_paper - lam0)) > 0.2
+    # and the exact linearisation predicts where the paper's poles really are
+    predicted = np.sort_complex(fws.closed_loop(VEH, speed, k, paper).poles())
+    np.testing.assert_allclose(true_paper, predicted, atol=1e-5)
+
+
+def test_erratum_4_ratio_one_on_curve_still_needs_k2_below_one():
+    """Paper model, a = 1, kappa != 0: p0 = V^2 kappa^2 (1 - k2), so k2 < 1."""
+    speed, k = 5.0, 0.1
+    for k2, expected in ((0.9, True), (1.1, False)):
+        g = fws.SteeringGains(0.5, k2, 1.0)
+        poles = fws.closed_loop(VEH, speed, k, g, model="paper").poles()
+        assert (np.max(poles.real) < 0) == expected
+        assert fws.is_stable(VEH, speed, k, 0.5, k2, 1.0, model="paper") == expected
+
+
+def test_erratum_5_ratio_one_straight_is_uncontrollable_and_eq42_is_wrong():
+    V, f, a, kap = (S.SYMBOLS[n] for n in ("speed", "wheelbase", "ratio", "curvature"))
+    k1, k2, lam0, lam = (S.SYMBOLS[n] for n in ("k1", "k2", "pole", "lam"))
+    for model in ("exact", "paper"):
+        D = S.characteristic_polynomial(model).as_expr().subs({a: 1, kap: 0})
+        assert sp.expand(D - lam * (lam + V * k1)) == 0
+    # printed k1 = -2 lam0 / f in eq. (39): p1 = V k1 = -2 lam0 V / f != -2 lam0
+    p1 = S.characteristic_polynomial("paper").all_coeffs()[1].subs({a: 1, kap: 0})
+    printed_k1 = S.paper_gain_formulas()["42"][k1]
+    assert sp.simplify(p1.subs(k1, printed_k1) + 2 * lam0) != 0
+    assert sp.solve(sp.Eq(p1, -2 * lam0), k1) == [-2 * lam0 / V]
+    with pytest.raises(fws.UncontrollableError):
+        fws.double_root_gains(VEH, 5.0, 0.0, 1.0, -1.0)
+
+
+def test_erratum_6_no_singularity_at_ratio_zero():
+    """Eqs. (45)-(46) divide by a; the 2x2 solve does not."""
+    printed = S.paper_gain_formulas()["45-46"]
+    k1 = S.SYMBOLS["k1"]
+    f_k1 = lambdify(printed[k1])
+    with pytest.raises(ZeroDivisionError):
+        f_k1(5.0, 2.7, 0.1, 0.0, 0, 0, -1.0)
+    # near a = 0 the printed form cancels two terms of size 1/a
+    near = f_k1(5.0, 2.7, 0.1, 1e-12, 0, 0, -1.0)
+    g_near = fws.double_root_gains(VEH, 5.0, 0.1, 1e-12, -1.0, model="paper")
+    assert abs(near - g_near.k1) > 1e-6 * abs(g_near.k1)
+    g0 = fws.double_root_gains(VEH, 5.0, 0.1, 0.0, -1.0, model="paper")
+    assert np.isfinite(g0.k1)
+    # the printed formula agrees away from a = 0 (where it is well defined)
+    g = fws.double_root_gains(VEH, 5.0, 0.1, 0.3, -1.0, model="paper")
+    assert g.k1 == pytest.approx(f_k1(5.0, 2.7, 0.1, 0.3, 0, 0, -1.0), rel=1e-12)
+
+
+def test_erratum_7_reversing_flips_condition_35_only():
+    """V < 0: p1 changes sign with V, p0 carries V^2 and does not."""
+    k, a, k1, k2 = 0.05, -0.5, 0.3, 0.6
+    fwd = fws.characteristic_coefficients(VEH, 5.0, k, a)
+    rev = fws.characteristic_coefficients(VEH, -5.0, k, a)
+    assert rev.p1(k1, k2) == pytest.approx(-fwd.p1(k1, k2))
+    assert rev.p0(k1, k2) == pytest.approx(fwd.p0(k1, k2))
+    # hence the forward-stable design is unstable in reverse (eigenvalues)
+    g = fws.SteeringGains(k1, k2, a)
+    assert np.max(fws.closed_loop(VEH, 5.0, k, g).poles().real) < 0
+    assert np.max(fws.closed_loop(VEH, -5.0, k, g).poles().real) > 0
+    # and the mirrored gains (-k1, -k2) are stable in reverse only if p0 stays
+    # positive, which it need not: (36) keeps its forward form
+    assert fws.is_stable(VEH, -5.0, k, -k1, -k2, a) == bool(
+        fwd.p0(-k1, -k2) > 0 and rev.p1(-k1, -k2) > 0)
