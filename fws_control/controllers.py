@@ -1,0 +1,401 @@
+r"""Path-tracking controllers and the steering actuator.
+
+The controller of the paper (eqs. 24-29) computes the steering angles from
+the path-frame errors and the path curvature at the projection point:
+
+.. math::
+    \delta_f = \underbrace{\arctan(\kappa_C f)}_{\delta_f^{FF}\ (26)}
+               \underbrace{-\,k_1 e_C - k_2\theta_C}_{\delta_f^{FB}\ (28)},\qquad
+    \delta_r = \underbrace{0}_{\delta_r^{FF}\ (27)}
+               \underbrace{-\,a k_1 e_C - a k_2\theta_C}_{\delta_r^{FB}\ (29)}.
+
+The feedback-only controller drops the feedforward term. Each channel is
+clipped to the vehicle's steering-angle limit when one is set
+(:attr:`Vehicle.max_steer_front`, :attr:`Vehicle.max_steer_rear`);
+otherwise no saturation is applied.
+
+A steering-*rate* limit cannot be expressed by a static map: it needs the
+actual steering angle as a state. :func:`steering_actuator` provides that
+state as a first-order lag whose rate is clipped,
+
+.. math:: \dot\delta = \operatorname{clip}\!\left(
+          \frac{\delta^{cmd} - \delta}{\tau}, -\dot\delta_{max},
+          \dot\delta_{max}\right),
+
+which the simulators insert between controller and vehicle whenever a rate
+limit is set.
+
+The numeric control law lives in :func:`steering_command` and
+:func:`steering_command_rate` (numpy, broadcasting); the
+:class:`control.NonlinearIOSystem` blocks and the fast simulator both call
+them, so the law has one implementation.
+"""
+
+from __future__ import annotations
+
+import math
+
+import control as ct
+import numpy as np
+
+from ._validation import check_positive
+from .gains import SteeringGains
+from .models import STEERING_INPUTS
+from .vehicle import Vehicle
+
+__all__ = [
+    "steering_command",
+    "steering_command_rate",
+    "path_tracking_controller",
+    "feedback_controller",
+    "feedforward_feedback_controller",
+    "steering_actuator",
+    "actuator_rate",
+    "CONTROLLER_INPUTS",
+    "DEFAULT_ACTUATOR_TIME_CONSTANT",
+]
+
+#: Inputs of the controller blocks: the path-frame errors and the path
+#: curvature at the projection point.
+CONTROLLER_INPUTS = ("e", "theta", "curvature")
+
+#: Time constant [s] of :func:`steering_actuator` used by the simulators when
+#: a rate limit is set and no other value is given.
+DEFAULT_ACTUATOR_TIME_CONSTANT = 0.05
+
+
+def _limit(value: float | None) -> float:
+    return math.inf if value is None else float(value)
+
+
+def _check_gains(gains) -> SteeringGains:
+    if not isinstance(gains, SteeringGains):
+        raise TypeError(f"gains must be a SteeringGains, got {type(gains).__name__}")
+    return gains
+
+
+def steering_command(
+    vehicle: Vehicle,
+    gains: SteeringGains,
+    e,
+    theta,
+    curvature=0.0,
+    feedforward: bool = True,
+) -> tuple[np.ndarray, np.ndarray]:
+    r"""Steering angles of the path-tracking controller, paper eqs. (24)-(29).
+
+    .. math::
+        \delta_f = \operatorname{sat}_f\!\big(\arctan(\kappa f)\,[\text{if
+        feedforward}] - k_1 e - k_2\theta\big),\quad
+        \delta_r = \operatorname{sat}_r\!\big(a(-k_1 e - k_2\theta)\big)
+
+    where :math:`\operatorname{sat}` clips to the vehicle's angle limit if one
+    is set and is the identity otherwise.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Geometry and optional steering-angle limits.
+    gains : SteeringGains
+        ``k1, k2, ratio``; may hold arrays that broadcast with the errors.
+    e, theta : float or array_like
+        Lateral error [m] (positive left of the path) and heading error
+        [rad].
+    curvature : float or array_like, optional
+        Path curvature at the projection point [1/m]; only used by the
+        feedforward term.
+    feedforward : bool, optional
+        Include the feedforward angle of eq. (26) (default). With ``False``
+        this is the feedback-only controller of eqs. (28)-(29).
+
+    Returns
+    -------
+    delta_f, delta_r : ndarray
+        Front and rear steering angles [rad], broadcast over the arguments.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> g = fws.SteeringGains(k1=0.1, k2=0.5, ratio=-1.0)
+    >>> df, dr = fws.steering_command(veh, g, e=1.0, theta=0.0, curvature=0.1)
+    >>> round(float(df), 6), round(float(dr), 6)
+    (0.163712, 0.1)
+    >>> lim = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35, max_steer_front=0.1)
+    >>> float(fws.steering_command(lim, g, 1.0, 0.0, 0.1)[0])
+    0.1
+    """
+    gains = _check_gains(gains)
+    fb = -gains.k1 * np.asarray(e, dtype=float) - gains.k2 * np.asarray(
+        theta, dtype=float
+    )
+    delta_f = fb
+    if feedforward:
+        delta_f = fb + np.arctan(vehicle.wheelbase * np.asarray(curvature, dtype=float))
+    delta_r = gains.ratio * fb
+    max_f = _limit(vehicle.max_steer_front)
+    max_r = _limit(vehicle.max_steer_rear)
+    if math.isfinite(max_f):
+        delta_f = np.clip(delta_f, -max_f, max_f)
+    if math.isfinite(max_r):
+        delta_r = np.clip(delta_r, -max_r, max_r)
+    delta_f, delta_r = np.broadcast_arrays(delta_f, delta_r)
+    return np.array(delta_f), np.array(delta_r)
+
+
+def steering_command_rate(
+    vehicle: Vehicle,
+    gains: SteeringGains,
+    e,
+    theta,
+    curvature,
+    e_rate,
+    theta_rate,
+    curvature_rate=0.0,
+    feedforward: bool = True,
+) -> tuple[np.ndarray, np.ndarray]:
+    r"""Time derivatives of :func:`steering_command` by the chain rule.
+
+    .. math::
+        \dot\delta_f = \frac{f\dot\kappa}{1+f^2\kappa^2}\,[\text{if
+        feedforward}] - k_1\dot e - k_2\dot\theta,\qquad
+        \dot\delta_r = a(-k_1\dot e - k_2\dot\theta),
+
+    set to zero where the corresponding angle is clipped at its limit (the
+    derivative of the clipped signal; at the limit itself the one-sided
+    derivative of the unclipped command is returned).
+
+    Parameters
+    ----------
+    vehicle, gains, e, theta, curvature, feedforward
+        As in :func:`steering_command`.
+    e_rate, theta_rate : float or array_like
+        :math:`\dot e` [m/s] and :math:`\dot\theta` [rad/s].
+    curvature_rate : float or array_like, optional
+        Time derivative of the curvature at the projection point,
+        :math:`\dot\kappa = \kappa'(s)\dot s` [1/(m s)].
+
+    Returns
+    -------
+    delta_f_rate, delta_r_rate : ndarray
+        [rad/s], broadcast over the arguments.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> g = fws.SteeringGains(k1=0.1, k2=0.5, ratio=-1.0)
+    >>> r = fws.steering_command_rate(veh, g, 1.0, 0.0, 0.0, e_rate=-1.0,
+    ...                               theta_rate=0.0)
+    >>> [round(float(v), 6) for v in r]
+    [0.1, -0.1]
+    """
+    gains = _check_gains(gains)
+    fb_rate = -gains.k1 * np.asarray(e_rate, dtype=float) - gains.k2 * np.asarray(
+        theta_rate, dtype=float
+    )
+    rate_f = fb_rate
+    if feedforward:
+        fk = vehicle.wheelbase * np.asarray(curvature, dtype=float)
+        rate_f = fb_rate + vehicle.wheelbase * np.asarray(curvature_rate) / (
+            1.0 + fk**2
+        )
+    rate_r = gains.ratio * fb_rate
+    max_f = _limit(vehicle.max_steer_front)
+    max_r = _limit(vehicle.max_steer_rear)
+    if math.isfinite(max_f) or math.isfinite(max_r):
+        cmd_f, cmd_r = steering_command(
+            Vehicle(vehicle.wheelbase, vehicle.rear_to_cg),
+            gains,
+            e,
+            theta,
+            curvature,
+            feedforward,
+        )
+        rate_f = np.where(np.abs(cmd_f) > max_f, 0.0, rate_f)
+        rate_r = np.where(np.abs(cmd_r) > max_r, 0.0, rate_r)
+    rate_f, rate_r = np.broadcast_arrays(rate_f, rate_r)
+    return np.array(rate_f), np.array(rate_r)
+
+
+def path_tracking_controller(
+    vehicle: Vehicle,
+    gains: SteeringGains,
+    feedforward: bool = True,
+    name: str = "controller",
+) -> ct.NonlinearIOSystem:
+    r"""Static path-tracking controller block, paper eqs. (24)-(29).
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Geometry; its steering-angle limits, if set, clip the outputs.
+    gains : SteeringGains
+        Scalar ``k1, k2, ratio``.
+    feedforward : bool, optional
+        Add the curvature feedforward :math:`\arctan(\kappa f)` of eq. (26)
+        to the front angle (default). ``False`` gives the feedback-only law.
+    name : str, optional
+        System name for :func:`control.interconnect`.
+
+    Returns
+    -------
+    control.NonlinearIOSystem
+        No states; inputs ``e, theta, curvature``; outputs ``delta_f,
+        delta_r``. Parameters ``k1, k2, ratio`` (may be overridden per
+        simulation with ``params``).
+
+    Raises
+    ------
+    TypeError
+        If `gains` is not a :class:`SteeringGains`.
+    ValueError
+        If the gains are not scalars.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> g = fws.SteeringGains(k1=0.1, k2=0.5, ratio=-1.0)
+    >>> ctrl = fws.path_tracking_controller(veh, g)
+    >>> ctrl.input_labels, ctrl.output_labels
+    (['e', 'theta', 'curvature'], ['delta_f', 'delta_r'])
+    >>> ctrl.output(0.0, [], [1.0, 0.0, 0.1]).round(6)
+    array([0.163712, 0.1     ])
+    """
+    gains = _check_gains(gains)
+    if any(np.ndim(v) != 0 for v in (gains.k1, gains.k2, gains.ratio)):
+        raise ValueError(
+            "gains must hold scalar k1, k2, ratio for a controller block, got "
+            f"shapes {np.shape(gains.k1)}, {np.shape(gains.k2)}, "
+            f"{np.shape(gains.ratio)}"
+        )
+    feedforward = bool(feedforward)
+
+    def output(t, x, u, params):
+        g = SteeringGains(params["k1"], params["k2"], params["ratio"])
+        df, dr = steering_command(vehicle, g, u[0], u[1], u[2], feedforward)
+        return np.array([float(df), float(dr)])
+
+    return ct.nlsys(
+        None,
+        output,
+        inputs=list(CONTROLLER_INPUTS),
+        outputs=list(STEERING_INPUTS),
+        params={
+            "k1": float(gains.k1),
+            "k2": float(gains.k2),
+            "ratio": float(gains.ratio),
+        },
+        name=name,
+    )
+
+
+def feedback_controller(
+    vehicle: Vehicle, gains: SteeringGains, name: str = "controller"
+) -> ct.NonlinearIOSystem:
+    """Feedback-only controller, paper eqs. (28)-(29).
+
+    Same as ``path_tracking_controller(vehicle, gains, feedforward=False)``;
+    the ``curvature`` input is ignored.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> g = fws.SteeringGains(k1=0.1, k2=0.5, ratio=-1.0)
+    >>> fws.feedback_controller(veh, g).output(0.0, [], [1.0, 0.0, 0.1]).round(6)
+    array([-0.1,  0.1])
+    """
+    return path_tracking_controller(vehicle, gains, feedforward=False, name=name)
+
+
+def feedforward_feedback_controller(
+    vehicle: Vehicle, gains: SteeringGains, name: str = "controller"
+) -> ct.NonlinearIOSystem:
+    """Feedforward + feedback controller, paper eqs. (24)-(29).
+
+    Same as ``path_tracking_controller(vehicle, gains, feedforward=True)``.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> g = fws.SteeringGains(k1=0.1, k2=0.5, ratio=-1.0)
+    >>> ctrl = fws.feedforward_feedback_controller(veh, g)
+    >>> ctrl.output(0.0, [], [0.0, 0.0, 0.1]).round(6)
+    array([0.263712, 0.      ])
+    """
+    return path_tracking_controller(vehicle, gains, feedforward=True, name=name)
+
+
+def actuator_rate(
+    vehicle: Vehicle, command, angle, time_constant: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Rates of the rate-limited first-order actuator (see module docstring).
+
+    `command` and `angle` have the two channels ``(front, rear)`` on their
+    first axis. Returns ``(delta_f_rate, delta_r_rate)``.
+    """
+    rate = (np.asarray(command, dtype=float) - np.asarray(angle, dtype=float)) / (
+        time_constant
+    )
+    max_f = _limit(vehicle.max_steer_rate_front)
+    max_r = _limit(vehicle.max_steer_rate_rear)
+    return np.clip(rate[0], -max_f, max_f), np.clip(rate[1], -max_r, max_r)
+
+
+def steering_actuator(
+    vehicle: Vehicle,
+    time_constant: float = DEFAULT_ACTUATOR_TIME_CONSTANT,
+    name: str = "actuator",
+) -> ct.NonlinearIOSystem:
+    r"""Steering actuator with rate limits: a rate-clipped first-order lag.
+
+    .. math:: \dot\delta_i = \operatorname{clip}\!\left(
+              \frac{\delta_i^{cmd} - \delta_i}{\tau},
+              -\dot\delta_{i,max}, \dot\delta_{i,max}\right),\quad i = f, r
+
+    with the rate limits ``max_steer_rate_front/rear`` of the vehicle
+    (unlimited where ``None``). Both channels get the same lag :math:`\tau`;
+    the simulators insert this block only when a rate limit is set, so
+    without rate limits the steering angles equal the commands exactly.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Rate limits.
+    time_constant : float, optional
+        :math:`\tau` [s], > 0. With a small :math:`\tau` the actuator follows
+        the command closely until the rate limit binds.
+    name : str, optional
+        System name.
+
+    Returns
+    -------
+    control.NonlinearIOSystem
+        States and outputs ``delta_f, delta_r``; inputs ``delta_f_cmd,
+        delta_r_cmd``.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35, max_steer_rate_front=0.5)
+    >>> act = fws.steering_actuator(veh, time_constant=0.1)
+    >>> act.dynamics(0.0, [0.0, 0.0], [0.2, 0.01]).round(6)
+    array([0.5, 0.1])
+    """
+    tau = float(check_positive("time_constant", time_constant))
+
+    def update(t, x, u, params):
+        rf, rr = actuator_rate(vehicle, u, x, tau)
+        return np.array([float(rf), float(rr)])
+
+    return ct.nlsys(
+        update,
+        None,
+        states=list(STEERING_INPUTS),
+        inputs=[f"{n}_cmd" for n in STEERING_INPUTS],
+        outputs=list(STEERING_INPUTS),
+        name=name,
+    )

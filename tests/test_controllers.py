@@ -1,0 +1,166 @@
+"""Controllers: control law, chain-rule rates, saturation, blocks, actuator."""
+
+import math
+
+import control as ct
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+import fws_control as fws
+from fws_control.controllers import actuator_rate
+
+VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+finite = st.floats(-3.0, 3.0, allow_nan=False)
+
+
+@given(e=finite, theta=st.floats(-1, 1), kappa=st.floats(-0.2, 0.2), a=finite)
+def test_command_matches_paper_equations(e, theta, kappa, a):
+    g = fws.SteeringGains(k1=0.3, k2=0.7, ratio=a)
+    df, dr = fws.steering_command(VEH, g, e, theta, kappa)
+    # eqs. (24)-(29) written out by hand
+    fb_f = -0.3 * e - 0.7 * theta
+    assert float(df) == pytest.approx(math.atan(kappa * 2.7) + fb_f, abs=1e-14)
+    assert float(dr) == pytest.approx(-a * 0.3 * e - a * 0.7 * theta, abs=1e-14)
+    df0, dr0 = fws.steering_command(VEH, g, e, theta, kappa, feedforward=False)
+    assert float(df0) == pytest.approx(fb_f, abs=1e-14)
+    assert float(dr0) == float(dr)
+
+
+def test_command_broadcasts_over_gains_and_errors():
+    g = fws.SteeringGains(k1=np.array([0.1, 0.2, 0.3]), k2=0.5, ratio=-1.0)
+    e = np.array([[1.0], [2.0]])
+    df, dr = fws.steering_command(VEH, g, e, 0.0, 0.0)
+    assert df.shape == dr.shape == (2, 3)
+    np.testing.assert_allclose(df, -np.outer([1.0, 2.0], [0.1, 0.2, 0.3]))
+    np.testing.assert_allclose(dr, -df)
+
+
+def test_no_saturation_without_limits_and_clip_with_limits():
+    g = fws.SteeringGains(k1=1.0, k2=0.0, ratio=0.5)
+    df, dr = fws.steering_command(VEH, g, -1.4, 0.0, 0.0)
+    assert (float(df), float(dr)) == (1.4, 0.7)  # beyond any plausible limit
+    lim = fws.Vehicle(2.7, 1.35, max_steer_front=0.5, max_steer_rear=0.2)
+    df, dr = fws.steering_command(lim, g, np.array([-1.4, 1.4, 0.1]), 0.0, 0.0)
+    np.testing.assert_array_equal(df, [0.5, -0.5, -0.1])
+    np.testing.assert_array_equal(dr, [0.2, -0.2, -0.05])
+
+
+def _signals(t):
+    """Smooth error and curvature histories used to test the chain rule."""
+    e = 1.5 * np.sin(0.7 * t) + 0.2
+    th = 0.3 * np.cos(1.3 * t)
+    kap = 0.1 * np.sin(0.4 * t)
+    return e, th, kap
+
+
+@pytest.mark.parametrize("feedforward", [True, False])
+def test_command_rate_matches_finite_differences(feedforward):
+    g = fws.SteeringGains(k1=0.4, k2=0.9, ratio=-0.6)
+    t = np.linspace(0.0, 10.0, 201)
+    h = 1e-5
+    e, th, kap = _signals(t)
+    e_rate = (_signals(t + h)[0] - _signals(t - h)[0]) / (2 * h)
+    th_rate = (_signals(t + h)[1] - _signals(t - h)[1]) / (2 * h)
+    kap_rate = (_signals(t + h)[2] - _signals(t - h)[2]) / (2 * h)
+    rf, rr = fws.steering_command_rate(
+        VEH, g, e, th, kap, e_rate, th_rate, kap_rate, feedforward
+    )
+    plus = fws.steering_command(VEH, g, *_signals(t + h), feedforward)
+    minus = fws.steering_command(VEH, g, *_signals(t - h), feedforward)
+    np.testing.assert_allclose(rf, (plus[0] - minus[0]) / (2 * h), atol=1e-8)
+    np.testing.assert_allclose(rr, (plus[1] - minus[1]) / (2 * h), atol=1e-8)
+
+
+def test_command_rate_is_zero_where_saturated():
+    lim = fws.Vehicle(2.7, 1.35, max_steer_front=0.3, max_steer_rear=0.1)
+    g = fws.SteeringGains(k1=0.4, k2=0.9, ratio=-0.6)
+    t = np.linspace(0.0, 10.0, 401)
+    h = 1e-6
+    rf, rr = fws.steering_command_rate(
+        lim,
+        g,
+        *_signals(t),
+        *[
+            (a - b) / (2 * h)
+            for a, b in zip(_signals(t + h), _signals(t - h), strict=True)
+        ],
+    )
+    plus = fws.steering_command(lim, g, *_signals(t + h))
+    minus = fws.steering_command(lim, g, *_signals(t - h))
+    fd_f = (plus[0] - minus[0]) / (2 * h)
+    fd_r = (plus[1] - minus[1]) / (2 * h)
+    # Away from the switching instants the derivative of the clipped signal
+    # is the finite difference; both channels do saturate somewhere.
+    smooth_f = (
+        np.abs(np.abs(fws.steering_command(lim, g, *_signals(t))[0]) - 0.3) > 1e-4
+    )
+    smooth_r = (
+        np.abs(np.abs(fws.steering_command(lim, g, *_signals(t))[1]) - 0.1) > 1e-4
+    )
+    assert np.any(rf == 0.0) and np.any(rr == 0.0)
+    np.testing.assert_allclose(rf[smooth_f], fd_f[smooth_f], atol=1e-6)
+    np.testing.assert_allclose(rr[smooth_r], fd_r[smooth_r], atol=1e-6)
+
+
+def test_blocks_wrap_the_same_law_and_accept_params():
+    g = fws.SteeringGains(k1=0.2, k2=0.6, ratio=0.4)
+    u = [0.7, -0.1, 0.05]
+    ff = fws.feedforward_feedback_controller(VEH, g)
+    fb = fws.feedback_controller(VEH, g)
+    assert ff.nstates == fb.nstates == 0
+    assert ff.input_labels == ["e", "theta", "curvature"]
+    np.testing.assert_allclose(
+        ff.output(0.0, [], u), fws.steering_command(VEH, g, *u), atol=1e-15
+    )
+    np.testing.assert_allclose(
+        fb.output(0.0, [], u),
+        fws.steering_command(VEH, g, *u, feedforward=False),
+        atol=1e-15,
+    )
+    # per-call parameters, as ct.input_output_response(params=...) passes them
+    other = fws.SteeringGains(k1=1.0, k2=0.0, ratio=0.0)
+    out = ff.output(0.0, [], u, params={"k1": 1.0, "k2": 0.0, "ratio": 0.0})
+    np.testing.assert_allclose(out, fws.steering_command(VEH, other, *u), atol=1e-15)
+
+
+def test_block_rejects_wrong_gains():
+    with pytest.raises(TypeError, match="SteeringGains"):
+        fws.path_tracking_controller(VEH, (0.1, 0.2, 0.0))
+    with pytest.raises(ValueError, match="scalar"):
+        fws.path_tracking_controller(VEH, fws.SteeringGains([0.1, 0.2], 0.5, 0.0))
+
+
+def test_actuator_rate_clips_each_channel():
+    veh = fws.Vehicle(2.7, 1.35, max_steer_rate_front=0.5)
+    rf, rr = actuator_rate(veh, np.array([1.0, 1.0]), np.array([0.0, 0.0]), 0.1)
+    assert (float(rf), float(rr)) == (0.5, 10.0)  # rear has no limit
+
+
+def test_actuator_step_response_matches_closed_form():
+    """Ramp at the rate limit, then the first-order lag (solved by hand)."""
+    rmax, tau, c = 0.5, 0.1, 0.4
+    veh = fws.Vehicle(2.7, 1.35, max_steer_rate_front=rmax, max_steer_rate_rear=rmax)
+    act = fws.steering_actuator(veh, time_constant=tau)
+    t = np.linspace(0.0, 2.0, 401)
+    resp = ct.input_output_response(
+        act,
+        t,
+        inputs=np.vstack([np.full_like(t, c), np.full_like(t, 0.02)]),
+        initial_state=[0.0, 0.0],
+        solve_ivp_method="LSODA",
+        solve_ivp_kwargs={"rtol": 1e-10, "atol": 1e-12, "max_step": 0.01},
+    )
+    t1 = (c - tau * rmax) / rmax  # the rate limit stops binding here
+    expect = np.where(t < t1, rmax * t, c - tau * rmax * np.exp(-(t - t1) / tau))
+    np.testing.assert_allclose(resp.outputs[0], expect, atol=1e-7)
+    # a small step never reaches the rate limit: pure lag
+    np.testing.assert_allclose(
+        resp.outputs[1], 0.02 * (1 - np.exp(-t / tau)), atol=1e-9
+    )
+
+
+def test_actuator_time_constant_must_be_positive():
+    with pytest.raises(ValueError, match="time_constant"):
+        fws.steering_actuator(VEH, time_constant=0.0)
