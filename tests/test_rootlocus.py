@@ -1,0 +1,202 @@
+"""Root loci: gain loop and parameter loci against closed-loop eigenvalues."""
+
+import control as ct
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+import fws_control as fws
+from fws_control.rootlocus import quadratic_roots
+
+
+def _sorted(z):
+    z = np.asarray(z, dtype=complex)
+    return z[np.lexsort((z.imag, z.real))]
+
+
+def _plant(veh, speed, curvature, ratio):
+    """Single-input exact plant (A, b) from ct.linearize of the nonlinear model."""
+    sys = fws.path_frame_model(veh, speed, curvature)
+    u0 = [fws.feedforward_steering(veh, curvature), 0.0]
+    lin = ct.linearize(sys, [0.0, 0.0, 0.0], u0)
+    return lin.A[1:, 1:], lin.B[1:, :] @ np.array([1.0, ratio])
+
+
+@pytest.mark.parametrize(
+    "speed, curvature, ratio, k1, k2",
+    [
+        (5.0, 0.1, -1.0, 0.05, 0.6),
+        (20.0, 0.01, 0.5, 0.02, 0.4),
+        (5.0, 0.0, 0.0, 0.1, 1.0),
+        (-5.0, 0.1, 0.5, 0.1, -0.5),
+    ],
+)
+def test_gain_loop_matches_state_space(veh, speed, curvature, ratio, k1, k2):
+    A, b = _plant(veh, speed, curvature, ratio)
+    ref = ct.ss(A, b[:, None], [[k1, k2]], [[0.0]])
+    loop = fws.gain_loop(veh, speed, curvature, fws.SteeringGains(k1, k2, ratio))
+    assert loop.issiso() and loop.input_labels == ["delta_f"]
+    for s in (0.3j, 1.0 + 2.0j, -0.7 + 0.1j, 4.0):
+        # ct.linearize differentiates numerically: ~1e-7 relative accuracy.
+        np.testing.assert_allclose(loop(s), ref(s), rtol=1e-5)
+    # Root locus at several scales = eig(A - g b k).
+    scales = np.array([0.0, 0.3, 1.0, 2.5])
+    rl = ct.root_locus_map(loop, gains=scales)
+    for g, row in zip(scales, rl.loci, strict=True):
+        ev = np.linalg.eigvals(A - g * np.outer(b, [k1, k2]))
+        np.testing.assert_allclose(_sorted(row), _sorted(ev), atol=1e-5)
+
+
+@pytest.mark.parametrize("model", ["exact", "paper"])
+def test_gain_locus_at_one_is_closed_loop(veh, model):
+    g = fws.double_root_gains(veh, 20.0, 0.01, ratio=0.5, pole=-2.0, model=model)
+    g = fws.SteeringGains(float(g.k1) * 1.3, float(g.k2) * 0.8, 0.5)  # distinct poles
+    pz = fws.gain_locus(veh, 20.0, 0.01, g, scale=[1.0], model=model)
+    cl = fws.closed_loop(veh, 20.0, 0.01, g, model=model)
+    np.testing.assert_allclose(_sorted(pz.loci[0]), _sorted(cl.poles()), atol=1e-10)
+
+
+def test_gain_locus_default_gains_and_plot(veh):
+    g = fws.double_root_gains(veh, 5.0, 0.1, ratio=-1.0, pole=-1.0)
+    loop = fws.gain_loop(veh, 5.0, 0.1, g)
+    # Open-loop poles +-j V kappa: the A matrix of eq. (33) (hand-derived).
+    np.testing.assert_allclose(_sorted(loop.poles()), [-0.5j, 0.5j], atol=1e-12)
+    cplt = ct.root_locus_plot(loop, grid=False, initial_gain=1.0)
+    xlim = cplt.axes[0, 0].get_xlim()
+    assert -10 < xlim[0] < -1 and xlim[1] < 10  # no spurious far-away zero
+    plt.close(cplt.figure)
+
+
+CASES = [
+    ("ratio", np.linspace(-1.5, 0.9, 25), 5.0, 0.1),
+    ("speed", np.linspace(1.0, 30.0, 25), 5.0, 0.1),
+    ("speed", np.linspace(-10.0, -1.0, 7), 5.0, 0.0),
+    ("curvature", np.linspace(0.0, 0.3, 25), 5.0, 0.1),
+    ("k1", np.linspace(-0.2, 0.5, 25), 20.0, 0.01),
+    ("k2", np.linspace(-1.0, 2.0, 25), 20.0, 0.01),
+]
+
+
+@pytest.mark.parametrize("model", ["exact", "paper"])
+@pytest.mark.parametrize("name, values, speed, curvature", CASES)
+def test_parameter_locus_equals_closed_loop(veh, name, values, speed, curvature, model):
+    g0 = fws.SteeringGains(0.05, 0.6, ratio=-1.0)
+    pz = fws.parameter_locus(veh, name, values, speed, curvature, g0, model=model)
+    assert pz.loci.shape == (len(values), 2)
+    np.testing.assert_array_equal(pz.gains, values)
+    for v, row in zip(values, pz.loci, strict=True):
+        p = {
+            "speed": speed,
+            "curvature": curvature,
+            "ratio": -1.0,
+            "k1": 0.05,
+            "k2": 0.6,
+        }
+        p[name] = v
+        g = fws.SteeringGains(p["k1"], p["k2"], p["ratio"])
+        cl = fws.closed_loop(veh, p["speed"], p["curvature"], g, model=model)
+        np.testing.assert_allclose(_sorted(row), _sorted(cl.poles()), atol=1e-9)
+
+
+def test_ratio_locus_keeps_k1_k2_fixed(veh):
+    g0 = fws.SteeringGains(0.05, 0.6, ratio=-1.0)
+    pz = fws.parameter_locus(veh, "ratio", [0.0], 5.0, 0.0, g0)
+    # a = 0, kappa = 0: lambda^2 + (V k2/f) lambda + V^2 k1/f (hand-derived).
+    ref = np.roots([1.0, 5.0 * 0.6 / 2.7, 25.0 * 0.05 / 2.7])
+    np.testing.assert_allclose(_sorted(pz.loci[0]), _sorted(ref), atol=1e-12)
+
+
+def test_redesign_and_cross_model(veh):
+    g0 = fws.SteeringGains(0.05, 0.6, ratio=-1.0)
+    kap = np.linspace(0.0, 0.25, 11)
+    same = fws.parameter_locus(veh, "curvature", kap, 5.0, 0.0, g0, redesign_pole=-1.0)
+    np.testing.assert_allclose(same.loci, -1.0, atol=1e-6)
+    cross = fws.parameter_locus(
+        veh,
+        "curvature",
+        kap,
+        5.0,
+        0.0,
+        g0,
+        model="exact",
+        redesign_pole=-1.0,
+        design_model="paper",
+    )
+    for k, row in zip(kap, cross.loci, strict=True):
+        gp = fws.double_root_gains(veh, 5.0, k, -1.0, -1.0, model="paper")
+        cl = fws.closed_loop(veh, 5.0, k, gp, model="exact")
+        np.testing.assert_allclose(_sorted(row), _sorted(cl.poles()), atol=1e-9)
+    # On a straight path both models agree; with curvature they do not.
+    np.testing.assert_allclose(cross.loci[0], -1.0, atol=1e-6)
+    assert np.abs(cross.loci[-1] + 1.0).max() > 0.05
+
+
+def test_branches_are_continuous(veh):
+    g0 = fws.SteeringGains(0.05, 0.6, ratio=-1.0)
+    vals = np.linspace(-0.2, 2.0, 2001)  # crosses real/complex transitions
+    pz = fws.parameter_locus(veh, "k1", vals, 5.0, 0.1, g0)
+    # The swapped assignment would jump by the gap between the branches.
+    swapped = np.abs(pz.loci[1:, ::-1] - pz.loci[:-1]).max(axis=1)
+    direct = np.abs(pz.loci[1:] - pz.loci[:-1]).max(axis=1)
+    assert np.all(direct <= swapped + 1e-12)
+    # Near a double root the roots move like sqrt(step); elsewhere the branch
+    # steps are tiny while the swapped assignment jumps by the branch gap.
+    assert np.median(direct) < 0.01 and swapped.max() > 1.0
+
+
+def test_parameter_locus_plot(veh):
+    g0 = fws.SteeringGains(0.05, 0.6, ratio=-1.0)
+    pz = fws.parameter_locus(veh, "ratio", np.linspace(-1.5, 0.9, 50), 5.0, 0.1, g0)
+    cplt = pz.plot(grid=False)
+    loci_lines = cplt.lines[0, 2]
+    assert len(loci_lines) == 2
+    np.testing.assert_allclose(loci_lines[0].get_xdata(), pz.loci[:, 0].real)
+    plt.close(cplt.figure)
+
+
+@given(st.floats(-50, 50), st.floats(-50, 50))
+def test_quadratic_roots_against_numpy(p1, p0):
+    r = quadratic_roots(p1, p0)
+    np.testing.assert_allclose(
+        _sorted(r),
+        _sorted(np.roots([1.0, p1, p0])),
+        atol=1e-7 * (1 + abs(p1) + abs(p0)),
+    )
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"name": "mass"}, "name must be one of"),
+        ({"values": []}, "values"),
+        ({"values": [np.nan]}, "values"),
+        ({"name": "speed", "values": [-1.0, 0.0, 1.0]}, "speed"),
+        ({"name": "k1", "redesign_pole": -1.0}, "redesign_pole"),
+        ({"model": "nonsense"}, "model"),
+    ],
+)
+def test_parameter_locus_bad_input(veh, kwargs, match):
+    args = {
+        "name": "ratio",
+        "values": [0.0, 0.5],
+        "speed": 5.0,
+        "curvature": 0.1,
+        "gains": fws.SteeringGains(0.05, 0.6, -1.0),
+    } | kwargs
+    with pytest.raises(ValueError, match=match):
+        fws.parameter_locus(veh, **args)
+
+
+def test_uncontrollable_redesign_raises(veh):
+    with pytest.raises(fws.UncontrollableError):
+        fws.parameter_locus(
+            veh,
+            "ratio",
+            [0.5, 1.0],
+            5.0,
+            0.0,
+            fws.SteeringGains(0.05, 0.6, -1.0),
+            redesign_pole=-1.0,
+        )
