@@ -36,8 +36,10 @@ def rng():
     return np.random.default_rng(20261121)
 
 
-_ARGS = [S.SYMBOLS[n] for n in ("speed", "wheelbase", "curvature", "ratio", "k1", "k2",
-                                "pole")]
+_ARGS = [
+    S.SYMBOLS[n]
+    for n in ("speed", "wheelbase", "curvature", "ratio", "k1", "k2", "pole")
+]
 
 
 def lambdify(expr):

@@ -31,8 +31,9 @@ def test_lateral_acceleration_matches_finite_differences_of_trajectory(veh):
 
     h = 1e-3
     t = np.arange(0.0, 8.0 + h / 2, h)
-    sol = solve_ivp(rhs, (0, 8), [0, 0, 0.3], t_eval=t, rtol=1e-12, atol=1e-12,
-                    method="DOP853")
+    sol = solve_ivp(
+        rhs, (0, 8), [0, 0, 0.3], t_eval=t, rtol=1e-12, atol=1e-12, method="DOP853"
+    )
     x, y, psi = sol.y
     xg = x + veh.rear_to_cg * np.cos(psi)
     yg = y + veh.rear_to_cg * np.sin(psi)
@@ -51,8 +52,10 @@ def test_yaw_acceleration_is_derivative_of_yaw_rate(veh, rng):
         speed = rng.uniform(-20, 20)
         df, dr = rng.uniform(-1.2, 1.2), rng.uniform(-1, 1)
         dfd, drd = rng.uniform(-1, 1), rng.uniform(-1, 1)
-        fd = (fws.yaw_rate(veh, speed, df + h * dfd, dr + h * drd)
-              - fws.yaw_rate(veh, speed, df - h * dfd, dr - h * drd)) / (2 * h)
+        fd = (
+            fws.yaw_rate(veh, speed, df + h * dfd, dr + h * drd)
+            - fws.yaw_rate(veh, speed, df - h * dfd, dr - h * drd)
+        ) / (2 * h)
         got = fws.yaw_acceleration(veh, speed, df, dr, dfd, drd)
         assert abs(got - fd) < 1e-6 * max(1.0, abs(fd))
 

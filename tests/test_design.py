@@ -86,8 +86,9 @@ def test_front_wheel_steering_is_regular_at_ratio_zero():
     """No special case at a = 0: the gains are continuous through it."""
     for model in ("exact", "paper"):
         at0 = fws.double_root_gains(VEH, 5.0, 0.1, 0.0, -1.0, model=model)
-        eps = fws.double_root_gains(VEH, 5.0, 0.1, np.array([-1e-9, 1e-9]), -1.0,
-                                    model=model)
+        eps = fws.double_root_gains(
+            VEH, 5.0, 0.1, np.array([-1e-9, 1e-9]), -1.0, model=model
+        )
         np.testing.assert_allclose(eps.k1, at0.k1, rtol=1e-7)
         np.testing.assert_allclose(eps.k2, at0.k2, rtol=1e-7)
     # paper eq. (44), hand-evaluated: k1 = f(lam^2/V^2 - k^2), k2 = -2 lam f / V
@@ -115,13 +116,26 @@ def test_ratio_one_on_curve_is_fine():
 
 @pytest.mark.parametrize(
     "kwargs, name",
-    [({"speed": 0.0}, "speed"), ({"speed": np.nan}, "speed"), ({"pole": 0.0}, "pole"),
-     ({"pole": 1.0}, "pole"), ({"pole": np.nan}, "pole"), ({"model": "x"}, "model"),
-     ({"ratio": np.inf}, "ratio"), ({"curvature": np.nan}, "curvature")],
+    [
+        ({"speed": 0.0}, "speed"),
+        ({"speed": np.nan}, "speed"),
+        ({"pole": 0.0}, "pole"),
+        ({"pole": 1.0}, "pole"),
+        ({"pole": np.nan}, "pole"),
+        ({"model": "x"}, "model"),
+        ({"ratio": np.inf}, "ratio"),
+        ({"curvature": np.nan}, "curvature"),
+    ],
 )
 def test_bad_arguments(kwargs, name):
-    args = {"speed": 5.0, "curvature": 0.1, "ratio": -1.0, "pole": -1.0,
-            "model": "exact", **kwargs}
+    args = {
+        "speed": 5.0,
+        "curvature": 0.1,
+        "ratio": -1.0,
+        "pole": -1.0,
+        "model": "exact",
+        **kwargs,
+    }
     with pytest.raises(ValueError, match=name):
         fws.double_root_gains(VEH, **args)
 

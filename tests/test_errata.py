@@ -20,15 +20,25 @@ VEH = fws.Vehicle(2.7, 1.35)
 def _arc_errors(x, y, psi, k):
     radius = 1.0 / k
     phi = np.unwrap(np.arctan2(y - radius, x))
-    return radius * (phi + np.pi / 2), radius - np.hypot(x, y - radius), psi - phi - np.pi / 2
+    return (
+        radius * (phi + np.pi / 2),
+        radius - np.hypot(x, y - radius),
+        psi - phi - np.pi / 2,
+    )
 
 
 def _drive_on_arc(speed, k, delta_f, duration=3.0):
     """Global-frame motion from (0, -1, 0.1) with constant steering."""
     glob = fws.global_frame_model(VEH, speed)
     t = np.linspace(0.0, duration, 301)
-    sol = solve_ivp(lambda t, x: glob.dynamics(t, x, [delta_f, 0.0]), (0, duration),
-                    [0.0, -1.0, 0.1], t_eval=t, rtol=1e-12, atol=1e-12)
+    sol = solve_ivp(
+        lambda t, x: glob.dynamics(t, x, [delta_f, 0.0]),
+        (0, duration),
+        [0.0, -1.0, 0.1],
+        t_eval=t,
+        rtol=1e-12,
+        atol=1e-12,
+    )
     return t, _arc_errors(*sol.y, k)
 
 
@@ -144,4 +154,5 @@ def test_erratum_7_reversing_flips_condition_35_only():
     # and the mirrored gains (-k1, -k2) are stable in reverse only if p0 stays
     # positive, which it need not: (36) keeps its forward form
     assert fws.is_stable(VEH, -5.0, k, -k1, -k2, a) == bool(
-        fwd.p0(-k1, -k2) > 0 and rev.p1(-k1, -k2) > 0)
+        fwd.p0(-k1, -k2) > 0 and rev.p1(-k1, -k2) > 0
+    )

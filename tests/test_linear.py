@@ -41,10 +41,12 @@ def test_matrices_equal_sympy(veh, rng, model):
         V, k = rng.uniform(-30, 30), rng.uniform(-0.3, 0.3)
         lin = fws.linearize(veh, V, k, model=model)
         args = (V, veh.wheelbase, k, 0, 0, 0, 0)
-        np.testing.assert_allclose(lin.A, np.asarray(fA(*args), float), rtol=1e-13,
-                                   atol=1e-14)
-        np.testing.assert_allclose(lin.B, np.asarray(fB(*args), float), rtol=1e-13,
-                                   atol=1e-14)
+        np.testing.assert_allclose(
+            lin.A, np.asarray(fA(*args), float), rtol=1e-13, atol=1e-14
+        )
+        np.testing.assert_allclose(
+            lin.B, np.asarray(fB(*args), float), rtol=1e-13, atol=1e-14
+        )
 
 
 def test_exact_front_entry_hand_value(veh):
@@ -71,12 +73,19 @@ def test_characteristic_polynomial_equals_sympy_and_eigenvalues(veh, rng, model)
         k1, k2 = rng.uniform(-2, 2, size=2)
         g = fws.SteeringGains(k1, k2, a)
         num = fws.characteristic_polynomial(veh, V, k, g, model=model)
-        ref = [1.0, f1(V, veh.wheelbase, k, a, k1, k2, 0), f0(V, veh.wheelbase, k, a,
-                                                               k1, k2, 0)]
+        ref = [
+            1.0,
+            f1(V, veh.wheelbase, k, a, k1, k2, 0),
+            f0(V, veh.wheelbase, k, a, k1, k2, 0),
+        ]
         np.testing.assert_allclose(num, ref, rtol=1e-12, atol=1e-12)
         cl = fws.closed_loop(veh, V, k, g, model=model)
-        np.testing.assert_allclose(np.sort_complex(cl.poles()),
-                                   np.sort_complex(np.roots(num)), rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(
+            np.sort_complex(cl.poles()),
+            np.sort_complex(np.roots(num)),
+            rtol=1e-9,
+            atol=1e-9,
+        )
 
 
 def test_closed_loop_outputs_are_steering_deviation(veh):
@@ -96,7 +105,9 @@ def test_characteristic_polynomial_broadcasts(veh):
     out = fws.characteristic_polynomial(veh, 5.0, 0.1, g)
     assert out.shape == (7, 3)
     for i, a in enumerate(ratios):
-        ref = fws.characteristic_polynomial(veh, 5.0, 0.1, fws.SteeringGains(0.2, 0.4, a))
+        ref = fws.characteristic_polynomial(
+            veh, 5.0, 0.1, fws.SteeringGains(0.2, 0.4, a)
+        )
         np.testing.assert_allclose(out[i], ref, rtol=1e-15)
 
 

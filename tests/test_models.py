@@ -54,10 +54,17 @@ def test_path_frame_matches_sympy_transformation(veh, rng):
 def test_front_steering_only_matches_textbook_single_track(veh, rng):
     """With delta_r = 0 the model is the rear-axle bicycle: psi_dot = V tan(delta)/f."""
     for _ in range(20):
-        speed, psi, delta = rng.uniform(-20, 20), rng.uniform(-3, 3), rng.uniform(-1.5, 1.5)
+        speed, psi, delta = (
+            rng.uniform(-20, 20),
+            rng.uniform(-3, 3),
+            rng.uniform(-1.5, 1.5),
+        )
         got = fws.global_frame_model(veh, speed).dynamics(0, [0, 0, psi], [delta, 0])
-        ref = [speed * math.cos(psi), speed * math.sin(psi),
-               speed * math.tan(delta) / veh.wheelbase]
+        ref = [
+            speed * math.cos(psi),
+            speed * math.sin(psi),
+            speed * math.tan(delta) / veh.wheelbase,
+        ]
         np.testing.assert_allclose(got, ref, rtol=1e-13, atol=1e-13)
 
 
@@ -102,8 +109,9 @@ def test_path_frame_agrees_with_global_frame_on_arc(veh, speed):
 def test_params_override_speed(veh):
     sys = fws.global_frame_model(veh, speed=5.0)
     t = np.linspace(0, 2, 21)
-    res = ct.input_output_response(sys, t, [[0.0] * 21, [0.0] * 21], [0, 0, 0],
-                                   params={"speed": -2.0})
+    res = ct.input_output_response(
+        sys, t, [[0.0] * 21, [0.0] * 21], [0, 0, 0], params={"speed": -2.0}
+    )
     np.testing.assert_allclose(res.states[0, -1], -4.0, rtol=1e-9)
 
 

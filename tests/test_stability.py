@@ -15,8 +15,9 @@ def _closed_loop_eigenvalues(veh, speed, curvature, k1, k2, ratio, model):
     c = fws.input_gain_factor(veh, curvature, model)
     f = veh.wheelbase
     n = np.broadcast(speed, curvature, k1, k2, ratio).shape
-    V, kap, k1, k2, a, c = (np.broadcast_to(v, n) for v in
-                            (speed, curvature, k1, k2, ratio, c))
+    V, kap, k1, k2, a, c = (
+        np.broadcast_to(v, n) for v in (speed, curvature, k1, k2, ratio, c)
+    )
     A = np.zeros(n + (2, 2))
     A[..., 0, 1] = V
     A[..., 1, 0] = -V * kap**2
@@ -50,8 +51,10 @@ def test_is_stable_agrees_with_eigenvalues_on_random_points(model):
 @given(
     model=st.sampled_from(["exact", "paper"]),
     speed=st.one_of(st.floats(1, 40), st.floats(-40, -1)),
-    curvature=st.floats(-0.3, 0.3), ratio=st.floats(-2, 2),
-    k1=st.floats(-3, 3), k2=st.floats(-3, 3),
+    curvature=st.floats(-0.3, 0.3),
+    ratio=st.floats(-2, 2),
+    k1=st.floats(-3, 3),
+    k2=st.floats(-3, 3),
 )
 def test_boundaries_reproduce_is_stable(model, speed, curvature, ratio, k1, k2):
     b1, b0 = fws.stability_boundaries(VEH, speed, curvature, ratio, model=model)
@@ -59,11 +62,18 @@ def test_boundaries_reproduce_is_stable(model, speed, curvature, ratio, k1, k2):
     assert both == fws.is_stable(VEH, speed, curvature, k1, k2, ratio, model=model)
 
 
-@given(model=st.sampled_from(["exact", "paper"]), curvature=st.floats(-0.3, 0.3),
-       ratio=st.floats(-2, 2), t=st.floats(-2, 2))
+@given(
+    model=st.sampled_from(["exact", "paper"]),
+    curvature=st.floats(-0.3, 0.3),
+    ratio=st.floats(-2, 2),
+    t=st.floats(-2, 2),
+)
 def test_points_on_boundary_have_a_zero_coefficient(model, curvature, ratio, t):
-    for b, coef in zip(fws.stability_boundaries(VEH, 5.0, curvature, ratio, model),
-                       ("p1", "p0"), strict=True):
+    for b, coef in zip(
+        fws.stability_boundaries(VEH, 5.0, curvature, ratio, model),
+        ("p1", "p0"),
+        strict=True,
+    ):
         if b.degenerate:
             continue
         # a point on the line: foot of the normal plus t along the direction
@@ -71,8 +81,14 @@ def test_points_on_boundary_have_a_zero_coefficient(model, curvature, ratio, t):
         k2 = -b.gamma * b.beta - t * b.alpha
         cc = fws.characteristic_coefficients(VEH, 5.0, curvature, ratio, model)
         val = getattr(cc, coef)(k1, k2)
-        scale = max(abs(cc.alpha1) + abs(cc.beta1), abs(cc.alpha0) + abs(cc.beta0)
-                    + abs(cc.gamma0), 1.0) * 10
+        scale = (
+            max(
+                abs(cc.alpha1) + abs(cc.beta1),
+                abs(cc.alpha0) + abs(cc.beta0) + abs(cc.gamma0),
+                1.0,
+            )
+            * 10
+        )
         assert abs(val) < 1e-10 * scale
 
 
@@ -82,11 +98,16 @@ def test_lines_do_not_depend_on_speed_but_reversing_flips_eq35_side():
         fast = fws.stability_boundaries(VEH, 20.0, 0.1, -0.5, model)
         rev = fws.stability_boundaries(VEH, -5.0, 0.1, -0.5, model)
         for p, q in zip(fwd, fast, strict=True):
-            assert (p.alpha, p.beta, p.gamma) == pytest.approx((q.alpha, q.beta, q.gamma))
+            assert (p.alpha, p.beta, p.gamma) == pytest.approx(
+                (q.alpha, q.beta, q.gamma)
+            )
         # (35): same line, opposite side; (36): identical
-        assert (rev[0].alpha, rev[0].beta) == pytest.approx((-fwd[0].alpha, -fwd[0].beta))
+        assert (rev[0].alpha, rev[0].beta) == pytest.approx(
+            (-fwd[0].alpha, -fwd[0].beta)
+        )
         assert (rev[1].alpha, rev[1].beta, rev[1].gamma) == pytest.approx(
-            (fwd[1].alpha, fwd[1].beta, fwd[1].gamma))
+            (fwd[1].alpha, fwd[1].beta, fwd[1].gamma)
+        )
 
 
 def test_ratio_one_straight_path():
@@ -107,8 +128,9 @@ def test_segment_lies_on_line_and_in_box():
     for b in (b1, b0):
         seg = b.segment((-1, 1), (-1, 1))
         assert seg is not None and seg.shape == (2, 2)
-        np.testing.assert_allclose(b.alpha * seg[:, 0] + b.beta * seg[:, 1] + b.gamma,
-                                   0.0, atol=1e-14)
+        np.testing.assert_allclose(
+            b.alpha * seg[:, 0] + b.beta * seg[:, 1] + b.gamma, 0.0, atol=1e-14
+        )
         assert np.all(np.abs(seg) <= 1 + 1e-12)
     far = fws.stability_boundaries(VEH, 5.0, 0.0, 1.0)[0]
     assert far.segment((0.5, 1.0), (-1, 1)) is None  # k1 = 0 misses the box

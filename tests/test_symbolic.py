@@ -15,8 +15,11 @@ def _zero(expr):
 
 def test_constraints_give_eqs_8_to_10():
     rhs = S.global_frame_rhs()
-    printed = [V * sp.cos(psi + dr), V * sp.sin(psi + dr),
-               V * sp.sin(df - dr) / (f * sp.cos(df))]
+    printed = [
+        V * sp.cos(psi + dr),
+        V * sp.sin(psi + dr),
+        V * sp.sin(df - dr) / (f * sp.cos(df)),
+    ]
     for got, ref in zip(rhs, printed, strict=True):
         assert _zero(got - ref)
 
@@ -24,8 +27,11 @@ def test_constraints_give_eqs_8_to_10():
 def test_transformation_gives_corrected_eqs_17_to_19():
     rhs = S.path_frame_rhs()
     s_dot = V * sp.cos(th + dr) / (1 - kap * e)
-    printed = [s_dot, V * sp.sin(th + dr),
-               -kap * s_dot + V * sp.sin(df - dr) / (f * sp.cos(df))]
+    printed = [
+        s_dot,
+        V * sp.sin(th + dr),
+        -kap * s_dot + V * sp.sin(df - dr) / (f * sp.cos(df)),
+    ]
     for got, ref in zip(rhs, printed, strict=True):
         assert _zero(got - ref)
 
@@ -41,16 +47,22 @@ def test_exact_jacobian_front_entry():
 
 def test_paper_characteristic_polynomial_is_eq34():
     p = S.characteristic_polynomial("paper").as_expr()
-    printed = (lam**2 + V / f * (f * a * k1 + (1 - a) * k2) * lam
-               + V**2 / f * ((1 - a) * k1 + (1 - a * k2) * f * kap**2))
+    printed = (
+        lam**2
+        + V / f * (f * a * k1 + (1 - a) * k2) * lam
+        + V**2 / f * ((1 - a) * k1 + (1 - a * k2) * f * kap**2)
+    )
     assert sp.expand(p - printed) == 0
 
 
 def test_exact_polynomial_replaces_one_minus_a_by_c_minus_a():
     c = 1 + f**2 * kap**2
     p = S.characteristic_polynomial("exact").as_expr()
-    ref = (lam**2 + V / f * (f * a * k1 + (c - a) * k2) * lam
-           + V**2 / f * ((c - a) * k1 + (1 - a * k2) * f * kap**2))
+    ref = (
+        lam**2
+        + V / f * (f * a * k1 + (c - a) * k2) * lam
+        + V**2 / f * ((c - a) * k1 + (1 - a * k2) * f * kap**2)
+    )
     assert sp.expand(p - ref) == 0
 
 

@@ -26,13 +26,22 @@ def test_frozen():
         ({"wheelbase": math.inf, "rear_to_cg": 0.0}, "wheelbase"),
         ({"wheelbase": 2.7, "rear_to_cg": -0.1}, "rear_to_cg"),
         ({"wheelbase": 2.7, "rear_to_cg": 2.8}, "rear_to_cg"),
-        ({"wheelbase": 2.7, "rear_to_cg": 1.0, "max_steer_front": 0.0}, "max_steer_front"),
-        ({"wheelbase": 2.7, "rear_to_cg": 1.0, "max_steer_rear": math.pi / 2},
-         "max_steer_rear"),
-        ({"wheelbase": 2.7, "rear_to_cg": 1.0, "max_steer_rate_front": -1.0},
-         "max_steer_rate_front"),
-        ({"wheelbase": 2.7, "rear_to_cg": 1.0, "max_steer_rate_rear": math.nan},
-         "max_steer_rate_rear"),
+        (
+            {"wheelbase": 2.7, "rear_to_cg": 1.0, "max_steer_front": 0.0},
+            "max_steer_front",
+        ),
+        (
+            {"wheelbase": 2.7, "rear_to_cg": 1.0, "max_steer_rear": math.pi / 2},
+            "max_steer_rear",
+        ),
+        (
+            {"wheelbase": 2.7, "rear_to_cg": 1.0, "max_steer_rate_front": -1.0},
+            "max_steer_rate_front",
+        ),
+        (
+            {"wheelbase": 2.7, "rear_to_cg": 1.0, "max_steer_rate_rear": math.nan},
+            "max_steer_rate_rear",
+        ),
     ],
 )
 def test_invalid_fields_name_the_field(kwargs, field):
