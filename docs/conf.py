@@ -1,0 +1,306 @@
+"""Sphinx configuration for the fws_control documentation.
+
+Build (warnings are errors, the gallery is executed)::
+
+    python -m sphinx -W --keep-going -b html docs docs/_build/html
+
+Set ``FWS_DOCS_SKIP_GALLERY=1`` to skip executing the examples (faster
+iteration on the text; the gallery pages then have no figures).
+"""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import os
+import re
+import sys
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+DOCS = Path(__file__).resolve().parent
+ROOT = DOCS.parent
+sys.path.insert(0, str(ROOT))
+
+import fws_control  # noqa: E402
+
+# -- Project -----------------------------------------------------------------
+
+project = "fws_control"
+author = "fws_control developers"
+copyright = "2026, fws_control developers"
+release = fws_control.__version__
+version = ".".join(release.split(".")[:2])
+
+# -- General -----------------------------------------------------------------
+
+extensions = [
+    "sphinx.ext.autodoc",
+    "sphinx.ext.autosummary",
+    "sphinx.ext.intersphinx",
+    "sphinx.ext.mathjax",
+    "sphinx.ext.viewcode",
+    "numpydoc",
+    "myst_parser",
+    "sphinx_gallery.gen_gallery",
+]
+
+source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
+root_doc = "index"
+templates_path = ["_templates"]
+exclude_patterns = [
+    "_build",
+    "_intersphinx",
+    "Thumbs.db",
+    ".DS_Store",
+    "auto_examples/*.ipynb",
+    "auto_examples/*.py",
+    "auto_examples/*.zip",
+    "auto_examples/*.json",
+    "auto_examples/*.md5",
+]
+default_role = "py:obj"
+pygments_style = "sphinx"
+nitpicky = False
+
+# -- MyST (Markdown pages; docs/errata.md uses $...$ math) -------------------
+
+myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
+myst_heading_anchors = 3
+myst_dmath_double_inline = True
+
+# -- autodoc / autosummary / numpydoc ----------------------------------------
+
+autosummary_generate = True
+autosummary_imported_members = False
+autodoc_default_options = {"member-order": "bysource"}
+autodoc_typehints = "none"  # numpydoc's Parameters sections carry the types
+autodoc_class_signature = "mixed"
+add_module_names = False
+
+numpydoc_show_class_members = False
+numpydoc_class_members_toctree = False
+numpydoc_attributes_as_param_list = True
+numpydoc_xref_param_type = True
+numpydoc_xref_aliases = {
+    # this package
+    "Vehicle": "fws_control.Vehicle",
+    "SteeringGains": "fws_control.SteeringGains",
+    "StabilityBoundary": "fws_control.StabilityBoundary",
+    "StabilityChart": "fws_control.StabilityChart",
+    "ChartPanel": "fws_control.ChartPanel",
+    "AffineCoefficients": "fws_control.AffineCoefficients",
+    "SimulationResult": "fws_control.SimulationResult",
+    "BatchResult": "fws_control.BatchResult",
+    "Projection": "fws_control.paths.Projection",
+    "Path": "fws_control.paths.Path",
+    "Straight": "fws_control.paths.Straight",
+    "Arc": "fws_control.paths.Arc",
+    "Clothoid": "fws_control.paths.Clothoid",
+    "Spline": "fws_control.paths.Spline",
+    "PathChain": "fws_control.paths.PathChain",
+    # python-control
+    "StateSpace": "control.StateSpace",
+    "TransferFunction": "control.TransferFunction",
+    "NonlinearIOSystem": "control.NonlinearIOSystem",
+    "InterconnectedSystem": "control.InterconnectedSystem",
+    "PoleZeroData": "control.PoleZeroData",
+    # numpy / matplotlib
+    "ndarray": "numpy.ndarray",
+    "array_like": ":term:`numpy:array_like`",
+    "array-like": ":term:`numpy:array_like`",
+    "Figure": "matplotlib.figure.Figure",
+    "Axes": "matplotlib.axes.Axes",
+}
+numpydoc_xref_ignore = {
+    "optional",
+    "default",
+    "or",
+    "of",
+    "shape",
+    "the",
+    "and",
+    "each",
+    "one",
+    "per",
+    "run",
+    "runs",
+    "path",
+    "object",
+    "None",
+    "True",
+    "False",
+}
+
+# -- intersphinx (offline) ---------------------------------------------------
+# The build machines reach package registries only, so the projects'
+# objects.inv cannot be downloaded (a failed fetch is a warning, fatal with
+# -W). docs/_intersphinx/ holds inventories generated from the installed
+# packages by make_inventories.py; FWS_DOCS_ONLINE_INTERSPHINX=1 uses the
+# projects' own inventories instead.
+
+_ONLINE = os.environ.get("FWS_DOCS_ONLINE_INTERSPHINX", "") not in ("", "0")
+
+
+def _inventory(name: str):
+    return None if _ONLINE else str(DOCS / "_intersphinx" / f"{name}.inv")
+
+
+def _control_url() -> str:
+    import control
+
+    return f"https://python-control.readthedocs.io/en/{control.__version__}/"
+
+
+intersphinx_mapping = {
+    "python": ("https://docs.python.org/3/", _inventory("python")),
+    "numpy": ("https://numpy.org/doc/stable/", _inventory("numpy")),
+    "scipy": ("https://docs.scipy.org/doc/scipy/", _inventory("scipy")),
+    "matplotlib": ("https://matplotlib.org/stable/", _inventory("matplotlib")),
+    "control": (_control_url(), _inventory("control")),
+}
+intersphinx_timeout = 10
+
+# -- sphinx-gallery ----------------------------------------------------------
+
+_SKIP_GALLERY = os.environ.get("FWS_DOCS_SKIP_GALLERY", "") not in ("", "0")
+
+sphinx_gallery_conf = {
+    "examples_dirs": str(ROOT / "examples"),
+    "gallery_dirs": "auto_examples",
+    "filename_pattern": r"/plot_",
+    "plot_gallery": "False" if _SKIP_GALLERY else "True",
+    "within_subsection_order": "FileNameSortKey",
+    "doc_module": ("fws_control",),
+    "backreferences_dir": "gen_modules/backreferences",
+    "reference_url": {"fws_control": None},
+    "image_scrapers": ("matplotlib",),
+    "matplotlib_animations": False,
+    "remove_config_comments": True,
+    "min_reported_time": 1,
+    "show_memory": False,
+    "download_all_examples": False,
+    "only_warn_on_example_error": False,
+    "abort_on_example_error": False,
+}
+
+# -- HTML --------------------------------------------------------------------
+
+html_theme = "pydata_sphinx_theme"
+html_title = f"fws_control {release}"
+html_static_path = ["_static"]
+html_css_files = ["custom.css"]
+html_theme_options = {
+    "navigation_with_keys": False,
+    "show_toc_level": 2,
+    "secondary_sidebar_items": ["page-toc", "sourcelink"],
+    "footer_start": ["copyright"],
+    "footer_end": ["sphinx-version"],
+}
+html_sidebars = {"**": ["sidebar-nav-bs"], "index": []}
+html_show_sourcelink = True
+
+# -- API completeness check --------------------------------------------------
+
+
+def _documented_names() -> set[str]:
+    """Every ``fws_control...`` name listed in an autosummary of api.rst."""
+    text = (DOCS / "api.rst").read_text(encoding="utf-8")
+    names: set[str] = set()
+    module = "fws_control"
+    in_autosummary = False
+    for line in text.splitlines():
+        m = re.match(r"\.\. currentmodule:: (\S+)", line)
+        if m:
+            module = m.group(1)
+            continue
+        if line.startswith(".. autosummary::"):
+            in_autosummary = True
+            continue
+        if in_autosummary:
+            if line and not line[0].isspace():
+                in_autosummary = False
+                continue
+            item = line.strip()
+            if not item or item.startswith(":"):
+                continue
+            names.add(item if item.startswith("fws_control") else f"{module}.{item}")
+    return names
+
+
+def _resolve(name: str):
+    module, _, attr = name.rpartition(".")
+    try:
+        return getattr(importlib.import_module(module), attr)
+    except (ImportError, AttributeError):
+        return None
+
+
+def _is_constant(obj) -> bool:
+    return isinstance(obj, (bool, int, float, str, tuple, dict, frozenset))
+
+
+def _public_names() -> dict[str, object]:
+    """``{qualified name: object}`` for every public name of the package.
+
+    Public: listed in ``fws_control.__all__`` or in a module's ``__all__``.
+    """
+    out = {}
+    for name in fws_control.__all__:
+        obj = getattr(fws_control, name)
+        if not inspect.ismodule(obj):
+            out[f"fws_control.{name}"] = obj
+    pkg = Path(fws_control.__file__).parent
+    for path in sorted(pkg.glob("*.py")):
+        if path.stem.startswith("_"):
+            continue
+        modname = f"fws_control.{path.stem}"
+        mod = importlib.import_module(modname)
+        for name in getattr(mod, "__all__", ()):
+            obj = getattr(mod, name)
+            if not inspect.ismodule(obj):
+                out[f"{modname}.{name}"] = obj
+    return out
+
+
+def _check_api_complete(app) -> None:
+    """Warn (fatal with -W) for a public name that api.rst does not list.
+
+    A function or class counts as documented under any of its public names
+    (``fws_control.simulate`` or ``fws_control.simulation.simulate``); a
+    constant only under its own qualified name.
+    """
+    from sphinx.util import logging
+
+    logger = logging.getLogger("fws_control.api")
+    documented = _documented_names()
+    documented_ids = set()
+    for name in documented:
+        obj = _resolve(name)
+        if obj is None:
+            logger.warning(
+                "docs/api.rst lists %s, which does not exist",
+                name,
+                type="fws_control",
+                subtype="api",
+            )
+        elif not _is_constant(obj):
+            documented_ids.add(id(obj))
+    for name, obj in sorted(_public_names().items()):
+        if name in documented:
+            continue
+        if not _is_constant(obj) and id(obj) in documented_ids:
+            continue
+        logger.warning(
+            "public name %s is missing from docs/api.rst",
+            name,
+            type="fws_control",
+            subtype="api",
+        )
+
+
+def setup(app):
+    app.connect("builder-inited", _check_api_complete)
