@@ -1,0 +1,288 @@
+"""Fast engine vs python-control reference, eq. (13) vs finite differences,
+singular runs, limits, and the result object."""
+
+import math
+
+import control as ct
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import fws_control as fws
+from fws_control.paths import AmbiguousProjectionError, Arc, Clothoid, Straight
+
+VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+TIGHT = {
+    "solve_ivp_method": "DOP853",
+    "solve_ivp_kwargs": {"rtol": 1e-10, "atol": 1e-12},
+}
+
+# The paper's scenarios (section 4.3): (speed, curvature, y0, feedforward)
+SCENARIOS = {
+    "straight_5": (5.0, 0.0, 2.0, False),
+    "curve_5": (5.0, 0.1, -5.0, True),
+    "straight_20": (20.0, 0.0, 2.0, False),
+    "curve_20": (20.0, 0.01, -10.0, True),
+}
+
+
+def _path(kappa):
+    return Straight() if kappa == 0 else Arc(curvature=kappa)
+
+
+def _reference(vehicle, path, gains, speed, x0, t, feedforward=True, **kw):
+    sys = fws.closed_loop_system(vehicle, path, gains, speed, feedforward, **kw)
+    resp = ct.input_output_response(sys, t, initial_state=x0, **TIGHT)
+    return dict(zip(sys.output_labels, resp.outputs, strict=True))
+
+
+@pytest.mark.parametrize("model", ["exact", "paper"])
+@pytest.mark.parametrize("name", list(SCENARIOS))
+def test_fast_engine_agrees_with_interconnected_reference(name, model):
+    V, kappa, y0, ff = SCENARIOS[name]
+    path = _path(kappa)
+    ratios = [-1.0, -0.5, 0.0, 0.5] + ([1.0] if kappa else [])
+    for a in ratios:
+        g = fws.double_root_gains(VEH, V, kappa, a, -1.0, model=model)
+        res = fws.simulate(
+            VEH, path, g, V, (0.0, y0, 0.0), 10.0, feedforward=ff, dt=0.05
+        )
+        if not res.ok:
+            # a = 1 on the curves: huge gains drive |delta_f| to pi/2, at once at
+            # 5 m/s (t_stop = 0) and after a few hundredths of a second at 20 m/s
+            assert res.status == "singular_steering" and a == 1.0
+            df0 = math.atan(2.7 * kappa) * ff - g.k1 * res.e[0] - g.k2 * res.theta[0]
+            if res.t_stop == 0.0:
+                assert abs(df0) >= math.pi / 2
+                continue
+            # the reference (global frame) heads for the same singularity
+            t_ref = np.linspace(0.0, 0.999 * res.t_stop, 21)
+            ref = _reference(VEH, path, g, V, [0.0, y0, 0.0], t_ref, ff)
+            near = fws.simulate(
+                VEH, path, g, V, (0.0, y0, 0.0), t_ref[-1], feedforward=ff, t_eval=t_ref
+            )
+            np.testing.assert_allclose(near.e, ref["e"], rtol=0, atol=1e-6)
+            assert abs(ref["delta_f"][-1]) > math.pi / 2 - 0.1
+            continue
+        ref = _reference(VEH, path, g, V, [0.0, y0, 0.0], res.t, ff)
+        np.testing.assert_allclose(res.e, ref["e"], rtol=0, atol=1e-6)
+        np.testing.assert_allclose(res.theta, ref["theta"], rtol=0, atol=1e-6)
+        np.testing.assert_allclose(res.x, ref["x"], rtol=0, atol=1e-6)
+        np.testing.assert_allclose(res.y, ref["y"], rtol=0, atol=1e-6)
+        # psi: continuous, same branch as the global model's integral
+        np.testing.assert_allclose(res.psi, ref["psi"], rtol=0, atol=1e-8)
+        np.testing.assert_allclose(res.delta_f, ref["delta_f"], rtol=0, atol=1e-7)
+        np.testing.assert_allclose(res.delta_r, ref["delta_r"], rtol=0, atol=1e-7)
+
+
+def test_front_steering_matches_independent_kinematic_single_track():
+    """Global-frame model with delta_r = 0 vs psi' = V tan(delta)/f."""
+    V, f = 7.0, VEH.wheelbase
+
+    def delta(t):
+        return 0.4 * np.sin(0.8 * t) + 0.1
+
+    def single_track(t, z):
+        return [V * np.cos(z[2]), V * np.sin(z[2]), V * np.tan(delta(t)) / f]
+
+    t = np.linspace(0.0, 12.0, 241)
+    z0 = [1.0, -2.0, 0.3]
+    ind = solve_ivp(single_track, (0, 12), z0, t_eval=t, rtol=1e-11, atol=1e-12)
+    sys = fws.global_frame_model(VEH, speed=V)
+    u = np.vstack([delta(t), np.zeros_like(t)])
+    # the input is interpolated linearly by python-control: use a fine grid
+    tf = np.linspace(0.0, 12.0, 48001)
+    uf = np.vstack([delta(tf), np.zeros_like(tf)])
+    resp = ct.input_output_response(sys, tf, inputs=uf, initial_state=z0, **TIGHT)
+    assert u.shape == (2, t.size)
+    np.testing.assert_allclose(resp.states[:, ::200], ind.y, atol=2e-6)
+
+
+def _fd_lateral_accel(res, d):
+    """Lateral acceleration of G from 5-point second differences of its position.
+
+    Returns values at ``res.t[2:-2]``.
+    """
+    xg = res.x + d * np.cos(res.psi)
+    yg = res.y + d * np.sin(res.psi)
+    h = res.t[1] - res.t[0]
+
+    def d2(z):
+        return (-z[4:] + 16 * z[3:-1] - 30 * z[2:-2] + 16 * z[1:-3] - z[:-4]) / (
+            12 * h**2
+        )
+
+    psi = res.psi[2:-2]
+    return -d2(xg) * np.sin(psi) + d2(yg) * np.cos(psi)
+
+
+@pytest.mark.parametrize(
+    "path, V, x0, ff",
+    [
+        (Arc(curvature=0.1), 5.0, (0.0, -5.0, 0.0), True),
+        (Straight(), 20.0, (0.0, 2.0, 0.0), False),
+        # varying curvature: exercises the f*kappa'(s)*s_dot term of the rate
+        (Clothoid(0.0, 0.08, length=200.0), 6.0, (1.0, -1.5, 0.2), True),
+    ],
+)
+def test_lateral_acceleration_and_rates_match_finite_differences(path, V, x0, ff):
+    g = fws.SteeringGains(k1=0.15, k2=0.8, ratio=-0.5)
+    res = fws.simulate(VEH, path, g, V, x0, 8.0, feedforward=ff, dt=2e-3)
+    assert res.ok
+    fd = _fd_lateral_accel(res, VEH.rear_to_cg)
+    scale = np.max(np.abs(res.lateral_accel))
+    np.testing.assert_allclose(res.lateral_accel[2:-2], fd, atol=1e-6 * scale + 5e-6)
+    for name in ("delta_f", "delta_r"):
+        sig = getattr(res, name)
+        # 4th-order central difference
+        fd_rate = (-sig[4:] + 8 * sig[3:-1] - 8 * sig[1:-3] + sig[:-4]) / (12 * 2e-3)
+        rate = getattr(res, f"{name}_rate")[2:-2]
+        np.testing.assert_allclose(rate, fd_rate, atol=1e-6 * np.max(np.abs(rate)))
+
+
+def test_singular_steering_at_start_is_reported_not_raised():
+    # paper gains at 5 m/s, a = 0.5, pole -2: k1*e0 > pi/2
+    g = fws.double_root_gains(VEH, 5.0, 0.0, 0.5, -2.0)
+    assert g.k1 * 2.0 > math.pi / 2
+    res = fws.simulate(
+        VEH, Straight(), g, 5.0, (0.0, 2.0, 0.0), 10.0, feedforward=False
+    )
+    assert res.status == "singular_steering" and res.singular and not res.ok
+    assert res.t_stop == 0.0 and res.t.tolist() == [0.0]
+    assert res.delta_f[0] == pytest.approx(-g.k1 * 2.0)
+    assert np.isnan(res.lateral_accel[0])  # eq. (13) is undefined there
+    assert "pi/2" in res.message
+
+
+def test_singular_steering_during_run_stops_there():
+    # k2 < 0 feeds the heading back positively: delta_f runs to pi/2
+    g = fws.SteeringGains(k1=0.1, k2=-0.5, ratio=0.0)
+    res = fws.simulate(
+        VEH, Straight(), g, 5.0, (0.0, 1.0, 0.0), 10.0, feedforward=False
+    )
+    assert res.status == "singular_steering"
+    assert 0.0 < res.t_stop < 10.0
+    assert res.t[-1] <= res.t_stop < res.t[-1] + 0.01 + 1e-12
+    assert np.all(np.abs(res.delta_f) < math.pi / 2)
+    # the data before the stop are the reference's
+    ref = _reference(VEH, Straight(), g, 5.0, [0.0, 1.0, 0.0], res.t[:-5], False)
+    np.testing.assert_allclose(res.e[:-5], ref["e"], atol=1e-6)
+
+
+def test_singular_curvature_when_driving_into_the_centre():
+    # no steering, heading +y from (0, 5) towards the centre (0, 10) of the
+    # circle: 1 - kappa*e = 0 after 5 m, i.e. at t = 1 s exactly
+    g = fws.SteeringGains(0.0, 0.0, 0.0)
+    res = fws.simulate(
+        VEH, Arc(0.1), g, 5.0, (0.0, 5.0, math.pi / 2), 3.0, feedforward=False
+    )
+    assert res.status == "singular_curvature"
+    assert res.t_stop == pytest.approx(1.0, abs=1e-9)
+    np.testing.assert_allclose(res.y, 5.0 + 5.0 * res.t, atol=1e-9)
+
+
+def test_end_of_open_path():
+    g = fws.SteeringGains(0.0, 0.0, 0.0)
+    res = fws.simulate(
+        VEH, Straight(length=20.0), g, 5.0, (0.0, 1.0, 0.0), 10.0, feedforward=False
+    )
+    assert res.status == "end_of_path"
+    assert res.t_stop == pytest.approx(4.0, abs=1e-6)  # s = V t reaches 20 m
+    np.testing.assert_allclose(res.s, 5.0 * res.t, atol=1e-9)
+
+
+def test_angle_saturation_agrees_with_reference():
+    lim = fws.Vehicle(2.7, 1.35, max_steer_front=0.15, max_steer_rear=0.05)
+    g = fws.double_root_gains(lim, 5.0, 0.1, -1.0, -1.0)
+    res = fws.simulate(lim, Arc(0.1), g, 5.0, (0.0, -5.0, 0.0), 10.0, dt=0.05)
+    assert res.ok
+    assert np.max(res.delta_f) == pytest.approx(0.15)  # saturation is active
+    assert np.min(res.delta_r) == pytest.approx(-0.05)
+    ref = _reference(lim, Arc(0.1), g, 5.0, [0.0, -5.0, 0.0], res.t)
+    np.testing.assert_allclose(res.e, ref["e"], atol=1e-6)
+
+
+def test_rate_limited_actuator_agrees_with_reference_and_limits_rates():
+    lim = fws.Vehicle(2.7, 1.35, max_steer_rate_front=0.2, max_steer_rate_rear=0.1)
+    g = fws.double_root_gains(lim, 5.0, 0.0, -0.5, -1.0)
+    x0 = (0.0, 2.0, 0.0)
+    res = fws.simulate(
+        lim,
+        Straight(),
+        g,
+        5.0,
+        x0,
+        10.0,
+        feedforward=False,
+        dt=1e-3,
+        actuator_time_constant=0.1,
+    )
+    assert res.ok
+    assert np.max(np.abs(res.delta_f_rate)) == pytest.approx(0.2)
+    assert np.max(np.abs(res.delta_r_rate)) == pytest.approx(0.1)
+    # actuator starts at the command: delta(0) = command(0)
+    assert res.delta_f[0] == pytest.approx(-g.k1 * 2.0)
+    # reference: actuator block states appended after the vehicle's
+    x0_ref = [*x0, -g.k1 * 2.0, -g.ratio * g.k1 * 2.0]
+    ref = _reference(
+        lim, Straight(), g, 5.0, x0_ref, res.t[::50], False, actuator_time_constant=0.1
+    )
+    np.testing.assert_allclose(res.e[::50], ref["e"], atol=1e-6)
+    fd = _fd_lateral_accel(res, lim.rear_to_cg)
+    # eq. (13) uses the actuator rates; the rate is only piecewise smooth, so
+    # compare away from the switching instants of the clip
+    rf = res.delta_f_rate[2:-2]
+    rr = res.delta_r_rate[2:-2]
+    smooth = (np.abs(np.abs(rf) - 0.2) > 1e-3) & (np.abs(np.abs(rr) - 0.1) > 1e-3)
+    np.testing.assert_allclose(res.lateral_accel[2:-2][smooth], fd[smooth], atol=1e-4)
+
+
+def test_psi_keeps_the_given_branch_and_is_continuous():
+    g = fws.double_root_gains(VEH, 5.0, 0.1, -1.0, -1.0)
+    psi0 = 2 * math.pi + 0.1
+    res = fws.simulate(VEH, Arc(0.1), g, 5.0, (0.0, -5.0, psi0), 20.0)
+    assert res.psi[0] == pytest.approx(psi0)
+    assert np.max(np.abs(np.diff(res.psi))) < 0.05
+    assert res.theta[0] == pytest.approx(0.1)
+    # more than one lap (heading of the path wraps); psi grows like kappa*V*t
+    assert res.psi[-1] - res.psi[0] > 2 * math.pi
+
+
+def test_result_to_pandas_and_plot():
+    g = fws.double_root_gains(VEH, 5.0, 0.1, -1.0, -1.0)
+    res = fws.simulate(VEH, Arc(0.1), g, 5.0, (0.0, -5.0, 0.0), 5.0, dt=0.1)
+    df = res.to_pandas()
+    assert df.index.name == "t" and len(df) == 51
+    np.testing.assert_array_equal(df["e"].to_numpy(), res.e)
+    assert df.attrs["status"] == "ok"
+    fig = res.plot(label="a=-1")
+    labels = [ax.get_ylabel() for ax in fig.axes]
+    assert "lateral error e [m]" in labels and "front steering δf [deg]" in labels
+    # steering is plotted in degrees
+    line = fig.axes[3].get_lines()[0]
+    np.testing.assert_allclose(line.get_ydata(), np.degrees(res.delta_f))
+    plt.close(fig)
+
+
+def test_invalid_arguments():
+    g = fws.SteeringGains(0.1, 0.5, 0.0)
+    with pytest.raises(ValueError, match="speed"):
+        fws.simulate(VEH, Straight(), g, 0.0, (0, 1, 0), 5.0)
+    with pytest.raises(ValueError, match="duration"):
+        fws.simulate(VEH, Straight(), g, 5.0, (0, 1, 0), -1.0)
+    with pytest.raises(ValueError, match="initial_state"):
+        fws.simulate(VEH, Straight(), g, 5.0, (0, 1), 5.0)
+    with pytest.raises(ValueError, match="simulate_batch"):
+        fws.simulate(
+            VEH,
+            Straight(),
+            fws.SteeringGains([0.1, 0.2], 0.5, 0.0),
+            5.0,
+            (0, 1, 0),
+            5.0,
+        )
+    with pytest.raises(ValueError, match="t_eval"):
+        fws.simulate(VEH, Straight(), g, 5.0, (0, 1, 0), 5.0, t_eval=[0.0, 6.0])
+    with pytest.raises(AmbiguousProjectionError):
+        fws.simulate(VEH, Arc(0.1), g, 5.0, (0.0, 10.0, 0.0), 5.0)  # the centre
