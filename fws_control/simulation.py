@@ -433,7 +433,7 @@ class _Engine:
         kappa = self.curvature(Y[0])
         df, _ = self.steering(Y, kappa)
         out = np.full((3, Y.shape[1]), np.inf)
-        out[0] = np.cos(df)
+        out[0] = 0.5 * math.pi - np.abs(df)
         out[1] = 1.0 - kappa * Y[1]
         if self.open_length is not None:
             # The offset lets a run start exactly at s = 0 (or at the end).
@@ -454,8 +454,8 @@ _STOP_MESSAGES = {
 
 
 #: A solver failure is attributed to a singular state when a run is this
-#: close to it (``cos(delta_f)``, ``1 - kappa*e`` or the relative distance to
-#: the end of the path).
+#: close to it (``pi/2 - |delta_f|``, ``1 - kappa*e`` or the relative distance
+#: to the end of the path).
 _COLLAPSE_MARGIN = 1e-3
 
 
