@@ -103,7 +103,7 @@ class AmbiguousProjectionError(ValueError):
     """
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Projection:
     """Nearest point of a path to one or more points.
 
@@ -170,7 +170,7 @@ def _finite_array(name: str, value: Any) -> Array:
             raise ValueError(f"{name} must be finite, got {value!r}")
         idx = tuple(int(i) for i in np.argwhere(bad)[0])
         raise ValueError(
-            f"{name} must be finite, got {arr[idx]!r} at index {idx} "
+            f"{name} must be finite, got {float(arr[idx])!r} at index {idx} "
             f"({int(bad.sum())} non-finite value(s))"
         )
     return arr
@@ -515,10 +515,10 @@ class Path(ABC):
         if strict and not np.all(unique):
             i = int(np.flatnonzero(~unique)[0])
             raise AmbiguousProjectionError(
-                f"point (x, y) = ({px[i]!r}, {py[i]!r}) has no unique nearest point "
-                f"on {_fmt(self)}: separate parts of the path lie at the same "
-                f"distance {dist[i]:.6g} m ({int((~unique).sum())} ambiguous "
-                "point(s))"
+                f"point (x, y) = ({float(px[i])!r}, {float(py[i])!r}) has no unique "
+                f"nearest point on {_fmt(self)}: separate parts of the path lie at "
+                f"the same distance {dist[i]:.6g} m ({int((~unique).sum())} "
+                "ambiguous point(s))"
             )
 
         def out(a: np.ndarray) -> Any:
@@ -659,12 +659,17 @@ class Path(ABC):
             ok[idx[~good]] = False
         return s, ok
 
-    def _global(
-        self, px: Array, py: Array
-    ) -> tuple[Array, Array, NDArray[np.bool_]]:
+    def _global(self, px: Array, py: Array) -> tuple[Array, Array, NDArray[np.bool_]]:
         """Globally nearest points by sampling and refinement: (s, distance, unique)."""
-        S = self._search_samples()
-        X, Y, _, _ = self._frame(S)
+        # Paths are immutable, so the samples are computed once per path.
+        cache = getattr(self, "_search_cache", None)
+        if cache:
+            S, X, Y = cache["samples"]
+        else:
+            S = self._search_samples()
+            X, Y, _, _ = self._frame(S)
+            if cache is not None:
+                cache["samples"] = (S, X, Y)
         n = px.size
         s_out, d_out = np.empty(n), np.empty(n)
         u_out = np.empty(n, dtype=bool)
@@ -837,9 +842,7 @@ class Straight(Path):
     def _curvature_rate(self, s: Array) -> Array:
         return np.zeros_like(s)
 
-    def _global(
-        self, px: Array, py: Array
-    ) -> tuple[Array, Array, NDArray[np.bool_]]:
+    def _global(self, px: Array, py: Array) -> tuple[Array, Array, NDArray[np.bool_]]:
         lx, ly = _to_local(self.start, self.start_heading, px, py)
         s = np.clip(lx, 0.0, self.length) if math.isfinite(self.length) else lx
         return s, np.hypot(lx - s, ly), np.ones(px.size, dtype=bool)
@@ -849,7 +852,7 @@ class Straight(Path):
 # circular arc
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False, repr=False)
 class Arc(Path):
     """Circular arc of constant curvature.
 
@@ -873,6 +876,11 @@ class Arc(Path):
 
     Attributes
     ----------
+    kappa : float
+        The constant curvature given as ``curvature`` (stored under another
+        name because ``curvature(s)`` is the method every path has).
+    length : float
+        Arc length [m]; ``2*pi/|kappa|`` for the full circle.
     closed : bool
         True for the full circle (``length=None``).
     center : (float, float)
@@ -897,41 +905,53 @@ class Arc(Path):
     (0.0, -5.0)
     """
 
-    curvature: float
-    length: float | None = None
-    start: tuple[float, float] = (0.0, 0.0)
-    start_heading: float = 0.0
-    closed: bool = field(init=False)
+    kappa: float
+    length: float
+    start: tuple[float, float]
+    start_heading: float
+    closed: bool
 
     _closed_form = True
 
-    def __post_init__(self) -> None:
+    def __init__(
+        self,
+        curvature: float,
+        length: float | None = None,
+        start: Sequence[float] = (0.0, 0.0),
+        start_heading: float = 0.0,
+    ) -> None:
         try:
-            k = float(self.curvature)
+            k = float(curvature)
         except (TypeError, ValueError) as exc:
             raise ValueError(
-                "curvature must be a finite nonzero number in 1/m, "
-                f"got {self.curvature!r}"
+                f"curvature must be a finite nonzero number in 1/m, got {curvature!r}"
             ) from exc
         if not math.isfinite(k) or k == 0.0:
             raise ValueError(
                 "curvature must be finite and nonzero (use Straight for zero "
-                f"curvature), got {self.curvature!r}"
+                f"curvature), got {curvature!r}"
             )
         full = 2.0 * math.pi / abs(k)
-        object.__setattr__(self, "curvature", k)
-        object.__setattr__(self, "closed", self.length is None)
-        L = full if self.length is None else _check_length(self.length, upper=full)
+        object.__setattr__(self, "kappa", k)
+        object.__setattr__(self, "closed", length is None)
+        L = full if length is None else _check_length(length, upper=full)
         object.__setattr__(self, "length", L)
-        object.__setattr__(self, "start", _check_start(self.start))
+        object.__setattr__(self, "start", _check_start(start))
         object.__setattr__(
-            self, "start_heading", _check_real("start_heading", self.start_heading)
+            self, "start_heading", _check_real("start_heading", start_heading)
+        )
+
+    def __repr__(self) -> str:
+        length = None if self.closed else self.length
+        return (
+            f"Arc(curvature={self.kappa!r}, length={length!r}, start={self.start!r}, "
+            f"start_heading={self.start_heading!r})"
         )
 
     @property
     def radius(self) -> float:
         """Radius ``1/|curvature|`` [m]."""
-        return 1.0 / abs(self.curvature)
+        return 1.0 / abs(self.kappa)
 
     @property
     def center(self) -> tuple[float, float]:
@@ -940,7 +960,7 @@ class Arc(Path):
             self.start,
             self.start_heading,
             np.array(0.0),
-            np.array(1.0 / self.curvature),
+            np.array(1.0 / self.kappa),
             np.array(0.0),
         )
         return float(x), float(y)
@@ -955,10 +975,10 @@ class Arc(Path):
         5.0
         """
         length = None if self.closed else self.length
-        return Arc(self.curvature, length, start, start_heading)
+        return Arc(self.kappa, length, start, start_heading)
 
     def _frame(self, s: Array) -> tuple[Array, Array, Array, Array]:
-        k = self.curvature
+        k = self.kappa
         ks = k * s
         # 2 sin^2(ks/2) rather than 1 - cos(ks): no cancellation near s = 0.
         lx, ly = np.sin(ks) / k, 2.0 * np.sin(0.5 * ks) ** 2 / k
@@ -968,10 +988,8 @@ class Arc(Path):
     def _curvature_rate(self, s: Array) -> Array:
         return np.zeros_like(s)
 
-    def _global(
-        self, px: Array, py: Array
-    ) -> tuple[Array, Array, NDArray[np.bool_]]:
-        k, R = self.curvature, 1.0 / abs(self.curvature)
+    def _global(self, px: Array, py: Array) -> tuple[Array, Array, NDArray[np.bool_]]:
+        k, R = self.kappa, 1.0 / abs(self.kappa)
         lx, ly = _to_local(self.start, self.start_heading, px, py)
         vx, vy = lx, ly - 1.0 / k
         rho = np.hypot(vx, vy)
@@ -1000,7 +1018,7 @@ class Arc(Path):
         return s, d, unique
 
     def _local_end(self) -> tuple[Array, Array, Array]:
-        k, L = self.curvature, self.length
+        k, L = self.kappa, self.length
         return (
             np.array(math.sin(k * L) / k),
             np.array(2.0 * math.sin(0.5 * k * L) ** 2 / k),
@@ -1055,6 +1073,9 @@ class Clothoid(Path):
     start: tuple[float, float] = (0.0, 0.0)
     start_heading: float = 0.0
     _equivalent: Path | None = field(init=False, repr=False, compare=False)
+    _search_cache: dict = field(
+        default_factory=dict, init=False, repr=False, compare=False
+    )
 
     def __post_init__(self) -> None:
         k0 = _check_real("curvature_start", self.curvature_start)
@@ -1127,9 +1148,7 @@ class Clothoid(Path):
         h = self.length / 32.0 if kmax == 0.0 else min(self.length / 32.0, 0.25 / kmax)
         return self._uniform_samples(h)
 
-    def _global(
-        self, px: Array, py: Array
-    ) -> tuple[Array, Array, NDArray[np.bool_]]:
+    def _global(self, px: Array, py: Array) -> tuple[Array, Array, NDArray[np.bool_]]:
         if self._equivalent is not None:
             return self._equivalent._global(px, py)
         return super()._global(px, py)
@@ -1170,7 +1189,8 @@ class Spline(Path):
     length : float
         Arc length [m].
     waypoint_s : ndarray
-        Arc length at each (distinct) waypoint [m]; read-only.
+        Arc length at each waypoint [m], read-only; for a closed spline the
+        last entry is ``length``, where the first waypoint comes round again.
 
     Raises
     ------
@@ -1196,6 +1216,9 @@ class Spline(Path):
     _s_tab: Array = field(init=False, compare=False)
     _inv: CubicHermiteSpline = field(init=False, compare=False)
     _knots_s: Array = field(init=False, compare=False)
+    _search_cache: dict = field(
+        default_factory=dict, init=False, repr=False, compare=False
+    )
 
     def __post_init__(self) -> None:
         try:
@@ -1489,9 +1512,7 @@ class PathChain(Path):
                 out[m] = seg._curvature_rate(local[m])
         return out
 
-    def _global(
-        self, px: Array, py: Array
-    ) -> tuple[Array, Array, NDArray[np.bool_]]:
+    def _global(self, px: Array, py: Array) -> tuple[Array, Array, NDArray[np.bool_]]:
         res = [seg._global(px, py) for seg in self.segments]
         S = np.stack([r[0] for r in res])
         D = np.stack([r[1] for r in res])
