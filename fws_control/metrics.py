@@ -1,0 +1,355 @@
+r"""Performance metrics of closed-loop time responses.
+
+The functions take arrays with time on the **last** axis, so that a
+:class:`BatchResult` signal of shape ``(runs, time)`` gives one value per
+run, and a single response of shape ``(time,)`` gives a scalar.
+
+Two kinds of metric:
+
+* **Peaks** (:func:`peak_abs` and the wrappers for the lateral acceleration,
+  steering angles and rates) use the samples that exist: a run that stopped
+  early (NaN tail in a batch) reports its peak up to the stop. A run with no
+  valid sample gives NaN.
+* **Horizon metrics** (:func:`settling_time`, :func:`overshoot`,
+  :func:`rms`, :func:`steady_state`) describe the whole simulated horizon;
+  a run with missing samples gives NaN, so an incomplete run is never
+  mistaken for a converged one.
+
+:func:`tracking_metrics` collects all of them for a :class:`SimulationResult`
+or :class:`BatchResult`, with the run status alongside.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._validation import check_positive
+
+__all__ = [
+    "peak_abs",
+    "settling_time",
+    "overshoot",
+    "rms",
+    "steady_state",
+    "TrackingMetrics",
+    "tracking_metrics",
+]
+
+
+def _scalar(out):
+    out = np.asarray(out, dtype=float)
+    return float(out) if out.ndim == 0 else out
+
+
+def _time_and_signal(t, signal):
+    t = np.asarray(t, dtype=float)
+    x = np.asarray(signal, dtype=float)
+    if t.ndim != 1 or x.shape[-1:] != t.shape:
+        raise ValueError(
+            f"signal must have time on its last axis matching t (length {t.size}), "
+            f"got shape {x.shape}"
+        )
+    if t.size < 2 or np.any(np.diff(t) <= 0):
+        raise ValueError("t must be strictly increasing with at least 2 samples")
+    return t, x
+
+
+def peak_abs(signal) -> float | np.ndarray:
+    """Largest absolute value over time, ignoring NaN samples.
+
+    Parameters
+    ----------
+    signal : array_like
+        Shape ``(..., time)``.
+
+    Returns
+    -------
+    float or ndarray
+        Shape ``(...)``; NaN where a run has no valid sample.
+
+    Examples
+    --------
+    >>> from fws_control.metrics import peak_abs
+    >>> peak_abs([0.5, -2.0, 1.0])
+    2.0
+    >>> peak_abs([[1.0, -3.0], [0.2, float("nan")]]).tolist()
+    [3.0, 0.2]
+    """
+    x = np.abs(np.asarray(signal, dtype=float))
+    valid = np.isfinite(x)
+    out = np.max(np.where(valid, x, -np.inf), axis=-1)
+    return _scalar(np.where(np.any(valid, axis=-1), out, np.nan))
+
+
+def settling_time(t, signal, band=None, fraction: float = 0.02) -> float | np.ndarray:
+    r"""Time after which ``|signal|`` stays within a band around zero.
+
+    The last crossing of ``|signal| = band`` is located by linear
+    interpolation between the samples around it.
+
+    Parameters
+    ----------
+    t : array_like
+        Sample times [s], shape ``(time,)``.
+    signal : array_like
+        Shape ``(..., time)``, converging to 0 (e.g. the lateral error).
+    band : float or array_like, optional
+        Half-width of the band, in the signal's units; broadcasts with
+        ``signal[..., 0]``. Default: ``fraction * |signal[..., 0]|``.
+    fraction : float, optional
+        Relative band used when `band` is not given (default 2 %).
+
+    Returns
+    -------
+    float or ndarray
+        Settling time [s]: 0 if the signal never leaves the band, ``inf`` if it
+        is outside the band at the last sample, NaN if any sample is NaN.
+
+    Examples
+    --------
+    >>> import math, numpy as np
+    >>> from fws_control.metrics import settling_time
+    >>> t = np.linspace(0.0, 10.0, 1001)
+    >>> round(settling_time(t, np.exp(-t)), 3), round(math.log(50.0), 3)
+    (3.912, 3.912)
+    """
+    t, x = _time_and_signal(t, signal)
+    mag = np.abs(x)
+    if band is None:
+        band = check_positive("fraction", fraction) * mag[..., 0]
+    band = np.broadcast_to(np.asarray(band, dtype=float), mag.shape[:-1])
+    outside = mag > band[..., None]
+    T = t.size
+    # index of the last sample outside the band (-1: never outside)
+    last = np.where(
+        np.any(outside, axis=-1), T - 1 - np.argmax(outside[..., ::-1], -1), -1
+    )
+    out = np.zeros(mag.shape[:-1])
+    inside_end = last < T - 1
+    i = np.clip(last, 0, T - 2)
+    m0 = np.take_along_axis(mag, i[..., None], -1)[..., 0]
+    m1 = np.take_along_axis(mag, (i + 1)[..., None], -1)[..., 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        frac = np.clip((m0 - band) / (m0 - m1), 0.0, 1.0)
+    crossing = t[i] + frac * (t[i + 1] - t[i])
+    out = np.where(last >= 0, crossing, 0.0)
+    out = np.where(inside_end, out, np.inf)
+    out = np.where(np.any(np.isnan(x), axis=-1), np.nan, out)
+    return _scalar(out)
+
+
+def overshoot(signal, relative: bool = False) -> float | np.ndarray:
+    """Largest excursion past zero, on the side opposite to the start.
+
+    For an error that starts at ``x0 != 0`` and should decay to zero, this is
+    ``max(0, max(-sign(x0) * x))``.
+
+    Parameters
+    ----------
+    signal : array_like
+        Shape ``(..., time)``.
+    relative : bool, optional
+        Divide by ``|x0|`` (a fraction, not percent).
+
+    Returns
+    -------
+    float or ndarray
+        In the signal's units (or relative); NaN if any sample is NaN or
+        ``x0 == 0``.
+
+    Examples
+    --------
+    >>> import math, numpy as np
+    >>> from fws_control.metrics import overshoot
+    >>> t = np.linspace(0.0, 10.0, 1001)
+    >>> round(overshoot((1 - t) * np.exp(-t)), 6), round(math.exp(-2.0), 6)
+    (0.135335, 0.135335)
+    """
+    x = np.asarray(signal, dtype=float)
+    x0 = x[..., 0]
+    sign = np.sign(x0)
+    out = np.maximum(np.max(-sign[..., None] * x, axis=-1), 0.0)
+    if relative:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            out = out / np.abs(x0)
+    out = np.where((sign == 0) | np.any(np.isnan(x), axis=-1), np.nan, out)
+    return _scalar(out)
+
+
+def rms(t, signal, t_start: float = 0.0) -> float | np.ndarray:
+    r"""Root mean square over time, :math:`\sqrt{\frac{1}{T}\int x^2\,dt}`.
+
+    Trapezoidal rule over the samples with ``t >= t_start``.
+
+    Parameters
+    ----------
+    t : array_like
+        Sample times [s].
+    signal : array_like
+        Shape ``(..., time)``.
+    t_start : float, optional
+        Start of the averaging window [s].
+
+    Returns
+    -------
+    float or ndarray
+        NaN if any sample in the window is NaN.
+
+    Examples
+    --------
+    >>> import math, numpy as np
+    >>> from fws_control.metrics import rms
+    >>> t = np.linspace(0.0, 2 * np.pi, 2001)
+    >>> round(rms(t, np.sin(t)), 6), round(1 / math.sqrt(2), 6)
+    (0.707107, 0.707107)
+    """
+    x = np.asarray(signal, dtype=float)
+    return _scalar(np.sqrt(_time_average(t, x**2, t_start)))
+
+
+def steady_state(t, signal, window: float = 1.0) -> float | np.ndarray:
+    """Time average of the signal over the last `window` seconds.
+
+    Parameters
+    ----------
+    t : array_like
+        Sample times [s].
+    signal : array_like
+        Shape ``(..., time)``.
+    window : float, optional
+        Length of the final averaging window [s], > 0.
+
+    Returns
+    -------
+    float or ndarray
+        NaN if any sample in the window is NaN.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fws_control.metrics import steady_state
+    >>> t = np.linspace(0.0, 10.0, 1001)
+    >>> round(steady_state(t, 0.3 + np.exp(-5 * t)), 9)
+    0.3
+    """
+    t, _ = _time_and_signal(t, signal)
+    window = float(check_positive("window", window))
+    return _scalar(_time_average(t, signal, t[-1] - window))
+
+
+def _time_average(t, signal, t_start):
+    """Trapezoidal time average of `signal` over ``t >= t_start``."""
+    t, x = _time_and_signal(t, signal)
+    # tolerate rounding in t[-1] - window
+    sel = t >= t_start - 1e-9 * max(1.0, abs(t_start))
+    if np.count_nonzero(sel) < 2:
+        raise ValueError(
+            f"the averaging window from t={t_start!r} s must hold at least 2 samples "
+            f"of t in [{t[0]}, {t[-1]}] s"
+        )
+    ts, xs = t[sel], x[..., sel]
+    return np.trapezoid(xs, ts, axis=-1) / (ts[-1] - ts[0])
+
+
+@dataclass(frozen=True)
+class TrackingMetrics:
+    """Metrics of one run (floats) or of a batch (arrays of shape ``(runs,)``).
+
+    Attributes
+    ----------
+    peak_lateral_accel : float or ndarray
+        Peak |lateral acceleration of G| [m/s^2] (up to the stop).
+    settling_time : float or ndarray
+        Settling time of the lateral error ``e`` [s] (see
+        :func:`settling_time`); NaN for runs that stopped early.
+    overshoot : float or ndarray
+        Overshoot of ``e`` past zero [m].
+    rms_error : float or ndarray
+        RMS of ``e`` over the horizon [m].
+    steady_state_error : float or ndarray
+        Mean of ``e`` over the final window [m].
+    steady_state_heading_error : float or ndarray
+        Mean of ``theta`` over the final window [rad].
+    peak_delta_f, peak_delta_r : float or ndarray
+        Peak |steering angle| [rad] (up to the stop).
+    peak_delta_f_rate, peak_delta_r_rate : float or ndarray
+        Peak |steering rate| [rad/s] (up to the stop).
+    status : str or ndarray of str
+        The run status; horizon metrics are NaN unless it is ``"ok"``.
+    """
+
+    peak_lateral_accel: float | np.ndarray
+    settling_time: float | np.ndarray
+    overshoot: float | np.ndarray
+    rms_error: float | np.ndarray
+    steady_state_error: float | np.ndarray
+    steady_state_heading_error: float | np.ndarray
+    peak_delta_f: float | np.ndarray
+    peak_delta_r: float | np.ndarray
+    peak_delta_f_rate: float | np.ndarray
+    peak_delta_r_rate: float | np.ndarray
+    status: str | np.ndarray
+
+
+def tracking_metrics(
+    result, band=None, fraction: float = 0.02, window: float = 1.0
+) -> TrackingMetrics:
+    """All metrics of a :class:`SimulationResult` or :class:`BatchResult`.
+
+    Parameters
+    ----------
+    result : SimulationResult or BatchResult
+    band, fraction
+        Settling band of the lateral error, see :func:`settling_time`.
+    window : float, optional
+        Final window [s] of the steady-state averages.
+
+    Returns
+    -------
+    TrackingMetrics
+        Floats for a single run, arrays of shape ``(runs,)`` for a batch.
+        Horizon metrics are NaN for runs whose status is not ``"ok"``.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> from fws_control.paths import Arc
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> g = fws.double_root_gains(veh, 5.0, 0.1, ratio=-1.0, pole=-1.0)
+    >>> res = fws.simulate(veh, Arc(curvature=0.1), g, 5.0, (0.0, -5.0, 0.0), 15.0)
+    >>> m = fws.tracking_metrics(res)
+    >>> m.status, round(m.peak_lateral_accel, 2), round(m.settling_time, 2)
+    ('ok', 5.37, 6.23)
+    """
+    t = np.asarray(result.t, dtype=float)
+    status = np.asarray(result.status)
+    ok = status == "ok"
+
+    def horizon(values):
+        return _scalar(np.where(ok, values, np.nan))
+
+    e = np.asarray(result.e, dtype=float)
+    theta = np.asarray(result.theta, dtype=float)
+    if t.size >= 2:
+        settle = horizon(settling_time(t, e, band, fraction))
+        ovs = horizon(overshoot(e))
+        rms_e = horizon(rms(t, e))
+        ss_e = horizon(steady_state(t, e, window))
+        ss_th = horizon(steady_state(t, theta, window))
+    else:  # a run that stopped at t = 0
+        settle = ovs = rms_e = ss_e = ss_th = np.nan
+    return TrackingMetrics(
+        peak_lateral_accel=peak_abs(result.lateral_accel),
+        settling_time=settle,
+        overshoot=ovs,
+        rms_error=rms_e,
+        steady_state_error=ss_e,
+        steady_state_heading_error=ss_th,
+        peak_delta_f=peak_abs(result.delta_f),
+        peak_delta_r=peak_abs(result.delta_r),
+        peak_delta_f_rate=peak_abs(result.delta_f_rate),
+        peak_delta_r_rate=peak_abs(result.delta_r_rate),
+        status=status.item() if status.ndim == 0 else status,
+    )

@@ -1,0 +1,104 @@
+"""Metrics against closed-form signals and brute-force definitions."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+import fws_control as fws
+from fws_control.paths import Arc, Straight
+
+VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+T = np.linspace(0.0, 10.0, 2001)
+
+
+@given(rate=st.floats(0.5, 3.0), fraction=st.floats(0.005, 0.2))
+def test_settling_time_of_exponential(rate, fraction):
+    # |exp(-r t)| <= fraction from t = -ln(fraction)/r on
+    expect = -math.log(fraction) / rate
+    got = fws.settling_time(T, 3.0 * np.exp(-rate * T), fraction=fraction)
+    if expect < T[-1]:
+        assert got == pytest.approx(expect, abs=2e-4)
+    else:
+        assert got == math.inf
+
+
+def test_settling_time_brute_force_with_band_and_batch():
+    rng = np.random.default_rng(1)
+    x = np.cumsum(rng.normal(size=(4, 200)), axis=1) * np.exp(-np.linspace(0, 8, 200))
+    t = np.linspace(0.0, 8.0, 200)
+    band = 0.05
+    got = fws.settling_time(t, x, band=band)
+    for i in range(4):
+        outside = np.flatnonzero(np.abs(x[i]) > band)
+        if outside.size == 0:
+            assert got[i] == 0.0
+        elif outside[-1] == t.size - 1:
+            assert got[i] == math.inf
+        else:
+            # between the last sample outside and the next one
+            assert t[outside[-1]] <= got[i] <= t[outside[-1] + 1]
+
+
+def test_overshoot_and_nan_handling():
+    x = (1 - T) * np.exp(-T)  # minimum -exp(-2) at t = 2
+    assert fws.overshoot(x) == pytest.approx(math.exp(-2), abs=1e-12)
+    assert fws.overshoot(-2 * x, relative=True) == pytest.approx(math.exp(-2))
+    assert fws.overshoot(np.exp(-T)) == 0.0  # monotone decay
+    assert math.isnan(fws.overshoot(np.zeros(5)))  # no initial error
+    y = np.vstack([x, np.where(T < 5, x, np.nan)])
+    np.testing.assert_allclose(fws.overshoot(y), [math.exp(-2), np.nan])
+
+
+def test_rms_and_steady_state_closed_forms():
+    t = np.linspace(0.0, 2 * np.pi, 4001)
+    assert fws.rms(t, 2 * np.sin(t)) == pytest.approx(math.sqrt(2), rel=1e-6)
+    # mean of 0.3 + exp(-t) over [9, 10]: 0.3 + (e^-9 - e^-10)
+    expect = 0.3 + math.exp(-9) - math.exp(-10)
+    assert fws.steady_state(T, 0.3 + np.exp(-T), window=1.0) == pytest.approx(
+        expect, rel=1e-7
+    )
+    # rms from t_start: constant 2 after 5 s
+    assert fws.rms(T, np.where(T < 5, 10.0, 2.0), t_start=5.0) == pytest.approx(2.0)
+    with pytest.raises(ValueError, match="window"):
+        fws.steady_state(T, T, window=0.0)
+    with pytest.raises(ValueError, match="last axis"):
+        fws.rms(T, np.zeros(3))
+
+
+def test_peak_abs_ignores_nan_tail():
+    x = np.array([[1.0, -4.0, 2.0], [0.5, np.nan, np.nan], [np.nan] * 3])
+    np.testing.assert_array_equal(fws.peak_abs(x), [4.0, 0.5, np.nan])
+
+
+def test_tracking_metrics_single_and_batch_agree_with_direct_computation():
+    ratios = np.array([-1.0, 0.0, 0.5])
+    g = fws.double_root_gains(VEH, 5.0, 0.1, ratios, -1.0)
+    batch = fws.simulate_batch(VEH, Arc(0.1), g, 5.0, (0, -5, 0), 15.0, dt=0.01)
+    m = fws.tracking_metrics(batch)
+    assert m.status.tolist() == ["ok"] * 3
+    np.testing.assert_allclose(
+        m.peak_lateral_accel, np.max(np.abs(batch.lateral_accel), axis=1)
+    )
+    np.testing.assert_allclose(
+        m.peak_delta_r_rate, np.max(np.abs(batch.delta_r_rate), 1)
+    )
+    for i in range(3):
+        single = fws.tracking_metrics(batch[i])
+        assert single.settling_time == pytest.approx(m.settling_time[i])
+        assert single.rms_error == pytest.approx(m.rms_error[i])
+    # with feedforward the error converges: steady-state mean over the last
+    # second is far below the 2 % band of e0 = -5 m
+    assert np.all(np.abs(m.steady_state_error) < 1e-3)
+
+
+def test_tracking_metrics_of_stopped_run_has_nan_horizon_metrics():
+    g = fws.SteeringGains(0.1, -0.5, 0.0)  # runs into |delta_f| = pi/2
+    res = fws.simulate(VEH, Straight(), g, 5.0, (0, 1, 0), 10.0, feedforward=False)
+    m = fws.tracking_metrics(res)
+    assert m.status == "singular_steering"
+    assert math.isnan(m.settling_time) and math.isnan(m.rms_error)
+    assert m.peak_delta_f == pytest.approx(np.max(np.abs(res.delta_f)))
+    assert m.peak_delta_f < math.pi / 2
