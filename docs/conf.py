@@ -181,6 +181,8 @@ sphinx_gallery_conf = {
     "matplotlib_animations": False,
     "remove_config_comments": True,
     "min_reported_time": 1,
+    # The global sg_execution_times.rst would be written into docs/ itself.
+    "write_computation_times": False,
     "show_memory": False,
     "download_all_examples": False,
     "only_warn_on_example_error": False,
