@@ -587,9 +587,7 @@ def test_projection_matches_brute_force(name, seed, spread):
     check_projection_consistent(path, px, py, p)
     if not path.closed:
         interior = (p.s > 1e-6) & (p.s < path.length - 1e-6)
-        assert_close(
-            np.abs(p.e[interior]), p.distance[interior], atol=1e-8
-        )
+        assert_close(np.abs(p.e[interior]), p.distance[interior], atol=1e-8)
 
 
 @FAST
