@@ -40,7 +40,7 @@ g = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
 print(f"k1 = {g.k1:.4f} rad/m, k2 = {g.k2:.4f}, k3 = {g.k3:.4f}, k4 = {g.k4:.4f}")
 
 cl = fws.closed_loop(veh, speed=5.0, curvature=0.1, gains=g)
-print("closed-loop poles:", np.round(cl.poles(), 6))
+print("closed-loop poles:", np.real_if_close(np.round(cl.poles(), 6)))
 print("stable:", fws.is_stable(veh, 5.0, 0.1, g.k1, g.k2, ratio=-1.0))
 
 # %%

@@ -107,6 +107,7 @@ for ax, (name, how, pz) in zip(axes.flat, cases, strict=True):
 
 i = int(np.argmin(np.abs(ratios - 0.5)))
 print(
-    "paper's gains at a = 0.5 put the true poles at", np.round(cases[3][2].loci[i], 3)
+    "paper's gains at a = 0.5 put the true poles at",
+    np.real_if_close(np.round(cases[3][2].loci[i], 3)),
 )
 plt.show()
