@@ -40,6 +40,7 @@ __all__ = [
     "gain_locus",
     "parameter_locus",
     "quadratic_roots",
+    "refined_scale",
     "LOCUS_PARAMETERS",
 ]
 
@@ -127,6 +128,25 @@ def gain_loop(
         outputs=["k_x"],
         name="gain_loop",
     )
+
+
+def refined_scale(lo: float, hi: float, n: int, at: float = 1.0) -> np.ndarray:
+    """Gain scales ``linspace(lo, hi, n)`` plus geometric refinement near `at`.
+
+    A double-root design breaks away from the real axis at ``g = 1``, where
+    the poles move like ``sqrt(g - 1)``; uniform sampling draws a kink there.
+
+    Examples
+    --------
+    >>> from fws_control.rootlocus import refined_scale
+    >>> g = refined_scale(0.0, 4.0, 5)
+    >>> bool(g[0] == 0.0 and g[-1] == 4.0 and (abs(g - 1.0) < 1e-5).sum() >= 2)
+    True
+    """
+    step = np.geomspace(1e-6, 0.2, 40)
+    near = at + np.concatenate([-step, step])
+    near = near[(near >= lo) & (near <= hi)]
+    return np.unique(np.concatenate([np.linspace(lo, hi, n), near]))
 
 
 def gain_locus(

@@ -1,0 +1,589 @@
+"""Command-line interface ``fws-control`` (also ``python -m fws_control``).
+
+Subcommands::
+
+    fws-control gains     --speed 5 --curvature 0.1 --ratio -1 --pole -1
+    fws-control chart     --speed 5 --curvature 0.1 --ratio -1 --out chart.png
+    fws-control chart     --paper-figure 3 --out fig3.png
+    fws-control rlocus    --speed 5 --curvature 0.1 --ratio -1 --out rl.png
+    fws-control simulate  --path arc --curvature 0.1 --y0 -5 --out sim.png
+    fws-control reproduce --out figures
+
+Angles are given and printed in degrees; everything else is SI. Invalid
+input ends with a one-line message on stderr and exit status 2; no traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+__all__ = ["main", "build_parser"]
+
+PROG = "fws-control"
+
+
+class _Parser(argparse.ArgumentParser):
+    """ArgumentParser whose errors are one line (no usage block)."""
+
+    def error(self, message: str):  # noqa: D401 - argparse API
+        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
+
+
+def _finite(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"must be finite, got {text!r}")
+    return v
+
+
+def _positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if v < 2:
+        raise argparse.ArgumentTypeError(f"must be >= 2, got {v}")
+    return v
+
+
+def _add_vehicle(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("vehicle")
+    g.add_argument("--wheelbase", type=_finite, default=2.7, help="f [m] (2.7)")
+    g.add_argument(
+        "--rear-to-cg", type=_finite, default=1.35, help="d, rear axle to CG [m] (1.35)"
+    )
+
+
+def _add_operating_point(p, curvature_default: float = 0.0) -> None:
+    p.add_argument("--speed", type=_finite, default=5.0, help="V [m/s] (5)")
+    p.add_argument(
+        "--curvature",
+        type=_finite,
+        default=curvature_default,
+        help=f"path curvature kappa [1/m] ({curvature_default:g})",
+    )
+    p.add_argument(
+        "--ratio", type=_finite, default=-1.0, help="a, delta_r = a*delta_f (-1)"
+    )
+    p.add_argument(
+        "--model",
+        choices=("exact", "paper"),
+        default="exact",
+        help="linearisation: exact Jacobian or the paper's eq. (33) (exact)",
+    )
+
+
+def _add_gains(p) -> None:
+    p.add_argument(
+        "--pole",
+        type=_finite,
+        default=-1.0,
+        help="double root lambda0 [1/s] for the gains (-1); ignored with --k1/--k2",
+    )
+    p.add_argument("--k1", type=_finite, help="lateral-error gain [rad/m]")
+    p.add_argument("--k2", type=_finite, help="heading-error gain [-]")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argparse parser of ``fws-control``."""
+    parser = _Parser(
+        prog=PROG,
+        description="Path tracking with four-wheel steering: gains, stability "
+        "charts, root loci, simulations and the paper's figures.",
+    )
+    from . import __version__
+
+    parser.add_argument(
+        "--version", action="version", version=f"%(prog)s {__version__}"
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+
+    p = sub.add_parser(
+        "gains",
+        help="double-root gains k1..k4 and closed-loop poles",
+        description="Gains that put both closed-loop poles at --pole, in the exact "
+        "model and in the paper's, with the poles each design gives in the "
+        "exact linearisation.",
+    )
+    _add_operating_point(p)
+    p.add_argument("--pole", type=_finite, default=-1.0, help="lambda0 [1/s] (-1)")
+    _add_vehicle(p)
+    p.set_defaults(func=_cmd_gains)
+
+    p = sub.add_parser(
+        "chart",
+        help="stability chart in the (k1, k2) plane (PNG)",
+        description="Routh-Hurwitz stable region, its boundaries and the "
+        "lambda0 design point; or one of the paper's Figs. 2-4.",
+    )
+    _add_operating_point(p)
+    p.add_argument("--pole", type=_finite, default=-1.0, help="lambda0 to mark (-1)")
+    p.add_argument(
+        "--k1-range",
+        nargs=2,
+        type=_finite,
+        default=(-1.0, 1.0),
+        metavar=("MIN", "MAX"),
+        help="k1 axis [rad/m] (-1 1)",
+    )
+    p.add_argument(
+        "--k2-range",
+        nargs=2,
+        type=_finite,
+        default=(-1.0, 1.0),
+        metavar=("MIN", "MAX"),
+        help="k2 axis [-] (-1 1)",
+    )
+    p.add_argument(
+        "--points", type=_positive_int, default=501, help="grid points per axis (501)"
+    )
+    p.add_argument(
+        "--paper-figure",
+        type=int,
+        choices=(2, 3, 4),
+        help="draw the paper's Fig. 2, 3 or 4 instead",
+    )
+    p.add_argument("--out", type=Path, default=Path("chart.png"), help="PNG file")
+    _add_vehicle(p)
+    p.set_defaults(func=_cmd_chart)
+
+    p = sub.add_parser(
+        "rlocus",
+        help="root locus of the gain scaling or of a parameter (PNG)",
+        description="Root locus of the gain scaling g*(k1, k2) "
+        "(control.root_locus_plot of the SISO loop), or with --param the "
+        "closed-loop poles while ratio, speed, curvature, k1 or k2 varies.",
+    )
+    _add_operating_point(p, curvature_default=0.1)
+    _add_gains(p)
+    p.add_argument(
+        "--param",
+        choices=("gain", "ratio", "speed", "curvature", "k1", "k2"),
+        default="gain",
+        help="what varies (gain)",
+    )
+    p.add_argument(
+        "--range",
+        nargs=2,
+        type=_finite,
+        metavar=("MIN", "MAX"),
+        help="range of the parameter (default: a sensible one)",
+    )
+    p.add_argument("--points", type=_positive_int, default=400, help="values (400)")
+    p.add_argument(
+        "--redesign",
+        action="store_true",
+        help="re-design the lambda0 gains at every value (not k1/k2)",
+    )
+    p.add_argument(
+        "--design-model",
+        choices=("exact", "paper"),
+        help="model of the re-design (default --model); --model exact "
+        "--design-model paper shows where the paper's gains put the true poles",
+    )
+    p.add_argument("--out", type=Path, default=Path("rlocus.png"), help="PNG file")
+    _add_vehicle(p)
+    p.set_defaults(func=_cmd_rlocus)
+
+    p = sub.add_parser(
+        "simulate",
+        help="nonlinear closed-loop simulation (PNG, optional CSV)",
+        description="Simulate the nonlinear closed loop on a straight path or an "
+        "arc from the initial pose (x0, y0, psi0) of the rear-axle centre, "
+        "next to the linear closed loop from the same initial errors.",
+    )
+    _add_operating_point(p, curvature_default=0.1)
+    _add_gains(p)
+    p.add_argument(
+        "--path",
+        choices=("straight", "arc"),
+        default="arc",
+        help="reference path; arc of --curvature starting at the origin "
+        "heading +x (arc)",
+    )
+    p.add_argument("--x0", type=_finite, default=0.0, help="x_R(0) [m] (0)")
+    p.add_argument("--y0", type=_finite, default=-5.0, help="y_R(0) [m] (-5)")
+    p.add_argument("--psi0", type=_finite, default=0.0, help="psi(0) [deg] (0)")
+    p.add_argument("--duration", type=_finite, default=15.0, help="[s] (15)")
+    p.add_argument(
+        "--no-feedforward",
+        action="store_true",
+        help="feedback only (the paper's straight-road controller)",
+    )
+    p.add_argument("--out", type=Path, default=Path("simulation.png"), help="PNG file")
+    p.add_argument("--csv", type=Path, help="also write the time series as CSV")
+    _add_vehicle(p)
+    p.set_defaults(func=_cmd_simulate)
+
+    p = sub.add_parser(
+        "reproduce",
+        help="write every figure of the paper (Figs. 2-9) and summary.md",
+        description="Regenerate the paper's Figs. 2-9 (plus extras) as PNG files "
+        "and summary.md (gains table, Fig. 5 peak accelerations) in --out.",
+    )
+    p.add_argument("--out", type=Path, default=Path("figures"), help="directory")
+    p.add_argument(
+        "--model",
+        choices=("exact", "paper"),
+        default="exact",
+        help="linearisation of the charts and designs (exact)",
+    )
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help="coarser grids and sweeps (seconds; for tests)",
+    )
+    p.add_argument(
+        "--only",
+        nargs="+",
+        metavar="NAME",
+        help="write only these figures (e.g. fig2 fig5)",
+    )
+    p.add_argument("--dpi", type=int, default=110, help="PNG resolution (110)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_reproduce)
+    return parser
+
+
+def _vehicle(args):
+    from .vehicle import Vehicle
+
+    return Vehicle(wheelbase=args.wheelbase, rear_to_cg=args.rear_to_cg)
+
+
+def _gains(args, veh):
+    from .design import double_root_gains
+    from .gains import SteeringGains
+
+    if (args.k1 is None) != (args.k2 is None):
+        raise ValueError("give both --k1 and --k2, or neither (then --pole is used)")
+    if args.k1 is not None:
+        return SteeringGains(args.k1, args.k2, args.ratio)
+    g = double_root_gains(
+        veh, args.speed, args.curvature, args.ratio, args.pole, args.model
+    )
+    return SteeringGains(float(g.k1), float(g.k2), args.ratio)
+
+
+def _fmt_poles(p) -> str:
+    import numpy as np
+
+    out = []
+    for z in np.sort_complex(np.asarray(p, dtype=complex)):
+        out.append(
+            f"{z.real:.6f}" if abs(z.imag) < 1e-6 else f"{z.real:.6f}{z.imag:+.6f}j"
+        )
+    return ", ".join(out)
+
+
+def _cmd_gains(args) -> int:
+    from .design import UncontrollableError, double_root_gains
+    from .linear import closed_loop
+
+    veh = _vehicle(args)
+    # Design first so that bad input fails before anything is printed.
+    double_root_gains(
+        veh, args.speed, args.curvature, args.ratio, args.pole, args.model
+    )
+    print(
+        f"V = {args.speed:g} m/s, kappa = {args.curvature:g} 1/m, a = {args.ratio:g}, "
+        f"lambda0 = {args.pole:g} 1/s, f = {veh.wheelbase:g} m"
+    )
+    order = [args.model] + [m for m in ("exact", "paper") if m != args.model]
+    for model in order:
+        try:
+            g = double_root_gains(
+                veh, args.speed, args.curvature, args.ratio, args.pole, model
+            )
+        except UncontrollableError as exc:
+            if model == args.model:
+                raise
+            print(f"{model} model: no design ({exc})")
+            continue
+        tag = "" if model == args.model else " (for comparison)"
+        print(f"{model} model{tag}:")
+        print(f"  k1 = {float(g.k1):.6f} rad/m   k2 = {float(g.k2):.6f}")
+        print(f"  k3 = {float(g.k3):.6f} rad/m   k4 = {float(g.k4):.6f}")
+        for lin in ("exact", "paper"):
+            cl = closed_loop(veh, args.speed, args.curvature, g, lin)
+            print(f"  closed-loop poles, {lin} linearisation: {_fmt_poles(cl.poles())}")
+    return 0
+
+
+def _cmd_chart(args) -> int:
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from .charts import plot_paper_figure, stability_chart
+
+    _check_out(args.out)
+    if args.paper_figure is not None:
+        fig = plot_paper_figure(args.paper_figure, model=args.model)
+    else:
+        k1 = np.linspace(*args.k1_range, args.points)
+        k2 = np.linspace(*args.k2_range, args.points)
+        ch = stability_chart(
+            _vehicle(args),
+            args.curvature,
+            args.ratio,
+            args.speed,
+            k1,
+            k2,
+            model=args.model,
+            pole=args.pole,
+        )
+        fig = ch.plot().figure
+        if ch.design is not None:
+            print(f"k1 = {float(ch.design.k1):.6f}, k2 = {float(ch.design.k2):.6f}")
+        for note in ch.notes():
+            print(note.replace("$\\lambda_0$", "lambda0"))
+        print(f"stable fraction of the grid: {ch.stable_fraction:.3f}")
+    _save(fig, args.out)
+    plt.close(fig)
+    return 0
+
+
+_PARAM_RANGE = {
+    "ratio": (-1.5, 0.99),
+    "speed": (1.0, 30.0),
+    "curvature": (0.0, 0.3),
+    "k1": (-0.5, 1.0),
+    "k2": (-1.0, 2.0),
+}
+
+
+def _fixed_params(args) -> str:
+    """The operating point without the parameter that varies."""
+    parts = {
+        "ratio": f"a = {args.ratio:g}",
+        "speed": f"V = {args.speed:g} m/s",
+        "curvature": f"kappa = {args.curvature:g} 1/m",
+    }
+    parts.pop(args.param, None)
+    return ", ".join(parts.values())
+
+
+def _cmd_rlocus(args) -> int:
+    import control as ct
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from .rootlocus import gain_loop, parameter_locus, refined_scale
+
+    _check_out(args.out)
+    veh = _vehicle(args)
+    g = _gains(args, veh)
+    if args.param == "gain":
+        if args.redesign:
+            raise ValueError("--redesign needs --param ratio, speed or curvature")
+        loop = gain_loop(veh, args.speed, args.curvature, g, args.model)
+        lo, hi = (0.0, 5.0) if args.range is None else args.range
+        if lo < 0 or hi <= lo:
+            raise ValueError(
+                f"--range for the gain scale must be 0 <= MIN < MAX, got {lo:g} {hi:g}"
+            )
+        scale = refined_scale(lo, hi, args.points)
+        cplt = ct.root_locus_plot(loop, gains=scale, grid=False, initial_gain=1.0)
+        fig = cplt.figure
+        ax = cplt.axes[0, 0]
+        ax.set_title(
+            f"gain locus of g*(k1, k2), k1 = {float(g.k1):.4f}, k2 = {float(g.k2):.4f}"
+            f"\na = {args.ratio:g}, V = {args.speed:g} m/s, kappa = {args.curvature:g}"
+            f" 1/m, {args.model} model; square: g = 1",
+            fontsize=10,
+        )
+        fig.suptitle("")
+        print(f"L(s) = {loop.num[0][0].tolist()} / {loop.den[0][0].tolist()}")
+    else:
+        lo, hi = _PARAM_RANGE[args.param] if args.range is None else args.range
+        if hi <= lo:
+            raise ValueError(f"--range must have MIN < MAX, got {lo:g} {hi:g}")
+        values = np.linspace(lo, hi, args.points)
+        pz = parameter_locus(
+            veh,
+            args.param,
+            values,
+            args.speed,
+            args.curvature,
+            g,
+            model=args.model,
+            redesign_pole=args.pole if args.redesign else None,
+            design_model=args.design_model,
+        )
+        fig, ax = plt.subplots(figsize=(7, 5.5), layout="constrained")
+        for j, branch in enumerate(pz.loci.T):
+            ax.plot(
+                branch.real,
+                branch.imag,
+                color="C0",
+                label="closed-loop poles" if j == 0 else None,
+            )
+        ax.plot(
+            pz.loci[0].real,
+            pz.loci[0].imag,
+            "x",
+            color="C0",
+            ms=8,
+            label=f"{args.param} = {lo:g}",
+        )
+        ax.plot(
+            pz.loci[-1].real,
+            pz.loci[-1].imag,
+            ">",
+            color="C0",
+            ms=8,
+            label=f"{args.param} = {hi:g}",
+        )
+        ax.axvline(0.0, color="0.5", lw=0.8)
+        ax.axhline(0.0, color="0.8", lw=0.6)
+        ymax = max(float(np.abs(pz.loci.imag).max()), 0.1) * 1.2
+        ax.set_ylim(-ymax, ymax)
+        ax.grid(alpha=0.3)
+        ax.set_xlabel("Re [1/s]")
+        ax.set_ylabel("Im [1/s]")
+        if args.redesign:
+            dm = args.model if args.design_model is None else args.design_model
+            what = f"gains re-designed in the {dm} model"
+        else:
+            what = "fixed gains"
+        ax.set_title(
+            f"closed-loop poles, {args.param} from {lo:g} to {hi:g} ({what})\n"
+            f"{_fixed_params(args)}, poles of the {args.model} model",
+            fontsize=10,
+        )
+        ax.legend(fontsize=8)
+    _save(fig, args.out)
+    plt.close(fig)
+    return 0
+
+
+def _cmd_simulate(args) -> int:
+    import matplotlib.pyplot as plt
+
+    from .comparison import compare_linear_nonlinear
+
+    veh = _vehicle(args)
+    if args.path == "straight" and args.curvature != 0.0 and args.k1 is None:
+        # The design of a straight path is made at zero curvature.
+        args.curvature = 0.0
+    g = _gains(args, veh)
+    cmp = compare_linear_nonlinear(
+        veh,
+        g,
+        speed=args.speed,
+        curvature=args.curvature if args.path == "arc" else 0.0,
+        initial_state=(args.x0, args.y0, math.radians(args.psi0)),
+        duration=args.duration,
+        feedforward=not args.no_feedforward,
+        model=args.model,
+    )
+    res = cmp.nonlinear
+    fig = cmp.plot()
+    _save(fig, args.out)
+    plt.close(fig)
+    print(f"k1 = {float(g.k1):.6f}, k2 = {float(g.k2):.6f}, a = {float(g.ratio):g}")
+    print(f"status: {res.status}{(' - ' + res.message) if res.message else ''}")
+    import numpy as np
+
+    print(
+        f"peak |lateral acceleration| = {np.nanmax(np.abs(res.lateral_accel)):.4f}"
+        " m/s^2"
+    )
+    print(
+        f"final e = {res.e[-1]:.4g} m, final theta = "
+        f"{math.degrees(res.theta[-1]):.4g} deg"
+    )
+    if args.csv is not None:
+        _write_csv(res, args.csv)
+        print(f"wrote {args.csv}")
+    return 0
+
+
+def _write_csv(res, path: Path) -> None:
+    import numpy as np
+
+    names = (
+        "t",
+        "x",
+        "y",
+        "psi",
+        "s",
+        "e",
+        "theta",
+        "delta_f",
+        "delta_r",
+        "lateral_accel",
+    )
+    data = np.column_stack([np.asarray(getattr(res, n), dtype=float) for n in names])
+    path.parent.mkdir(parents=True, exist_ok=True)
+    np.savetxt(path, data, delimiter=",", header=",".join(names), comments="")
+
+
+def _cmd_reproduce(args) -> int:
+    from .figures import reproduce
+
+    res = reproduce(
+        args.out,
+        model=args.model,
+        quick=args.quick,
+        progress=not args.no_progress,
+        dpi=args.dpi,
+        names=args.only,
+    )
+    for p in res.figures:
+        print(p)
+    print(res.summary)
+    return 0
+
+
+def _check_out(out: Path) -> None:
+    if Path(out).suffix.lower() != ".png":
+        raise ValueError(f"--out must be a .png file, got {str(out)!r}")
+
+
+def _save(fig, out: Path) -> None:
+    out = Path(out)
+    _check_out(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=110)
+    print(f"wrote {out}")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run ``fws-control``; returns the exit status.
+
+    Errors in the input (ValueError, including UncontrollableError and
+    SingularStateError, TypeError, OSError) end with one line on stderr and
+    status 2.
+    """
+    import logging
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    # Equal-aspect root-locus axes make matplotlib log "Ignoring fixed x
+    # limits ..." at every save; it is noise for a command-line user.
+    logging.getLogger("matplotlib").setLevel(logging.ERROR)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except (ValueError, TypeError, OSError, ArithmeticError) as exc:
+        msg = " ".join(str(exc).split())
+        print(f"{PROG} {args.command}: error: {msg}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,260 @@
+r"""Linear versus nonlinear closed-loop responses from the same initial errors.
+
+The linear prediction is :func:`control.initial_response` of
+:func:`closed_loop` (states ``e, theta`` about the feedforward operating
+point); the nonlinear one is :func:`simulate` of the kinematic model on the
+path. Both start from the same lateral and heading errors, so the gap between
+them is the linearisation error: small for small initial errors, growing with
+them (the steering angles and ``sin(theta + delta_r)`` leave their linear
+range).
+
+Without feedforward on a curved path the feedforward angle is missing from
+the input; the linear prediction then adds it as a constant steering
+disturbance :math:`w = (-\delta_f^{FF}, 0)` (:func:`control.forced_response`),
+which gives the steady-state offset of the feedback-only controller.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import control as ct
+import numpy as np
+
+from ._validation import check_finite, check_positive
+from .gains import SteeringGains
+from .linear import closed_loop
+from .models import feedforward_steering
+from .paths import Arc, Straight
+from .simulation import SimulationResult, simulate
+from .vehicle import Vehicle
+
+__all__ = ["LinearNonlinearComparison", "compare_linear_nonlinear"]
+
+
+@dataclass(frozen=True, eq=False)
+class LinearNonlinearComparison:
+    """Linear and nonlinear responses of one closed loop.
+
+    Attributes
+    ----------
+    linear : control.TimeResponseData
+        Response of :func:`closed_loop`; outputs ``e, theta, delta_f,
+        delta_r`` (steering as deviations from the feedforward angles).
+    nonlinear : SimulationResult
+        :func:`simulate` of the nonlinear closed loop.
+    speed, curvature : float
+        Operating point [m/s], [1/m].
+    gains : SteeringGains
+    model : str
+        Linearisation of the linear prediction.
+    feedforward : bool
+        Whether the curvature feedforward was used.
+    """
+
+    linear: ct.TimeResponseData
+    nonlinear: SimulationResult
+    speed: float
+    curvature: float
+    gains: SteeringGains
+    model: str
+    feedforward: bool
+
+    @property
+    def initial_errors(self) -> tuple[float, float]:
+        """``(e0, theta0)`` [m, rad] shared by both responses."""
+        return float(self.nonlinear.e[0]), float(self.nonlinear.theta[0])
+
+    def _linear_steering(self):
+        y = self.linear.outputs
+        ff = feedforward_steering(self.nonlinear.vehicle, self.curvature)
+        return y[2] + (ff if self.feedforward else 0.0), y[3]
+
+    def max_difference(self) -> dict[str, float]:
+        """Largest gap between the two responses over the common time span.
+
+        Returns
+        -------
+        dict
+            ``{"e": [m], "theta": [rad], "delta_f": [rad], "delta_r": [rad]}``.
+        """
+        n = self.nonlinear.t.size
+        y = self.linear.outputs[:, :n]
+        df, dr = self._linear_steering()
+        nl = self.nonlinear
+        return {
+            "e": float(np.nanmax(np.abs(y[0] - nl.e))),
+            "theta": float(np.nanmax(np.abs(y[1] - nl.theta))),
+            "delta_f": float(np.nanmax(np.abs(df[:n] - nl.delta_f))),
+            "delta_r": float(np.nanmax(np.abs(dr[:n] - nl.delta_r))),
+        }
+
+    def plot(self, fig=None):
+        """Overlay both responses: errors, trajectory, steering angles.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            Four panels over time (lateral error [m], heading error [deg],
+            front and rear steering [deg]; nonlinear solid, linear dashed)
+            and the trajectory of R with the path.
+        """
+        import matplotlib.pyplot as plt
+
+        if fig is None:
+            fig = plt.figure(figsize=(12, 7.5), layout="constrained")
+        gs = fig.add_gridspec(2, 3)
+        axes = [
+            fig.add_subplot(gs[0, 0]),
+            fig.add_subplot(gs[0, 1]),
+            fig.add_subplot(gs[1, 0]),
+            fig.add_subplot(gs[1, 1]),
+        ]
+        ax_xy = fig.add_subplot(gs[:, 2])
+        nl, lin = self.nonlinear, self.linear
+        df_lin, dr_lin = self._linear_steering()
+        deg = 180.0 / math.pi
+        rows = (
+            ("lateral error e [m]", nl.e, lin.outputs[0], 1.0),
+            ("heading error θ [deg]", nl.theta, lin.outputs[1], deg),
+            ("front steering δf [deg]", nl.delta_f, df_lin, deg),
+            ("rear steering δr [deg]", nl.delta_r, dr_lin, deg),
+        )
+        for ax, (label, y_nl, y_lin, scale) in zip(axes, rows, strict=True):
+            ax.plot(nl.t, scale * y_nl, "-", color="C0", label="nonlinear (simulate)")
+            ax.plot(
+                lin.time,
+                scale * y_lin,
+                "--",
+                color="C1",
+                label=f"linear ({self.model} model, closed_loop)",
+            )
+            ax.set_xlabel("time t [s]")
+            ax.set_ylabel(label)
+            ax.grid(alpha=0.3)
+        axes[0].legend(fontsize=8)
+        ax_xy.plot(nl.x, nl.y, color="C0", label="R, nonlinear")
+        path = nl.path
+        if path is not None and nl.s.size:
+            ss = np.linspace(np.nanmin(nl.s), np.nanmax(nl.s), 300)
+            px, py = path.position(ss)
+            ax_xy.plot(px, py, "k--", lw=1.0, label="path")
+        ax_xy.set_aspect("equal", adjustable="datalim")
+        ax_xy.set_xlabel("x [m]")
+        ax_xy.set_ylabel("y [m]")
+        ax_xy.grid(alpha=0.3)
+        ax_xy.legend(fontsize=8)
+        e0, th0 = self.initial_errors
+        g = self.gains
+        fig.suptitle(
+            f"linear vs nonlinear: V = {self.speed:g} m/s, κ = {self.curvature:g} 1/m, "
+            f"a = {float(g.ratio):g}, k1 = {float(g.k1):.4f}, k2 = {float(g.k2):.4f}, "
+            f"e0 = {e0:g} m, θ0 = {math.degrees(th0):g}°"
+            + ("" if self.feedforward else ", feedback only"),
+            fontsize=11,
+        )
+        return fig
+
+
+def compare_linear_nonlinear(
+    vehicle: Vehicle,
+    gains: SteeringGains,
+    speed: float,
+    curvature: float = 0.0,
+    initial_state=None,
+    initial_errors=None,
+    duration: float = 15.0,
+    feedforward: bool = True,
+    model: str = "exact",
+    dt: float = 0.01,
+) -> LinearNonlinearComparison:
+    r"""Linear and nonlinear responses from the same initial errors.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Geometry.
+    gains : SteeringGains
+        Scalar gains.
+    speed : float
+        Speed [m/s], nonzero.
+    curvature : float, optional
+        Path curvature [1/m]: 0 is the straight path along the x-axis,
+        otherwise the :class:`Arc` that starts at the origin heading +x.
+    initial_state : array_like, optional
+        ``(x_R, y_R, psi)`` [m, m, rad] of the rear-axle centre; default
+        ``(0, 2, 0)``, the paper's straight-road start.
+    initial_errors : (float, float), optional
+        ``(e0, theta0)`` [m, rad] instead of `initial_state`: the vehicle
+        starts at the normal of the path's start point.
+    duration : float, optional
+        [s].
+    feedforward : bool, optional
+        Curvature feedforward on (default) or off.
+    model : {"exact", "paper"}, optional
+        Linearisation of the linear prediction.
+    dt : float, optional
+        Output time step [s] of both responses.
+
+    Returns
+    -------
+    LinearNonlinearComparison
+
+    Raises
+    ------
+    ValueError
+        For both `initial_state` and `initial_errors`, or invalid values.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> g = fws.double_root_gains(veh, 5.0, 0.1, ratio=-1.0, pole=-1.0)
+    >>> small = fws.compare_linear_nonlinear(veh, g, 5.0, 0.1,
+    ...                                      initial_errors=(0.05, 0.0))
+    >>> small.max_difference()["e"] < 1e-3
+    True
+    """
+    if not isinstance(gains, SteeringGains):
+        raise TypeError(f"gains must be a SteeringGains, got {type(gains).__name__}")
+    speed = float(check_finite("speed", speed))
+    curvature = float(check_finite("curvature", curvature))
+    duration = float(check_positive("duration", duration))
+    path = Straight() if curvature == 0.0 else Arc(curvature=curvature)
+    if initial_state is not None and initial_errors is not None:
+        raise ValueError("give initial_state or initial_errors, not both")
+    if initial_errors is not None:
+        e0, th0 = (float(v) for v in check_finite("initial_errors", initial_errors))
+        px, py = path.position(0.0)
+        h = float(path.heading(0.0))
+        initial_state = (
+            float(px) - e0 * math.sin(h),
+            float(py) + e0 * math.cos(h),
+            h + th0,
+        )
+    elif initial_state is None:
+        initial_state = (0.0, 2.0, 0.0)
+    t = np.arange(0.0, duration + 0.5 * dt, dt)
+    t = t[t <= duration]
+    nl = simulate(
+        vehicle,
+        path,
+        gains,
+        speed,
+        initial_state,
+        duration,
+        feedforward=feedforward,
+        t_eval=t,
+    )
+    x0 = [float(nl.e[0]), float(nl.theta[0])]
+    cl = closed_loop(vehicle, speed, curvature, gains, model)
+    if feedforward or curvature == 0.0:
+        lin = ct.initial_response(cl, T=t, X0=x0)
+    else:
+        w = -feedforward_steering(vehicle, curvature)
+        U = np.vstack([np.full_like(t, w), np.zeros_like(t)])
+        lin = ct.forced_response(cl, T=t, U=U, X0=x0)
+    return LinearNonlinearComparison(
+        lin, nl, speed, curvature, gains, model, bool(feedforward)
+    )

@@ -1,0 +1,478 @@
+r"""Every figure of the paper (Figs. 2-9) as PNG files, plus a summary.
+
+:func:`reproduce` writes one PNG per figure and ``summary.md`` into a
+directory; ``fws-control reproduce --out DIR`` calls it. Each figure also has
+a function returning a :class:`matplotlib.figure.Figure`, listed in
+:data:`FIGURES`, so that scripts and the documentation can draw a single one.
+
+Figures 2-4 are stability charts (:mod:`fws_control.charts`); Figs. 5-9 are
+simulations of the nonlinear closed loop (:mod:`fws_control.scenarios`).
+Three extra figures go beyond the paper: root loci, linear-versus-nonlinear
+responses and the turning radius that the paper's conclusion is about.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ._validation import check_model
+from .charts import PAPER_VEHICLE, plot_paper_figure
+from .design import UncontrollableError, double_root_gains
+from .linear import closed_loop
+from .turning import plot_turning_radius, turning_radius
+from .vehicle import Vehicle
+
+__all__ = [
+    "FigureSpec",
+    "FIGURES",
+    "make_figure",
+    "gains_table",
+    "ReproduceResult",
+    "reproduce",
+    "plot_root_loci",
+]
+
+#: The scenario speeds, curvatures and ratios of section 5.
+PAPER_SPEEDS = (5.0, 20.0)
+PAPER_CURVED = {5.0: 0.1, 20.0: 0.01}
+TABLE_RATIOS = (-1.5, -1.0, -0.5, 0.0, 0.5, 1.0, 1.5)
+
+
+@dataclass(frozen=True)
+class FigureSpec:
+    """One figure that :func:`reproduce` writes.
+
+    Attributes
+    ----------
+    name : str
+        File stem, e.g. ``"fig2"``.
+    caption : str
+        What the figure shows.
+    make : callable
+        ``make(model=..., quick=...) -> matplotlib.figure.Figure``.
+    paper : bool
+        True for the paper's figures, False for the extras.
+    """
+
+    name: str
+    caption: str
+    make: Callable = field(repr=False)
+    paper: bool = True
+
+
+def _chart_figure(n):
+    def make(model: str = "exact", quick: bool = False):
+        return plot_paper_figure(n, model=model, npoints=201 if quick else 401)
+
+    return make
+
+
+def plot_root_loci(
+    vehicle: Vehicle | None = None, model: str = "exact", quick: bool = False
+):
+    r"""Root loci of the :math:`\lambda_0 = -1` designs (extra figure).
+
+    (a) Gain locus (:func:`gain_loop`): poles of ``g*(k1, k2)`` for the
+    double-root designs at three values of ``V*kappa``; the square marks
+    ``g = 1`` (the double root). For any double-root design the loop is
+    :math:`L(s) = (-2\lambda_0 s + \lambda_0^2 - V^2\kappa^2)/(s^2 +
+    V^2\kappa^2)`, the same for every ``a`` and either model. (b) Real
+    parts of the exact-model poles that the *paper-model* gains produce as
+    the curvature grows (:func:`parameter_locus` with
+    ``design_model="paper"``): -1 on a straight path, then they split, and
+    for large curvature one crosses into the right half plane (erratum 3).
+    (c) Ratio locus at 20 m/s on a straight path with the gains of the
+    ``a = 0.5`` design kept fixed.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import control as ct
+    import matplotlib.pyplot as plt
+
+    from .rootlocus import gain_loop, parameter_locus, refined_scale
+
+    vehicle = PAPER_VEHICLE if vehicle is None else vehicle
+    fig, axes = plt.subplots(1, 3, figsize=(17, 5.2), layout="constrained")
+    n = 200 if quick else 800
+
+    ax = axes[0]
+    # For any double-root design the loop is L(s) = (-2 l0 s + l0^2 - V^2 k^2)
+    # / (s^2 + V^2 k^2): it depends on V*kappa only, not on a or the model.
+    for i, (V, kap) in enumerate(((5.0, 0.0), (20.0, 0.01), (5.0, 0.1))):
+        g = double_root_gains(vehicle, V, kap, -1.0, -1.0, model)
+        loop = gain_loop(vehicle, V, kap, g, model)
+        rl = ct.root_locus_map(loop, gains=refined_scale(0.0, 4.0, n))
+        lab = rf"V = {V:g} m/s, $\kappa$ = {kap:g} 1/m"
+        for j, branch in enumerate(rl.loci.T):
+            ax.plot(
+                branch.real, branch.imag, color=f"C{i}", label=lab if j == 0 else None
+            )
+        ax.plot(rl.loci[0].real, rl.loci[0].imag, "x", color=f"C{i}", ms=8)
+        at1 = ct.root_locus_map(loop, gains=[1.0]).loci[0]
+        ax.plot(at1.real, at1.imag, "s", color=f"C{i}", mec="k", ms=6)
+        z = loop.zeros()
+        ax.plot(z.real, z.imag, "o", mfc="none", color=f"C{i}", ms=8)
+    ax.plot([], [], "x", color="0.3", label="g = 0 (open loop)")
+    ax.plot([], [], "o", mfc="none", color="0.3", label="zero of L(s)")
+    ax.plot([], [], "s", color="0.6", mec="k", label=r"g = 1 ($\lambda_0 = -1$)")
+    ax.set_title(
+        "(a) gain locus: poles of $g\\,(k_1, k_2)$, g in [0, 4], for the\n"
+        r"$\lambda_0 = -1$ designs (the same for every a: L(s) depends on V$\kappa$)",
+        fontsize=10,
+    )
+    ax.set_xlabel("Re [1/s]")
+    ax.set_ylabel("Im [1/s]")
+
+    ax = axes[1]
+    kap = np.linspace(0.0, 0.4, n)
+    for i, a in enumerate((-1.0, 0.0, 0.5)):
+        g0 = double_root_gains(vehicle, 5.0, 0.0, a, -1.0, "paper")
+        pz = parameter_locus(
+            vehicle,
+            "curvature",
+            kap,
+            5.0,
+            0.0,
+            g0,
+            model="exact",
+            redesign_pole=-1.0,
+            design_model="paper",
+        )
+        for j, branch in enumerate(pz.loci.T):
+            ax.plot(
+                kap,
+                branch.real,
+                color=f"C{i}",
+                ls="-" if j == 0 else "--",
+                label=f"a = {a:g}" if j == 0 else None,
+            )
+    ax.axhline(-1.0, color="k", lw=1.0, ls=":", label=r"target $\lambda_0 = -1$")
+    ax.axvline(0.1, color="0.6", lw=0.8)
+    ax.text(
+        0.102,
+        0.97,
+        r"$\kappa$ = 0.1 (Fig. 7)",
+        va="top",
+        transform=ax.get_xaxis_transform(),
+        fontsize=8,
+    )
+    ax.plot([], [], "k-", label="pole 1 (solid), pole 2 (dashed)")
+    ax.set_title(
+        "(b) real parts of the exact-model poles with the paper-model\n"
+        r"$\lambda_0 = -1$ gains (eqs. 43-46), V = 5 m/s (parameter locus)",
+        fontsize=10,
+    )
+    ax.set_xlabel(r"curvature $\kappa$ [1/m]")
+    ax.set_ylabel("Re [1/s]")
+
+    ax = axes[2]
+    g = double_root_gains(vehicle, 20.0, 0.0, 0.5, -1.0, model)
+    ratios = np.linspace(-1.5, 0.99, n)
+    pz = parameter_locus(vehicle, "ratio", ratios, 20.0, 0.0, g, model=model)
+    for j, branch in enumerate(pz.loci.T):
+        ax.plot(
+            branch.real,
+            branch.imag,
+            color="C3",
+            label="poles, a from -1.5 to 0.99" if j == 0 else None,
+        )
+    ax.plot(pz.loci[0].real, pz.loci[0].imag, "x", color="C3", ms=8, label="a = -1.5")
+    ax.plot(pz.loci[-1].real, pz.loci[-1].imag, ">", color="C3", ms=7, label="a = 0.99")
+    at05 = parameter_locus(vehicle, "ratio", [0.5], 20.0, 0.0, g, model=model).loci[0]
+    ax.plot(at05.real, at05.imag, "s", color="C3", mec="k", label="a = 0.5 (design)")
+    ax.set_title(
+        f"(c) ratio locus, gains k1 = {float(g.k1):.3f}, k2 = {float(g.k2):.3f} "
+        "fixed\nV = 20 m/s, straight path",
+        fontsize=10,
+    )
+    ax.set_xlabel("Re [1/s]")
+    ax.set_ylabel("Im [1/s]")
+    for ax in axes:
+        ax.axhline(0.0, color="0.5", lw=0.8)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="lower left" if ax is axes[1] else "upper left")
+    fig.suptitle("Root loci of the structured 4WS loop", fontsize=13)
+    return fig
+
+
+def _turning_figure(model: str = "exact", quick: bool = False):
+    return plot_turning_radius(PAPER_VEHICLE).figure
+
+
+FIGURES: dict[str, FigureSpec] = {
+    "fig2": FigureSpec(
+        "fig2",
+        "Stable gains on a straight path: (a) a = -1.5..0 at 5 m/s, "
+        "(b) a = -1.5..-0.5 at 20 m/s, (c) a = 0..1.5 at 20 m/s",
+        _chart_figure(2),
+    ),
+    "fig3": FigureSpec(
+        "fig3",
+        "Stable gains at 5 m/s for a = -1.5..1.5, curvatures 0, 0.05, 0.1, 0.2 1/m",
+        _chart_figure(3),
+    ),
+    "fig4": FigureSpec(
+        "fig4",
+        "Stable gains at 20 m/s for a = -1.5..1.5, curvatures 0, 0.01, 0.02, 0.05 1/m",
+        _chart_figure(4),
+    ),
+    "extra_root_loci": FigureSpec(
+        "extra_root_loci",
+        "Root loci: gain scaling, paper gains versus curvature, ratio",
+        lambda model="exact", quick=False: plot_root_loci(model=model, quick=quick),
+        paper=False,
+    ),
+    "extra_turning_radius": FigureSpec(
+        "extra_turning_radius",
+        "Steady turning radius of R and G at the front steering limit versus a",
+        _turning_figure,
+        paper=False,
+    ),
+}
+
+
+def make_figure(name: str, model: str = "exact", quick: bool = False):
+    """Draw one figure of :data:`FIGURES` by name.
+
+    Parameters
+    ----------
+    name : str
+        Key of :data:`FIGURES`, e.g. ``"fig3"``.
+    model : {"exact", "paper"}, optional
+        Linearisation used for the designs and charts.
+    quick : bool, optional
+        Coarser grids and shorter sweeps (for tests).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Examples
+    --------
+    >>> import matplotlib; matplotlib.use("Agg")
+    >>> import matplotlib.pyplot as plt, fws_control as fws
+    >>> fig = fws.make_figure("fig2", quick=True)
+    >>> len(fig.axes)
+    3
+    >>> plt.close(fig)
+    """
+    check_model(model)
+    if name not in FIGURES:
+        raise ValueError(f"name must be one of {sorted(FIGURES)}, got {name!r}")
+    return FIGURES[name].make(model=model, quick=quick)
+
+
+def _fmt_poles(p) -> str:
+    p = np.sort_complex(np.asarray(p, dtype=complex))
+    out = []
+    for z in p:
+        # A double root splits by ~sqrt(eps) in floating point: show it as real.
+        if abs(z.imag) < 1e-6:
+            out.append(f"{z.real:.3f}")
+        else:
+            out.append(f"{z.real:.3f}{z.imag:+.3f}j")
+    return ", ".join(out)
+
+
+def gains_table(
+    vehicle: Vehicle | None = None,
+    pole: float = -1.0,
+    ratios=TABLE_RATIOS,
+    cases=None,
+) -> str:
+    r"""Markdown table of the double-root gains in both linearisations.
+
+    For every speed/curvature case and ratio ``a``: the gains ``k1, k2`` of
+    the exact and of the paper's model (eq. 33) and the closed-loop poles
+    that the *paper's* gains give in the exact linearisation (on a curved
+    path they miss the requested double root, erratum 3). ``a = 1`` on a
+    straight path has no design (erratum 5).
+
+    Parameters
+    ----------
+    vehicle : Vehicle, optional
+        Default: the paper's vehicle.
+    pole : float, optional
+        Double root :math:`\lambda_0`.
+    ratios : sequence of float, optional
+    cases : sequence of (speed, curvature), optional
+        Default: the paper's scenarios, (5, 0), (5, 0.1), (20, 0), (20, 0.01).
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> table = fws.gains_table(ratios=[-1.0], cases=[(5.0, 0.0)])
+    >>> print(table.splitlines()[-1])
+    | 5 | 0 | -1 | 0.05400 | 0.61290 | 0.05400 | 0.61290 | -1.000, -1.000 |
+    """
+    vehicle = PAPER_VEHICLE if vehicle is None else vehicle
+    if cases is None:
+        cases = [(V, k) for V in PAPER_SPEEDS for k in (0.0, PAPER_CURVED[V])]
+    head = (
+        "| V [m/s] | kappa [1/m] | a | k1 exact | k2 exact | k1 paper | k2 paper "
+        "| paper gains: exact poles |\n|---|---|---|---|---|---|---|---|"
+    )
+    rows = [head]
+    for V, kap in cases:
+        for a in ratios:
+            cells = [f"{V:g}", f"{kap:g}", f"{a:g}"]
+            try:
+                ge = double_root_gains(vehicle, V, kap, a, pole, "exact")
+                gp = double_root_gains(vehicle, V, kap, a, pole, "paper")
+            except UncontrollableError:
+                cells += ["—"] * 4 + ["no design (uncontrollable)"]
+                rows.append("| " + " | ".join(cells) + " |")
+                continue
+            poles = closed_loop(vehicle, V, kap, gp, "exact").poles()
+            cells += [
+                f"{float(ge.k1):.5f}",
+                f"{float(ge.k2):.5f}",
+                f"{float(gp.k1):.5f}",
+                f"{float(gp.k2):.5f}",
+                _fmt_poles(poles),
+            ]
+            rows.append("| " + " | ".join(cells) + " |")
+    return "\n".join(rows)
+
+
+def _turning_table(vehicle: Vehicle) -> str:
+    ratios = (-1.5, -1.0, -0.5, 0.0, 0.5)
+    rows = [
+        "| front limit | " + " | ".join(f"a = {a:g}" for a in ratios) + " |",
+        "|---" * (len(ratios) + 1) + "|",
+    ]
+    for deg in (20.0, 30.0, 40.0):
+        r = turning_radius(vehicle, np.array(ratios), math.radians(deg))
+        rows.append(
+            f"| {deg:.0f}° | "
+            + " | ".join(
+                f"{rr:.2f} / {rg:.2f}" for rr, rg in zip(r.rear_axle, r.cg, strict=True)
+            )
+            + " |"
+        )
+    return "\n".join(rows)
+
+
+@dataclass(frozen=True)
+class ReproduceResult:
+    """Files written by :func:`reproduce`.
+
+    Attributes
+    ----------
+    out : pathlib.Path
+        Output directory.
+    figures : tuple of pathlib.Path
+        PNG files, in the order of :data:`FIGURES`.
+    summary : pathlib.Path
+        ``summary.md``.
+    """
+
+    out: Path
+    figures: tuple[Path, ...]
+    summary: Path
+
+
+def _progress(iterable, enabled, total=None, desc=None):
+    if not enabled:
+        return iterable
+    from tqdm.auto import tqdm
+
+    return tqdm(iterable, total=total, desc=desc, file=sys.stderr, unit="fig")
+
+
+def reproduce(
+    out: str | os.PathLike,
+    model: str = "exact",
+    quick: bool = False,
+    progress: bool = True,
+    dpi: int = 110,
+    names=None,
+) -> ReproduceResult:
+    """Write every figure of :data:`FIGURES` as PNG and ``summary.md``.
+
+    Parameters
+    ----------
+    out : path-like
+        Output directory; created if needed.
+    model : {"exact", "paper"}, optional
+        Linearisation used for the charts and designs.
+    quick : bool, optional
+        Coarser grids and fewer sweep points (for tests).
+    progress : bool, optional
+        Show a tqdm progress bar on stderr.
+    dpi : int, optional
+        Resolution of the PNG files.
+    names : sequence of str, optional
+        Subset of :data:`FIGURES` to write; default all.
+
+    Returns
+    -------
+    ReproduceResult
+    """
+    import matplotlib.pyplot as plt
+
+    check_model(model)
+    names = list(FIGURES) if names is None else list(names)
+    for name in names:
+        if name not in FIGURES:
+            raise ValueError(f"names must be in {sorted(FIGURES)}, got {name!r}")
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    for name in _progress(names, progress, total=len(names), desc="figures"):
+        fig = FIGURES[name].make(model=model, quick=quick)
+        path = out / f"{name}.png"
+        fig.savefig(path, dpi=dpi)
+        plt.close(fig)
+        written.append(path)
+    summary = out / "summary.md"
+    summary.write_text(_summary_text(model, written), encoding="utf-8")
+    return ReproduceResult(out, tuple(written), summary)
+
+
+def _summary_text(model: str, written) -> str:
+    lines = [
+        "# fws-control reproduce: summary",
+        "",
+        f"Charts and designs use the **{model}** linearisation. Vehicle: "
+        f"f = {PAPER_VEHICLE.wheelbase} m, d = {PAPER_VEHICLE.rear_to_cg} m.",
+        "",
+        "## Figures",
+        "",
+    ]
+    for p in written:
+        spec = FIGURES[p.stem]
+        tag = "" if spec.paper else " (extra, not in the paper)"
+        lines.append(f"- `{p.name}`{tag}: {spec.caption}")
+    lines += [
+        "",
+        "## Double-root gains, lambda0 = -1",
+        "",
+        "Gains from the exact Jacobian and from the paper's eq. (33); the last "
+        "column gives the closed-loop poles that the paper's gains produce in "
+        "the exact linearisation.",
+        "",
+        gains_table(),
+        "",
+        "## Turning radius at the front steering limit",
+        "",
+        "Radius of the rear-axle centre R / centre of gravity G [m] with "
+        "delta_r = a * delta_f_max (no rear limit).",
+        "",
+        _turning_table(PAPER_VEHICLE),
+        "",
+    ]
+    return "\n".join(lines)

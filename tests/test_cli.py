@@ -1,0 +1,189 @@
+"""The fws-control command line, run as `python -m fws_control` in a subprocess."""
+
+import csv
+import math
+import os
+import re
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+PNG = b"\x89PNG\r\n\x1a\n"
+F = 2.7
+
+
+def _popen(args, cwd=None):
+    env = dict(os.environ, MPLBACKEND="Agg")
+    return subprocess.Popen(
+        [sys.executable, "-m", "fws_control", *map(str, args)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=cwd,
+        env=env,
+    )
+
+
+def _finish(proc):
+    out, err = proc.communicate(timeout=300)
+    return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
+
+
+def run(*args, cwd=None):
+    return _finish(_popen(args, cwd))
+
+
+def run_many(arg_lists, cwd=None):
+    """Run several invocations two at a time (the interpreter start dominates)."""
+    results = []
+    for i in range(0, len(arg_lists), 2):
+        procs = [_popen(a, cwd) for a in arg_lists[i : i + 2]]
+        results += [_finish(p) for p in procs]
+    return results
+
+
+SUBCOMMANDS = [None, "gains", "chart", "rlocus", "simulate", "reproduce"]
+
+
+def test_help():
+    procs = run_many([([sub] if sub else []) + ["--help"] for sub in SUBCOMMANDS])
+    for sub, p in zip(SUBCOMMANDS, procs, strict=True):
+        assert p.returncode == 0, p.stderr
+        assert p.stdout.startswith("usage: fws-control")
+        if sub:
+            assert f"fws-control {sub}" in p.stdout
+
+
+def test_gains_straight_matches_eq41():
+    p = run("gains", "--speed", 5, "--curvature", 0, "--ratio", -0.5, "--pole", -1)
+    assert p.returncode == 0, p.stderr
+    k1 = F / (25 * 1.5)
+    k2 = F / (5 * 1.5) * (2 + 0.5 * F / (5 * 1.5))
+    m = re.search(r"k1 = (\S+) rad/m\s+k2 = (\S+)", p.stdout)
+    assert float(m.group(1)) == pytest.approx(k1, abs=1e-6)
+    assert float(m.group(2)) == pytest.approx(k2, abs=1e-6)
+    m = re.search(r"k3 = (\S+) rad/m\s+k4 = (\S+)", p.stdout)
+    assert float(m.group(1)) == pytest.approx(-0.5 * k1, abs=1e-6)
+    assert "closed-loop poles, exact linearisation: -1.000000, -1.000000" in p.stdout
+
+
+def test_gains_curved_shows_paper_model_error():
+    p = run("gains", "--speed", 5, "--curvature", 0.1, "--ratio", 0, "--model", "paper")
+    assert p.returncode == 0, p.stderr
+    first = p.stdout.split("exact model")[0]
+    # Paper eq. (44), a = 0: k1 = f (lambda0^2/V^2 - kappa^2), k2 = -2 lambda0 f / V.
+    m = re.search(r"k1 = (\S+) rad/m\s+k2 = (\S+)", first)
+    assert float(m.group(1)) == pytest.approx(F * (1 / 25 - 0.01), abs=1e-6)
+    assert float(m.group(2)) == pytest.approx(2 * F / 5, abs=1e-6)
+    # Those gains in the exact linearisation: lambda^2 + (V c k2/f) l + V^2 (c k1/f
+    # + kappa^2), c = 1 + f^2 kappa^2.
+    c = 1 + F**2 * 0.01
+    ref = np.sort(np.roots([1, 5 * c * 2 / 5, 25 * (c * (1 / 25 - 0.01) + 0.01)]).real)
+    line = re.search(r"paper model:.*?exact linearisation: ([^\n]+)", p.stdout, re.S)
+    got = np.sort([float(x) for x in line.group(1).split(",")])
+    np.testing.assert_allclose(got, ref, atol=1e-5)
+
+
+def test_chart_rlocus_write_png(tmp_path):
+    out = tmp_path / "c.png"
+    p = run(
+        "chart",
+        "--speed",
+        20,
+        "--curvature",
+        0.01,
+        "--ratio",
+        0.5,
+        "--points",
+        101,
+        "--out",
+        out,
+    )
+    assert p.returncode == 0, p.stderr
+    assert out.read_bytes()[:8] == PNG
+    p = run("chart", "--paper-figure", 2, "--out", tmp_path / "f2.png")
+    assert p.returncode == 0, p.stderr
+    assert (tmp_path / "f2.png").read_bytes()[:8] == PNG
+    p = run("rlocus", "--out", tmp_path / "r.png")
+    assert p.returncode == 0, p.stderr
+    assert (tmp_path / "r.png").read_bytes()[:8] == PNG
+    # L(s) of a double-root design: (-2 l0 s + l0^2 - V^2 kappa^2)/(s^2 + V^2 kappa^2)
+    num = re.search(r"L\(s\) = \[([^\]]+)\]", p.stdout).group(1)
+    np.testing.assert_allclose([float(x) for x in num.split(",")], [2.0, 0.75])
+    p = run(
+        "rlocus",
+        "--param",
+        "curvature",
+        "--redesign",
+        "--design-model",
+        "paper",
+        "--points",
+        50,
+        "--out",
+        tmp_path / "r2.png",
+    )
+    assert p.returncode == 0, p.stderr
+    assert (tmp_path / "r2.png").read_bytes()[:8] == PNG
+
+
+def test_simulate_png_and_csv(tmp_path):
+    out, data = tmp_path / "s.png", tmp_path / "s.csv"
+    p = run(
+        "simulate",
+        "--path",
+        "straight",
+        "--speed",
+        5,
+        "--ratio",
+        -1,
+        "--y0",
+        2,
+        "--psi0",
+        10,
+        "--duration",
+        10,
+        "--out",
+        out,
+        "--csv",
+        data,
+    )
+    assert p.returncode == 0, p.stderr
+    assert out.read_bytes()[:8] == PNG
+    with open(data) as fh:
+        rows = list(csv.DictReader(fh))
+    assert float(rows[0]["e"]) == pytest.approx(2.0)
+    assert float(rows[0]["theta"]) == pytest.approx(math.radians(10))
+    assert float(rows[-1]["t"]) == pytest.approx(10.0)
+    # lambda0 = -1 double root: after 10 s the error is ~ (1 + t) e^-t small.
+    assert abs(float(rows[-1]["e"])) < 0.02
+    assert "status: ok" in p.stdout
+
+
+BAD = [
+    (["gains", "--speed", "abc"], "--speed"),
+    (["gains", "--speed", "nan"], "--speed"),
+    (["gains", "--speed", "0"], "speed"),
+    (["gains", "--ratio", "1", "--curvature", "0"], "uncontrollable"),
+    (["gains", "--pole", "1"], "pole"),
+    (["gains", "--model", "linear"], "--model"),
+    (["chart", "--out", "chart.txt"], ".png"),
+    (["rlocus", "--k1", "0.1"], "--k2"),
+    (["rlocus", "--param", "k1", "--redesign"], "redesign"),
+    (["simulate", "--duration", "-1"], "duration"),
+    (["reproduce", "--only", "fig99", "--no-progress"], "fig99"),
+    (["nonsense"], "invalid choice"),
+    ([], "COMMAND"),
+]
+
+
+def test_bad_input_one_line_error(tmp_path):
+    procs = run_many([args for args, _ in BAD], cwd=tmp_path)
+    for (args, fragment), p in zip(BAD, procs, strict=True):
+        assert p.returncode == 2, args
+        assert "Traceback" not in p.stderr, args
+        lines = p.stderr.strip().splitlines()
+        assert len(lines) == 1, (args, p.stderr)
+        assert fragment in lines[0] and "error" in lines[0], (args, lines)
+    assert not list(tmp_path.glob("*.png"))

@@ -1,0 +1,129 @@
+"""Linear versus nonlinear responses."""
+
+import math
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+from scipy.linalg import expm
+from scipy.optimize import fsolve
+
+import fws_control as fws
+
+
+@pytest.fixture
+def design(veh):
+    return fws.double_root_gains(veh, 5.0, 0.1, ratio=-1.0, pole=-1.0)
+
+
+def test_linear_part_is_matrix_exponential(veh, design):
+    cmp = fws.compare_linear_nonlinear(
+        veh, design, 5.0, 0.1, initial_errors=(0.3, 0.05), duration=6.0
+    )
+    cl = fws.closed_loop(veh, 5.0, 0.1, design)
+    x0 = np.array([0.3, 0.05])
+    for i in (0, 50, 200, 599):
+        t = cmp.linear.time[i]
+        np.testing.assert_allclose(
+            cmp.linear.outputs[:2, i], expm(cl.A * t) @ x0, atol=1e-9
+        )
+    # Same initial errors in both responses.
+    np.testing.assert_allclose(cmp.initial_errors, (0.3, 0.05), atol=1e-12)
+    np.testing.assert_allclose(cmp.nonlinear.t, cmp.linear.time)
+
+
+def test_gap_is_second_order_in_the_initial_error(veh, design):
+    gaps = []
+    for e0 in (0.02, 0.04, 0.08):
+        cmp = fws.compare_linear_nonlinear(
+            veh, design, 5.0, 0.1, initial_errors=(e0, 0.0), duration=8.0
+        )
+        gaps.append(cmp.max_difference()["e"])
+    ratios = np.array(gaps[1:]) / np.array(gaps[:-1])
+    # Doubling e0 multiplies the linearisation error by ~4 (quadratic terms).
+    np.testing.assert_allclose(ratios, 4.0, rtol=0.1)
+    assert gaps[0] < 1e-3 * 0.02 * 10
+
+
+def test_paper_model_prediction_is_worse_on_curves(veh):
+    # Each model's own lambda0 = -1 design, predicted by its own linearisation:
+    # the exact model tracks the nonlinear run closer than eq. (33) does.
+    gaps = {}
+    for model in ("exact", "paper"):
+        g = fws.double_root_gains(veh, 5.0, 0.1, -1.0, -1.0, model=model)
+        cmp = fws.compare_linear_nonlinear(
+            veh, g, 5.0, 0.1, initial_errors=(0.05, 0.0), duration=8.0, model=model
+        )
+        gaps[model] = cmp.max_difference()["e"]
+    assert gaps["exact"] < 0.2 * gaps["paper"]
+
+
+def test_initial_state_and_initial_errors_agree(veh, design):
+    a = fws.compare_linear_nonlinear(
+        veh, design, 5.0, 0.1, initial_state=(0.0, -5.0, 0.0), duration=3.0
+    )
+    b = fws.compare_linear_nonlinear(
+        veh, design, 5.0, 0.1, initial_errors=(-5.0, 0.0), duration=3.0
+    )
+    np.testing.assert_allclose(a.nonlinear.e, b.nonlinear.e, atol=1e-9)
+    np.testing.assert_allclose(a.linear.outputs, b.linear.outputs, atol=1e-12)
+
+
+def test_feedback_only_offset(veh):
+    g = fws.double_root_gains(veh, 5.0, 0.0, ratio=-1.0, pole=-1.0)
+    kap, f = 0.1, veh.wheelbase
+    cmp = fws.compare_linear_nonlinear(
+        veh, g, 5.0, kap, initial_errors=(0.0, 0.0), duration=20.0, feedforward=False
+    )
+
+    # Nonlinear equilibrium from eqs. (18)-(19) without feedforward (fsolve):
+    # sin(theta + d_r) = 0 and yaw rate = V kappa cos(theta + d_r)/(1 - kappa e).
+    def residual(z):
+        e, th = z
+        df = -g.k1 * e - g.k2 * th
+        dr = -1.0 * df
+        return [
+            math.sin(th + dr),
+            math.sin(df - dr) / (f * math.cos(df))
+            - kap * math.cos(th + dr) / (1 - kap * e),
+        ]
+
+    e_star, th_star = fsolve(residual, [-1.0, 0.0], xtol=1e-12)
+    np.testing.assert_allclose(cmp.nonlinear.e[-1], e_star, atol=1e-4)
+    np.testing.assert_allclose(cmp.nonlinear.theta[-1], th_star, atol=1e-5)
+    # Linear prediction: steady state of the disturbance w = (-delta_ff, 0).
+    cl = fws.closed_loop(veh, 5.0, kap, g)
+    x_ss = -np.linalg.solve(cl.A, cl.B @ [-math.atan(kap * f), 0.0])
+    np.testing.assert_allclose(cmp.linear.outputs[:2, -1], x_ss, atol=1e-6)
+    assert np.sign(x_ss[0]) == np.sign(e_star)
+
+
+def test_plot(veh, design):
+    cmp = fws.compare_linear_nonlinear(
+        veh, design, 5.0, 0.1, initial_state=(0.0, -5.0, 0.0), duration=4.0
+    )
+    fig = cmp.plot()
+    assert len(fig.axes) == 5
+    ax_e = fig.axes[0]
+    assert ax_e.get_ylabel() == "lateral error e [m]"
+    labels = [t.get_text() for t in ax_e.get_legend().get_texts()]
+    assert any("nonlinear" in s for s in labels) and any("linear" in s for s in labels)
+    np.testing.assert_allclose(ax_e.lines[1].get_ydata(), cmp.linear.outputs[0])
+    # Steering panel shows absolute angles: linear deviation + feedforward.
+    ff = fws.feedforward_steering(veh, 0.1)
+    np.testing.assert_allclose(
+        fig.axes[2].lines[1].get_ydata(),
+        np.degrees(cmp.linear.outputs[2] + ff),
+    )
+    plt.close(fig)
+
+
+def test_bad_input(veh, design):
+    with pytest.raises(ValueError, match="not both"):
+        fws.compare_linear_nonlinear(
+            veh, design, 5.0, 0.1, initial_state=(0, 0, 0), initial_errors=(0, 0)
+        )
+    with pytest.raises(TypeError, match="SteeringGains"):
+        fws.compare_linear_nonlinear(veh, (0.1, 0.2), 5.0)
+    with pytest.raises(ValueError, match="duration"):
+        fws.compare_linear_nonlinear(veh, design, 5.0, duration=0.0)
