@@ -14,6 +14,7 @@ import importlib
 import inspect
 import os
 import re
+import shutil
 import sys
 from pathlib import Path
 
@@ -75,6 +76,8 @@ myst_dmath_double_inline = True
 # -- autodoc / autosummary / numpydoc ----------------------------------------
 
 autosummary_generate = True
+# autosummary never deletes pages of names that left the API: start afresh.
+shutil.rmtree(DOCS / "api" / "generated", ignore_errors=True)
 autosummary_imported_members = False
 autodoc_default_options = {"member-order": "bysource"}
 autodoc_typehints = "none"  # numpydoc's Parameters sections carry the types
@@ -167,6 +170,9 @@ intersphinx_timeout = 10
 # -- sphinx-gallery ----------------------------------------------------------
 
 _SKIP_GALLERY = os.environ.get("FWS_DOCS_SKIP_GALLERY", "") not in ("", "0")
+if _SKIP_GALLERY:
+    # Pages that show gallery figures (getting_started) then lack them.
+    suppress_warnings = ["image.not_readable"]
 
 sphinx_gallery_conf = {
     "examples_dirs": str(ROOT / "examples"),
@@ -304,5 +310,45 @@ def _check_api_complete(app) -> None:
         )
 
 
+# -- ``fws-cli-help`` directive: the CLI's --help text, always current -------
+
+
+def _cli_help_directive():
+    from docutils import nodes
+    from sphinx.util.docutils import SphinxDirective
+
+    class CliHelp(SphinxDirective):
+        """Literal block with ``fws-control [COMMAND] --help``."""
+
+        optional_arguments = 1
+
+        def run(self):
+            from fws_control.cli import build_parser
+
+            parser = build_parser()
+            if self.arguments:
+                sub = None
+                for action in parser._actions:
+                    choices = getattr(action, "choices", None)
+                    if isinstance(choices, dict) and self.arguments[0] in choices:
+                        sub = choices[self.arguments[0]]
+                if sub is None:
+                    raise self.error(f"no fws-control command {self.arguments[0]!r}")
+                parser = sub
+            old = os.environ.get("COLUMNS")
+            os.environ["COLUMNS"] = "88"
+            try:
+                text = parser.format_help()
+            finally:
+                if old is None:
+                    del os.environ["COLUMNS"]
+                else:
+                    os.environ["COLUMNS"] = old
+            return [nodes.literal_block(text, text, language="text")]
+
+    return CliHelp
+
+
 def setup(app):
     app.connect("builder-inited", _check_api_complete)
+    app.add_directive("fws-cli-help", _cli_help_directive())
