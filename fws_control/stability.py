@@ -3,8 +3,9 @@ r"""Routh-Hurwitz stability of the linear closed loop, paper section 4.1.
 For the second-order characteristic polynomial
 :math:`\lambda^2 + p_1\lambda + p_0` both roots lie in the open left half
 plane iff :math:`p_1 > 0` and :math:`p_0 > 0` (eqs. 35-36). Both are affine
-in ``(k1, k2)`` (see :func:`characteristic_coefficients`), so each boundary
-is a straight line in the gain plane and the tests are closed form on arrays.
+in ``(k1, k2)`` (see :func:`~fws_control.characteristic_coefficients`), so
+each boundary is a straight line in the gain plane and the tests are closed
+form on arrays.
 
 The lines :math:`p_1 = 0` and :math:`p_0 = 0` do not depend on the speed
 (``V`` only scales them), but the stable *side* of :math:`p_1 = 0` does:
