@@ -10,6 +10,8 @@ iteration on the text; the gallery pages then have no figures).
 
 from __future__ import annotations
 
+import collections
+import functools
 import importlib
 import inspect
 import os
@@ -25,6 +27,8 @@ matplotlib.use("Agg")
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
 sys.path.insert(0, str(ROOT))
+
+from sphinx_gallery.sorting import FunctionSortKey  # noqa: E402
 
 import fws_control  # noqa: E402
 
@@ -170,16 +174,35 @@ intersphinx_timeout = 10
 # -- sphinx-gallery ----------------------------------------------------------
 
 _SKIP_GALLERY = os.environ.get("FWS_DOCS_SKIP_GALLERY", "") not in ("", "0")
-if _SKIP_GALLERY:
-    # Pages that show gallery figures (getting_started) then lack them.
-    suppress_warnings = ["image.not_readable"]
+
+#: Gallery order: the tour first, then analysis, then simulation. The sort
+#: key must pickle (Sphinx caches the configuration), hence a dict lookup
+#: rather than a function defined here; unlisted examples go last.
+_EXAMPLE_RANK = collections.defaultdict(
+    functools.partial(int, "99"),
+    {
+        name: rank
+        for rank, name in enumerate(
+            (
+                "plot_quick_start.py",
+                "plot_stability_chart.py",
+                "plot_root_loci.py",
+                "plot_fws_vs_4ws.py",
+                "plot_spline_course.py",
+                "plot_ratio_sweep.py",
+            )
+        )
+    },
+)
 
 sphinx_gallery_conf = {
     "examples_dirs": str(ROOT / "examples"),
     "gallery_dirs": "auto_examples",
     "filename_pattern": r"/plot_",
     "plot_gallery": "False" if _SKIP_GALLERY else "True",
-    "within_subsection_order": "FileNameSortKey",
+    "within_subsection_order": FunctionSortKey(
+        _EXAMPLE_RANK.__getitem__, "fws_example_order"
+    ),
     "doc_module": ("fws_control",),
     "backreferences_dir": "gen_modules/backreferences",
     "reference_url": {"fws_control": None},

@@ -132,7 +132,9 @@ def python_entries() -> set[tuple[str, str, str]]:
             out.add((full, _role(obj), f"{page}#{full}"))
     out.add(("os.PathLike", "py:class", "library/os.html#os.PathLike"))
     # Targets of numpydoc's default type aliases (bool, sequence, ...).
-    out.add(("bltin-boolean-values", "std:label", "library/stdtypes.html#boolean-values"))
+    out.add(
+        ("bltin-boolean-values", "std:label", "library/stdtypes.html#boolean-values")
+    )
     for term in ("sequence", "iterable", "generator", "mapping", "hashable"):
         out.add((term, "std:term", f"glossary.html#term-{term}"))
     return out
@@ -170,7 +172,9 @@ def numpy_entries() -> set[tuple[str, str, str]]:
         full = f"numpy.typing.{name}"
         out.add((full, "py:data", f"reference/typing.html#{full}"))
         out.add((full, "py:class", f"reference/typing.html#{full}"))
-    out.add(("arrays.scalars", "std:label", "reference/arrays.scalars.html#arrays-scalars"))
+    out.add(
+        ("arrays.scalars", "std:label", "reference/arrays.scalars.html#arrays-scalars")
+    )
     for term in ("array_like", "array-like", "ndarray", "scalar", "dtype", "ufunc"):
         out.add((term, "std:term", f"glossary.html#term-{term}"))
     return out
