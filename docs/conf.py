@@ -359,7 +359,7 @@ def _cli_help_directive():
                     raise self.error(f"no fws-control command {self.arguments[0]!r}")
                 parser = sub
             old = os.environ.get("COLUMNS")
-            os.environ["COLUMNS"] = "88"
+            os.environ["COLUMNS"] = "72"
             try:
                 text = parser.format_help()
             finally:

@@ -25,7 +25,7 @@ import fws_control as fws
 from fws_control.paths import Arc
 
 veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-sys = fws.linearize(veh, speed=5.0, curvature=0.1)  # model="exact" by default
+sys = fws.linearize(veh, speed=5.0, curvature=0.1)  # model="exact"
 print(sys)
 
 # %%
