@@ -567,7 +567,15 @@ def _draw_panel(ax, panel: ChartPanel, legend: bool = True) -> list:
     _note_box(ax, notes)
     ax.set_title(panel.title, fontsize=10)
     if legend:
-        ax.legend(handles=handles, fontsize=7, loc="upper right", framealpha=0.85)
+        # Below the axes: inside, it would hide regions and design points.
+        ax.legend(
+            handles=handles,
+            fontsize=8,
+            loc="upper center",
+            bbox_to_anchor=(0.5, -0.13),
+            ncol=3,
+            frameon=False,
+        )
     return handles
 
 
@@ -607,7 +615,7 @@ def plot_paper_figure(
 
     panels = paper_figure_panels(n, model, vehicle, pole, curvatures, npoints)
     if n == 2:
-        fig, axes = plt.subplots(1, 3, figsize=(15, 5.2), layout="constrained")
+        fig, axes = plt.subplots(1, 3, figsize=(15, 6.2), layout="constrained")
         axes = list(axes)
     else:
         fig, axs = plt.subplots(2, 4, figsize=(19, 9.5), layout="constrained")

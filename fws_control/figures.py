@@ -18,6 +18,7 @@ import os
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -37,6 +38,7 @@ __all__ = [
     "ReproduceResult",
     "reproduce",
     "plot_root_loci",
+    "plot_fig5",
 ]
 
 #: The scenario speeds, curvatures and ratios of section 5.
@@ -204,8 +206,256 @@ def plot_root_loci(
     return fig
 
 
+def _comparison_figure(model: str = "exact", quick: bool = False):
+    from .comparison import compare_linear_nonlinear
+
+    g = double_root_gains(PAPER_VEHICLE, 5.0, 0.1, -1.0, -1.0, model)
+    cmp = compare_linear_nonlinear(
+        PAPER_VEHICLE,
+        g,
+        5.0,
+        0.1,
+        initial_state=(0.0, -5.0, 0.0),
+        duration=15.0,
+        model=model,
+        dt=0.05 if quick else 0.01,
+    )
+    return cmp.plot()
+
+
 def _turning_figure(model: str = "exact", quick: bool = False):
     return plot_turning_radius(PAPER_VEHICLE).figure
+
+
+# --------------------------------------------------------------------------
+# Simulation figures (Figs. 5-9), drawn from fws_control.scenarios data.
+
+_DEG = 180.0 / math.pi
+_FIG5_TITLES = {
+    "a": "(a) straight road, V = 5 m/s, feedback",
+    "b": "(b) curve κ = 1/10 1/m, V = 5 m/s, feedforward + feedback",
+    "c": "(c) straight road, V = 20 m/s, feedback",
+    "d": "(d) curve κ = 1/100 1/m, V = 20 m/s, feedforward + feedback",
+}
+
+
+@lru_cache(maxsize=4)
+def _fig5_data(model: str, quick: bool):
+    from .scenarios import FIG5_RATIOS, fig5_peak_lateral_accel
+
+    ratios = np.linspace(-1.5, 1.5, 13) if quick else FIG5_RATIOS
+    return fig5_peak_lateral_accel(
+        model, ratios, dt=0.02 if quick else 0.01, progress=False
+    )
+
+
+@lru_cache(maxsize=4)
+def _fig6_to_9_data(model: str, quick: bool):
+    from .scenarios import fig6_to_9_responses
+
+    return fig6_to_9_responses(model, dt=0.05 if quick else 0.01, progress=False)
+
+
+def plot_fig5(model: str = "exact", quick: bool = False):
+    r"""Fig. 5: peak |lateral acceleration of G| versus the ratio ``a``.
+
+    One panel per scenario, one curve per double root :math:`\lambda_0`
+    (``-1, -2`` at 5 m/s; ``-1, -2, -3`` at 20 m/s), log scale. Runs that
+    stopped at a singular steering angle (:math:`|\delta_f| \to \pi/2`) are
+    marked with ``x`` on the lower edge; ``a = 1`` on a straight road has no
+    design and is marked with ``|``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+
+    data = _fig5_data(model, quick)
+    fig, axes = plt.subplots(2, 2, figsize=(13, 9), layout="constrained")
+    for ax, (panel, sweep) in zip(axes.flat, data.items(), strict=True):
+        for i, lam in enumerate(sweep.poles):
+            color = f"C{i}"
+            ax.plot(
+                sweep.ratios,
+                sweep.peak_lateral_accel[i],
+                "o-",
+                ms=3,
+                color=color,
+                label=rf"$\lambda_0$ = {lam:g}",
+            )
+            stopped = np.isin(sweep.status[i], ("ok", "uncontrollable"), invert=True)
+            unc = sweep.status[i] == "uncontrollable"
+            for mask, marker, mcolor, size in (
+                (stopped, "x", color, 7),
+                (unc, "|", "k", 14),
+            ):
+                if not mask.any():
+                    continue
+                # A rug on the lower edge (axes coordinates): these runs have
+                # no peak value to plot.
+                # One row per pole, so that the rugs do not hide each other.
+                (rug,) = ax.plot(
+                    sweep.ratios[mask],
+                    np.full(mask.sum(), 0.02 + 0.03 * i),
+                    marker,
+                    color=mcolor,
+                    ms=size,
+                    transform=ax.get_xaxis_transform(),
+                    clip_on=False,
+                    scalex=False,
+                    scaley=False,
+                )
+                rug.set_in_layout(False)
+        ax.plot([], [], "x", color="0.3", label="run stopped: singular steering")
+        if np.any(sweep.status == "uncontrollable"):
+            ax.plot([], [], "|", color="k", ms=10, label="a = 1: no design")
+        ax.set_yscale("log")
+        ax.set_xlabel("ratio $a$ [-]")
+        ax.set_ylabel(r"max $|a_G^{lat}|$ [m/s²]")
+        ax.set_title(_FIG5_TITLES[panel], fontsize=10)
+        ax.grid(alpha=0.3, which="both")
+        ax.axvline(0.0, color="0.6", lw=0.8)
+        ax.legend(fontsize=8, loc="upper left")
+    fig.suptitle(
+        f"Fig. 5: peak lateral acceleration of G, double-root gains ({model} "
+        "model), nonlinear simulation",
+        fontsize=13,
+    )
+    return fig
+
+
+def _responses_figure(n: int, model: str, quick: bool):
+    import matplotlib.pyplot as plt
+
+    sr = _fig6_to_9_data(model, quick)[n]
+    res, sc = sr.result, sr.scenario
+    curved = sc.curvature != 0.0
+    if curved:
+        fig, axs = plt.subplots(2, 3, figsize=(16, 9), layout="constrained")
+        panels = [
+            (axs[0, 0], "e", 1.0, "(a) lateral error e [m]"),
+            (axs[0, 1], "theta", _DEG, "(b) yaw angle error θ [deg]"),
+            (axs[0, 2], None, None, "(c) trajectory"),
+            (axs[1, 0], "delta_f", _DEG, "(d) front steering angle δf [deg]"),
+            (axs[1, 1], "delta_r", _DEG, "(e) rear steering angle δr [deg]"),
+            (axs[1, 2], "lateral_accel", 1.0, "(f) lateral acceleration [m/s²]"),
+        ]
+    else:
+        fig, axs = plt.subplots(2, 2, figsize=(13, 9), layout="constrained")
+        panels = [
+            (axs[0, 0], "y", 1.0, "(a) lateral position $y_R$ [m]"),
+            (axs[0, 1], "lateral_accel", 1.0, "(b) lateral acceleration [m/s²]"),
+            (axs[1, 0], "delta_f", _DEG, "(c) front steering angle δf [deg]"),
+            (axs[1, 1], "delta_r", _DEG, "(d) rear steering angle δr [deg]"),
+        ]
+    for i, a in enumerate(sr.ratios):
+        color = f"C{i}"
+        status = res.status[i]
+        label = f"a = {a:g}"
+        if status == "uncontrollable":
+            label += ": no design (uncontrollable)"
+        elif status != "ok":
+            label += f": stopped at {res.t_stop[i]:.2f} s ({status})"
+        for ax, name, scale, _ in panels:
+            if name is None:
+                x, y = res.x[i], res.y[i]
+            else:
+                x, y = res.t, scale * getattr(res, name)[i]
+            lab = label if name == panels[0][1] else None
+            good = np.isfinite(y)
+            if good.sum() <= 1:
+                # Not simulated, or stopped at t = 0 with only its invalid
+                # initial command: the legend says so; drawing the point would
+                # only stretch the axes.
+                ax.plot([], [], color=color, label=lab)
+                continue
+            ax.plot(x, y, color=color, label=lab)
+            if status != "ok":
+                j = np.flatnonzero(good)[-1]
+                ax.plot(x[j], y[j], "x", color=color, ms=8)
+    ok = res.status == "ok"
+    for ax, name, scale, title in panels:
+        ax.set_title(title, fontsize=10)
+        ax.grid(alpha=0.3)
+        if name is not None and ok.any() and not ok.all():
+            # Scale to the runs that finished: a run that diverges towards a
+            # singular steering angle would otherwise flatten every curve.
+            vals = scale * getattr(res, name)[ok]
+            lo, hi = float(np.nanmin(vals)), float(np.nanmax(vals))
+            pad = 0.08 * max(hi - lo, 1e-9)
+            every = scale * getattr(res, name)
+            if np.nanmax(every) > hi + pad or np.nanmin(every) < lo - pad:
+                ax.set_ylim(lo - pad, hi + pad)
+                ax.text(
+                    0.99,
+                    0.98,
+                    "stopped runs clipped",
+                    transform=ax.transAxes,
+                    ha="right",
+                    va="top",
+                    fontsize=7,
+                    color="0.4",
+                )
+        if name is None:
+            s = res.s[np.isfinite(res.s)]
+            ss = np.linspace(0.0, float(s.max()) if s.size else 1.0, 400)
+            px, py = sc.path.position(ss)
+            ax.plot(px, py, "k--", lw=1.0, label="path")
+            ax.set_xlabel("x [m]")
+            ax.set_ylabel("y [m]")
+            ax.set_aspect("equal", adjustable="datalim")
+            ax.legend(fontsize=8, loc="best")
+        else:
+            ax.set_xlabel("time t [s]")
+            ax.set_ylabel(title.split(") ", 1)[1])
+    panels[0][0].legend(fontsize=8, loc="best")
+    ctrl = "feedforward + feedback" if sr.feedforward else "feedback"
+    road = f"curved road κ = {sc.curvature:g} 1/m" if curved else "straight road"
+    x0, y0, _ = sc.initial_state
+    fig.suptitle(
+        f"Fig. {n}: {road}, {ctrl}, V = {sc.speed:g} m/s, "
+        rf"$\lambda_0$ = {sr.pole:g} ({model}-model gains), R(0) = ({x0:g}, {y0:g}) m",
+        fontsize=13,
+    )
+    return fig
+
+
+def _response_maker(n):
+    def make(model: str = "exact", quick: bool = False):
+        return _responses_figure(n, model, quick)
+
+    return make
+
+
+def _fig5_table(model: str, quick: bool) -> str:
+    data = _fig5_data(model, quick)
+    show = (-1.5, -1.0, -0.5, 0.0, 0.5, 1.0, 1.5)
+    lines = []
+    for panel, sweep in data.items():
+        lines += [f"**{_FIG5_TITLES[panel]}**", ""]
+        head = "| λ0 | " + " | ".join(f"a = {a:g}" for a in show) + " | min over a |"
+        lines += [head, "|---" * (len(show) + 2) + "|"]
+        for i, lam in enumerate(sweep.poles):
+            cells = []
+            for a in show:
+                j = int(np.argmin(np.abs(sweep.ratios - a)))
+                st = sweep.status[i, j]
+                if st == "ok":
+                    cells.append(f"{sweep.peak_lateral_accel[i, j]:.3g}")
+                elif st == "uncontrollable":
+                    cells.append("no design")
+                else:
+                    cells.append("singular")
+            row = sweep.peak_lateral_accel[i]
+            if np.any(np.isfinite(row)):
+                k = int(np.nanargmin(row))
+                cells.append(f"{row[k]:.3g} at a = {sweep.ratios[k]:g}")
+            else:
+                cells.append("—")
+            lines.append(f"| {lam:g} | " + " | ".join(cells) + " |")
+        lines.append("")
+    return "\n".join(lines)
 
 
 FIGURES: dict[str, FigureSpec] = {
@@ -224,6 +474,43 @@ FIGURES: dict[str, FigureSpec] = {
         "fig4",
         "Stable gains at 20 m/s for a = -1.5..1.5, curvatures 0, 0.01, 0.02, 0.05 1/m",
         _chart_figure(4),
+    ),
+    "fig5": FigureSpec(
+        "fig5",
+        "Peak lateral acceleration of G versus a: (a) straight 5 m/s, (b) curve "
+        "1/10 at 5 m/s, (c) straight 20 m/s, (d) curve 1/100 at 20 m/s",
+        plot_fig5,
+    ),
+    "fig6": FigureSpec(
+        "fig6",
+        "Straight road, 5 m/s, feedback, lambda0 = -1: lateral position, lateral "
+        "acceleration, front and rear steering",
+        _response_maker(6),
+    ),
+    "fig7": FigureSpec(
+        "fig7",
+        "Curve 1/10, 5 m/s, feedforward + feedback, lambda0 = -1: errors, "
+        "trajectory, steering, lateral acceleration",
+        _response_maker(7),
+    ),
+    "fig8": FigureSpec(
+        "fig8",
+        "Straight road, 20 m/s, feedback, lambda0 = -1: lateral position, lateral "
+        "acceleration, front and rear steering",
+        _response_maker(8),
+    ),
+    "fig9": FigureSpec(
+        "fig9",
+        "Curve 1/100, 20 m/s, feedforward + feedback, lambda0 = -1: errors, "
+        "trajectory, steering, lateral acceleration",
+        _response_maker(9),
+    ),
+    "extra_linear_vs_nonlinear": FigureSpec(
+        "extra_linear_vs_nonlinear",
+        "Linear (control.initial_response of closed_loop) versus nonlinear "
+        "response, curve 1/10 at 5 m/s, a = -1, from e0 = -5 m",
+        _comparison_figure,
+        paper=False,
     ),
     "extra_root_loci": FigureSpec(
         "extra_root_loci",
@@ -439,11 +726,11 @@ def reproduce(
         plt.close(fig)
         written.append(path)
     summary = out / "summary.md"
-    summary.write_text(_summary_text(model, written), encoding="utf-8")
+    summary.write_text(_summary_text(model, written, quick), encoding="utf-8")
     return ReproduceResult(out, tuple(written), summary)
 
 
-def _summary_text(model: str, written) -> str:
+def _summary_text(model: str, written, quick: bool = False) -> str:
     lines = [
         "# fws-control reproduce: summary",
         "",
@@ -467,6 +754,14 @@ def _summary_text(model: str, written) -> str:
         "",
         gains_table(),
         "",
+        "## Fig. 5: peak lateral acceleration of G [m/s²]",
+        "",
+        "Nonlinear simulation with the double-root gains of the "
+        f"{model} model; 'singular' = the run reached |delta_f| = 90 deg and "
+        "stopped; 'no design' = a = 1 on a straight road (uncontrollable)."
+        + (" Quick mode: coarse ratio grid." if quick else ""),
+        "",
+        _fig5_table(model, quick),
         "## Turning radius at the front steering limit",
         "",
         "Radius of the rear-axle centre R / centre of gravity G [m] with "

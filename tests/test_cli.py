@@ -10,6 +10,8 @@ import sys
 import numpy as np
 import pytest
 
+from fws_control.cli import main
+
 PNG = b"\x89PNG\r\n\x1a\n"
 F = 2.7
 
@@ -44,16 +46,25 @@ def run_many(arg_lists, cwd=None):
     return results
 
 
-SUBCOMMANDS = [None, "gains", "chart", "rlocus", "simulate", "reproduce"]
+SUBCOMMANDS = ["gains", "chart", "rlocus", "simulate", "reproduce"]
 
 
-def test_help():
-    procs = run_many([([sub] if sub else []) + ["--help"] for sub in SUBCOMMANDS])
-    for sub, p in zip(SUBCOMMANDS, procs, strict=True):
+def test_help_subprocess():
+    procs = run_many([["--help"], ["reproduce", "--help"]])
+    for p in procs:
         assert p.returncode == 0, p.stderr
         assert p.stdout.startswith("usage: fws-control")
-        if sub:
-            assert f"fws-control {sub}" in p.stdout
+    assert "--out" in procs[1].stdout and "--quick" in procs[1].stdout
+
+
+@pytest.mark.parametrize("sub", SUBCOMMANDS)
+def test_help_every_subcommand(sub, capsys):
+    # In-process (the interpreter start dominates a subprocess); same parser.
+    with pytest.raises(SystemExit) as exc:
+        main([sub, "--help"])
+    assert exc.value.code == 0
+    out = capsys.readouterr().out
+    assert out.startswith(f"usage: fws-control {sub}")
 
 
 def test_gains_straight_matches_eq41():
@@ -69,8 +80,18 @@ def test_gains_straight_matches_eq41():
     assert "closed-loop poles, exact linearisation: -1.000000, -1.000000" in p.stdout
 
 
-def test_gains_curved_shows_paper_model_error():
-    p = run("gains", "--speed", 5, "--curvature", 0.1, "--ratio", 0, "--model", "paper")
+def _in_process(args, capsys):
+    """main() in this interpreter; returns a CompletedProcess-like result."""
+    code = main([str(a) for a in args])
+    cap = capsys.readouterr()
+    return subprocess.CompletedProcess(args, code, cap.out, cap.err)
+
+
+def test_gains_curved_shows_paper_model_error(capsys):
+    p = _in_process(
+        ["gains", "--speed", 5, "--curvature", 0.1, "--ratio", 0, "--model", "paper"],
+        capsys,
+    )
     assert p.returncode == 0, p.stderr
     first = p.stdout.split("exact model")[0]
     # Paper eq. (44), a = 0: k1 = f (lambda0^2/V^2 - kappa^2), k2 = -2 lambda0 f / V.
@@ -86,7 +107,7 @@ def test_gains_curved_shows_paper_model_error():
     np.testing.assert_allclose(got, ref, atol=1e-5)
 
 
-def test_chart_rlocus_write_png(tmp_path):
+def test_chart_rlocus_write_png(tmp_path, capsys):
     out = tmp_path / "c.png"
     p = run(
         "chart",
@@ -103,7 +124,9 @@ def test_chart_rlocus_write_png(tmp_path):
     )
     assert p.returncode == 0, p.stderr
     assert out.read_bytes()[:8] == PNG
-    p = run("chart", "--paper-figure", 2, "--out", tmp_path / "f2.png")
+    p = _in_process(
+        ["chart", "--paper-figure", 2, "--out", tmp_path / "f2.png"], capsys
+    )
     assert p.returncode == 0, p.stderr
     assert (tmp_path / "f2.png").read_bytes()[:8] == PNG
     p = run("rlocus", "--out", tmp_path / "r.png")
@@ -112,17 +135,20 @@ def test_chart_rlocus_write_png(tmp_path):
     # L(s) of a double-root design: (-2 l0 s + l0^2 - V^2 kappa^2)/(s^2 + V^2 kappa^2)
     num = re.search(r"L\(s\) = \[([^\]]+)\]", p.stdout).group(1)
     np.testing.assert_allclose([float(x) for x in num.split(",")], [2.0, 0.75])
-    p = run(
-        "rlocus",
-        "--param",
-        "curvature",
-        "--redesign",
-        "--design-model",
-        "paper",
-        "--points",
-        50,
-        "--out",
-        tmp_path / "r2.png",
+    p = _in_process(
+        [
+            "rlocus",
+            "--param",
+            "curvature",
+            "--redesign",
+            "--design-model",
+            "paper",
+            "--points",
+            50,
+            "--out",
+            tmp_path / "r2.png",
+        ],
+        capsys,
     )
     assert p.returncode == 0, p.stderr
     assert (tmp_path / "r2.png").read_bytes()[:8] == PNG
@@ -161,19 +187,26 @@ def test_simulate_png_and_csv(tmp_path):
     assert "status: ok" in p.stdout
 
 
+# Each kind of failure once through a real subprocess ...
 BAD = [
-    (["gains", "--speed", "abc"], "--speed"),
-    (["gains", "--speed", "nan"], "--speed"),
-    (["gains", "--speed", "0"], "speed"),
+    (["gains", "--speed", "abc"], "--speed"),  # argparse type error
+    (["gains", "--speed", "0"], "speed"),  # ValueError from the library
     (["gains", "--ratio", "1", "--curvature", "0"], "uncontrollable"),
-    (["gains", "--pole", "1"], "pole"),
-    (["gains", "--model", "linear"], "--model"),
     (["chart", "--out", "chart.txt"], ".png"),
-    (["rlocus", "--k1", "0.1"], "--k2"),
-    (["rlocus", "--param", "k1", "--redesign"], "redesign"),
-    (["simulate", "--duration", "-1"], "duration"),
     (["reproduce", "--only", "fig99", "--no-progress"], "fig99"),
     (["nonsense"], "invalid choice"),
+]
+
+# ... and the other cases in-process through the same main().
+BAD_IN_PROCESS = [
+    (["gains", "--speed", "nan"], "--speed"),
+    (["gains", "--pole", "1"], "pole"),
+    (["gains", "--model", "linear"], "--model"),
+    (["rlocus", "--k1", "0.1"], "--k2"),
+    (["rlocus", "--param", "k1", "--redesign"], "redesign"),
+    (["rlocus", "--param", "speed", "--range", "0", "10"], "speed"),
+    (["simulate", "--duration", "-1"], "duration"),
+    (["chart", "--points", "1"], "--points"),
     ([], "COMMAND"),
 ]
 
@@ -187,3 +220,38 @@ def test_bad_input_one_line_error(tmp_path):
         assert len(lines) == 1, (args, p.stderr)
         assert fragment in lines[0] and "error" in lines[0], (args, lines)
     assert not list(tmp_path.glob("*.png"))
+
+
+@pytest.mark.parametrize("args, fragment", BAD_IN_PROCESS)
+def test_bad_input_in_process(args, fragment, tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    try:
+        code = main(args)
+    except SystemExit as exc:  # argparse errors exit from parse_args
+        code = exc.code
+    assert code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and fragment in err[0] and "error" in err[0], err
+    assert not list(tmp_path.glob("*.png"))
+
+
+def test_reproduce_quick_writes_every_figure(tmp_path):
+    out = tmp_path / "figures"
+    p = run("reproduce", "--out", out, "--quick", "--no-progress", "--dpi", 40)
+    assert p.returncode == 0, p.stderr
+    expected = [f"fig{n}.png" for n in range(2, 10)] + [
+        "extra_linear_vs_nonlinear.png",
+        "extra_root_loci.png",
+        "extra_turning_radius.png",
+    ]
+    assert sorted(f.name for f in out.glob("*.png")) == sorted(expected)
+    for name in expected:
+        data = (out / name).read_bytes()
+        assert data[:8] == PNG and len(data) > 5000
+    summary = (out / "summary.md").read_text()
+    assert "Double-root gains" in summary and "Fig. 5: peak lateral" in summary
+    # Fig. 5 table, panel (d): the peak cannot be below the steady-state
+    # centripetal acceleration V^2 kappa = 4 m/s^2 on the 1/100 curve.
+    part = summary.split("**(d) curve")[1].split("##")[0]
+    vals = [float(v) for v in re.findall(r"\| (\d+\.?\d*(?:e[+-]\d+)?) ", part)]
+    assert vals and min(vals) >= 4.0 - 1e-6

@@ -8,6 +8,7 @@ import pytest
 
 import fws_control as fws
 from fws_control.figures import FIGURES
+from fws_control.paths import Arc, Straight
 
 PNG = b"\x89PNG\r\n\x1a\n"
 F, LAM = 2.7, -1.0
@@ -95,3 +96,47 @@ def test_reproduce_subset_writes_pngs_and_summary(tmp_path):
     assert re.search(rf"\| 5 \| 0 \| -1 \| {k1:.5f} \| {k2:.5f} \|", text)
     with pytest.raises(ValueError, match="names"):
         fws.reproduce(tmp_path / "x", names=["fig99"], progress=False)
+
+
+def test_fig5_points_match_direct_simulation():
+    fig = fws.make_figure("fig5", quick=True)
+    ax_a = fig.axes[0]
+    (line,) = [ln for ln in ax_a.lines if ln.get_label() == r"$\lambda_0$ = -1"]
+    a, peak = line.get_xdata(), line.get_ydata()
+    veh = fws.Vehicle(2.7, 1.35)
+    for ratio in (-1.0, 0.0):
+        g = fws.double_root_gains(veh, 5.0, 0.0, ratio, -1.0)
+        res = fws.simulate(
+            veh, Straight(), g, 5.0, (0.0, 2.0, 0.0), 15.0, feedforward=False, dt=0.02
+        )
+        j = int(np.argmin(np.abs(a - ratio)))
+        assert peak[j] == pytest.approx(np.max(np.abs(res.lateral_accel)), rel=1e-6)
+    # a = 1 on the straight road: no point is drawn (no design).
+    assert np.isnan(peak[np.argmin(np.abs(a - 1.0))])
+    assert ax_a.get_yscale() == "log"
+    plt.close(fig)
+
+
+@pytest.mark.parametrize("n, curvature, y0", [(6, 0.0, 2.0), (7, 0.1, -5.0)])
+def test_response_figures_match_direct_simulation(n, curvature, y0):
+    fig = fws.make_figure(f"fig{n}", quick=True)
+    ax = fig.axes[0]
+    (line,) = [ln for ln in ax.lines if ln.get_label() == "a = -0.5"]
+    veh = fws.Vehicle(2.7, 1.35)
+    g = fws.double_root_gains(veh, 5.0, curvature, -0.5, -1.0)
+    path = Straight() if curvature == 0.0 else Arc(curvature=curvature)
+    res = fws.simulate(
+        veh,
+        path,
+        g,
+        5.0,
+        (0.0, y0, 0.0),
+        15.0,
+        feedforward=curvature != 0.0,
+        t_eval=line.get_xdata(),
+    )
+    ref = res.y if n == 6 else res.e  # panel (a): lateral position / error
+    np.testing.assert_allclose(line.get_ydata(), ref, atol=1e-6)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any(s.startswith("a = 1:") for s in labels)  # a = 1 is marked, not hidden
+    plt.close(fig)
