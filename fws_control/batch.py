@@ -16,7 +16,6 @@ tqdm progress bar over the chunks is shown on interactive terminals.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -63,7 +62,7 @@ class BatchResult:
     message : tuple of str
         Per run explanation ("" for ``"ok"``).
     t_stop : ndarray
-        Per run end time [s].
+        Per run end time [s]; NaN for runs that were not simulated.
     speed : ndarray
         Per run speed [m/s].
     k1, k2, ratio : ndarray
@@ -431,7 +430,7 @@ def _expand_batch(
     sig = {name: np.full((n_total, T), np.nan) for name in SIGNALS}
     status = np.full(n_total, fill_status, dtype=object)
     message = [fill_message] * n_total
-    t_stop = np.zeros(n_total)
+    t_stop = np.full(n_total, np.nan)
     if result is not None:
         for name in SIGNALS:
             sig[name][positions] = getattr(result, name)
@@ -439,8 +438,6 @@ def _expand_batch(
         for p, m in zip(positions, result.message, strict=True):
             message[p] = m
         t_stop[positions] = result.t_stop
-    else:
-        t_stop[:] = math.nan
     return BatchResult(
         t=t,
         **sig,

@@ -276,7 +276,9 @@ def plot_responses(results, labels=None, fig=None):
     s_lo, s_hi = math.inf, -math.inf
     for res, lab in zip(results, labels, strict=True):
         text = lab if lab is not None else ""
-        if not res.ok:
+        if res.status == STATUS_UNCONTROLLABLE:
+            text = f"{text} (uncontrollable: not simulated)".strip()
+        elif not res.ok:
             text = f"{text} ({res.status} at t={res.t_stop:.3g} s)".strip()
         color = None
         for ax, name, scale, _ in panels:

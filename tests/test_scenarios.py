@@ -73,6 +73,7 @@ def test_scenario_responses_keep_uncontrollable_rows_and_match_simulate():
     res = r.result
     assert res.status.tolist() == ["ok", "uncontrollable", "ok"]
     assert np.all(np.isnan(res.e[1])) and math.isnan(res.k1[1])
+    assert math.isnan(res.t_stop[1])  # never simulated
     assert "uncontrollable" in res.message[1]
     assert r.feedforward is False and r.ratios.tolist() == [-1.0, 1.0, 0.5]
     for i in (0, 2):
