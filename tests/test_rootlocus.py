@@ -154,6 +154,10 @@ def test_parameter_locus_plot(veh):
     assert len(loci_lines) == 2
     np.testing.assert_allclose(loci_lines[0].get_xdata(), pz.loci[:, 0].real)
     plt.close(cplt.figure)
+    # The default call (python-control's s-plane grid) accepts it too.
+    cplt = pz.plot()
+    np.testing.assert_allclose(cplt.lines[0, 2][1].get_ydata(), pz.loci[:, 1].imag)
+    plt.close(cplt.figure)
 
 
 @given(st.floats(-50, 50), st.floats(-50, 50))
