@@ -260,7 +260,7 @@ class TrackingMetrics:
     Attributes
     ----------
     peak_lateral_accel : float or ndarray
-        Peak |lateral acceleration of G| [m/s^2] (up to the stop).
+        Peak absolute lateral acceleration of G [m/s^2] (up to the stop).
     settling_time : float or ndarray
         Settling time of the lateral error ``e`` [s] (see
         :func:`settling_time`); NaN for runs that stopped early.
@@ -273,9 +273,9 @@ class TrackingMetrics:
     steady_state_heading_error : float or ndarray
         Mean of ``theta`` over the final window [rad].
     peak_delta_f, peak_delta_r : float or ndarray
-        Peak |steering angle| [rad] (up to the stop).
+        Peak absolute steering angle [rad] (up to the stop).
     peak_delta_f_rate, peak_delta_r_rate : float or ndarray
-        Peak |steering rate| [rad/s] (up to the stop).
+        Peak absolute steering rate [rad/s] (up to the stop).
     status : str or ndarray of str
         The run status; horizon metrics are NaN unless it is ``"ok"``.
     """

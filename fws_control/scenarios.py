@@ -9,14 +9,14 @@ double-root gains (``"exact"`` Jacobian or the ``"paper"``'s eq. 33).
 Scenarios (paper section 4.3; ``f = 2.7 m``, ``d = 1.35 m``, zero initial
 heading error):
 
-========================  =====  ========  ============  ===========  ======
-name                      V      path      R(0)          controller   figure
-========================  =====  ========  ============  ===========  ======
-``"straight_5"``          5      straight  (0, 2 m)      feedback     6
-``"curve_5"``             5      κ = 1/10  (0, -5 m)     FF + FB      7
-``"straight_20"``         20     straight  (0, 2 m)      feedback     8
-``"curve_20"``            20     κ = 1/100 (0, -10 m)    FF + FB      9
-========================  =====  ========  ============  ===========  ======
+========================  =====  ==========  ============  ===========  ======
+name                      V      path        R(0)          controller   figure
+========================  =====  ==========  ============  ===========  ======
+``"straight_5"``          5      straight    (0, 2 m)      feedback     6
+``"curve_5"``             5      κ = 1/10    (0, -5 m)     FF + FB      7
+``"straight_20"``         20     straight    (0, 2 m)      feedback     8
+``"curve_20"``            20     κ = 1/100   (0, -10 m)    FF + FB      9
+========================  =====  ==========  ============  ===========  ======
 
 Designs that do not exist are kept in the data, never dropped: ``ratio = 1``
 on a straight road has no double-root gains (the heading is uncontrollable,
@@ -393,10 +393,10 @@ class PeakSweep:
     poles : ndarray
         Shape ``(p,)``.
     peak_lateral_accel : ndarray
-        Peak |lateral acceleration of G| [m/s^2], shape ``(p, n)``; NaN
+        Peak absolute lateral acceleration of G [m/s^2], shape ``(p, n)``; NaN
         where the status is not ``"ok"``.
     peak_delta_f, peak_delta_r : ndarray
-        Peak |steering angles| [rad], shape ``(p, n)``, NaN where not ``"ok"``.
+        Peak absolute steering angles [rad], shape ``(p, n)``, NaN where not ``"ok"``.
     status : ndarray of str
         Shape ``(p, n)``: ``"ok"``, ``"uncontrollable"`` (no design),
         ``"singular_steering"`` etc. (the run stopped at ``t_stop``).
@@ -430,7 +430,7 @@ def fig5_peak_lateral_accel(
     client=None,
     progress: bool | None = None,
 ) -> dict[str, PeakSweep]:
-    """Fig. 5: peak |lateral acceleration| versus the ratio ``a``.
+    """Fig. 5: peak absolute lateral acceleration versus the ratio ``a``.
 
     One :func:`simulate_batch` call per panel over all ``(pole, ratio)``
     pairs.
