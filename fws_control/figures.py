@@ -257,7 +257,7 @@ def _fig6_to_9_data(model: str, quick: bool):
 
 
 def plot_fig5(model: str = "exact", quick: bool = False):
-    r"""Fig. 5: peak |lateral acceleration of G| versus the ratio ``a``.
+    r"""Fig. 5: peak absolute lateral acceleration of G versus the ratio ``a``.
 
     One panel per scenario, one curve per double root :math:`\lambda_0`
     (``-1, -2`` at 5 m/s; ``-1, -2, -3`` at 20 m/s), log scale. Runs that
