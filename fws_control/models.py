@@ -59,6 +59,24 @@ def _check_steering(delta_f: np.ndarray) -> None:
         )
 
 
+def _yaw_rate(speed, wheelbase, delta_f, delta_r):
+    """Eq. (10) without checks; broadcasts (the single implementation)."""
+    return speed * np.sin(delta_f - delta_r) / (wheelbase * np.cos(delta_f))
+
+
+def path_frame_derivatives(speed, wheelbase, curvature, e, theta, delta_f, delta_r):
+    r"""Right-hand side of the corrected eqs. (17)-(19), broadcasting.
+
+    Returns ``(s_dot, e_dot, theta_dot)``. No singularity checks: callers
+    that integrate many runs at once detect singular states themselves
+    (:func:`path_frame_model` raises :class:`SingularStateError`).
+    """
+    s_dot = speed * np.cos(theta + delta_r) / (1.0 - curvature * e)
+    e_dot = speed * np.sin(theta + delta_r)
+    theta_dot = -curvature * s_dot + _yaw_rate(speed, wheelbase, delta_f, delta_r)
+    return s_dot, e_dot, theta_dot
+
+
 def yaw_rate(
     vehicle: Vehicle, speed: float | np.ndarray, delta_f, delta_r
 ) -> float | np.ndarray:
@@ -83,7 +101,7 @@ def yaw_rate(
     df = np.asarray(delta_f, dtype=float)
     dr = np.asarray(delta_r, dtype=float)
     _check_steering(df)
-    out = speed * np.sin(df - dr) / (vehicle.wheelbase * np.cos(df))
+    out = _yaw_rate(speed, vehicle.wheelbase, df, dr)
     return float(out) if np.ndim(out) == 0 else out
 
 
@@ -116,7 +134,7 @@ def _global_update(t, x, u, params):
         [
             speed * math.cos(psi + delta_r),
             speed * math.sin(psi + delta_r),
-            speed * math.sin(delta_f - delta_r) / (f * math.cos(delta_f)),
+            _yaw_rate(speed, f, delta_f, delta_r),
         ]
     )
 
@@ -134,14 +152,8 @@ def _path_update(t, x, u, params):
             f"1 - curvature*e = {gap!r} <= 0 (curvature={kappa!r}, e={e!r}): the "
             "vehicle is at or beyond the path's centre of curvature"
         )
-    s_dot = speed * math.cos(theta + delta_r) / gap
     return np.array(
-        [
-            s_dot,
-            speed * math.sin(theta + delta_r),
-            -kappa * s_dot
-            + speed * math.sin(delta_f - delta_r) / (f * math.cos(delta_f)),
-        ]
+        path_frame_derivatives(speed, f, kappa, e, theta, delta_f, delta_r), dtype=float
     )
 
 

@@ -48,7 +48,7 @@ from .controllers import (
     steering_command_rate,
 )
 from .gains import SteeringGains
-from .models import global_frame_model
+from .models import global_frame_model, path_frame_derivatives
 from .paths import Arc, Path, Straight
 from .vehicle import Vehicle
 
@@ -412,12 +412,10 @@ class _Engine:
         s, e, th = Y[0], Y[1], Y[2]
         kappa = self.curvature(s)
         df, dr = self.steering(Y, kappa)
-        V = self.speed
-        f = self.vehicle.wheelbase
         with np.errstate(divide="ignore", invalid="ignore"):
-            s_dot = V * np.cos(th + dr) / (1.0 - kappa * e)
-            e_dot = V * np.sin(th + dr)
-            th_dot = -kappa * s_dot + V * np.sin(df - dr) / (f * np.cos(df))
+            s_dot, e_dot, th_dot = path_frame_derivatives(
+                self.speed, self.vehicle.wheelbase, kappa, e, th, df, dr
+            )
         if self.tau is None:
             Ydot = np.stack([s_dot, e_dot, th_dot])
         else:
