@@ -15,6 +15,8 @@ __all__ = [
     "check_finite",
     "check_positive",
     "check_nonzero",
+    "check_scalar",
+    "check_vehicle",
     "check_model",
     "MODELS",
 ]
@@ -24,7 +26,14 @@ MODELS = ("exact", "paper")
 
 def check_finite(name: str, value: Any) -> np.ndarray | float:
     """Return `value` as float (or float array) if every element is finite."""
-    arr = np.asarray(value, dtype=float)
+    if isinstance(value, (str, bytes)) or value is None:
+        raise ValueError(f"{name} must be a finite number, got {value!r}")
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(
+            f"{name} must be a finite number or array, got {value!r}"
+        ) from exc
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} must be finite, got {value!r}")
     return float(arr) if arr.ndim == 0 else arr
@@ -46,6 +55,26 @@ def check_nonzero(name: str, value: Any) -> np.ndarray | float:
     return v
 
 
+def check_scalar(name: str, value: Any) -> float:
+    """Return `value` as a finite float; arrays are refused, naming `name`."""
+    v = check_finite(name, value)
+    if np.ndim(v) != 0:
+        raise ValueError(
+            f"{name} must be a scalar here, got an array of shape {np.shape(v)}"
+        )
+    return float(v)
+
+
+def check_vehicle(vehicle: Any) -> None:
+    """Refuse anything that is not a :class:`~fws_control.Vehicle`."""
+    from .vehicle import Vehicle
+
+    if not isinstance(vehicle, Vehicle):
+        raise TypeError(
+            f"vehicle must be a fws_control.Vehicle, got {type(vehicle).__name__}"
+        )
+
+
 def check_model(model: Any) -> str:
     """Return `model` if it names a known linearisation."""
     if model not in MODELS:
@@ -53,11 +82,21 @@ def check_model(model: Any) -> str:
     return model
 
 
+def _float_or_nan(value: Any) -> float:
+    # a value that is no number fails the range test below with its name
+    if isinstance(value, bool):
+        return math.nan
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return math.nan
+
+
 def check_angle_limit(name: str, value: Any) -> float | None:
     """Steering-angle limit: None (no limit) or a number in (0, pi/2)."""
     if value is None:
         return None
-    v = float(value)
+    v = _float_or_nan(value)
     if not (math.isfinite(v) and 0.0 < v < math.pi / 2):
         raise ValueError(f"{name} must be None or in (0, pi/2) rad, got {value!r}")
     return v
@@ -67,7 +106,7 @@ def check_rate_limit(name: str, value: Any) -> float | None:
     """Steering-rate limit: None (no limit) or a finite number > 0."""
     if value is None:
         return None
-    v = float(value)
+    v = _float_or_nan(value)
     if not (math.isfinite(v) and v > 0.0):
         raise ValueError(
             f"{name} must be None or a finite value > 0 rad/s, got {value!r}"

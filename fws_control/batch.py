@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from ._validation import check_nonzero
+from ._validation import check_nonzero, check_vehicle
 from .gains import SteeringGains
 from .simulation import (
     SIGNALS,
@@ -35,6 +35,7 @@ from .simulation import (
     _single_result,
     _stderr_is_tty,
     _time_grid,
+    check_path,
     plot_responses,
 )
 from .vehicle import Vehicle
@@ -193,8 +194,11 @@ def _gains_or_none(k1, k2, ratio) -> SteeringGains | None:
     return None
 
 
-def _normalise_gains(gains) -> SteeringGains:
-    """One SteeringGains with 1-D arrays from a SteeringGains or a sequence."""
+def _normalise_gains(gains, name: str = "gains_list") -> SteeringGains:
+    """One SteeringGains with 1-D arrays from a SteeringGains or a sequence.
+
+    `name` is the caller's argument name, used in error messages.
+    """
     if isinstance(gains, SteeringGains):
         k1, k2, a = np.broadcast_arrays(
             np.asarray(gains.k1, dtype=float),
@@ -206,15 +210,15 @@ def _normalise_gains(gains) -> SteeringGains:
         items = list(gains)
     except TypeError:
         raise TypeError(
-            "gains must be a SteeringGains or a sequence of SteeringGains, got "
+            f"{name} must be a SteeringGains or a sequence of SteeringGains, got "
             f"{type(gains).__name__}"
         ) from None
     if not items or not all(isinstance(g, SteeringGains) for g in items):
         raise TypeError(
-            "gains_list must be a non-empty sequence of SteeringGains (or one "
-            "SteeringGains with array fields)"
+            f"{name} must be a SteeringGains or a non-empty sequence of "
+            f"SteeringGains, got {gains!r}"
         )
-    parts = [_normalise_gains(g) for g in items]
+    parts = [_normalise_gains(g, name) for g in items]
     return SteeringGains(
         np.concatenate([p.k1 for p in parts]),
         np.concatenate([p.k2 for p in parts]),
@@ -313,6 +317,8 @@ def simulate_batch(
     >>> bool(np.all(np.abs(res.e[:, -1]) < 1e-2))
     True
     """
+    check_vehicle(vehicle)
+    check_path(path)
     g = _normalise_gains(gains_list)
     speed_arr = np.atleast_1d(np.asarray(check_nonzero("speed", speed), dtype=float))
     x0 = _check_initial_state(initial_state)

@@ -20,11 +20,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validation import check_finite, check_model, check_nonzero
+from ._validation import check_finite, check_model, check_nonzero, check_scalar
 from .design import UncontrollableError, double_root_gains
 from .gains import SteeringGains
-from .linear import characteristic_coefficients
-from .stability import StabilityBoundary, stability_boundaries
+from .stability import StabilityBoundary, is_stable, stability_boundaries
 from .vehicle import Vehicle
 
 __all__ = [
@@ -339,19 +338,18 @@ def stability_chart(
     >>> bool(ch.stable[np.searchsorted(ch.k2, 0.6), np.searchsorted(ch.k1, 0.05)])
     True
     >>> fws.stability_chart(veh, 0.0, 1.0, 5.0, pole=-1.0).design_error
-    'ratio=1.0 on a straight path ...'
+    'ratio=1.0 with curvature=0.0 makes delta_r = delta_f: ...'
     """
     check_model(model)
-    speed = float(check_nonzero("speed", speed))
-    curvature = float(check_finite("curvature", curvature))
-    ratio = float(check_finite("ratio", ratio))
+    speed = check_scalar("speed", check_nonzero("speed", speed))
+    curvature = check_scalar("curvature", curvature)
+    ratio = check_scalar("ratio", ratio)
     k1a = _axis("k1", k1)
     k2a = _axis("k2", k2)
-    cc = characteristic_coefficients(vehicle, speed, curvature, ratio, model)
     # Outer broadcasting (k2 down the rows, k1 across) avoids a meshgrid.
-    K1 = k1a[np.newaxis, :]
-    K2 = k2a[:, np.newaxis]
-    stable = (cc.p1(K1, K2) > 0) & (cc.p0(K1, K2) > 0)
+    stable = is_stable(
+        vehicle, speed, curvature, k1a[np.newaxis, :], k2a[:, np.newaxis], ratio, model
+    )
     bounds = stability_boundaries(vehicle, speed, curvature, ratio, model)
     design = err = None
     if pole is not None:

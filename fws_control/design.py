@@ -6,7 +6,7 @@ determinant is
 
 .. math:: \Delta = -\frac{V^3}{f^2}\left(a^2 f^2\kappa^2 + (c-a)^2\right),
 
-which equals, up to sign, the determinant of the controllability matrix of
+which equals the determinant of the controllability matrix of
 :math:`(\mathbf A, \mathbf B[1, a]^T)`. It vanishes only for ``a = c`` and
 ``a*kappa = 0``, i.e. ``a = 1`` on a straight path in both models; nothing is
 special about ``a = 0`` (the paper's eqs. (43)-(46) are singular there only
@@ -23,6 +23,12 @@ from .linear import characteristic_coefficients
 from .vehicle import Vehicle
 
 __all__ = ["UncontrollableError", "double_root_gains"]
+
+
+#: Below this distance from the uncontrollable design (dimensionless
+#: a^2 f^2 kappa^2 + (c - a)^2) the gains, which grow like its inverse,
+#: exceed ~1e12 and are refused.
+_SINGULAR_DISTANCE = 1e-12
 
 
 class UncontrollableError(ValueError):
@@ -87,7 +93,7 @@ def double_root_gains(
     >>> fws.double_root_gains(veh, 5.0, 0.0, ratio=1.0, pole=-1.0)
     Traceback (most recent call last):
         ...
-    fws_control.design.UncontrollableError: ratio=1.0 on a straight path ...
+    fws_control.design.UncontrollableError: ratio=1.0 with curvature=0.0 makes ...
     """
     check_model(model)
     V = check_nonzero("speed", speed)
@@ -101,15 +107,26 @@ def double_root_gains(
     det = cc.alpha1 * cc.beta0 - cc.beta1 * cc.alpha0
     # det is -(V^3/f^2)(a^2 f^2 kappa^2 + (c-a)^2): compare with that scale so
     # that the test does not depend on units.
-    scale = np.abs(np.asarray(V)) ** 3 / vehicle.wheelbase**2
-    singular = np.abs(det) <= 1e-12 * scale
+    # det = -(V^3/f^2) * distance, distance = a^2 f^2 kappa^2 + (c - a)^2:
+    # dimensionless, zero exactly at the uncontrollable design.
+    distance = -det * vehicle.wheelbase**2 / np.asarray(V) ** 3
+    singular = distance <= _SINGULAR_DISTANCE
     if np.any(singular):
-        raise UncontrollableError(
-            f"ratio={ratio!r} on a straight path (curvature={curvature!r}) makes "
-            "delta_r = delta_f: the yaw rate is identically zero, the heading is "
-            "uncontrollable and D(lambda) = lambda*(lambda + V*k1), so no double "
-            f"root pole={pole!r} != 0 exists"
-        )
+        worst = float(np.min(distance))
+        if worst == 0.0:
+            why = (
+                "makes delta_r = delta_f: the yaw rate is identically zero, the "
+                "heading is uncontrollable and D(lambda) = lambda*(lambda + V*k1), "
+                f"so no double root pole={pole!r} != 0 exists"
+            )
+        else:
+            why = (
+                "is nearly uncontrollable (delta_r = delta_f on a straight path is "
+                "uncontrollable): a^2 f^2 kappa^2 + (c - a)^2 = "
+                f"{worst:.3g} <= {_SINGULAR_DISTANCE:g}; the gains grow like its "
+                "inverse and would be meaningless"
+            )
+        raise UncontrollableError(f"ratio={ratio!r} with curvature={curvature!r} {why}")
     r1 = -2.0 * np.asarray(lam) - cc.gamma1
     r0 = np.asarray(lam) ** 2 - cc.gamma0
     k1 = (r1 * cc.beta0 - cc.beta1 * r0) / det

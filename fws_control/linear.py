@@ -31,7 +31,13 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
-from ._validation import check_finite, check_model, check_nonzero
+from ._validation import (
+    check_finite,
+    check_model,
+    check_nonzero,
+    check_scalar,
+    check_vehicle,
+)
 from .gains import SteeringGains
 from .models import STEERING_INPUTS, feedforward_steering
 from .vehicle import Vehicle
@@ -84,8 +90,9 @@ def operating_point(vehicle: Vehicle, curvature) -> tuple[np.ndarray, np.ndarray
 
 
 def _matrices(vehicle: Vehicle, speed, curvature, model):
-    speed = check_nonzero("speed", speed)
-    kappa = check_finite("curvature", curvature)
+    check_vehicle(vehicle)
+    speed = check_scalar("speed", check_nonzero("speed", speed))
+    kappa = check_scalar("curvature", curvature)
     c = input_gain_factor(vehicle, kappa, model)
     f = vehicle.wheelbase
     A = np.array([[0.0, speed], [-speed * kappa**2, 0.0]])
@@ -249,6 +256,7 @@ def characteristic_coefficients(
     >>> round(float(cc.p1(0.2, 0.5)), 9), round(float(cc.p0(0.2, 0.5)), 9)
     (0.925925926, 1.851851852)
     """
+    check_vehicle(vehicle)
     check_model(model)
     V = np.asarray(check_nonzero("speed", speed))
     kappa = np.asarray(check_finite("curvature", curvature))

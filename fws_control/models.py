@@ -22,7 +22,7 @@ import math
 import control as ct
 import numpy as np
 
-from ._validation import check_finite, check_nonzero
+from ._validation import check_finite, check_nonzero, check_scalar, check_vehicle
 from .vehicle import Vehicle
 
 __all__ = [
@@ -200,7 +200,8 @@ def global_frame_model(
     >>> sys.dynamics(0.0, [0.0, 0.0, 0.0], [0.1, 0.0]).round(4)
     array([5.    , 0.    , 0.1858])
     """
-    speed = check_nonzero("speed", speed)
+    check_vehicle(vehicle)
+    speed = check_scalar("speed", check_nonzero("speed", speed))
     return ct.nlsys(
         _global_update,
         None,
@@ -262,8 +263,9 @@ def path_frame_model(
     >>> np.allclose(sys.dynamics(0.0, [0.0, 0.0, 0.0], u_ff), [5.0, 0.0, 0.0])
     True
     """
-    speed = check_nonzero("speed", speed)
-    curvature = check_finite("curvature", curvature)
+    check_vehicle(vehicle)
+    speed = check_scalar("speed", check_nonzero("speed", speed))
+    curvature = check_scalar("curvature", curvature)
     return ct.nlsys(
         _path_update,
         None,

@@ -37,7 +37,7 @@ import numpy as np
 from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, OdeSolver, Radau
 from scipy.optimize import brentq
 
-from ._validation import check_finite, check_nonzero, check_positive
+from ._validation import check_finite, check_nonzero, check_positive, check_vehicle
 from .acceleration import lateral_acceleration
 from .controllers import (
     DEFAULT_ACTUATOR_TIME_CONSTANT,
@@ -51,6 +51,13 @@ from .gains import SteeringGains
 from .models import global_frame_model, path_frame_derivatives
 from .paths import Arc, Path, Straight
 from .vehicle import Vehicle
+
+
+def check_path(path: Any) -> None:
+    """Refuse anything that is not a :class:`~fws_control.paths.Path`."""
+    if not isinstance(path, Path):
+        raise TypeError(f"path must be a fws_control Path, got {type(path).__name__}")
+
 
 __all__ = [
     "SimulationResult",
@@ -769,7 +776,10 @@ def simulate(
         Include the curvature feedforward (default ``True``); ``False`` is
         the feedback-only controller.
     dt : float, optional
-        Spacing of the output times [s] (the solver chooses its own steps).
+        Nominal spacing of the output times [s] (the solver chooses its own
+        steps). The grid is ``linspace(0, duration, round(duration/dt) + 1)``,
+        so the actual spacing is ``duration/round(duration/dt)`` (at least
+        one interval): pass `t_eval` for exact times.
     t_eval : array_like, optional
         Output times instead of `dt`; increasing, from 0 to at most
         `duration`.
@@ -778,7 +788,10 @@ def simulate(
         vehicle has a rate limit (default
         :data:`DEFAULT_ACTUATOR_TIME_CONSTANT`).
     method, rtol, atol : optional
-        Passed to :func:`scipy.integrate.solve_ivp`.
+        Integration method (a :class:`scipy.integrate.OdeSolver` name) and
+        tolerances. The engine steps that solver itself, as
+        :func:`scipy.integrate.solve_ivp` would, so that it can stop a run at
+        a singular state.
 
     Returns
     -------
@@ -806,7 +819,9 @@ def simulate(
     """
     from .batch import _normalise_gains
 
-    g = _normalise_gains(gains)
+    check_vehicle(vehicle)
+    check_path(path)
+    g = _normalise_gains(gains, "gains")
     if g.k1.size != 1:
         raise ValueError(
             f"gains must be scalar for simulate (got {g.k1.size} designs); use "

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._validation import check_finite
 from .linear import characteristic_coefficients
 from .vehicle import Vehicle
 
@@ -61,6 +62,8 @@ def is_stable(
            [0, 0, 1]])
     """
     cc = characteristic_coefficients(vehicle, speed, curvature, ratio, model)
+    k1 = check_finite("k1", k1)
+    k2 = check_finite("k2", k2)
     out = (cc.p1(k1, k2) > 0) & (cc.p0(k1, k2) > 0)
     return bool(out) if np.ndim(out) == 0 else out
 

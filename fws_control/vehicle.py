@@ -10,6 +10,16 @@ from ._validation import check_angle_limit, check_rate_limit
 __all__ = ["Vehicle"]
 
 
+def _number(name: str, value: object) -> float:
+    # bool is an int subclass; a True wheelbase is a bug, not 1 m
+    if isinstance(value, bool):
+        raise ValueError(f"{name} must be a number in metres, got {value!r}")
+    try:
+        return float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be a number in metres, got {value!r}") from exc
+
+
 @dataclass(frozen=True)
 class Vehicle:
     """Geometry of a kinematic single-track (bicycle) vehicle with 4WS.
@@ -56,12 +66,12 @@ class Vehicle:
     max_steer_rate_rear: float | None = None
 
     def __post_init__(self) -> None:
-        f = float(self.wheelbase)
+        f = _number("wheelbase", self.wheelbase)
         if not (math.isfinite(f) and f > 0.0):
             raise ValueError(
                 f"wheelbase must be finite and > 0 m, got {self.wheelbase!r}"
             )
-        d = float(self.rear_to_cg)
+        d = _number("rear_to_cg", self.rear_to_cg)
         if not (math.isfinite(d) and 0.0 <= d <= f):
             raise ValueError(
                 f"rear_to_cg must be in [0, wheelbase={f}] m, got {self.rear_to_cg!r}"

@@ -286,3 +286,17 @@ def test_invalid_arguments():
         fws.simulate(VEH, Straight(), g, 5.0, (0, 1, 0), 5.0, t_eval=[0.0, 6.0])
     with pytest.raises(AmbiguousProjectionError):
         fws.simulate(VEH, Arc(0.1), g, 5.0, (0.0, 10.0, 0.0), 5.0)  # the centre
+
+
+@pytest.mark.parametrize("kappa", [0.0, 0.05])
+def test_reversing_agrees_with_interconnected_reference(kappa):
+    """V < 0: gains designed for reversing; both engines must agree."""
+    V, path = -3.0, _path(kappa)
+    g = fws.double_root_gains(VEH, V, kappa, -0.5, -0.8)
+    res = fws.simulate(VEH, path, g, V, (0.0, -1.0, 0.1), 8.0, dt=0.05)
+    assert res.ok and res.s[-1] < -10.0  # it really drove backwards
+    ref = _reference(VEH, path, g, V, [0.0, -1.0, 0.1], res.t)
+    np.testing.assert_allclose(res.e, ref["e"], rtol=0, atol=1e-6)
+    np.testing.assert_allclose(res.theta, ref["theta"], rtol=0, atol=1e-6)
+    # the reversing design converges: |e| decays like exp(-0.8 t) * poly(t)
+    assert abs(res.e[-1]) < 0.05 * abs(res.e[0])
