@@ -151,8 +151,10 @@ def test_erratum_7_reversing_flips_condition_35_only():
     g = fws.SteeringGains(k1, k2, a)
     assert np.max(fws.closed_loop(VEH, 5.0, k, g).poles().real) < 0
     assert np.max(fws.closed_loop(VEH, -5.0, k, g).poles().real) > 0
-    # and the mirrored gains (-k1, -k2) are stable in reverse only if p0 stays
-    # positive, which it need not: (36) keeps its forward form
-    assert fws.is_stable(VEH, -5.0, k, -k1, -k2, a) == bool(
-        fwd.p0(-k1, -k2) > 0 and rev.p1(-k1, -k2) > 0
-    )
+    # "both conditions flip" would make p0 < 0 the reverse requirement: a
+    # design with p1 < 0 and p0 > 0 (forward form of 36) is stable in reverse
+    k1r, k2r = 0.3, -0.6
+    assert rev.p1(k1r, k2r) > 0 and rev.p0(k1r, k2r) > 0
+    g_rev = fws.SteeringGains(k1r, k2r, a)
+    assert np.max(fws.closed_loop(VEH, -5.0, k, g_rev).poles().real) < 0
+    assert fws.is_stable(VEH, -5.0, k, k1r, k2r, a)

@@ -170,10 +170,16 @@ def test_spline_course(tmp_path):
 
 def test_ratio_sweep(tmp_path):
     out = run_example("plot_ratio_sweep.py", tmp_path)
-    assert (
-        "V = 20 m/s, straight, feedback                       lambda0 = -1: 46/46"
-        in out
+    # At 20 m/s on the straight road the lambda0 = -1 gains are small
+    # (k1 = f lam0^2 / (V^2 (1 - a)) < 0.03 rad/m for the swept a), so every
+    # run keeps |delta_f| far below 90 deg and must complete.
+    line = next(
+        ln
+        for ln in out.splitlines()
+        if ln.startswith("V = 20 m/s, straight") and "lambda0 = -1:" in ln
     )
+    valid, total = map(int, re.search(r"(\d+)/(\d+) runs valid", line).groups())
+    assert total > 10 and valid == total, line
     # On the curves every run ends in steady cornering, so its peak is at
     # least V^2 kappa: 2.5 m/s^2 at 5 m/s, 4 m/s^2 at 20 m/s.
     for label, bound in (("V = 5 m/s, \\kappa", 2.5), ("V = 20 m/s, \\kappa", 4.0)):

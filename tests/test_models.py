@@ -150,6 +150,14 @@ def test_feedforward_is_equilibrium_for_any_speed(veh):
             sys = fws.path_frame_model(veh, speed, k)
             dx = sys.dynamics(0, [0, 0, 0], [fws.feedforward_steering(veh, k), 0.0])
             np.testing.assert_allclose(dx, [speed, 0.0, 0.0], atol=1e-14)
-            # independent: on a circle of radius 1/k the rear wheel points at
-            # atan(f k) from the centre line (wheelbase over radius)
-    assert fws.feedforward_steering(veh, 0.1) == pytest.approx(math.atan(0.27))
+    # geometry: with R on a circle of radius 1/k and the rear wheel tangent,
+    # the front axle centre F = R + f (cos psi, sin psi) must have its wheel
+    # normal through the circle's centre: tan(delta_f) = f / radius.
+    k = 0.1
+    radius, f = 1.0 / k, veh.wheelbase
+    centre, rear, front = np.array([0.0, radius]), np.zeros(2), np.array([f, 0.0])
+    delta = fws.feedforward_steering(veh, k)
+    normal = np.array([-np.sin(delta), np.cos(delta)])  # front wheel's left normal
+    to_centre = centre - front
+    assert abs(normal[0] * to_centre[1] - normal[1] * to_centre[0]) < 1e-12
+    assert np.linalg.norm(rear - centre) == pytest.approx(radius)

@@ -45,7 +45,7 @@ def test_frozen():
     ],
 )
 def test_invalid_fields_name_the_field(kwargs, field):
-    with pytest.raises(ValueError, match=field):
+    with pytest.raises(ValueError, match=f"^{field} "):
         fws.Vehicle(**kwargs)
 
 
