@@ -1205,7 +1205,10 @@ class Spline(Path):
     >>> t = np.linspace(0.0, 2.0 * np.pi, 25)
     >>> ring = Spline(np.column_stack([10 * np.cos(t), 10 * np.sin(t)]))
     >>> ring.closed, round(ring.length, 3), round(float(ring.curvature(5.0)), 3)
-    (True, 62.832, 0.1)
+    (True, 62.831, 0.1)
+
+    (The circle's length is 62.832 m: 25 waypoints give a spline 0.5 mm
+    shorter.)
     """
 
     waypoints: Any

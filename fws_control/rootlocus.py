@@ -105,8 +105,8 @@ def gain_loop(
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     >>> g = fws.double_root_gains(veh, 5.0, 0.1, ratio=-1.0, pole=-1.0)
     >>> loop = fws.gain_loop(veh, 5.0, 0.1, g)
-    >>> loop.poles()
-    array([0.+0.5j, 0.-0.5j])
+    >>> loop.poles().real.round(12) + 0.0, loop.poles().imag
+    (array([0., 0.]), array([ 0.5, -0.5]))
     >>> rl = ct.root_locus_map(loop, gains=[1.0])
     >>> np.allclose(rl.loci[0], [-1.0, -1.0], atol=1e-6)
     True
