@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -477,9 +478,9 @@ def _cmd_simulate(args) -> int:
     g = _gains(args, veh)
     cmp = compare_linear_nonlinear(
         veh,
-        g,
         speed=args.speed,
         curvature=args.curvature if args.path == "arc" else 0.0,
+        gains=g,
         initial_state=(args.x0, args.y0, math.radians(args.psi0)),
         duration=args.duration,
         feedforward=not args.no_feedforward,
@@ -576,6 +577,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.func(args) or 0)
+    except BrokenPipeError:
+        # Output piped into e.g. `head`, which closed early: not an error.
+        # Point stdout at devnull so the interpreter's final flush is silent.
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 0
     except (ValueError, TypeError, OSError, ArithmeticError) as exc:
         msg = " ".join(str(exc).split())
         print(f"{PROG} {args.command}: error: {msg}", file=sys.stderr)

@@ -159,9 +159,10 @@ class LinearNonlinearComparison:
 
 def compare_linear_nonlinear(
     vehicle: Vehicle,
-    gains: SteeringGains,
     speed: float,
-    curvature: float = 0.0,
+    curvature: float,
+    gains: SteeringGains,
+    *,
     initial_state=None,
     initial_errors=None,
     duration: float = 15.0,
@@ -175,13 +176,13 @@ def compare_linear_nonlinear(
     ----------
     vehicle : Vehicle
         Geometry.
-    gains : SteeringGains
-        Scalar gains.
     speed : float
         Speed [m/s], nonzero.
-    curvature : float, optional
+    curvature : float
         Path curvature [1/m]: 0 is the straight path along the x-axis,
         otherwise the :class:`Arc` that starts at the origin heading +x.
+    gains : SteeringGains
+        Scalar gains. The argument order follows :func:`closed_loop`.
     initial_state : array_like, optional
         ``(x_R, y_R, psi)`` [m, m, rad] of the rear-axle centre; default
         ``(0, 2, 0)``, the paper's straight-road start.
@@ -211,7 +212,7 @@ def compare_linear_nonlinear(
     >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     >>> g = fws.double_root_gains(veh, 5.0, 0.1, ratio=-1.0, pole=-1.0)
-    >>> small = fws.compare_linear_nonlinear(veh, g, 5.0, 0.1,
+    >>> small = fws.compare_linear_nonlinear(veh, 5.0, 0.1, g,
     ...                                      initial_errors=(0.05, 0.0))
     >>> small.max_difference()["e"] < 1e-3
     True

@@ -212,9 +212,9 @@ def _comparison_figure(model: str = "exact", quick: bool = False):
     g = double_root_gains(PAPER_VEHICLE, 5.0, 0.1, -1.0, -1.0, model)
     cmp = compare_linear_nonlinear(
         PAPER_VEHICLE,
-        g,
         5.0,
         0.1,
+        g,
         initial_state=(0.0, -5.0, 0.0),
         duration=15.0,
         model=model,
