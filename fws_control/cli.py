@@ -511,18 +511,9 @@ def _cmd_simulate(args) -> int:
 def _write_csv(res, path: Path) -> None:
     import numpy as np
 
-    names = (
-        "t",
-        "x",
-        "y",
-        "psi",
-        "s",
-        "e",
-        "theta",
-        "delta_f",
-        "delta_r",
-        "lateral_accel",
-    )
+    from .simulation import SIGNALS
+
+    names = ("t", *SIGNALS)
     data = np.column_stack([np.asarray(getattr(res, n), dtype=float) for n in names])
     path.parent.mkdir(parents=True, exist_ok=True)
     np.savetxt(path, data, delimiter=",", header=",".join(names), comments="")
