@@ -1,24 +1,41 @@
-"""fws_control: path tracking of automated vehicles with four-wheel steering.
+r"""fws_control: path tracking of automated vehicles with four-wheel steering.
 
-A control-systems toolbox built on python-control for the kinematic
-single-track model with front and rear steering, ``delta_r = ratio*delta_f``:
-nonlinear models as :class:`control.NonlinearIOSystem`, exact and paper
-linearisations as :class:`control.StateSpace`, closed-form Routh-Hurwitz
-stability and double-root pole placement, paths with robust projection,
-closed-loop simulation (a python-control reference and a fast batch engine),
-stability charts, root loci and the figures of the paper.
+A control-systems toolbox built on python-control. The data flow runs one
+way, one module per concept; a module knows only the modules above it::
+
+    Vehicle ──► models (ct.NonlinearIOSystem: global and path frame)
+       │            │ exact Jacobian / paper eq. (33)
+       │            ▼
+       │        LateralPlant (operating point) ──► ct.StateSpace ◄── or any plant
+       │            │                     (inputs delta_f, delta_r; outputs e, theta)
+       │            ▼
+       │        plant-first analysis (linear, stability, design, charts, rootlocus):
+       │            u = [1, a]^T (-k1 e - k2 theta) is rank one, so the
+       │            characteristic polynomial is affine in (k1, k2) for any order
+       │
+       └──► paths (Straight, Arc, Clothoid, Spline, chains: projection → s, e, θ, κ)
+                controllers (the paper's law as static nlsys)
+                simulation/ (engine, runners, one result type, python-control reference)
+                metrics, comparison (linear vs nonlinear), turning
+                paper/ (the paper's scenarios and figures, reproduce) ──► cli
+
+Modules: :mod:`~fws_control.vehicle`, :mod:`~fws_control.exceptions`,
+:mod:`~fws_control.validation`, :mod:`~fws_control.models`,
+:mod:`~fws_control.acceleration`, :mod:`~fws_control.gains`,
+:mod:`~fws_control.plant`, :mod:`~fws_control.linear`,
+:mod:`~fws_control.stability`, :mod:`~fws_control.design`,
+:mod:`~fws_control.charts`, :mod:`~fws_control.rootlocus`,
+:mod:`~fws_control.turning`, :mod:`~fws_control.paths`,
+:mod:`~fws_control.controllers`, :mod:`~fws_control.simulation`,
+:mod:`~fws_control.metrics`, :mod:`~fws_control.comparison`,
+:mod:`~fws_control.symbolic` (sympy derivations, the tests' reference) and
+:mod:`~fws_control.paper` (imported only by the CLI).
 """
 
-from . import scenarios, symbolic
+from . import symbolic
 from .acceleration import lateral_acceleration, yaw_acceleration
 from .batch import BatchResult, simulate_batch
-from .charts import (
-    ChartPanel,
-    StabilityChart,
-    paper_figure_panels,
-    plot_paper_figure,
-    stability_chart,
-)
+from .charts import StabilityChart, stability_chart
 from .comparison import LinearNonlinearComparison, compare_linear_nonlinear
 from .controllers import (
     feedback_controller,
@@ -28,17 +45,19 @@ from .controllers import (
     steering_command,
     steering_command_rate,
 )
-from .design import UncontrollableError, double_root_gains
-from .figures import gains_table, make_figure, reproduce
+from .design import double_root_gains
+from .exceptions import (
+    AmbiguousProjectionError,
+    SingularStateError,
+    UncontrollableError,
+)
 from .gains import SteeringGains
 from .linear import (
-    AffineCoefficients,
+    AffinePolynomial,
     characteristic_coefficients,
     characteristic_polynomial,
     closed_loop,
-    input_gain_factor,
     linearize,
-    operating_point,
 )
 from .metrics import (
     TrackingMetrics,
@@ -50,14 +69,12 @@ from .metrics import (
     tracking_metrics,
 )
 from .models import (
-    SingularStateError,
     feedforward_steering,
     global_frame_model,
     path_frame_model,
     yaw_rate,
 )
 from .paths import (
-    AmbiguousProjectionError,
     Arc,
     Clothoid,
     Path,
@@ -66,6 +83,7 @@ from .paths import (
     Spline,
     Straight,
 )
+from .plant import LateralPlant, LoopMatrices, as_plant, loop_matrices
 from .rootlocus import gain_locus, gain_loop, parameter_locus
 from .simulation import (
     SimulationResult,
@@ -73,7 +91,13 @@ from .simulation import (
     projection_system,
     simulate,
 )
-from .stability import StabilityBoundary, is_stable, stability_boundaries
+from .stability import (
+    BoundaryCurve,
+    StabilityBoundaries,
+    StabilityBoundary,
+    is_stable,
+    stability_boundaries,
+)
 from .turning import (
     TurningGeometry,
     plot_turning_radius,
@@ -91,11 +115,15 @@ __all__ = [
     "feedforward_steering",
     "yaw_acceleration",
     "lateral_acceleration",
-    "input_gain_factor",
-    "operating_point",
     "linearize",
     "closed_loop",
-    "AffineCoefficients",
+    "AffinePolynomial",
+    "LateralPlant",
+    "LoopMatrices",
+    "as_plant",
+    "loop_matrices",
+    "StabilityBoundaries",
+    "BoundaryCurve",
     "characteristic_coefficients",
     "characteristic_polynomial",
     "SteeringGains",
@@ -107,9 +135,6 @@ __all__ = [
     "symbolic",
     "StabilityChart",
     "stability_chart",
-    "ChartPanel",
-    "paper_figure_panels",
-    "plot_paper_figure",
     "gain_loop",
     "gain_locus",
     "parameter_locus",
@@ -119,9 +144,6 @@ __all__ = [
     "plot_turning_radius",
     "LinearNonlinearComparison",
     "compare_linear_nonlinear",
-    "make_figure",
-    "gains_table",
-    "reproduce",
 ]
 __all__ += [
     "steering_command",
@@ -143,7 +165,6 @@ __all__ += [
     "steady_state",
     "TrackingMetrics",
     "tracking_metrics",
-    "scenarios",
 ]
 __all__ += [
     "Path",
@@ -155,4 +176,4 @@ __all__ += [
     "Projection",
     "AmbiguousProjectionError",
 ]
-__version__ = "0.1.0"
+__version__ = "0.2.0.dev0"

@@ -22,7 +22,6 @@ from typing import Any
 
 import numpy as np
 
-from ._validation import check_nonzero, check_vehicle
 from .gains import SteeringGains
 from .simulation import (
     SIGNALS,
@@ -38,6 +37,7 @@ from .simulation import (
     check_path,
     plot_responses,
 )
+from .validation import check_nonzero, check_type
 from .vehicle import Vehicle
 
 __all__ = ["BatchResult", "simulate_batch", "DEFAULT_CHUNK_SIZE"]
@@ -317,7 +317,7 @@ def simulate_batch(
     >>> bool(np.all(np.abs(res.e[:, -1]) < 1e-2))
     True
     """
-    check_vehicle(vehicle)
+    check_type("vehicle", vehicle, Vehicle)
     check_path(path)
     g = _normalise_gains(gains_list)
     speed_arr = np.atleast_1d(np.asarray(check_nonzero("speed", speed), dtype=float))

@@ -1,60 +1,59 @@
-r"""Stability charts in the ``(k1, k2)`` gain plane, paper Figs. 2-4.
+r"""Stability charts in the ``(k1, k2)`` gain plane, for plants of any order.
 
-A chart evaluates the Routh-Hurwitz conditions (35)-(36) in closed form on a
-whole grid of gains at once (:func:`characteristic_coefficients` is affine in
-``k1, k2`` and broadcasts), so a 1000 x 1000 grid costs a few milliseconds
-instead of a million eigenvalue problems. It also carries the two boundary
-lines from :func:`stability_boundaries` and, when a double root
-:math:`\lambda_0` is requested, the gains of :func:`double_root_gains`.
-
-:func:`plot_paper_figure` redraws Figs. 2-4 of the paper. The paper does not
-list the curvatures shown in Figs. 3 and 4; this module uses
-:data:`PAPER_CURVATURES`: :math:`\kappa \in \{0, 0.05, 0.1, 0.2\}` 1/m at
-5 m/s (Fig. 3) and :math:`\kappa \in \{0, 0.01, 0.02, 0.05\}` 1/m at 20 m/s
-(Fig. 4), which include the curvatures of the simulations (0.1 and 0.01 1/m).
+A chart evaluates stability on a whole grid of gains at once: the
+characteristic polynomial is affine in ``k1, k2``
+(:func:`~fws_control.characteristic_coefficients`), so its coefficients on
+the grid are one broadcast expression and the test is the closed form
+:math:`p_1 > 0,\ p_0 > 0` (two states, eqs. 35-36) or the vectorised
+Routh-Hurwitz test (:func:`~fws_control.stability.routh_hurwitz`). A
+1000 x 1000 grid costs milliseconds instead of a million eigenvalue problems.
+The chart also carries the D-subdivision boundaries
+(:func:`stability_boundaries`) and, for a 2-state plant and a requested
+double root :math:`\lambda_0`, the gains of :func:`double_root_gains`.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import Any
 
+import control as ct
 import numpy as np
 
-from ._validation import check_finite, check_model, check_nonzero, check_scalar
-from .design import UncontrollableError, double_root_gains
+from .design import double_root_gains
+from .exceptions import UncontrollableError
 from .gains import SteeringGains
-from .stability import StabilityBoundary, is_stable, stability_boundaries
-from .vehicle import Vehicle
+from .linear import AffinePolynomial, characteristic_coefficients
+from .plant import LateralPlant, as_plant
+from .stability import (
+    BoundaryCurve,
+    StabilityBoundaries,
+    complex_root_curve,
+    default_frequencies,
+    is_stable,
+    stability_boundaries,
+)
+from .validation import check_finite, check_scalar
 
-__all__ = [
-    "StabilityChart",
-    "stability_chart",
-    "ChartPanel",
-    "paper_figure_panels",
-    "plot_paper_figure",
-    "PAPER_VEHICLE",
-    "PAPER_CURVATURES",
-]
+__all__ = ["StabilityChart", "stability_chart", "note_box", "DEFAULT_GAIN_AXIS"]
 
-#: The paper's vehicle, section 4.3: f = 2.7 m, d = 1.35 m.
-PAPER_VEHICLE = Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+#: Default grid axis of k1 and k2: 401 points on [-1, 1].
+DEFAULT_GAIN_AXIS = np.linspace(-1.0, 1.0, 401)
 
-#: Curvatures [1/m] overlaid in each panel of Figs. 3 (V = 5) and 4 (V = 20).
-#: The paper does not list them; these are this library's choice.
-PAPER_CURVATURES = {3: (0.0, 0.05, 0.1, 0.2), 4: (0.0, 0.01, 0.02, 0.05)}
-
-_DEFAULT_RANGE = (-1.0, 1.0)
-_DEFAULT_POINTS = 401
-_MAX_RANGE = (-2.0, 2.0)
-# Line styles tell the two Routh-Hurwitz conditions apart in every chart.
-_STYLE = {0: "-", 1: "--"}
-_COND_LABEL = {0: r"$p_1 = 0$ (eq. 35)", 1: r"$p_0 = 0$ (eq. 36)"}
-_HATCHES = (None, "//", "\\\\", "||", "--", "xx", "..")
+# Line styles tell the boundaries apart in every chart.
+_STYLE = {"p1 > 0": "-", "p0 > 0": "--", "complex": "-"}
+_LABEL = {
+    "p1 > 0": r"$p_1 = 0$",
+    "p0 > 0": r"$p_0 = 0$ (root at $s = 0$)",
+    "complex": r"roots at $\pm j\omega$",
+}
+_EQ = {"p1 > 0": " (eq. 35)", "p0 > 0": " (eq. 36)"}
 
 
 def _axis(name: str, values) -> np.ndarray:
     if values is None:
-        return np.linspace(*_DEFAULT_RANGE, _DEFAULT_POINTS)
+        return DEFAULT_GAIN_AXIS.copy()
     arr = np.asarray(check_finite(name, values), dtype=float)
     if arr.ndim != 1 or arr.size < 2:
         raise ValueError(
@@ -65,6 +64,32 @@ def _axis(name: str, values) -> np.ndarray:
     return arr
 
 
+def _curve_in_box(cp: AffinePolynomial, k1r, k2r, passes: int = 8) -> BoundaryCurve:
+    """The complex-root curve, sampled densely where it crosses the box.
+
+    Starts from :func:`default_frequencies` and bisects (geometrically) every
+    interval whose end points are both finite, one of them near the box, and
+    farther apart than 1 % of the box: a smooth curve inside the chart at a
+    bounded number of points.
+    """
+    w = default_frequencies(cp, num=1201)
+    span = np.array([k1r[1] - k1r[0], k2r[1] - k2r[0]])
+    lo = np.array([k1r[0], k2r[0]]) - span
+    hi = np.array([k1r[1], k2r[1]]) + span
+    for _ in range(passes):
+        c = complex_root_curve(cp, w)
+        pts = np.column_stack([c.k1, c.k2])
+        near = np.all((pts >= lo) & (pts <= hi), axis=1)
+        gap = np.hypot(*((np.diff(pts, axis=0)) / span).T)
+        split = (near[:-1] | near[1:]) & (gap > 0.01)
+        split &= np.isfinite(gap)
+        if not np.any(split) or w.size > 40_000:
+            return c
+        mid = np.sqrt(w[:-1][split] * w[1:][split])
+        w = np.sort(np.concatenate([w, mid]))
+    return complex_root_curve(cp, w)
+
+
 @dataclass(frozen=True, eq=False)
 class StabilityChart:
     r"""Stable set of the linear closed loop on a ``(k1, k2)`` grid.
@@ -73,41 +98,79 @@ class StabilityChart:
 
     Attributes
     ----------
-    vehicle : Vehicle
-    speed, curvature, ratio : float
-        Operating point :math:`V` [m/s], :math:`\kappa_C` [1/m] and
-        :math:`a`.
-    model : str
-        ``"exact"`` or ``"paper"``.
+    plant : LateralPlant or control.StateSpace
+        The plant (one operating point).
+    ratio : float
+        Rear-to-front steering ratio :math:`a`.
     k1, k2 : ndarray
         Grid axes [rad/m] and [-], 1-D.
     stable : ndarray of bool
-        Shape ``(len(k2), len(k1))``: ``stable[i, j]`` is the Routh-Hurwitz
-        verdict at ``(k1[j], k2[i])`` (rows follow ``k2``, as in
-        :func:`numpy.meshgrid` and :meth:`matplotlib.axes.Axes.contourf`).
-    boundaries : (StabilityBoundary, StabilityBoundary)
-        The ``p1 = 0`` (eq. 35) and ``p0 = 0`` (eq. 36) lines.
+        Shape ``(len(k2), len(k1))``: ``stable[i, j]`` is the verdict at
+        ``(k1[j], k2[i])`` (rows follow ``k2``, as in :func:`numpy.meshgrid`
+        and :meth:`matplotlib.axes.Axes.contourf`).
+    boundaries : StabilityBoundaries
+        D-subdivision boundaries; ``boundaries.lines`` are the straight ones.
+    curve : BoundaryCurve
+        The complex-root boundary sampled densely inside the grid (for
+        drawing).
     pole : float or None
         Requested double root :math:`\lambda_0` [1/s].
     design : SteeringGains or None
         Double-root gains for `pole`; None when no pole was requested or the
         design does not exist (then `design_error` says why).
     design_error : str or None
-        The :class:`UncontrollableError` message when the design failed.
+        Why the design failed (:class:`UncontrollableError`).
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> ch = fws.stability_chart(fws.LateralPlant(veh, speed=5.0), ratio=0.0,
+    ...                          k1=np.linspace(-1, 1, 5), k2=np.linspace(-1, 1, 5))
+    >>> round(ch.stable_fraction, 2), ch.order
+    (0.16, 2)
     """
 
-    vehicle: Vehicle
-    speed: float
-    curvature: float
+    plant: Any
     ratio: float
-    model: str
     k1: np.ndarray
     k2: np.ndarray
     stable: np.ndarray
-    boundaries: tuple[StabilityBoundary, StabilityBoundary]
+    boundaries: StabilityBoundaries
+    curve: BoundaryCurve
     pole: float | None = None
     design: SteeringGains | None = None
     design_error: str | None = None
+
+    @property
+    def order(self) -> int:
+        """Order of the closed loop."""
+        return self.boundaries.order
+
+    @property
+    def lateral(self) -> bool:
+        """True when the plant is the kinematic :class:`LateralPlant`."""
+        return isinstance(self.plant, LateralPlant)
+
+    @property
+    def speed(self) -> float:
+        """Speed [m/s] of a :class:`LateralPlant` (NaN otherwise)."""
+        return float(self.plant.speed) if self.lateral else math.nan
+
+    @property
+    def curvature(self) -> float:
+        """Curvature [1/m] of a :class:`LateralPlant` (NaN otherwise)."""
+        return float(self.plant.curvature) if self.lateral else math.nan
+
+    @property
+    def model(self) -> str | None:
+        """Linearisation model of a :class:`LateralPlant` (None otherwise)."""
+        return self.plant.model if self.lateral else None
+
+    @property
+    def vehicle(self):
+        """Vehicle of a :class:`LateralPlant` (None otherwise)."""
+        return self.plant.vehicle if self.lateral else None
 
     @property
     def stable_fraction(self) -> float:
@@ -131,7 +194,17 @@ class StabilityChart:
         )
 
     def notes(self, label: str = "") -> list[str]:
-        """Remarks a reader needs that the drawing cannot show."""
+        """Remarks a reader needs that the drawing cannot show.
+
+        Parameters
+        ----------
+        label : str, optional
+            Prefix naming the chart (e.g. its curvature) in an overlay.
+
+        Returns
+        -------
+        list of str
+        """
         pre = f"{label}: " if label else ""
         out = []
         if self.empty:
@@ -146,11 +219,13 @@ class StabilityChart:
         return out
 
     def describe(self) -> str:
-        """One-line description: a, V, kappa and the model."""
-        return (
-            f"a = {self.ratio:g}, V = {self.speed:g} m/s, "
-            rf"$\kappa$ = {self.curvature:g} 1/m, {self.model} model"
-        )
+        """One-line description: a and the operating point or the plant."""
+        if self.lateral:
+            return (
+                f"a = {self.ratio:g}, V = {self.speed:g} m/s, "
+                rf"$\kappa$ = {self.curvature:g} 1/m, {self.model} model"
+            )
+        return f"a = {self.ratio:g}, {self.order}-state plant"
 
     def plot(
         self,
@@ -163,9 +238,10 @@ class StabilityChart:
         boundaries: bool = True,
         design: bool = True,
         legend: bool = True,
+        notes: bool = True,
         title: bool | str = True,
-    ):
-        r"""Draw the stable region, the boundary lines and the design point.
+    ) -> ct.ControlPlot:
+        r"""Draw the stable region, the boundaries and the design point.
 
         Parameters
         ----------
@@ -174,45 +250,70 @@ class StabilityChart:
         color : str, optional
             Colour of the region, lines and design marker.
         label : str, optional
-            Legend label of the stable region (default ``"stable"``).
+            Legend label of the stable region (default ``"stable"``). With a
+            label, the boundary lines get no legend entries of their own, so
+            that overlaid charts share one legend for the line styles.
         hatch : str, optional
             Matplotlib hatch of the region, to tell overlaid charts apart.
         alpha : float, optional
             Opacity of the region.
         boundaries, design : bool, optional
-            Whether to draw the boundary lines and the design point.
+            Whether to draw the boundaries and the design point.
         legend : bool, optional
             Whether to add a legend.
+        notes : bool, optional
+            Whether to write :meth:`notes` into the axes.
         title : bool or str, optional
             True: :meth:`describe`; a string: that title; False: none.
 
         Returns
         -------
-        matplotlib.axes.Axes
+        control.ControlPlot
+            ``.lines[0, 0]`` holds the drawn artists, ``.axes[0, 0]`` the
+            axes.
+
+        Examples
+        --------
+        >>> import matplotlib; matplotlib.use("Agg")
+        >>> import matplotlib.pyplot as plt, numpy as np, fws_control as fws
+        >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+        >>> ch = fws.stability_chart(veh, speed=5.0, ratio=-1.0, pole=-1.0,
+        ...                          k1=np.linspace(-1, 1, 51),
+        ...                          k2=np.linspace(-1, 1, 51))
+        >>> cplt = ch.plot()
+        >>> cplt.axes[0, 0].get_xlabel()
+        '$k_1$ [rad/m]'
+        >>> plt.close(cplt.figure)
         """
         import matplotlib.pyplot as plt
 
         if ax is None:
             _, ax = plt.subplots(figsize=(5.5, 4.8), layout="constrained")
-        handles = self._draw(ax, color, label, hatch, alpha, boundaries, design)
+        artists, handles = self._draw(
+            ax, color, label, hatch, alpha, boundaries, design
+        )
         if title:
             ax.set_title(self.describe() if title is True else title, fontsize=10)
-        if legend:
-            ax.legend(handles=handles, fontsize=8, loc="best")
-        _note_box(ax, self.notes())
-        return ax
+        leg = ax.legend(handles=handles, fontsize=8, loc="best") if legend else None
+        if notes:
+            note_box(ax, self.notes())
+        lines = np.empty((1, 1), dtype=object)
+        lines[0, 0] = artists
+        return ct.ControlPlot(lines, np.array([[ax]]), ax.figure, legend=leg)
 
-    def _draw(self, ax, color, label, hatch, alpha, boundaries, design) -> list:
-        """Draw on `ax`; return the legend handles."""
+    def _draw(self, ax, color, label, hatch, alpha, boundaries, design):
+        """Draw on `ax`; return ``(artists, legend handles)``."""
         from matplotlib.colors import to_rgba
         from matplotlib.patches import Patch
 
+        artists = []
         region_label = "stable" if label is None else label
         if not self.empty:
             z = self.stable.astype(float)
-            ax.contourf(
+            cs = ax.contourf(
                 self.k1, self.k2, z, levels=[0.5, 1.5], colors=[color], alpha=alpha
             )
+            artists.append(cs)
             if hatch:
                 # A second, unfilled layer keeps the hatch opaque and in the
                 # region's colour, so overlaid regions stay distinguishable.
@@ -226,6 +327,7 @@ class StabilityChart:
                 )
                 cs.set_edgecolor(color)
                 cs.set_linewidth(0.0)
+                artists.append(cs)
         # contourf makes no legend handle; a proxy patch stands in for it.
         handles = [
             Patch(
@@ -238,20 +340,38 @@ class StabilityChart:
         k1r = (float(self.k1.min()), float(self.k1.max()))
         k2r = (float(self.k2.min()), float(self.k2.max()))
         if boundaries:
-            for i, b in enumerate(self.boundaries):
+            for b in self.boundaries.lines:
                 seg = b.segment(k1r, k2r)
                 if seg is None:
                     continue
+                text = _LABEL[b.condition] + (_EQ[b.condition] if self.lateral else "")
                 (line,) = ax.plot(
                     seg[:, 0],
                     seg[:, 1],
-                    _STYLE[i],
+                    _STYLE[b.condition],
                     color=color,
                     lw=1.6,
-                    label=_COND_LABEL[i] if label is None else None,
+                    label=text if label is None else None,
                 )
+                artists.append(line)
                 if label is None:
                     handles.append(line)
+            if self.order > 2:
+                first = True
+                for br in self.curve.branches():
+                    (line,) = ax.plot(
+                        br[:, 1],
+                        br[:, 2],
+                        _STYLE["complex"],
+                        color=color,
+                        lw=2.2,
+                        alpha=0.6,
+                        label=_LABEL["complex"] if (label is None and first) else None,
+                    )
+                    artists.append(line)
+                    if label is None and first:
+                        handles.append(line)
+                    first = False
         if design and self.design_on_chart:
             k1d, k2d = float(self.design.k1), float(self.design.k2)
             (pt,) = ax.plot(
@@ -264,6 +384,7 @@ class StabilityChart:
                 label=rf"$\lambda_0$ = {self.pole:g}: ({k1d:.3f}, {k2d:.3f})",
                 zorder=5,
             )
+            artists.append(pt)
             if label is None:
                 handles.append(pt)
         ax.set_xlim(*k1r)
@@ -272,46 +393,101 @@ class StabilityChart:
         ax.set_ylabel(r"$k_2$ [-]")
         ax.axhline(0.0, color="0.7", lw=0.5, zorder=0)
         ax.axvline(0.0, color="0.7", lw=0.5, zorder=0)
-        return handles
+        return artists, handles
+
+    def draw(self, ax, **kwargs) -> list:
+        """Draw into `ax` without title, legend or notes; return legend handles.
+
+        For figures that overlay several charts and build one legend (see
+        :mod:`fws_control.paper.charts`).
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes
+            Axes to draw on.
+        **kwargs
+            `color`, `label`, `hatch`, `alpha`, `boundaries`, `design` as in
+            :meth:`plot`.
+
+        Returns
+        -------
+        list
+            Legend handles.
+        """
+        opts = {
+            "color": "C0",
+            "label": None,
+            "hatch": None,
+            "alpha": 0.3,
+            "boundaries": True,
+            "design": True,
+        }
+        unknown = set(kwargs) - set(opts)
+        if unknown:
+            raise TypeError(
+                f"draw() got unexpected keyword arguments {sorted(unknown)}"
+            )
+        opts.update(kwargs)
+        return self._draw(ax, **opts)[1]
 
 
-def stability_chart(
-    vehicle: Vehicle,
-    curvature: float,
-    ratio: float,
-    speed: float,
-    k1=None,
-    k2=None,
-    model: str = "exact",
-    pole: float | None = None,
-) -> StabilityChart:
-    r"""Routh-Hurwitz stability of the linear closed loop on a gain grid.
-
-    Note the argument order ``(vehicle, curvature, ratio, speed, ...)``,
-    which follows the paper's charts (one chart per curvature and ratio);
-    pass them by keyword when in doubt.
+def note_box(ax, notes) -> None:
+    """Write remarks into the top-left corner of `ax` (nothing if none).
 
     Parameters
     ----------
-    vehicle : Vehicle
-        Geometry.
-    curvature : float
-        Path curvature :math:`\kappa_C` [1/m].
+    ax : matplotlib.axes.Axes
+        Axes to write into.
+    notes : sequence of str
+        One remark per line.
+    """
+    if not notes:
+        return
+    ax.text(
+        0.02,
+        0.98,
+        "\n".join(notes),
+        transform=ax.transAxes,
+        va="top",
+        ha="left",
+        fontsize=7,
+        bbox={"fc": "white", "ec": "0.7", "alpha": 0.9},
+        zorder=10,
+    )
+
+
+def stability_chart(
+    plant: Any,
+    *,
+    ratio: float,
+    k1=None,
+    k2=None,
+    pole: float | None = None,
+    speed: Any = None,
+    curvature: Any = None,
+    model: Any = None,
+) -> StabilityChart:
+    r"""Stability of the linear closed loop on a gain grid.
+
+    Parameters
+    ----------
+    plant : LateralPlant, control.StateSpace or Vehicle
+        One operating point of a plant of any order (see
+        :mod:`fws_control.plant`).
     ratio : float
         Rear-to-front steering ratio :math:`a`.
-    speed : float
-        Speed :math:`V` [m/s], nonzero; for ``V < 0`` condition (35) flips
-        side (see :mod:`fws_control.stability`).
     k1, k2 : array_like, optional
-        Strictly monotonic 1-D grid axes [rad/m], [-]; default 401 points on
-        ``[-1, 1]`` each.
-    model : {"exact", "paper"}, optional
-        Linearisation, see :func:`linearize`.
+        Strictly monotonic 1-D grid axes [rad/m], [-]; default
+        :data:`DEFAULT_GAIN_AXIS` (401 points on ``[-1, 1]``).
     pole : float, optional
         Double root :math:`\lambda_0 < 0` whose gains
-        (:func:`double_root_gains`) are stored and marked. If that design is
-        uncontrollable (``a = 1`` on a straight path) the chart records the
-        reason in :attr:`StabilityChart.design_error` instead of failing.
+        (:func:`double_root_gains`, 2-state plants) are stored and marked. If
+        that design is uncontrollable (``a = 1`` on a straight path) the chart
+        records the reason in :attr:`StabilityChart.design_error` instead of
+        failing.
+    speed, curvature, model : optional
+        With a :class:`Vehicle` only, as in :func:`linearize`. For ``V < 0``
+        condition (35) flips side (see :mod:`fws_control.stability`).
 
     Returns
     -------
@@ -320,313 +496,66 @@ def stability_chart(
 
     Raises
     ------
+    TypeError
+        For positional arguments after the plant, or an unknown plant.
     ValueError
-        For a zero speed, non-finite arguments, a non-negative `pole`, an
-        unknown `model` or grid axes that are not 1-D monotonic arrays.
+        For a non-finite or array `ratio`, a non-negative `pole`, a `pole`
+        with a plant of more than two states, or grid axes that are not 1-D
+        monotonic arrays.
 
     Examples
     --------
     >>> import numpy as np, fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> ch = fws.stability_chart(veh, curvature=0.0, ratio=-1.0, speed=5.0,
+    >>> plant = fws.LateralPlant(veh, speed=5.0)
+    >>> ch = fws.stability_chart(plant, ratio=-1.0, pole=-1.0,
     ...                          k1=np.linspace(-1, 1, 1000),
-    ...                          k2=np.linspace(-1, 1, 800), pole=-1.0)
+    ...                          k2=np.linspace(-1, 1, 800))
     >>> ch.stable.shape
     (800, 1000)
     >>> round(float(ch.design.k1), 4), round(float(ch.design.k2), 4)
     (0.054, 0.6129)
     >>> bool(ch.stable[np.searchsorted(ch.k2, 0.6), np.searchsorted(ch.k1, 0.05)])
     True
-    >>> fws.stability_chart(veh, 0.0, 1.0, 5.0, pole=-1.0).design_error
+    >>> fws.stability_chart(plant, ratio=1.0, pole=-1.0).design_error
     'ratio=1.0 with curvature=0.0 makes delta_r = delta_f: ...'
     """
-    check_model(model)
-    speed = check_scalar("speed", check_nonzero("speed", speed))
-    curvature = check_scalar("curvature", curvature)
+    p = as_plant(plant, speed=speed, curvature=curvature, model=model)
+    if isinstance(p, LateralPlant) and p.shape != ():
+        raise ValueError(
+            f"stability_chart needs one operating point, got speed/curvature of "
+            f"shape {p.shape}"
+        )
     ratio = check_scalar("ratio", ratio)
     k1a = _axis("k1", k1)
     k2a = _axis("k2", k2)
     # Outer broadcasting (k2 down the rows, k1 across) avoids a meshgrid.
-    stable = is_stable(
-        vehicle, speed, curvature, k1a[np.newaxis, :], k2a[:, np.newaxis], ratio, model
-    )
-    bounds = stability_boundaries(vehicle, speed, curvature, ratio, model)
+    grid = SteeringGains(k1a[np.newaxis, :], k2a[:, np.newaxis], ratio)
+    stable = is_stable(p, grid)
+    bounds = stability_boundaries(p, ratio=ratio)
+    k1r = (float(k1a.min()), float(k1a.max()))
+    k2r = (float(k2a.min()), float(k2a.max()))
+    if bounds.order > 2:
+        curve = _curve_in_box(characteristic_coefficients(p, ratio=ratio), k1r, k2r)
+    else:
+        curve = bounds.complex_root
     design = err = None
     if pole is not None:
-        pole = float(check_finite("pole", pole))
+        pole = check_scalar("pole", pole)
         try:
-            g = double_root_gains(vehicle, speed, curvature, ratio, pole, model)
+            g = double_root_gains(p, ratio=ratio, pole=pole)
             design = SteeringGains(float(g.k1), float(g.k2), ratio)
         except UncontrollableError as exc:
             err = str(exc)
     return StabilityChart(
-        vehicle=vehicle,
-        speed=speed,
-        curvature=curvature,
+        plant=p,
         ratio=ratio,
-        model=model,
         k1=k1a,
         k2=k2a,
         stable=stable,
         boundaries=bounds,
+        curve=curve,
         pole=pole,
         design=design,
         design_error=err,
     )
-
-
-@dataclass(frozen=True, eq=False)
-class ChartPanel:
-    """One panel of a paper figure: overlaid charts with their labels.
-
-    Attributes
-    ----------
-    title : str
-        Panel title, e.g. ``"(a) V = 5 m/s, kappa = 0"``.
-    charts : tuple of StabilityChart
-    labels : tuple of str
-        Legend label of each chart (the quantity that varies in the panel).
-    """
-
-    title: str
-    charts: tuple[StabilityChart, ...]
-    labels: tuple[str, ...]
-
-
-def _panel_ranges(designs, base=_DEFAULT_RANGE, cap=_MAX_RANGE):
-    """Grid range covering ``base`` and the design points, with a margin.
-
-    The range grows at most to ``cap``: a design with huge gains (``a`` near
-    1 on a gently curved path) would otherwise squash every region into a
-    sliver. Designs left outside are listed in the panel instead.
-    """
-    k1s = [float(g.k1) for g in designs if g is not None]
-    k2s = [float(g.k2) for g in designs if g is not None]
-    out = []
-    for vals in (k1s, k2s):
-        lo, hi = base
-        width = hi - lo
-        vals = [v for v in vals if cap[0] <= v <= cap[1]]
-        if vals:
-            lo = max(cap[0], min(lo, min(vals) - 0.1 * width))
-            hi = min(cap[1], max(hi, max(vals) + 0.1 * width))
-        out.append((lo, hi))
-    return out
-
-
-def _build_panel(vehicle, title, specs, model, pole, npoints):
-    """specs: list of (label, speed, curvature, ratio)."""
-    designs = []
-    for _, V, kap, a in specs:
-        try:
-            designs.append(double_root_gains(vehicle, V, kap, a, pole, model))
-        except UncontrollableError:
-            designs.append(None)
-    (k1lo, k1hi), (k2lo, k2hi) = _panel_ranges(designs)
-    k1 = np.linspace(k1lo, k1hi, npoints)
-    k2 = np.linspace(k2lo, k2hi, npoints)
-    charts = tuple(
-        stability_chart(vehicle, kap, a, V, k1, k2, model=model, pole=pole)
-        for _, V, kap, a in specs
-    )
-    return ChartPanel(title, charts, tuple(s[0] for s in specs))
-
-
-def paper_figure_panels(
-    n: int,
-    model: str = "exact",
-    vehicle: Vehicle | None = None,
-    pole: float = -1.0,
-    curvatures=None,
-    npoints: int = _DEFAULT_POINTS,
-) -> list[ChartPanel]:
-    r"""The data behind Figs. 2, 3 or 4 of the paper.
-
-    Fig. 2: straight path; (a) ``a`` in {-1.5, -1, -0.5, 0} at 5 m/s, (b) ``a``
-    in {-1.5, -1, -0.5} at 20 m/s, (c) ``a`` in {0, 0.5, 1, 1.5} at 20 m/s.
-    Figs. 3 (5 m/s) and 4 (20 m/s): one panel per ``a`` in {-1.5, -1, -0.5,
-    0, 0.5, 1, 1.5}, each overlaying the curvatures of
-    :data:`PAPER_CURVATURES` (or `curvatures`).
-
-    Each panel's grid covers ``[-1, 1]^2`` (the paper's range), widened where
-    needed (up to ``[-2, 2]``) so that the :math:`\lambda_0` design points are
-    visible; designs outside that are listed in the panel.
-
-    Parameters
-    ----------
-    n : {2, 3, 4}
-        Figure number.
-    model : {"exact", "paper"}, optional
-        Linearisation. On a straight path (Fig. 2) both agree.
-    vehicle : Vehicle, optional
-        Default :data:`PAPER_VEHICLE`.
-    pole : float, optional
-        Double root of the marked gains, default -1.
-    curvatures : sequence of float, optional
-        Curvatures for Figs. 3-4 instead of :data:`PAPER_CURVATURES`.
-    npoints : int, optional
-        Grid points per axis.
-
-    Returns
-    -------
-    list of ChartPanel
-
-    Examples
-    --------
-    >>> import fws_control as fws
-    >>> panels = fws.paper_figure_panels(2, npoints=51)
-    >>> [p.labels for p in panels]
-    [('a = -1.5', 'a = -1', 'a = -0.5', 'a = 0'), ('a = -1.5', 'a = -1', 'a = -0.5'),
-     ('a = 0', 'a = 0.5', 'a = 1', 'a = 1.5')]
-    """
-    check_model(model)
-    vehicle = PAPER_VEHICLE if vehicle is None else vehicle
-    if n == 2:
-        groups = [
-            ("(a) V = 5 m/s", 5.0, (-1.5, -1.0, -0.5, 0.0)),
-            ("(b) V = 20 m/s", 20.0, (-1.5, -1.0, -0.5)),
-            ("(c) V = 20 m/s", 20.0, (0.0, 0.5, 1.0, 1.5)),
-        ]
-        return [
-            _build_panel(
-                vehicle,
-                rf"{t}, $\kappa$ = 0",
-                [(f"a = {a:g}", V, 0.0, a) for a in ratios],
-                model,
-                pole,
-                npoints,
-            )
-            for t, V, ratios in groups
-        ]
-    if n in (3, 4):
-        V = 5.0 if n == 3 else 20.0
-        kappas = PAPER_CURVATURES[n] if curvatures is None else tuple(curvatures)
-        panels = []
-        ratios = (-1.5, -1.0, -0.5, 0.0, 0.5, 1.0, 1.5)
-        for letter, a in zip("abcdefg", ratios, strict=True):
-            panels.append(
-                _build_panel(
-                    vehicle,
-                    f"({letter}) a = {a:g}, V = {V:g} m/s",
-                    [(rf"$\kappa$ = {k:g} 1/m", V, k, a) for k in kappas],
-                    model,
-                    pole,
-                    npoints,
-                )
-            )
-        return panels
-    raise ValueError(f"n must be 2, 3 or 4 (the paper's chart figures), got {n!r}")
-
-
-def _note_box(ax, notes) -> None:
-    if notes:
-        ax.text(
-            0.02,
-            0.02,
-            "\n".join(notes),
-            transform=ax.transAxes,
-            fontsize=7,
-            va="bottom",
-            bbox={"fc": "white", "ec": "0.7", "alpha": 0.9},
-            zorder=10,
-        )
-
-
-def _draw_panel(ax, panel: ChartPanel, legend: bool = True) -> list:
-    from matplotlib.lines import Line2D
-
-    handles = []
-    notes = []
-    for i, (ch, lab) in enumerate(zip(panel.charts, panel.labels, strict=True)):
-        color = f"C{i}"
-        handles += ch._draw(
-            ax,
-            color=color,
-            label=lab,
-            hatch=_HATCHES[i % len(_HATCHES)],
-            alpha=0.1,
-            boundaries=True,
-            design=True,
-        )
-        notes += ch.notes(lab)
-    handles += [
-        Line2D([], [], color="0.3", ls=_STYLE[0], label=_COND_LABEL[0]),
-        Line2D([], [], color="0.3", ls=_STYLE[1], label=_COND_LABEL[1]),
-        Line2D(
-            [],
-            [],
-            marker="o",
-            ls="",
-            color="0.6",
-            mec="k",
-            label=rf"$\lambda_0$ = {panel.charts[0].pole:g} gains",
-        ),
-    ]
-    _note_box(ax, notes)
-    ax.set_title(panel.title, fontsize=10)
-    if legend:
-        # Below the axes: inside, it would hide regions and design points.
-        ax.legend(
-            handles=handles,
-            fontsize=8,
-            loc="upper center",
-            bbox_to_anchor=(0.5, -0.13),
-            ncol=3,
-            frameon=False,
-        )
-    return handles
-
-
-def plot_paper_figure(
-    n: int,
-    model: str = "exact",
-    vehicle: Vehicle | None = None,
-    pole: float = -1.0,
-    curvatures=None,
-    npoints: int = _DEFAULT_POINTS,
-):
-    r"""Redraw Fig. 2, 3 or 4 of the paper as one matplotlib figure.
-
-    Every panel overlays the stable regions (hatched, translucent) of the
-    charts listed in :func:`paper_figure_panels`, their boundary lines
-    (solid: eq. 35, dashed: eq. 36) and the :math:`\lambda_0` gains.
-
-    Parameters
-    ----------
-    n, model, vehicle, pole, curvatures, npoints
-        See :func:`paper_figure_panels`.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-
-    Examples
-    --------
-    >>> import matplotlib; matplotlib.use("Agg")
-    >>> import matplotlib.pyplot as plt, fws_control as fws
-    >>> fig = fws.plot_paper_figure(2, npoints=101)
-    >>> len(fig.axes)
-    3
-    >>> plt.close(fig)
-    """
-    import matplotlib.pyplot as plt
-
-    panels = paper_figure_panels(n, model, vehicle, pole, curvatures, npoints)
-    if n == 2:
-        fig, axes = plt.subplots(1, 3, figsize=(15, 6.2), layout="constrained")
-        axes = list(axes)
-    else:
-        fig, axs = plt.subplots(2, 4, figsize=(19, 9.5), layout="constrained")
-        axes = list(axs.flat)
-    for ax, panel in zip(axes, panels, strict=False):
-        handles = _draw_panel(ax, panel, legend=n == 2)
-    if n != 2:
-        # The eighth slot holds the shared legend.
-        spare = axes[-1]
-        spare.axis("off")
-        spare.legend(handles=handles, loc="center", fontsize=10, title="legend")
-    V = {2: "5 and 20", 3: "5", 4: "20"}[n]
-    fig.suptitle(
-        f"Fig. {n}: stable gains (shaded), V = {V} m/s, {model} model", fontsize=13
-    )
-    return fig

@@ -22,12 +22,12 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
-from ._validation import check_finite, check_positive
 from .gains import SteeringGains
 from .linear import closed_loop
 from .models import feedforward_steering
 from .paths import Arc, Straight
 from .simulation import SimulationResult, simulate
+from .validation import check_finite, check_positive
 from .vehicle import Vehicle
 
 __all__ = ["LinearNonlinearComparison", "compare_linear_nonlinear"]

@@ -38,9 +38,9 @@ import math
 import control as ct
 import numpy as np
 
-from ._validation import check_positive
 from .gains import SteeringGains
 from .models import STEERING_INPUTS
+from .validation import check_positive
 from .vehicle import Vehicle
 
 __all__ = [

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validation import check_finite
+from .validation import check_finite
 
 __all__ = ["SteeringGains"]
 
@@ -41,9 +41,11 @@ class SteeringGains:
     >>> g = fws.SteeringGains(k1=0.2, k2=0.5, ratio=-1.0)
     >>> g.k3, g.k4
     (-0.2, -0.5)
-    >>> g.matrix
-    array([[-0.2, -0.5],
-           [ 0.2,  0.5]])
+    >>> g.K
+    array([[ 0.2,  0.5],
+           [-0.2, -0.5]])
+    >>> g.K_paper[0]
+    array([-0.2, -0.5])
     """
 
     k1: float | np.ndarray
@@ -65,15 +67,94 @@ class SteeringGains:
         return self.ratio * self.k2
 
     @property
-    def matrix(self) -> np.ndarray:
-        r"""The feedback matrix :math:`\mathbf{K}` of eq. (33), ``u = K x``.
+    def K(self) -> np.ndarray:
+        r"""Feedback matrix in python-control's sign, ``u = -K y``.
 
-        Shape ``(..., 2, 2)``: rows ``delta_f, delta_r``; columns ``e, theta``.
+        .. math:: \mathbf K = \begin{bmatrix}k_1 & k_2\\ a k_1 & a k_2\end{bmatrix}
+
+        Shape ``(..., 2, 2)``: rows ``delta_f, delta_r``; columns ``e,
+        theta``. This is what :func:`control.place` and :func:`control.lqr`
+        return for a plant with these inputs and states, so the two compare
+        without a sign change.
         """
         k1, k2, k3, k4 = np.broadcast_arrays(self.k1, self.k2, self.k3, self.k4)
-        return -np.stack(
+        return np.stack(
             [np.stack([k1, k2], axis=-1), np.stack([k3, k4], axis=-1)], axis=-2
         )
+
+    @property
+    def K_paper(self) -> np.ndarray:
+        r"""Feedback matrix in the paper's sign, ``u = K_paper x`` (eq. 33).
+
+        :math:`\mathbf K_{paper} = -\mathbf K`, i.e. ``-[[k1, k2], [k3, k4]]``.
+        """
+        return -self.K
+
+    @classmethod
+    def from_K(cls, K, *, ratio=None, rtol: float = 1e-9) -> SteeringGains:
+        r"""Gains from a python-control feedback matrix (``u = -K y``).
+
+        Parameters
+        ----------
+        K : array_like
+            Either the ``1 x 2`` (or length-2) row ``[k1, k2]`` of a
+            single-input design on :math:`(\mathbf A, \mathbf B[1, a]^T)`,
+            e.g. from :func:`control.acker`; then `ratio` is required. Or the
+            ``2 x 2`` matrix of both steering inputs, which must have the
+            structure ``[[k1, k2], [a k1, a k2]]``.
+        ratio : float, optional
+            The ratio :math:`a` for a single row.
+        rtol : float, optional
+            Relative tolerance of the rank-one structure check.
+
+        Returns
+        -------
+        SteeringGains
+
+        Raises
+        ------
+        ValueError
+            If `K` has another shape, lacks `ratio`, or is not of the rank-one
+            form (then the feedback cannot be written with one ratio ``a``).
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> fws.SteeringGains.from_K([[0.2, 0.5], [-0.2, -0.5]])
+        SteeringGains(k1=0.2, k2=0.5, ratio=-1.0)
+        >>> fws.SteeringGains.from_K([[0.2, 0.5]], ratio=0.5).k4
+        0.25
+        """
+        arr = np.asarray(check_finite("K", K), dtype=float)
+        if arr.size == 2 and arr.ndim <= 2:
+            if ratio is None:
+                raise ValueError(
+                    "a single row K = [k1, k2] needs ratio= (the rear-to-front "
+                    "steering ratio it was designed for)"
+                )
+            row = arr.ravel()
+            return cls(float(row[0]), float(row[1]), ratio)
+        if arr.shape != (2, 2):
+            raise ValueError(
+                f"K must be a 1 x 2 row or a 2 x 2 matrix, got shape {arr.shape}"
+            )
+        if ratio is not None:
+            raise ValueError("ratio= is only for a single row K; a 2 x 2 K fixes it")
+        front, rear = arr
+        scale = float(np.max(np.abs(front)))
+        if scale == 0.0:
+            raise ValueError(
+                f"K's front row must be nonzero to define a ratio, got K={arr.tolist()}"
+            )
+        j = int(np.argmax(np.abs(front)))
+        a = float(rear[j] / front[j])
+        if np.max(np.abs(rear - a * front)) > rtol * max(scale, abs(a) * scale):
+            raise ValueError(
+                "K must have the rank-one form [[k1, k2], [a*k1, a*k2]] "
+                f"(delta_r = a*delta_f), got K={arr.tolist()}: use the "
+                "two-input feedback directly"
+            )
+        return cls(float(front[0]), float(front[1]), a)
 
     def steering(self, e, theta) -> tuple[np.ndarray, np.ndarray]:
         """Feedback steering angles ``(delta_f_fb, delta_r_fb)`` for errors."""

@@ -1,301 +1,436 @@
-r"""Linearisation of the path-frame model and the linear closed loop.
+r"""Linearisation, the linear closed loop and its characteristic polynomial.
 
-Two linearisations about the feedforward operating point
-``e = theta = 0, delta_f = atan(curvature*wheelbase), delta_r = 0`` are
-offered:
-
-``model="exact"`` (default)
-    The true Jacobian of eqs. (18)-(19). The front-steering entry of
-    :math:`\mathbf B` is :math:`V(1+f^2\kappa^2)/f = V/(f\cos^2\delta_f^{FF})`.
-``model="paper"``
-    Eq. (33) verbatim, which takes that entry as :math:`V/f`, exact only on a
-    straight path.
-
-Both have the form
+With the paper's structure the steering feedback is rank one,
 
 .. math::
-    \mathbf A = \begin{bmatrix}0 & V\\ -V\kappa^2 & 0\end{bmatrix},\quad
-    \mathbf B = \begin{bmatrix}0 & V\\ cV/f & -V/f\end{bmatrix},
+    \begin{bmatrix}\delta_f\\ \delta_r\end{bmatrix}
+    = \begin{bmatrix}1\\ a\end{bmatrix}(-k_1 e - k_2\theta),
 
-with :math:`c = 1 + f^2\kappa^2` (exact) or :math:`c = 1` (paper). The
-characteristic polynomial of :math:`\mathbf A + \mathbf B\mathbf K` (eq. 34,
-with ``(1-a)`` replaced by ``(c-a)``) is affine in ``(k1, k2)``; this module
-holds its single numeric implementation, which the stability and design
-modules use.
+so for any plant :math:`(\mathbf A, \mathbf B, \mathbf C)` the
+characteristic polynomial of the closed loop is *affine* in the gains
+(matrix determinant lemma):
+
+.. math::
+    p(s) = \det(s\mathbf I - \mathbf A) + k_1 n_1(s) + k_2 n_2(s),\qquad
+    n_i(s) = \mathbf c_i\,\operatorname{adj}(s\mathbf I - \mathbf A)\,\mathbf b,
+
+with :math:`\mathbf b = \mathbf B_f + a\mathbf B_r` and
+:math:`\mathbf c_1, \mathbf c_2` the rows measuring ``e`` and ``theta``
+(:class:`AffinePolynomial`). This module holds the single numeric
+implementation of it: closed form for the kinematic :class:`LateralPlant`
+(eq. 34 with ``(c - a)`` for ``(1 - a)``), the Faddeev-LeVerrier recursion
+for a :class:`control.StateSpace` of any order. Stability, the stability
+boundaries, the double-root design and the root loci all start from it.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import control as ct
 import numpy as np
 
-from ._validation import (
-    check_finite,
-    check_model,
-    check_nonzero,
-    check_scalar,
-    check_vehicle,
-)
 from .gains import SteeringGains
-from .models import STEERING_INPUTS, feedforward_steering
-from .vehicle import Vehicle
+from .plant import LateralPlant, LoopMatrices, as_plant, loop_matrices
+from .validation import check_finite, check_type
 
 __all__ = [
-    "input_gain_factor",
-    "operating_point",
     "linearize",
     "closed_loop",
-    "characteristic_polynomial",
-    "AffineCoefficients",
+    "AffinePolynomial",
     "characteristic_coefficients",
-    "LINEAR_STATES",
+    "characteristic_polynomial",
+    "check_gains",
+    "horner",
 ]
 
-LINEAR_STATES = ("e", "theta")
 
-
-def input_gain_factor(vehicle: Vehicle, curvature, model: str = "exact"):
-    r"""Factor :math:`c` of the front-steering entry :math:`cV/f` of B.
-
-    :math:`c = 1 + f^2\kappa^2` for ``model="exact"`` and :math:`c = 1` for
-    ``model="paper"`` (eq. 33). Broadcasts over `curvature`.
+def check_gains(gains: Any, *, scalar: bool = False) -> SteeringGains:
+    """Return `gains` if it is a :class:`SteeringGains` (scalar if asked).
 
     Examples
     --------
     >>> import fws_control as fws
-    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> round(fws.input_gain_factor(veh, 0.1), 4)
-    1.0729
-    >>> fws.input_gain_factor(veh, 0.1, model="paper")
-    1.0
+    >>> from fws_control.linear import check_gains
+    >>> check_gains(fws.SteeringGains(0.1, 0.5, ratio=0.0), scalar=True).k1
+    0.1
     """
-    check_model(model)
-    kappa = np.asarray(check_finite("curvature", curvature))
-    if model == "paper":
-        out = np.ones_like(kappa)
-    else:
-        out = 1.0 + (vehicle.wheelbase * kappa) ** 2
-    return float(out) if out.ndim == 0 else out
-
-
-def operating_point(vehicle: Vehicle, curvature) -> tuple[np.ndarray, np.ndarray]:
-    """Equilibrium of the path-frame model with feedforward steering.
-
-    Returns ``(x0, u0)`` with ``x0 = [s, e, theta] = [0, 0, 0]`` and
-    ``u0 = [atan(curvature*wheelbase), 0]`` (paper eqs. 26-27).
-    """
-    return np.zeros(3), np.array([feedforward_steering(vehicle, curvature), 0.0])
-
-
-def _matrices(vehicle: Vehicle, speed, curvature, model):
-    check_vehicle(vehicle)
-    speed = check_scalar("speed", check_nonzero("speed", speed))
-    kappa = check_scalar("curvature", curvature)
-    c = input_gain_factor(vehicle, kappa, model)
-    f = vehicle.wheelbase
-    A = np.array([[0.0, speed], [-speed * kappa**2, 0.0]])
-    B = np.array([[0.0, speed], [c * speed / f, -speed / f]])
-    return A, B
+    check_type("gains", gains, SteeringGains)
+    if scalar and (np.ndim(gains.k1) or np.ndim(gains.k2) or np.ndim(gains.ratio)):
+        raise ValueError(
+            "gains must hold scalar k1, k2 and ratio here, got shapes "
+            f"{np.shape(gains.k1)}, {np.shape(gains.k2)}, {np.shape(gains.ratio)}"
+        )
+    return gains
 
 
 def linearize(
-    vehicle: Vehicle, speed: float, curvature: float = 0.0, model: str = "exact"
+    plant: Any,
+    *,
+    speed: Any = None,
+    curvature: Any = None,
+    model: Any = None,
 ) -> ct.StateSpace:
-    r"""Linearised lateral dynamics about the feedforward operating point.
+    r"""Linearised lateral dynamics of a plant, as a named state space.
 
     Parameters
     ----------
-    vehicle : Vehicle
-        Geometry.
-    speed : float
-        Speed :math:`V` [m/s], finite and nonzero (negative: reversing).
-    curvature : float, optional
-        Path curvature :math:`\kappa_C` [1/m].
-    model : {"exact", "paper"}, optional
-        ``"exact"``: Jacobian of eqs. (18)-(19); ``"paper"``: eq. (33).
+    plant : LateralPlant, control.StateSpace or Vehicle
+        The plant (see :mod:`fws_control.plant`); a state space is returned
+        as it is.
+    speed, curvature, model : optional
+        With a :class:`Vehicle` only: speed :math:`V` [m/s] (nonzero),
+        curvature :math:`\kappa_C` [1/m] (default 0) and ``"exact"``
+        (default: Jacobian of eqs. 18-19) or ``"paper"`` (eq. 33).
 
     Returns
     -------
     control.StateSpace
-        States and outputs ``e, theta`` (deviations from the operating
-        point); inputs ``delta_f, delta_r`` (deviations from the feedforward
-        angles).
-
-    Raises
-    ------
-    ValueError
-        For a zero or non-finite `speed`, non-finite `curvature` or an
-        unknown `model`.
+        For the kinematic plant: states and outputs ``e, theta`` (deviations
+        from the feedforward operating point), inputs ``delta_f, delta_r``.
 
     Examples
     --------
     >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> sys = fws.linearize(veh, speed=5.0, curvature=0.1)
-    >>> sys.B.round(4)
-    array([[ 0.    ,  5.    ],
-           [ 1.9869, -1.8519]])
     >>> fws.linearize(veh, speed=5.0, curvature=0.1, model="paper").B.round(4)
     array([[ 0.    ,  5.    ],
            [ 1.8519, -1.8519]])
+    >>> plant = fws.LateralPlant(veh, speed=5.0, curvature=0.1)
+    >>> fws.linearize(plant).B.round(4)
+    array([[ 0.    ,  5.    ],
+           [ 1.9869, -1.8519]])
     """
-    A, B = _matrices(vehicle, speed, curvature, model)
-    return ct.ss(
-        A,
-        B,
-        np.eye(2),
-        np.zeros((2, 2)),
-        states=list(LINEAR_STATES),
-        inputs=list(STEERING_INPUTS),
-        outputs=list(LINEAR_STATES),
-        name=f"linear_{model}",
-    )
+    p = as_plant(plant, speed=speed, curvature=curvature, model=model)
+    return p.linearize() if isinstance(p, LateralPlant) else p
 
 
 def closed_loop(
-    vehicle: Vehicle,
-    speed: float,
-    curvature: float,
+    plant: Any,
     gains: SteeringGains,
-    model: str = "exact",
+    *,
+    speed: Any = None,
+    curvature: Any = None,
+    model: Any = None,
 ) -> ct.StateSpace:
-    r"""Linear closed loop with the structured feedback ``u = K x + w``.
+    r"""Linear closed loop with the structured feedback ``u = K_paper y + w``.
 
-    .. math:: \dot x = (\mathbf A + \mathbf B\mathbf K) x + \mathbf B w
+    .. math:: \dot x = (\mathbf A + \mathbf B_s\mathbf K_{paper}\mathbf C_s) x
+              + \mathbf B_s w
+
+    where :math:`\mathbf B_s` are the columns of ``delta_f, delta_r``,
+    :math:`\mathbf C_s` the rows of ``e, theta`` and
+    :math:`\mathbf K_{paper} = -` :attr:`SteeringGains.K`.
 
     Parameters
     ----------
-    vehicle, speed, curvature, model
-        As in :func:`linearize`.
+    plant : LateralPlant, control.StateSpace or Vehicle
+        The plant (see :mod:`fws_control.plant`).
     gains : SteeringGains
-        Scalar gains; ``K`` is :attr:`SteeringGains.matrix`.
+        Scalar gains.
+    speed, curvature, model : optional
+        With a :class:`Vehicle` only, as in :func:`linearize`.
 
     Returns
     -------
     control.StateSpace
-        States ``e, theta``; inputs ``delta_f_dist, delta_r_dist`` (steering
-        disturbances added to the controller's output); outputs ``e, theta,
-        delta_f, delta_r``, the last two being the steering deviations from the
-        feedforward angles, ``K x + w``.
+        The plant's states; inputs ``delta_f_dist, delta_r_dist`` (steering
+        disturbances added to the controller's output) followed by the
+        plant's other inputs; outputs: the plant's outputs followed by
+        ``delta_f, delta_r`` (the steering deviations ``K_paper y + w``).
 
     Examples
     --------
     >>> import numpy as np, fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> g = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
-    >>> cl = fws.closed_loop(veh, 5.0, 0.1, g)
+    >>> plant = fws.LateralPlant(veh, speed=5.0, curvature=0.1)
+    >>> g = fws.double_root_gains(plant, ratio=-1.0, pole=-1.0)
+    >>> cl = fws.closed_loop(plant, g)
     >>> np.allclose(cl.poles(), [-1.0, -1.0], atol=1e-6)
     True
+    >>> cl.input_labels, cl.output_labels
+    (['delta_f_dist', 'delta_r_dist'], ['e', 'theta', 'delta_f', 'delta_r'])
     """
-    if not isinstance(gains, SteeringGains):
-        raise TypeError(f"gains must be a SteeringGains, got {type(gains).__name__}")
-    K = gains.matrix
-    if K.shape != (2, 2):
-        raise ValueError(
-            f"gains must hold scalar k1, k2, ratio for closed_loop, got shape {K.shape}"
-        )
-    A, B = _matrices(vehicle, speed, curvature, model)
+    g = check_gains(gains, scalar=True)
+    sys = linearize(plant, speed=speed, curvature=curvature, model=model)
+    lm = loop_matrices(sys)
+    A, B, C, D = (np.asarray(m, dtype=float) for m in (sys.A, sys.B, sys.C, sys.D))
+    inputs = list(sys.input_labels)
+    if lm.states == ("e", "theta") and inputs == ["u[0]", "u[1]"]:
+        steer = [0, 1]  # unnamed 2-state plant, read as (delta_f, delta_r)
+    else:
+        steer = [inputs.index("delta_f"), inputs.index("delta_r")]
+    others = [j for j in range(B.shape[1]) if j not in steer]
+    K = -g.K  # paper's sign: u = K_paper [e, theta]
+    Cs = np.stack([lm.c_e, lm.c_theta])
+    Bs, Ds = B[:, steer], D[:, steer]
+    A_cl = A + Bs @ K @ Cs
+    B_cl = np.hstack([Bs, B[:, others]])
+    C_cl = np.vstack([C + Ds @ K @ Cs, K @ Cs])
+    D_cl = np.vstack(
+        [
+            np.hstack([Ds, D[:, others]]),
+            np.hstack([np.eye(2), np.zeros((2, len(others)))]),
+        ]
+    )
     return ct.ss(
-        A + B @ K,
-        B,
-        np.vstack([np.eye(2), K]),
-        np.vstack([np.zeros((2, 2)), np.eye(2)]),
-        states=list(LINEAR_STATES),
-        inputs=["delta_f_dist", "delta_r_dist"],
-        outputs=[*LINEAR_STATES, *STEERING_INPUTS],
-        name=f"closed_loop_{model}",
+        A_cl,
+        B_cl,
+        C_cl,
+        D_cl,
+        states=list(sys.state_labels),
+        inputs=["delta_f_dist", "delta_r_dist", *(inputs[j] for j in others)],
+        outputs=[*sys.output_labels, "delta_f", "delta_r"],
+        name=f"closed_loop_{sys.name}",
     )
 
 
-@dataclass(frozen=True)
-class AffineCoefficients:
-    r"""Coefficients of :math:`\lambda^2 + p_1\lambda + p_0` as affine maps.
+@dataclass(frozen=True, eq=False)
+class AffinePolynomial:
+    r"""Closed-loop characteristic polynomial as an affine map of (k1, k2).
 
-    ``p1 = alpha1*k1 + beta1*k2 + gamma1`` and
-    ``p0 = alpha0*k1 + beta0*k2 + gamma0`` (eq. 34 with ``(c-a)`` for
-    ``(1-a)``). The bilinear ``k1*k2`` terms cancel, which is why the
-    stability boundaries are straight lines and the double-root design is a
-    2x2 linear system. Fields broadcast.
-    """
+    .. math:: p(s) = d(s) + k_1 n_1(s) + k_2 n_2(s)
 
-    alpha1: np.ndarray
-    beta1: np.ndarray
-    gamma1: np.ndarray
-    alpha0: np.ndarray
-    beta0: np.ndarray
-    gamma0: np.ndarray
+    with :math:`d(s) = \det(s\mathbf I - \mathbf A)` (monic, degree ``n``)
+    and :math:`n_1, n_2` of degree below ``n``. Coefficient arrays have
+    shape ``(..., n + 1)``, highest power first (``numpy.polyval`` order);
+    the leading dimensions broadcast (operating points, ratios).
 
-    def p1(self, k1, k2):
-        """Coefficient of :math:`\\lambda` (Routh-Hurwitz condition 35)."""
-        return self.alpha1 * k1 + self.beta1 * k2 + self.gamma1
-
-    def p0(self, k1, k2):
-        """Constant coefficient (Routh-Hurwitz condition 36)."""
-        return self.alpha0 * k1 + self.beta0 * k2 + self.gamma0
-
-
-def characteristic_coefficients(
-    vehicle: Vehicle, speed, curvature, ratio, model: str = "exact"
-) -> AffineCoefficients:
-    r"""Characteristic polynomial of the closed loop as affine maps of (k1, k2).
-
-    .. math::
-        p_1 = \frac{V}{f}\left(f a k_1 + (c-a)k_2\right),\qquad
-        p_0 = \frac{V^2}{f}\left((c-a)k_1 + (1-a k_2) f\kappa^2\right)
-
-    with :math:`c` from :func:`input_gain_factor`. Broadcasts over `speed`,
-    `curvature` and `ratio`.
+    Attributes
+    ----------
+    open_loop : ndarray
+        Coefficients of :math:`d(s)`.
+    n1, n2 : ndarray
+        Coefficients of :math:`n_1(s)` and :math:`n_2(s)` (leading zero).
 
     Examples
     --------
     >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> cc = fws.characteristic_coefficients(veh, 5.0, 0.0, 0.0)
-    >>> round(float(cc.p1(0.2, 0.5)), 9), round(float(cc.p0(0.2, 0.5)), 9)
-    (0.925925926, 1.851851852)
+    >>> cp = fws.characteristic_coefficients(fws.LateralPlant(veh, speed=5.0),
+    ...                                      ratio=0.0)
+    >>> cp.order, cp.coefficients(0.2, 0.5).round(9)
+    (2, array([1.        , 0.92592593, 1.85185185]))
     """
-    check_vehicle(vehicle)
-    check_model(model)
-    V = np.asarray(check_nonzero("speed", speed))
-    kappa = np.asarray(check_finite("curvature", curvature))
-    a = np.asarray(check_finite("ratio", ratio))
-    f = vehicle.wheelbase
-    c = np.asarray(input_gain_factor(vehicle, kappa, model))
-    V, kappa, a, c = np.broadcast_arrays(V, kappa, a, c)
-    return AffineCoefficients(
-        alpha1=V * a,
-        beta1=V * (c - a) / f,
-        gamma1=np.zeros_like(V),
-        alpha0=V**2 * (c - a) / f,
-        beta0=-(V**2) * a * kappa**2,
-        gamma0=V**2 * kappa**2,
-    )
+
+    open_loop: np.ndarray
+    n1: np.ndarray
+    n2: np.ndarray
+
+    @property
+    def order(self) -> int:
+        """Degree ``n`` of the polynomial (the number of states)."""
+        return int(self.open_loop.shape[-1]) - 1
+
+    def coefficients(self, k1, k2) -> np.ndarray:
+        """Coefficients of :math:`p(s)` for gains that broadcast, ``(..., n+1)``.
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+        >>> cp = fws.characteristic_coefficients(fws.LateralPlant(veh, speed=5.0),
+        ...                                      ratio=0.0)
+        >>> cp.coefficients([0.1, 0.2], 0.5).shape
+        (2, 3)
+        """
+        k1 = np.asarray(k1, dtype=float)[..., np.newaxis]
+        k2 = np.asarray(k2, dtype=float)[..., np.newaxis]
+        return self.open_loop + k1 * self.n1 + k2 * self.n2
+
+    def evaluate(self, s, k1=0.0, k2=0.0) -> np.ndarray:
+        """:math:`p(s)` at points `s` (broadcast with the gains), by Horner.
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+        >>> cp = fws.characteristic_coefficients(fws.LateralPlant(veh, speed=5.0),
+        ...                                      ratio=0.0)
+        >>> v = complex(cp.evaluate(1j, 0.2, 0.5))
+        >>> round(v.real, 9), round(v.imag, 9)
+        (0.851851852, 0.925925926)
+        """
+        return horner(self.coefficients(k1, k2), s)
+
+    def polynomials_at(self, s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(d(s), n1(s), n2(s))`` at points `s` (broadcast).
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+        >>> cp = fws.characteristic_coefficients(fws.LateralPlant(veh, speed=5.0),
+        ...                                      ratio=0.0)
+        >>> [complex(v) for v in cp.polynomials_at(0.0)]
+        [0j, (9.25925925925926+0j), 0j]
+        """
+        return tuple(horner(c, s) for c in (self.open_loop, self.n1, self.n2))
 
 
-def characteristic_polynomial(
-    vehicle: Vehicle,
-    speed,
-    curvature,
-    gains: SteeringGains,
-    model: str = "exact",
-) -> np.ndarray:
-    r"""Coefficients ``[1, p1, p0]`` of :math:`D(\lambda)`, eq. (34).
-
-    Broadcasts: the result has shape ``(..., 3)``, highest power first, so a
-    scalar design gives an array usable with :func:`numpy.roots`.
+def horner(coefficients: np.ndarray, s) -> np.ndarray:
+    """Evaluate polynomials (coefficients on the last axis) at `s`, broadcasting.
 
     Examples
     --------
-    >>> import numpy as np, fws_control as fws
+    >>> from fws_control.linear import horner
+    >>> complex(horner([1.0, 0.0, 1.0], 1j))
+    0j
+    """
+    c = np.asarray(coefficients)
+    s = np.asarray(s)
+    out = np.zeros(
+        np.broadcast_shapes(c.shape[:-1], s.shape), dtype=np.result_type(c, s)
+    )
+    for k in range(c.shape[-1]):
+        out = out * s + c[..., k]
+    return out
+
+
+def _faddeev_leverrier(A: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Characteristic polynomial and adjugate terms of ``s I - A``.
+
+    Returns ``(d, M)`` with ``d`` the monic coefficients (highest power
+    first) and ``adj(sI - A) = sum_k M[k] s^(n-1-k)``. The recursion gives
+    the exact structure (degrees below ``n`` of every ``c adj b``), which
+    an eigenvalue route does not; its rounding grows with the order, which
+    is why it serves the low-order plants of lateral control.
+    """
+    n = A.shape[0]
+    eye = np.eye(n)
+    d = np.zeros(n + 1)
+    d[0] = 1.0
+    M = []
+    Mk = np.zeros_like(A)
+    for k in range(1, n + 1):
+        Mk = A @ Mk + d[k - 1] * eye
+        M.append(Mk)
+        d[k] = -np.trace(A @ Mk) / k
+    return d, M
+
+
+def _lateral_coefficients(plant: LateralPlant, ratio) -> AffinePolynomial:
+    V = np.asarray(plant.speed, dtype=float)
+    kappa = np.asarray(plant.curvature, dtype=float)
+    c = np.asarray(plant.input_gain_factor, dtype=float)
+    a = np.asarray(ratio, dtype=float)
+    f = plant.vehicle.wheelbase
+    V, kappa, c, a = np.broadcast_arrays(V, kappa, c, a)
+    zero = np.zeros_like(V)
+    one = np.ones_like(V)
+    # eq. (34) with (c - a) for (1 - a): p1 = V a k1 + V (c - a)/f k2,
+    # p0 = V^2/f ((c - a) k1 + (1 - a k2) f kappa^2)
+    return AffinePolynomial(
+        open_loop=np.stack([one, zero, V**2 * kappa**2], -1),
+        n1=np.stack([zero, V * a, V**2 * (c - a) / f], -1),
+        n2=np.stack([zero, V * (c - a) / f, -(V**2) * a * kappa**2], -1),
+    )
+
+
+def _statespace_coefficients(lm: LoopMatrices, ratio) -> AffinePolynomial:
+    d, M = _faddeev_leverrier(lm.A)
+    n = lm.order
+
+    # n_i(s) = c_i adj(sI - A) (B_f + a B_r): four fixed polynomials, then a
+    # broadcast over the ratio.
+    def poly(c, b):
+        return np.concatenate([[0.0], [c @ Mk @ b for Mk in M]])
+
+    ef, er = poly(lm.c_e, lm.B_front), poly(lm.c_e, lm.B_rear)
+    tf_, tr = poly(lm.c_theta, lm.B_front), poly(lm.c_theta, lm.B_rear)
+    a = np.asarray(ratio, dtype=float)[..., np.newaxis]
+    n1 = ef + a * er
+    n2 = tf_ + a * tr
+    open_loop = np.broadcast_to(d, n1.shape[:-1] + (n + 1,))
+    return AffinePolynomial(open_loop=open_loop, n1=n1, n2=n2)
+
+
+def characteristic_coefficients(
+    plant: Any,
+    *,
+    ratio,
+    speed: Any = None,
+    curvature: Any = None,
+    model: Any = None,
+) -> AffinePolynomial:
+    r"""The closed-loop characteristic polynomial as an affine map of the gains.
+
+    For the kinematic :class:`LateralPlant` (eq. 34, with ``(c - a)`` in
+    place of ``(1 - a)`` for the exact model):
+
+    .. math::
+        p(s) = s^2 + \frac{V}{f}\left(f a k_1 + (c-a)k_2\right)s
+             + \frac{V^2}{f}\left((c-a)k_1 + (1-a k_2) f\kappa^2\right);
+
+    for a :class:`control.StateSpace` of order ``n``:
+    :math:`p(s) = \det(s\mathbf I-\mathbf A) + k_1 n_1(s) + k_2 n_2(s)`.
+
+    Parameters
+    ----------
+    plant : LateralPlant, control.StateSpace or Vehicle
+        The plant (see :mod:`fws_control.plant`).
+    ratio : float or array_like
+        Rear-to-front steering ratio :math:`a`; broadcasts with the
+        operating points of a :class:`LateralPlant`.
+    speed, curvature, model : optional
+        With a :class:`Vehicle` only, as in :func:`linearize`.
+
+    Returns
+    -------
+    AffinePolynomial
+
+    Examples
+    --------
+    >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> g = fws.double_root_gains(veh, 20.0, 0.01, ratio=0.5, pole=-2.0)
-    >>> fws.characteristic_polynomial(veh, 20.0, 0.01, g).round(9)
+    >>> cp = fws.characteristic_coefficients(veh, speed=5.0, ratio=0.0)
+    >>> cp.n1.round(6), cp.n2.round(6)
+    (array([0.      , 0.      , 9.259259]), array([0.      , 1.851852, 0.      ]))
+    """
+    p = as_plant(plant, speed=speed, curvature=curvature, model=model)
+    ratio = check_finite("ratio", ratio)
+    if isinstance(p, LateralPlant):
+        return _lateral_coefficients(p, ratio)
+    return _statespace_coefficients(loop_matrices(p), ratio)
+
+
+def characteristic_polynomial(
+    plant: Any,
+    gains: SteeringGains,
+    *,
+    speed: Any = None,
+    curvature: Any = None,
+    model: Any = None,
+) -> np.ndarray:
+    r"""Coefficients of the closed-loop characteristic polynomial.
+
+    Parameters
+    ----------
+    plant : LateralPlant, control.StateSpace or Vehicle
+        The plant (see :mod:`fws_control.plant`).
+    gains : SteeringGains
+        Gains; arrays broadcast (with the plant's operating points).
+    speed, curvature, model : optional
+        With a :class:`Vehicle` only, as in :func:`linearize`.
+
+    Returns
+    -------
+    ndarray
+        Shape ``(..., n + 1)``, monic, highest power first: a scalar design
+        gives an array usable with :func:`numpy.roots`.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> plant = fws.LateralPlant(veh, speed=20.0, curvature=0.01)
+    >>> g = fws.double_root_gains(plant, ratio=0.5, pole=-2.0)
+    >>> fws.characteristic_polynomial(plant, g).round(9)
     array([1., 4., 4.])
     """
-    cc = characteristic_coefficients(vehicle, speed, curvature, gains.ratio, model)
-    p1 = cc.p1(gains.k1, gains.k2)
-    p0 = cc.p0(gains.k1, gains.k2)
-    p1, p0 = np.broadcast_arrays(p1, p0)
-    return np.stack([np.ones_like(p1), p1, p0], axis=-1)
+    g = check_gains(gains)
+    cp = characteristic_coefficients(
+        plant, ratio=g.ratio, speed=speed, curvature=curvature, model=model
+    )
+    return cp.coefficients(g.k1, g.k2)

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validation import check_positive
+from .validation import check_positive
 
 __all__ = [
     "peak_abs",

@@ -22,11 +22,11 @@ import math
 import control as ct
 import numpy as np
 
-from ._validation import check_finite, check_nonzero, check_scalar, check_vehicle
+from .exceptions import SingularStateError
+from .validation import check_finite, check_nonzero, check_scalar, check_type
 from .vehicle import Vehicle
 
 __all__ = [
-    "SingularStateError",
     "global_frame_model",
     "path_frame_model",
     "yaw_rate",
@@ -39,16 +39,6 @@ __all__ = [
 GLOBAL_STATES = ("x", "y", "psi")
 PATH_STATES = ("s", "e", "theta")
 STEERING_INPUTS = ("delta_f", "delta_r")
-
-
-class SingularStateError(ValueError):
-    """A state or input where the kinematic model is not defined.
-
-    Raised for a front steering angle with ``|delta_f| >= pi/2`` (the yaw
-    rate of eq. (10) has ``cos(delta_f)`` in the denominator) and, in the
-    path frame, for ``1 - curvature * e <= 0`` (the vehicle is at or beyond
-    the centre of curvature, where the projection onto the path is lost).
-    """
 
 
 def _check_steering(delta_f: np.ndarray) -> None:
@@ -200,7 +190,7 @@ def global_frame_model(
     >>> sys.dynamics(0.0, [0.0, 0.0, 0.0], [0.1, 0.0]).round(4)
     array([5.    , 0.    , 0.1858])
     """
-    check_vehicle(vehicle)
+    check_type("vehicle", vehicle, Vehicle)
     speed = check_scalar("speed", check_nonzero("speed", speed))
     return ct.nlsys(
         _global_update,
@@ -263,7 +253,7 @@ def path_frame_model(
     >>> np.allclose(sys.dynamics(0.0, [0.0, 0.0, 0.0], u_ff), [5.0, 0.0, 0.0])
     True
     """
-    check_vehicle(vehicle)
+    check_type("vehicle", vehicle, Vehicle)
     speed = check_scalar("speed", check_nonzero("speed", speed))
     curvature = check_scalar("curvature", curvature)
     return ct.nlsys(

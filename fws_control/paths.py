@@ -59,8 +59,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import CubicHermiteSpline, CubicSpline
 
+from .exceptions import AmbiguousProjectionError
+
 __all__ = [
-    "AmbiguousProjectionError",
     "Arc",
     "Clothoid",
     "Path",
@@ -84,23 +85,6 @@ _NEWTON_MAXITER = 40
 _CHUNK = 2_000_000
 
 Array = NDArray[np.float64]
-
-
-class AmbiguousProjectionError(ValueError):
-    """The nearest point of a path to a given point is not unique.
-
-    Raised by :meth:`Path.project` and :meth:`Path.errors` with
-    ``strict=True``; the message names the first such point.
-
-    Examples
-    --------
-    >>> from fws_control.paths import Arc, AmbiguousProjectionError
-    >>> try:
-    ...     Arc(curvature=0.1).project(0.0, 10.0, strict=True)
-    ... except AmbiguousProjectionError as exc:
-    ...     print("ambiguous")
-    ambiguous
-    """
 
 
 @dataclass(frozen=True, eq=False)

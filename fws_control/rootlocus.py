@@ -1,97 +1,92 @@
 r"""Root loci of the structured 4WS loop on python-control objects.
 
 With the rear angle tied to the front one, ``delta_r = a*delta_f``, the
-linear plant has a single input ``u = delta_f``:
+plant has a single steering input ``u = delta_f``:
 
 .. math::
     \dot x = \mathbf A x + \mathbf b u,\qquad
-    \mathbf b = \mathbf B\begin{bmatrix}1\\ a\end{bmatrix},\qquad
-    u = -g\,[k_1\ k_2]\,x,
+    \mathbf b = \mathbf B_f + a\mathbf B_r,\qquad
+    u = -g\,(k_1 e + k_2\theta),
 
 so scaling the gain direction ``(k1, k2)`` by ``g`` is a classical SISO root
 locus of the loop transfer function
 
-.. math:: L(s) = [k_1\ k_2](s\mathbf I-\mathbf A)^{-1}\mathbf b
+.. math:: L(s) = \frac{k_1 n_1(s) + k_2 n_2(s)}{\det(s\mathbf I-\mathbf A)}
 
-(:func:`gain_loop`), drawn by :func:`control.root_locus_map` /
-:func:`control.root_locus_plot`. At ``g = 1`` its closed-loop poles are those
-of :func:`closed_loop`.
+(:func:`gain_loop`, from the affine characteristic polynomial), drawn by
+:func:`control.root_locus_map` / :func:`control.root_locus_plot`. At ``g = 1``
+its closed-loop poles are those of :func:`closed_loop`.
 
 :func:`parameter_locus` follows the closed-loop poles while a parameter of
-the loop (``ratio``, ``speed``, ``curvature``, ``k1`` or ``k2``) varies. The
-characteristic polynomial is quadratic, so the poles are the closed-form
-roots of :math:`\lambda^2 + p_1\lambda + p_0`, vectorised over the values and
-returned as :class:`control.PoleZeroData` so that ``.plot()`` draws them.
+the loop varies: ``ratio``, ``k1`` or ``k2`` for any plant, ``speed`` or
+``curvature`` for the kinematic :class:`LateralPlant`. For two states the
+poles are the closed-form roots of :math:`\lambda^2 + p_1\lambda + p_0`; for
+more, the eigenvalues of the companion matrices, matched from one value to the
+next so that the branches are continuous. Both come back as
+:class:`control.PoleZeroData`, so ``.plot()`` draws them.
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
+from typing import Any
+
 import control as ct
 import numpy as np
+from scipy.optimize import linear_sum_assignment
 
-from ._validation import check_finite, check_model, check_nonzero
 from .design import double_root_gains
 from .gains import SteeringGains
-from .linear import characteristic_coefficients
-from .vehicle import Vehicle
+from .linear import characteristic_coefficients, check_gains
+from .plant import LateralPlant, as_plant
+from .validation import check_finite, check_model
 
 __all__ = [
     "gain_loop",
     "gain_locus",
     "parameter_locus",
     "quadratic_roots",
+    "polynomial_roots",
     "refined_scale",
     "LOCUS_PARAMETERS",
 ]
 
-#: Names accepted by :func:`parameter_locus`.
-LOCUS_PARAMETERS = ("ratio", "speed", "curvature", "k1", "k2")
-
-
-def _check_gains(gains) -> SteeringGains:
-    if not isinstance(gains, SteeringGains):
-        raise TypeError(f"gains must be a SteeringGains, got {type(gains).__name__}")
-    if np.ndim(gains.k1) or np.ndim(gains.k2) or np.ndim(gains.ratio):
-        raise ValueError("gains must hold scalar k1, k2 and ratio")
-    return gains
+#: Names accepted by :func:`parameter_locus`; the first two need a
+#: :class:`LateralPlant` (or a Vehicle with ``speed=``).
+LOCUS_PARAMETERS = ("speed", "curvature", "ratio", "k1", "k2")
 
 
 def gain_loop(
-    vehicle: Vehicle,
-    speed: float,
-    curvature: float,
+    plant: Any,
     gains: SteeringGains,
-    model: str = "exact",
+    *,
+    speed: Any = None,
+    curvature: Any = None,
+    model: Any = None,
 ) -> ct.TransferFunction:
     r"""Loop transfer function of the gain scaling, SISO.
 
-    .. math::
-        L(s) = [k_1\ k_2](s\mathbf I-\mathbf A)^{-1}\mathbf B[1,\ a]^T
-             = \frac{(p_1 - \gamma_1)s + (p_0 - \gamma_0)}{s^2 + V^2\kappa^2}
+    .. math:: L(s) = \frac{k_1 n_1(s) + k_2 n_2(s)}{d(s)}
+              = [k_1\ k_2]\,\mathbf C_s(s\mathbf I-\mathbf A)^{-1}\mathbf b
 
-    where :math:`p_1, p_0` are the closed-loop coefficients of
-    :func:`characteristic_coefficients` and :math:`\gamma_1 = 0`,
-    :math:`\gamma_0 = V^2\kappa^2` their gain-free parts. Closing
-    ``u = -g y`` gives :math:`\mathbf A - g\,\mathbf B[1, a]^T[k_1\ k_2]`, the
-    structured controller with gains ``g*k1, g*k2``; python-control's root
-    locus computes the roots of :math:`1 + g L(s)`, so its locus at ``g = 1`` is
-    the pole set of :func:`closed_loop` with `gains`.
+    with :math:`d, n_1, n_2` of :func:`characteristic_coefficients`. Closing
+    ``u = -g y`` gives the structured controller with gains ``g*k1, g*k2``;
+    python-control's root locus computes the roots of :math:`1 + g L(s)`, so
+    its locus at ``g = 1`` is the pole set of :func:`closed_loop`.
 
-    The transfer function is built from these closed-form coefficients rather
-    than converted from a state space: python-control's zeros of a state space
+    The transfer function is built from these coefficients rather than
+    converted from a state space: python-control's zeros of a state space
     with ``D = 0`` include a spurious huge "zero" (the one at infinity) that
     wrecks the automatic plot limits of :func:`control.root_locus_plot`.
 
     Parameters
     ----------
-    vehicle : Vehicle
-        Geometry.
-    speed, curvature : float
-        Operating point [m/s], [1/m].
+    plant : LateralPlant, control.StateSpace or Vehicle
+        The plant (see :mod:`fws_control.plant`), one operating point.
     gains : SteeringGains
         Gain direction ``(k1, k2)`` and the ratio ``a``; scalars.
-    model : {"exact", "paper"}, optional
-        Linearisation, see :func:`linearize`.
+    speed, curvature, model : optional
+        With a :class:`Vehicle` only, as in :func:`linearize`.
 
     Returns
     -------
@@ -103,31 +98,37 @@ def gain_loop(
     --------
     >>> import numpy as np, control as ct, fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> g = fws.double_root_gains(veh, 5.0, 0.1, ratio=-1.0, pole=-1.0)
-    >>> loop = fws.gain_loop(veh, 5.0, 0.1, g)
+    >>> plant = fws.LateralPlant(veh, speed=5.0, curvature=0.1)
+    >>> g = fws.double_root_gains(plant, ratio=-1.0, pole=-1.0)
+    >>> loop = fws.gain_loop(plant, g)
     >>> loop.poles().real.round(12) + 0.0, loop.poles().imag
     (array([0., 0.]), array([ 0.5, -0.5]))
     >>> rl = ct.root_locus_map(loop, gains=[1.0])
     >>> np.allclose(rl.loci[0], [-1.0, -1.0], atol=1e-6)
     True
     """
-    gains = _check_gains(gains)
-    check_model(model)
-    V = float(check_nonzero("speed", speed))
-    kappa = float(check_finite("curvature", curvature))
-    cc = characteristic_coefficients(vehicle, V, kappa, float(gains.ratio), model)
-    k1, k2 = float(gains.k1), float(gains.k2)
-    n1 = float(cc.alpha1 * k1 + cc.beta1 * k2)
-    n0 = float(cc.alpha0 * k1 + cc.beta0 * k2)
-    num = [n1, n0] if n1 != 0.0 else [n0]
-    den = [1.0, float(cc.gamma1), float(cc.gamma0)]
+    g = check_gains(gains, scalar=True)
+    p = as_plant(plant, speed=speed, curvature=curvature, model=model)
+    _one_point(p)
+    cp = characteristic_coefficients(p, ratio=g.ratio)
+    num = np.trim_zeros(g.k1 * cp.n1 + g.k2 * cp.n2, "f")
+    if num.size == 0:
+        num = np.zeros(1)
     return ct.tf(
         num,
-        den,
+        np.asarray(cp.open_loop, dtype=float),
         inputs=["delta_f"],
         outputs=["k_x"],
         name="gain_loop",
     )
+
+
+def _one_point(p) -> None:
+    if isinstance(p, LateralPlant) and p.shape != ():
+        raise ValueError(
+            f"plant must be one operating point here, got speed/curvature of shape "
+            f"{p.shape}"
+        )
 
 
 def refined_scale(lo: float, hi: float, n: int, at: float = 1.0) -> np.ndarray:
@@ -150,12 +151,13 @@ def refined_scale(lo: float, hi: float, n: int, at: float = 1.0) -> np.ndarray:
 
 
 def gain_locus(
-    vehicle: Vehicle,
-    speed: float,
-    curvature: float,
+    plant: Any,
     gains: SteeringGains,
+    *,
     scale=None,
-    model: str = "exact",
+    speed: Any = None,
+    curvature: Any = None,
+    model: Any = None,
 ) -> ct.PoleZeroData:
     """Root locus of the gain scaling ``g`` (``k1, k2 -> g*k1, g*k2``).
 
@@ -163,25 +165,29 @@ def gain_locus(
 
     Parameters
     ----------
-    vehicle, speed, curvature, gains, model
-        See :func:`gain_loop`.
+    plant : LateralPlant, control.StateSpace or Vehicle
+        The plant (see :mod:`fws_control.plant`).
+    gains : SteeringGains
+        Scalar gain direction and ratio.
     scale : array_like, optional
         Values of ``g``; default: python-control's automatic choice.
+    speed, curvature, model : optional
+        With a :class:`Vehicle` only, as in :func:`linearize`.
 
     Returns
     -------
     control.PoleZeroData
-        ``.loci`` of shape ``(len(scale), 2)``, ``.gains`` the scales.
+        ``.loci`` of shape ``(len(scale), n)``, ``.gains`` the scales.
 
     Examples
     --------
     >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     >>> g = fws.SteeringGains(0.05, 0.6, ratio=-1.0)
-    >>> fws.gain_locus(veh, 5.0, 0.0, g, scale=[0.0, 1.0, 2.0]).loci.shape
+    >>> fws.gain_locus(veh, g, speed=5.0, scale=[0.0, 1.0, 2.0]).loci.shape
     (3, 2)
     """
-    loop = gain_loop(vehicle, speed, curvature, gains, model)
+    loop = gain_loop(plant, gains, speed=speed, curvature=curvature, model=model)
     if scale is not None:
         scale = np.atleast_1d(check_finite("scale", scale))
     return ct.root_locus_map(loop, gains=scale)
@@ -212,114 +218,169 @@ def quadratic_roots(p1, p0) -> np.ndarray:
     return np.stack([(-p1 + sq) / 2.0, (-p1 - sq) / 2.0], axis=-1)
 
 
+def polynomial_roots(coefficients) -> np.ndarray:
+    """Roots of a sequence of polynomials, matched into continuous branches.
+
+    The roots of each polynomial (rows of `coefficients`, highest power
+    first, nonzero leading coefficient) are the eigenvalues of its companion
+    matrix, computed for all rows at once; consecutive rows are then matched
+    by a minimum-distance assignment, so column ``j`` follows one branch
+    through a smooth parameter sweep.
+
+    Parameters
+    ----------
+    coefficients : array_like
+        Shape ``(m, n + 1)``.
+
+    Returns
+    -------
+    ndarray of complex
+        Shape ``(m, n)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fws_control.rootlocus import polynomial_roots
+    >>> r = polynomial_roots([np.poly([-1, -2, -3]), np.poly([-1.1, -2, -3])])
+    >>> np.round(r.real, 6)
+    array([[-3. , -2. , -1. ],
+           [-3. , -2. , -1.1]])
+    """
+    c = np.atleast_2d(np.asarray(coefficients, dtype=float))
+    m, n1 = c.shape
+    n = n1 - 1
+    comp = np.zeros((m, n, n))
+    comp[:, 0, :] = -c[:, 1:] / c[:, :1]
+    comp[:, np.arange(1, n), np.arange(n - 1)] = 1.0
+    roots = np.linalg.eigvals(comp)
+    roots[0] = roots[0][np.lexsort((roots[0].imag, roots[0].real))]
+    for i in range(1, m):
+        cost = np.abs(roots[i - 1][:, None] - roots[i][None, :])
+        _, cols = linear_sum_assignment(cost)
+        roots[i] = roots[i][cols]
+    return roots
+
+
 def parameter_locus(
-    vehicle: Vehicle,
-    name: str,
-    values,
-    speed: float,
-    curvature: float,
+    plant: Any,
     gains: SteeringGains,
-    model: str = "exact",
+    *,
+    parameter: str,
+    values,
     redesign_pole: float | None = None,
     design_model: str | None = None,
+    speed: Any = None,
+    curvature: Any = None,
+    model: Any = None,
 ) -> ct.PoleZeroData:
     r"""Closed-loop poles while one parameter of the loop varies.
 
     Parameters
     ----------
-    vehicle : Vehicle
-        Geometry.
-    name : {"ratio", "speed", "curvature", "k1", "k2"}
-        The parameter that takes `values`; the others come from `speed`,
-        `curvature` and `gains`.
+    plant : LateralPlant, control.StateSpace or Vehicle
+        The plant (see :mod:`fws_control.plant`), one operating point.
+    gains : SteeringGains
+        Scalar ``k1, k2`` and ``ratio``. When `parameter` is ``"ratio"`` the
+        gains ``k1, k2`` stay fixed while ``a`` varies (so ``k3 = a*k1`` and
+        ``k4 = a*k2`` change with it); to follow a design instead, give
+        `redesign_pole`.
+    parameter : {"speed", "curvature", "ratio", "k1", "k2"}
+        The parameter that takes `values`; ``"speed"`` and ``"curvature"``
+        need a :class:`LateralPlant`.
     values : array_like
         1-D values of the parameter (SI units). A monotonic sweep gives
         continuous branches.
-    speed, curvature : float
-        Operating point [m/s], [1/m] (the one named by `name` is replaced).
-    gains : SteeringGains
-        ``k1, k2`` and ``ratio``. When `name` is ``"ratio"`` the gains
-        ``k1, k2`` stay fixed while ``a`` varies (so ``k3 = a*k1`` and
-        ``k4 = a*k2`` change with it); to follow a design instead, give
-        `redesign_pole`.
-    model : {"exact", "paper"}, optional
-        Linearisation in which the poles are computed.
     redesign_pole : float, optional
         If given, the gains are recomputed at every value by
-        :func:`double_root_gains` with this double root (not for ``"k1"``,
-        ``"k2"``). With ``design_model != model`` this shows where a design
-        made in one model puts the poles of the other, e.g. the paper's
-        gains in the exact linearisation.
+        :func:`double_root_gains` with this double root (2-state plants;
+        not for ``"k1"``, ``"k2"``). With `design_model` different from the
+        plant's model this shows where a design made in one model puts the
+        poles of the other, e.g. the paper's gains in the exact
+        linearisation.
     design_model : {"exact", "paper"}, optional
-        Model used for the redesign; default `model`.
+        Model used for the redesign (a :class:`LateralPlant` only); default
+        the plant's.
+    speed, curvature, model : optional
+        With a :class:`Vehicle` only, as in :func:`linearize`.
 
     Returns
     -------
     control.PoleZeroData
-        ``.loci`` of shape ``(len(values), 2)``; ``.gains`` holds `values`;
+        ``.loci`` of shape ``(len(values), n)``; ``.gains`` holds `values`;
         ``.poles`` the poles at the first value (plotted as ``x``);
         ``.zeros`` is empty. ``.plot()`` draws the locus.
 
     Raises
     ------
     ValueError
-        For an unknown `name` or `model`, non-finite or empty `values`, a
-        zero speed among them, or `redesign_pole` with ``"k1"``/``"k2"``.
+        For an unknown `parameter`, ``"speed"``/``"curvature"``/
+        `design_model` with a state-space plant, non-finite or empty
+        `values`, a zero speed among them, or `redesign_pole` with
+        ``"k1"``/``"k2"``.
     UncontrollableError
-        If a redesign hits ``a = 1`` on a straight path.
+        If a redesign hits an uncontrollable design.
 
     Examples
     --------
     >>> import numpy as np, fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> g = fws.double_root_gains(veh, 5.0, 0.0, ratio=-1.0, pole=-1.0)
-    >>> pz = fws.parameter_locus(veh, "speed", [2.5, 5.0, 10.0], 5.0, 0.0, g)
+    >>> plant = fws.LateralPlant(veh, speed=5.0)
+    >>> g = fws.double_root_gains(plant, ratio=-1.0, pole=-1.0)
+    >>> pz = fws.parameter_locus(plant, g, parameter="speed",
+    ...                          values=[2.5, 5.0, 10.0])
     >>> pz.loci.shape
     (3, 2)
     >>> np.allclose(pz.loci[1], [-1.0, -1.0], atol=1e-6)
     True
     """
-    check_model(model)
-    design_model = model if design_model is None else check_model(design_model)
-    if name not in LOCUS_PARAMETERS:
-        raise ValueError(f"name must be one of {LOCUS_PARAMETERS}, got {name!r}")
-    gains = _check_gains(gains)
+    g = check_gains(gains, scalar=True)
+    p = as_plant(plant, speed=speed, curvature=curvature, model=model)
+    _one_point(p)
+    if parameter not in LOCUS_PARAMETERS:
+        raise ValueError(
+            f"parameter must be one of {LOCUS_PARAMETERS}, got {parameter!r}"
+        )
+    lateral = isinstance(p, LateralPlant)
+    if parameter in ("speed", "curvature") and not lateral:
+        raise ValueError(
+            f"parameter={parameter!r} needs a LateralPlant (or a Vehicle with "
+            "speed=); a state-space plant has no operating point to vary: sweep "
+            "'ratio', 'k1' or 'k2', or rebuild the plant per value"
+        )
+    if design_model is not None:
+        if not lateral:
+            raise ValueError("design_model= needs a LateralPlant")
+        check_model(design_model)
     vals = np.atleast_1d(check_finite("values", values)).astype(float)
     if vals.ndim != 1 or vals.size == 0:
         raise ValueError(
             f"values must be a non-empty 1-D array, got shape {vals.shape}"
         )
-    V = float(check_nonzero("speed", speed))
-    kappa = float(check_finite("curvature", curvature))
-    a = float(gains.ratio)
-    k1, k2 = float(gains.k1), float(gains.k2)
-    par = {"speed": V, "curvature": kappa, "ratio": a, "k1": k1, "k2": k2}
-    par[name] = vals
-    if name == "speed":
-        check_nonzero("values (speed)", vals)
+    par = {"ratio": g.ratio, "k1": g.k1, "k2": g.k2}
+    swept = p
+    if parameter in ("speed", "curvature"):
+        swept = replace(p, **{parameter: vals})
+    else:
+        par[parameter] = vals
     if redesign_pole is not None:
-        if name in ("k1", "k2"):
+        if parameter in ("k1", "k2"):
             raise ValueError(
-                f"redesign_pole cannot be used with name={name!r}: the design "
-                "fixes both k1 and k2"
+                f"redesign_pole cannot be used with parameter={parameter!r}: the "
+                "design fixes both k1 and k2"
             )
-        g = double_root_gains(
-            vehicle,
-            par["speed"],
-            par["curvature"],
-            par["ratio"],
-            redesign_pole,
-            design_model,
-        )
-        par["k1"], par["k2"] = g.k1, g.k2
-    cc = characteristic_coefficients(
-        vehicle, par["speed"], par["curvature"], par["ratio"], model
-    )
-    p1 = cc.p1(par["k1"], par["k2"])
-    p0 = cc.p0(par["k1"], par["k2"])
-    p1, p0 = np.broadcast_arrays(p1, p0, vals)[:2]
-    loci = quadratic_roots(p1, p0)
-    label = f"{name} {vals[0]:g} to {vals[-1]:g}"
+        target = swept
+        if design_model is not None:
+            target = replace(swept, model=design_model)
+        d = double_root_gains(target, ratio=par["ratio"], pole=redesign_pole)
+        par["k1"], par["k2"] = d.k1, d.k2
+    cp = characteristic_coefficients(swept, ratio=par["ratio"])
+    coeffs = cp.coefficients(par["k1"], par["k2"])
+    coeffs = np.broadcast_to(coeffs, vals.shape + coeffs.shape[-1:])
+    if cp.order == 2:
+        loci = quadratic_roots(coeffs[:, 1], coeffs[:, 2])
+    else:
+        loci = polynomial_roots(coeffs)
+    label = f"{parameter} {vals[0]:g} to {vals[-1]:g}"
     return ct.PoleZeroData(
         loci[0].copy(),
         np.array([], dtype=complex),

@@ -37,7 +37,6 @@ import numpy as np
 from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, OdeSolver, Radau
 from scipy.optimize import brentq
 
-from ._validation import check_finite, check_nonzero, check_positive, check_vehicle
 from .acceleration import lateral_acceleration
 from .controllers import (
     DEFAULT_ACTUATOR_TIME_CONSTANT,
@@ -50,6 +49,7 @@ from .controllers import (
 from .gains import SteeringGains
 from .models import global_frame_model, path_frame_derivatives
 from .paths import Arc, Path, Straight
+from .validation import check_finite, check_nonzero, check_positive, check_type
 from .vehicle import Vehicle
 
 
@@ -819,7 +819,7 @@ def simulate(
     """
     from .batch import _normalise_gains
 
-    check_vehicle(vehicle)
+    check_type("vehicle", vehicle, Vehicle)
     check_path(path)
     g = _normalise_gains(gains, "gains")
     if g.k1.size != 1:

@@ -1,95 +1,204 @@
-r"""Routh-Hurwitz stability of the linear closed loop, paper section 4.1.
+r"""Stability of the structured steering loop for plants of any order.
 
-For the second-order characteristic polynomial
-:math:`\lambda^2 + p_1\lambda + p_0` both roots lie in the open left half
-plane iff :math:`p_1 > 0` and :math:`p_0 > 0` (eqs. 35-36). Both are affine
-in ``(k1, k2)`` (see :func:`~fws_control.characteristic_coefficients`), so
-each boundary is a straight line in the gain plane and the tests are closed
-form on arrays.
+The closed-loop characteristic polynomial is affine in the gains,
+:math:`p(s) = d(s) + k_1 n_1(s) + k_2 n_2(s)`
+(:func:`~fws_control.characteristic_coefficients`), so
 
-The lines :math:`p_1 = 0` and :math:`p_0 = 0` do not depend on the speed
-(``V`` only scales them), but the stable *side* of :math:`p_1 = 0` does:
-for ``V < 0`` (reversing) :math:`p_1` changes sign, so condition (35) flips
-while (36), which carries :math:`V^2`, does not.
+* **stability** on whole arrays of gains is a vectorised Routh-Hurwitz test
+  on the coefficient arrays (:func:`routh_hurwitz`); for the second-order
+  kinematic plant it reduces to the closed form :math:`p_1 > 0,\ p_0 > 0`
+  (eqs. 35-36), kept as the fast path;
+* the **boundaries** in the ``(k1, k2)`` plane follow from D-subdivision: a
+  root crosses the imaginary axis either at ``s = 0`` — the straight line
+  :math:`p(0) = 0` — or at :math:`s = \pm j\omega` — the curve that solves
+  the 2 x 2 linear system :math:`\operatorname{Re} p(j\omega) =
+  \operatorname{Im} p(j\omega) = 0` for ``(k1, k2)`` at each
+  :math:`\omega > 0` (:func:`stability_boundaries`).
+
+For the kinematic plant the curve is the ray of the line :math:`p_1 = 0` on
+which :math:`p_0 = \omega^2 > 0`. The lines :math:`p_1 = 0` and
+:math:`p_0 = 0` do not depend on the speed (``V`` only scales them), but the
+stable *side* of :math:`p_1 = 0` does: for ``V < 0`` (reversing) condition
+(35) flips while (36), which carries :math:`V^2`, does not.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from ._validation import check_finite
-from .linear import characteristic_coefficients
-from .vehicle import Vehicle
+from .gains import SteeringGains
+from .linear import AffinePolynomial, characteristic_coefficients, check_gains
+from .plant import LateralPlant, as_plant
+from .validation import check_finite
 
-__all__ = ["is_stable", "StabilityBoundary", "stability_boundaries"]
+__all__ = [
+    "is_stable",
+    "routh_hurwitz",
+    "StabilityBoundary",
+    "BoundaryCurve",
+    "StabilityBoundaries",
+    "stability_boundaries",
+    "default_frequencies",
+    "complex_root_curve",
+]
 
 
-def is_stable(
-    vehicle: Vehicle, speed, curvature, k1, k2, ratio, model: str = "exact"
-) -> bool | np.ndarray:
-    """Asymptotic stability of the linear closed loop (Routh-Hurwitz).
+def routh_hurwitz(coefficients) -> bool | np.ndarray:
+    r"""Hurwitz test of polynomials on the last axis, vectorised.
+
+    True where every root has a negative real part. The first column of the
+    Routh array is computed for all polynomials at once (a Python loop over
+    the order only); a polynomial is Hurwitz iff that column has no zero and
+    no sign change. A zero in it (a root on the imaginary axis, or a
+    singular array) counts as not stable, so boundary points are never
+    stable.
 
     Parameters
     ----------
-    vehicle : Vehicle
-        Geometry.
-    speed, curvature : float or array_like
-        Speed [m/s] (nonzero) and path curvature [1/m].
-    k1, k2, ratio : float or array_like
-        Gains and rear-to-front ratio; all arguments broadcast, so a grid of
-        gains is one call.
-    model : {"exact", "paper"}, optional
-        Linearisation, see :func:`linearize`.
+    coefficients : array_like
+        Shape ``(..., n + 1)``, highest power first, nonzero leading
+        coefficient.
 
     Returns
     -------
     bool or ndarray of bool
-        True where both closed-loop poles have negative real part. Points on
-        a boundary (a zero coefficient) are not stable.
+        Shape ``(...)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fws_control.stability import routh_hurwitz
+    >>> routh_hurwitz(np.poly([-1.0, -2.0, -3.0]))
+    True
+    >>> routh_hurwitz([[1.0, 1.0, 1.0, 1.0], [1.0, 2.0, 2.0, 1.0]]).tolist()
+    [False, True]
+    """
+    c = np.asarray(coefficients, dtype=float)
+    if c.ndim == 0 or c.shape[-1] < 2:
+        raise ValueError(
+            f"coefficients must have at least 2 entries on the last axis, got "
+            f"shape {c.shape}"
+        )
+    c = c * np.sign(c[..., :1])  # leading coefficient positive
+    n1 = c.shape[-1]
+    width = (n1 + 1) // 2
+    upper = np.zeros(c.shape[:-1] + (width + 1,))
+    lower = np.zeros(c.shape[:-1] + (width + 1,))
+    upper[..., : len(range(0, n1, 2))] = c[..., 0::2]
+    lower[..., : len(range(1, n1, 2))] = c[..., 1::2]
+    ok = upper[..., 0] > 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for _ in range(n1 - 1):
+            pivot = lower[..., :1]
+            ok &= pivot[..., 0] > 0
+            new = np.zeros_like(upper)
+            new[..., :-1] = upper[..., 1:] - upper[..., :1] / pivot * lower[..., 1:]
+            upper, lower = lower, new
+    out = ok & np.all(np.isfinite(c), axis=-1)
+    return bool(out) if out.ndim == 0 else out
+
+
+def _stable_from_polynomial(cp: AffinePolynomial, k1, k2) -> bool | np.ndarray:
+    if cp.order == 2:
+        # Closed form of eqs. (35)-(36); monic, so p1 > 0 and p0 > 0.
+        p1 = cp.open_loop[..., 1] + k1 * cp.n1[..., 1] + k2 * cp.n2[..., 1]
+        p0 = cp.open_loop[..., 2] + k1 * cp.n1[..., 2] + k2 * cp.n2[..., 2]
+        out = (p1 > 0) & (p0 > 0)
+        return bool(out) if np.ndim(out) == 0 else out
+    return routh_hurwitz(cp.coefficients(k1, k2))
+
+
+def is_stable(
+    plant: Any,
+    gains: SteeringGains,
+    *,
+    speed: Any = None,
+    curvature: Any = None,
+    model: Any = None,
+) -> bool | np.ndarray:
+    """Asymptotic stability of the linear closed loop.
+
+    Parameters
+    ----------
+    plant : LateralPlant, control.StateSpace or Vehicle
+        The plant (see :mod:`fws_control.plant`), of any order.
+    gains : SteeringGains
+        Gains and ratio; arrays broadcast with each other and with the
+        operating points of a :class:`LateralPlant`, so a whole grid is one
+        call.
+    speed, curvature, model : optional
+        With a :class:`Vehicle` only, as in :func:`linearize`.
+
+    Returns
+    -------
+    bool or ndarray of bool
+        True where every closed-loop pole has a negative real part (closed
+        form for two states, :func:`routh_hurwitz` otherwise). Points on a
+        boundary (a pole on the imaginary axis) are not stable.
 
     Examples
     --------
     >>> import numpy as np, fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> fws.is_stable(veh, 5.0, 0.0, k1=0.1, k2=0.5, ratio=0.0)
+    >>> plant = fws.LateralPlant(veh, speed=5.0)
+    >>> fws.is_stable(plant, fws.SteeringGains(0.1, 0.5, ratio=0.0))
     True
     >>> k1, k2 = np.meshgrid(np.linspace(-1, 1, 3), np.linspace(-1, 1, 3))
-    >>> fws.is_stable(veh, 5.0, 0.0, k1, k2, ratio=0.0).astype(int)
+    >>> fws.is_stable(plant, fws.SteeringGains(k1, k2, ratio=0.0)).astype(int)
     array([[0, 0, 0],
            [0, 0, 0],
            [0, 0, 1]])
     """
-    cc = characteristic_coefficients(vehicle, speed, curvature, ratio, model)
-    k1 = check_finite("k1", k1)
-    k2 = check_finite("k2", k2)
-    out = (cc.p1(k1, k2) > 0) & (cc.p0(k1, k2) > 0)
-    return bool(out) if np.ndim(out) == 0 else out
+    g = check_gains(gains)
+    cp = characteristic_coefficients(
+        plant, ratio=g.ratio, speed=speed, curvature=curvature, model=model
+    )
+    return _stable_from_polynomial(cp, np.asarray(g.k1), np.asarray(g.k2))
 
 
 @dataclass(frozen=True)
 class StabilityBoundary:
-    r"""One Routh-Hurwitz boundary in the ``(k1, k2)`` plane.
+    r"""A straight boundary in the ``(k1, k2)`` plane.
 
-    The set ``alpha*k1 + beta*k2 + gamma = 0``; the condition holds (stable
-    side) where ``alpha*k1 + beta*k2 + gamma > 0``. Coefficients are
-    normalised so that ``hypot(alpha, beta) == 1`` unless the line is
-    degenerate (then ``alpha = beta = 0`` and ``gamma`` is the sign of the
-    gain-independent coefficient).
+    The set ``alpha*k1 + beta*k2 + gamma = 0``; its condition holds where
+    ``alpha*k1 + beta*k2 + gamma > 0``. Coefficients are normalised so that
+    ``hypot(alpha, beta) == 1`` unless the line is degenerate (then ``alpha
+    = beta = 0`` and ``gamma`` is the sign of the gain-independent
+    coefficient).
 
     Attributes
     ----------
     alpha, beta, gamma : float
         Line coefficients.
     condition : str
-        ``"p1 > 0 (eq. 35)"`` or ``"p0 > 0 (eq. 36)"``.
+        The coefficient condition, e.g. ``"p0 > 0"``.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> b = fws.StabilityBoundary(1.0, 0.0, -0.5, "p0 > 0")
+    >>> b.vertical, float(b.k1_at(3.0)), b.satisfied(1.0, 0.0)
+    (True, 0.5, True)
     """
 
     alpha: float
     beta: float
     gamma: float
     condition: str
+
+    @classmethod
+    def from_coefficients(cls, alpha, beta, gamma, condition: str) -> StabilityBoundary:
+        """Normalised boundary from raw coefficients (scalars)."""
+        alpha, beta, gamma = float(alpha), float(beta), float(gamma)
+        norm = float(np.hypot(alpha, beta))
+        # No tolerance: a = c on a straight path cancels to an exact 0.0, and
+        # any fuzz would make the lines disagree with is_stable near them.
+        if norm == 0.0:
+            return cls(0.0, 0.0, float(np.sign(gamma)), condition)
+        return cls(alpha / norm, beta / norm, gamma / norm, condition)
 
     @property
     def degenerate(self) -> bool:
@@ -160,62 +269,216 @@ class StabilityBoundary:
         return np.array([pts[0], pts[-1]])
 
 
-def stability_boundaries(
-    vehicle: Vehicle,
-    speed: float,
-    curvature: float,
-    ratio: float,
-    model: str = "exact",
-) -> tuple[StabilityBoundary, StabilityBoundary]:
-    r"""Both Routh-Hurwitz boundary lines in the ``(k1, k2)`` plane.
+@dataclass(frozen=True, eq=False)
+class BoundaryCurve:
+    r"""The complex-root boundary: gains that put a root pair at ``±jω``.
 
-    In the paper's notation (eq. 37, with ``(c-a)`` for ``(1-a)`` in the exact
-    model) the lines are
+    Attributes
+    ----------
+    omega : ndarray
+        Crossing frequencies :math:`\omega > 0` [rad/s], increasing.
+    k1, k2 : ndarray
+        Gains on the curve; NaN where the 2 x 2 system is singular (there the
+        curve leaves to infinity or is not unique), which splits it into
+        branches.
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> b = fws.stability_boundaries(fws.LateralPlant(veh, speed=5.0), ratio=0.0,
+    ...                              omega=[1.0, 2.0])
+    >>> b.complex_root.k1.round(6), b.complex_root.k2
+    (array([0.108, 0.432]), array([0., 0.]))
+    """
+
+    omega: np.ndarray
+    k1: np.ndarray
+    k2: np.ndarray
+
+    def branches(self) -> list[np.ndarray]:
+        """The finite runs of the curve, each an array of shape ``(m, 3)``.
+
+        Columns ``omega, k1, k2``.
+        """
+        pts = np.column_stack([self.omega, self.k1, self.k2])
+        good = np.all(np.isfinite(pts), axis=1)
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], good, [0]])))
+        return [pts[a:b] for a, b in zip(edges[::2], edges[1::2], strict=True)]
+
+
+@dataclass(frozen=True, eq=False)
+class StabilityBoundaries:
+    r"""D-subdivision boundaries of the stable set in the ``(k1, k2)`` plane.
+
+    Attributes
+    ----------
+    real_root : StabilityBoundary
+        The line :math:`p(0) = 0` (a real root at ``s = 0``), condition
+        ``"p0 > 0"`` (constant coefficient positive).
+    complex_root : BoundaryCurve
+        The curve :math:`p(\pm j\omega) = 0`, :math:`\omega > 0`.
+    lines : tuple of StabilityBoundary
+        Straight boundaries: for two states the Routh-Hurwitz lines
+        ``p1 = 0`` (eq. 35) and ``p0 = 0`` (eq. 36), on which the complex
+        curve is a ray; otherwise ``(real_root,)``.
+    order : int
+        Order ``n`` of the closed loop.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> b = fws.stability_boundaries(veh, speed=5.0, curvature=0.1, ratio=1.0,
+    ...                              model="paper")
+    >>> p1, p0 = b.lines
+    >>> round(float(p0.k2_at(0.3)), 12)       # the line k2 = 1 of erratum 4
+    1.0
+    """
+
+    real_root: StabilityBoundary
+    complex_root: BoundaryCurve
+    lines: tuple[StabilityBoundary, ...]
+    order: int
+
+    def __iter__(self):
+        # unpacking gives the straight lines, as stability_boundaries did in 0.1
+        return iter(self.lines)
+
+
+def default_frequencies(cp: AffinePolynomial, num: int = 2001) -> np.ndarray:
+    """Logarithmic frequency grid covering the plant's time scales [rad/s].
+
+    From ``1e-3`` to ``1e3`` times the largest magnitude of the roots of the
+    open loop and of :math:`n_1, n_2` (at least 1 rad/s).
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> cp = fws.characteristic_coefficients(veh, speed=5.0, ratio=0.0)
+    >>> w = fws.stability.default_frequencies(cp, num=5)
+    >>> w[0] < 1e-2 < 1e3 < w[-1]
+    True
+    """
+    scale = 1.0
+    for c in (cp.open_loop, cp.n1, cp.n2):
+        c = np.trim_zeros(np.asarray(c, dtype=float).reshape(-1, c.shape[-1])[0], "f")
+        if c.size > 1:
+            scale = max(scale, float(np.max(np.abs(np.roots(c)), initial=0.0)))
+    return np.geomspace(1e-3 * scale, 1e3 * scale, num)
+
+
+def complex_root_curve(cp: AffinePolynomial, omega) -> BoundaryCurve:
+    r"""Solve :math:`p(j\omega) = 0` for ``(k1, k2)`` at each frequency.
+
+    .. math::
+        \begin{bmatrix}\operatorname{Re} n_1 & \operatorname{Re} n_2\\
+        \operatorname{Im} n_1 & \operatorname{Im} n_2\end{bmatrix}
+        \begin{bmatrix}k_1\\ k_2\end{bmatrix}
+        = -\begin{bmatrix}\operatorname{Re} d\\ \operatorname{Im} d\end{bmatrix}
+        \quad\text{at } s = j\omega.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> cp = fws.characteristic_coefficients(veh, speed=5.0, ratio=0.0)
+    >>> fws.stability.complex_root_curve(cp, [1.0]).k1.round(6)
+    array([0.108])
+    """
+    w = np.asarray(omega, dtype=float)
+    d, n1, n2 = cp.polynomials_at(1j * w)
+    det = n1.real * n2.imag - n2.real * n1.imag
+    scale = np.abs(n1) * np.abs(n2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        k1 = (-d.real * n2.imag + d.imag * n2.real) / det
+        k2 = (-n1.real * d.imag + n1.imag * d.real) / det
+    # A relative test: det is a 2x2 determinant of vectors of size |n1|, |n2|.
+    singular = ~(np.abs(det) > 1e-12 * scale)
+    k1 = np.where(singular, np.nan, k1)
+    k2 = np.where(singular, np.nan, k2)
+    return BoundaryCurve(omega=w, k1=k1, k2=k2)
+
+
+def stability_boundaries(
+    plant: Any,
+    *,
+    ratio: float,
+    omega=None,
+    speed: Any = None,
+    curvature: Any = None,
+    model: Any = None,
+) -> StabilityBoundaries:
+    r"""Stability boundaries in the ``(k1, k2)`` plane (D-subdivision).
+
+    For the kinematic plant the straight lines are (eq. 37, with ``(c-a)``
+    for ``(1-a)`` in the exact model)
 
     .. math::
         f a k_1 + (c-a) k_2 = 0 \quad (p_1 = 0),\qquad
         (c-a) k_1 - a f\kappa^2 k_2 + f\kappa^2 = 0 \quad (p_0 = 0).
 
     For ``a = c`` (``a = 1`` on a straight path) the first is ``k1 = 0``
-    (eq. 38); on a curved path the second then reads ``k2 = 1/a`` — with
-    ``a = 1`` in the paper's model ``k2 < 1`` is still required, so eq. (38)'s
-    "any k2" holds only on a straight path. On a straight path with ``a = 1``
-    the second is degenerate (:math:`p_0 \equiv 0`, never stable).
+    (eq. 38); on a curved path the second then reads ``k2 = 1/a``, so eq.
+    (38)'s "any k2" holds only on a straight path. On a straight path with
+    ``a = 1`` the second is degenerate (:math:`p_0 \equiv 0`, never stable).
 
     Parameters
     ----------
-    vehicle : Vehicle
-    speed : float
-        Nonzero speed [m/s]; its sign decides the stable side of ``p1 = 0``
-        (the line itself does not depend on it).
-    curvature, ratio : float
-    model : {"exact", "paper"}, optional
+    plant : LateralPlant, control.StateSpace or Vehicle
+        One operating point (see :mod:`fws_control.plant`), any order.
+    ratio : float
+        Rear-to-front steering ratio :math:`a`.
+    omega : array_like, optional
+        Frequencies [rad/s] of the complex-root curve; default
+        :func:`default_frequencies`.
+    speed, curvature, model : optional
+        With a :class:`Vehicle` only, as in :func:`linearize`.
 
     Returns
     -------
-    (StabilityBoundary, StabilityBoundary)
-        The ``p1 = 0`` and ``p0 = 0`` boundaries.
+    StabilityBoundaries
+        Unpacking it gives the straight lines (for two states
+        ``p1_line, p0_line = stability_boundaries(...)``, as in 0.1).
 
     Examples
     --------
     >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> b1, b0 = fws.stability_boundaries(veh, 5.0, 0.1, ratio=1.0, model="paper")
-    >>> round(float(b0.k2_at(0.3)), 12)       # the line k2 = 1 of erratum 4
-    1.0
+    >>> b = fws.stability_boundaries(fws.LateralPlant(veh, speed=5.0), ratio=-1.0)
+    >>> b.real_root.condition, [ln.condition for ln in b.lines]
+    ('p0 > 0', ['p1 > 0', 'p0 > 0'])
     """
-    cc = characteristic_coefficients(vehicle, speed, curvature, ratio, model)
-    out = []
-    for alpha, beta, gamma, cond in (
-        (cc.alpha1, cc.beta1, cc.gamma1, "p1 > 0 (eq. 35)"),
-        (cc.alpha0, cc.beta0, cc.gamma0, "p0 > 0 (eq. 36)"),
-    ):
-        alpha, beta, gamma = float(alpha), float(beta), float(gamma)
-        norm = float(np.hypot(alpha, beta))
-        # No tolerance: a = c on a straight path cancels to an exact 0.0, and
-        # any fuzz would make the lines disagree with is_stable near them.
-        if norm == 0.0:
-            out.append(StabilityBoundary(0.0, 0.0, float(np.sign(gamma)), cond))
-            continue
-        out.append(StabilityBoundary(alpha / norm, beta / norm, gamma / norm, cond))
-    return out[0], out[1]
+    p = as_plant(plant, speed=speed, curvature=curvature, model=model)
+    ratio = check_finite("ratio", ratio)
+    if np.ndim(ratio) or (isinstance(p, LateralPlant) and p.shape != ()):
+        raise ValueError(
+            "stability_boundaries needs one operating point and a scalar ratio"
+        )
+    cp = characteristic_coefficients(p, ratio=ratio)
+    last = cp.order
+    real = StabilityBoundary.from_coefficients(
+        cp.n1[..., last], cp.n2[..., last], cp.open_loop[..., last], "p0 > 0"
+    )
+    if cp.order == 2:
+        p1 = StabilityBoundary.from_coefficients(
+            cp.n1[..., 1], cp.n2[..., 1], cp.open_loop[..., 1], "p1 > 0"
+        )
+        lines = (p1, real)
+    else:
+        lines = (real,)
+    if omega is None:
+        w = default_frequencies(cp)
+    else:
+        w = np.atleast_1d(check_finite("omega", omega)).astype(float)
+        if w.ndim != 1 or np.any(w <= 0):
+            raise ValueError(
+                f"omega must be a 1-D array of frequencies > 0 rad/s, got {omega!r}"
+            )
+    return StabilityBoundaries(
+        real_root=real,
+        complex_root=complex_root_curve(cp, w),
+        lines=lines,
+        order=cp.order,
+    )

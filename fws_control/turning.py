@@ -34,8 +34,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validation import check_finite
 from .models import _check_steering
+from .validation import check_finite
 from .vehicle import Vehicle
 
 __all__ = [

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ._validation import check_angle_limit, check_rate_limit
+from .validation import check_angle_limit, check_rate_limit
 
 __all__ = ["Vehicle"]
 

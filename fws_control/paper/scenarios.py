@@ -34,16 +34,16 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import brentq
 
-from ._validation import check_finite, check_model
-from .batch import BatchResult, _expand_batch, simulate_batch
-from .design import UncontrollableError, double_root_gains
-from .gains import SteeringGains
-from .paths import Arc, Straight
-from .simulation import STATUS_UNCONTROLLABLE, _time_grid
-from .vehicle import Vehicle
+from ..batch import BatchResult, _expand_batch, simulate_batch
+from ..design import UncontrollableError, double_root_gains
+from ..gains import SteeringGains
+from ..paths import Arc, Straight
+from ..simulation import STATUS_UNCONTROLLABLE, _time_grid
+from ..validation import check_finite, check_model
+from ..vehicle import Vehicle
+from .data import FIG5_POLES, FIG5_RATIOS, FIG6_TO_9_RATIOS, PAPER_VEHICLE
 
 __all__ = [
-    "PAPER_VEHICLE",
     "Scenario",
     "PAPER_SCENARIOS",
     "paper_scenario",
@@ -57,21 +57,7 @@ __all__ = [
     "feedback_only_steady_state",
     "FeedbackOnlyResponses",
     "feedback_only_curve",
-    "FIG5_RATIOS",
-    "FIG6_TO_9_RATIOS",
 ]
-
-#: The paper's vehicle: wheelbase f = 2.7 m, rear axle to CG d = 1.35 m.
-PAPER_VEHICLE = Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-
-#: Ratios of Fig. 5: a in [-1.5, 1.5] in steps of 0.05 (includes 0 and 1).
-FIG5_RATIOS = np.round(np.linspace(-1.5, 1.5, 61), 12)
-
-#: Ratios of Figs. 6-9.
-FIG6_TO_9_RATIOS = (-1.0, -0.5, 0.0, 0.5, 1.0)
-
-#: Default double roots of Fig. 5 per speed [1/s].
-FIG5_POLES = {5.0: (-1.0, -2.0), 20.0: (-1.0, -2.0, -3.0)}
 
 
 @dataclass(frozen=True)

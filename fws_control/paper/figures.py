@@ -23,12 +23,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ._validation import check_model
-from .charts import PAPER_VEHICLE, plot_paper_figure
-from .design import UncontrollableError, double_root_gains
-from .linear import closed_loop
-from .turning import plot_turning_radius, turning_radius
-from .vehicle import Vehicle
+from ..design import UncontrollableError, double_root_gains
+from ..linear import closed_loop
+from ..turning import plot_turning_radius, turning_radius
+from ..validation import check_model
+from ..vehicle import Vehicle
+from .charts import plot_paper_figure
+from .data import PAPER_CURVED, PAPER_SPEEDS, PAPER_VEHICLE, TABLE_RATIOS
 
 __all__ = [
     "FigureSpec",
@@ -40,11 +41,6 @@ __all__ = [
     "plot_root_loci",
     "plot_fig5",
 ]
-
-#: The scenario speeds, curvatures and ratios of section 5.
-PAPER_SPEEDS = (5.0, 20.0)
-PAPER_CURVED = {5.0: 0.1, 20.0: 0.01}
-TABLE_RATIOS = (-1.5, -1.0, -0.5, 0.0, 0.5, 1.0, 1.5)
 
 
 @dataclass(frozen=True)
@@ -100,7 +96,7 @@ def plot_root_loci(
     import control as ct
     import matplotlib.pyplot as plt
 
-    from .rootlocus import gain_loop, parameter_locus, refined_scale
+    from ..rootlocus import gain_loop, parameter_locus, refined_scale
 
     vehicle = PAPER_VEHICLE if vehicle is None else vehicle
     fig, axes = plt.subplots(1, 3, figsize=(17, 5.2), layout="constrained")
@@ -207,7 +203,7 @@ def plot_root_loci(
 
 
 def _comparison_figure(model: str = "exact", quick: bool = False):
-    from .comparison import compare_linear_nonlinear
+    from ..comparison import compare_linear_nonlinear
 
     g = double_root_gains(PAPER_VEHICLE, 5.0, 0.1, -1.0, -1.0, model)
     cmp = compare_linear_nonlinear(
@@ -241,7 +237,8 @@ _FIG5_TITLES = {
 
 @lru_cache(maxsize=4)
 def _fig5_data(model: str, quick: bool):
-    from .scenarios import FIG5_RATIOS, fig5_peak_lateral_accel
+    from .data import FIG5_RATIOS
+    from .scenarios import fig5_peak_lateral_accel
 
     ratios = np.linspace(-1.5, 1.5, 13) if quick else FIG5_RATIOS
     return fig5_peak_lateral_accel(

@@ -16,8 +16,10 @@ __all__ = [
     "check_positive",
     "check_nonzero",
     "check_scalar",
-    "check_vehicle",
+    "check_type",
     "check_model",
+    "check_angle_limit",
+    "check_rate_limit",
     "MODELS",
 ]
 
@@ -65,14 +67,16 @@ def check_scalar(name: str, value: Any) -> float:
     return float(v)
 
 
-def check_vehicle(vehicle: Any) -> None:
-    """Refuse anything that is not a :class:`~fws_control.Vehicle`."""
-    from .vehicle import Vehicle
+def check_type(name: str, value: Any, cls: type, what: str | None = None) -> Any:
+    """Return `value` if it is an instance of `cls`, else raise TypeError.
 
-    if not isinstance(vehicle, Vehicle):
-        raise TypeError(
-            f"vehicle must be a fws_control.Vehicle, got {type(vehicle).__name__}"
-        )
+    The class is passed in by the caller, so that this module imports no
+    library class (it sits below every other module).
+    """
+    if not isinstance(value, cls):
+        what = what or f"a fws_control.{cls.__name__}"
+        raise TypeError(f"{name} must be {what}, got {type(value).__name__}")
+    return value
 
 
 def check_model(model: Any) -> str:

@@ -1,0 +1,73 @@
+"""Exceptions of fws_control, in one place.
+
+Every exception is a :class:`ValueError` subclass, so that code that catches
+bad input in general keeps working, while callers that care can tell a design
+that cannot exist from a singular state of the model or an ambiguous
+projection.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "UncontrollableError",
+    "SingularStateError",
+    "AmbiguousProjectionError",
+]
+
+
+class UncontrollableError(ValueError):
+    """The requested closed-loop poles cannot be reached by any gains.
+
+    Raised by :func:`~fws_control.double_root_gains` when the single-input
+    pair :math:`(\\mathbf A, \\mathbf B[1, a]^T)` is uncontrollable (for the
+    kinematic plant: ``ratio = c`` on a straight path, i.e. ``a = 1``) or so
+    nearly so that the gains would be meaningless.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> try:
+    ...     fws.double_root_gains(veh, speed=5.0, ratio=1.0, pole=-1.0)
+    ... except fws.UncontrollableError:
+    ...     print("uncontrollable")
+    uncontrollable
+    """
+
+
+class SingularStateError(ValueError):
+    """A state or input where the kinematic model is not defined.
+
+    Raised for a front steering angle with ``|delta_f| >= pi/2`` (the yaw
+    rate of eq. (10) has ``cos(delta_f)`` in the denominator) and, in the
+    path frame, for ``1 - curvature * e <= 0`` (the vehicle is at or beyond
+    the centre of curvature, where the projection onto the path is lost).
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> try:
+    ...     fws.yaw_rate(veh, 2.0, 0.0, speed=5.0)
+    ... except fws.SingularStateError:
+    ...     print("singular")
+    singular
+    """
+
+
+class AmbiguousProjectionError(ValueError):
+    """The nearest point of a path to a given point is not unique.
+
+    Raised by :meth:`Path.project` and :meth:`Path.errors` with
+    ``strict=True``; the message names the first such point.
+
+    Examples
+    --------
+    >>> from fws_control.paths import Arc
+    >>> from fws_control.exceptions import AmbiguousProjectionError
+    >>> try:
+    ...     Arc(curvature=0.1).project(0.0, 10.0, strict=True)
+    ... except AmbiguousProjectionError as exc:
+    ...     print("ambiguous")
+    ambiguous
+    """

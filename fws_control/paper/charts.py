@@ -1,0 +1,322 @@
+r"""The paper's stability-chart figures (Figs. 2-4) from :func:`stability_chart`.
+
+The paper does not list the curvatures shown in Figs. 3 and 4; this module
+uses :data:`~fws_control.paper.data.PAPER_CURVATURES`:
+:math:`\kappa \in \{0, 0.05, 0.1, 0.2\}` 1/m at 5 m/s (Fig. 3) and
+:math:`\kappa \in \{0, 0.01, 0.02, 0.05\}` 1/m at 20 m/s (Fig. 4), which
+include the curvatures of the simulations (0.1 and 0.01 1/m).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import control as ct
+import numpy as np
+
+from ..charts import StabilityChart, stability_chart
+from ..design import double_root_gains
+from ..exceptions import UncontrollableError
+from ..plant import LateralPlant
+from ..validation import check_model
+from ..vehicle import Vehicle
+from .data import PAPER_CURVATURES, PAPER_VEHICLE
+
+__all__ = ["ChartPanel", "paper_figure_panels", "plot_paper_figure"]
+
+_DEFAULT_RANGE = (-1.0, 1.0)
+_DEFAULT_POINTS = 401
+_MAX_RANGE = (-2.0, 2.0)
+_HATCHES = (None, "//", "\\\\", "||", "--", "xx", "..")
+
+
+@dataclass(frozen=True, eq=False)
+class ChartPanel:
+    """One panel of a paper figure: overlaid charts with their labels.
+
+    Attributes
+    ----------
+    title : str
+        Panel title, e.g. ``"(a) V = 5 m/s, kappa = 0"``.
+    charts : tuple of StabilityChart
+    labels : tuple of str
+        Legend label of each chart (the quantity that varies in the panel).
+    """
+
+    title: str
+    charts: tuple[StabilityChart, ...]
+    labels: tuple[str, ...]
+
+
+def _panel_ranges(designs, base=_DEFAULT_RANGE, cap=_MAX_RANGE):
+    """Grid range covering ``base`` and the design points, with a margin.
+
+    The range grows at most to ``cap``: a design with huge gains (``a`` near
+    1 on a gently curved path) would otherwise squash every region into a
+    sliver. Designs left outside are listed in the panel instead.
+    """
+    k1s = [float(g.k1) for g in designs if g is not None]
+    k2s = [float(g.k2) for g in designs if g is not None]
+    out = []
+    for vals in (k1s, k2s):
+        lo, hi = base
+        width = hi - lo
+        vals = [v for v in vals if cap[0] <= v <= cap[1]]
+        if vals:
+            lo = max(cap[0], min(lo, min(vals) - 0.1 * width))
+            hi = min(cap[1], max(hi, max(vals) + 0.1 * width))
+        out.append((lo, hi))
+    return out
+
+
+def _build_panel(vehicle, title, specs, model, pole, npoints) -> ChartPanel:
+    """specs: list of (label, speed, curvature, ratio)."""
+    designs = []
+    for _, V, kap, a in specs:
+        try:
+            plant = LateralPlant(vehicle, speed=V, curvature=kap, model=model)
+            designs.append(double_root_gains(plant, ratio=a, pole=pole))
+        except UncontrollableError:
+            designs.append(None)
+    (k1lo, k1hi), (k2lo, k2hi) = _panel_ranges(designs)
+    k1 = np.linspace(k1lo, k1hi, npoints)
+    k2 = np.linspace(k2lo, k2hi, npoints)
+    charts = tuple(
+        stability_chart(
+            LateralPlant(vehicle, speed=V, curvature=kap, model=model),
+            ratio=a,
+            k1=k1,
+            k2=k2,
+            pole=pole,
+        )
+        for _, V, kap, a in specs
+    )
+    return ChartPanel(title, charts, tuple(s[0] for s in specs))
+
+
+def paper_figure_panels(
+    n: int,
+    *,
+    model: str = "exact",
+    vehicle: Vehicle | None = None,
+    pole: float = -1.0,
+    curvatures=None,
+    npoints: int = _DEFAULT_POINTS,
+) -> list[ChartPanel]:
+    r"""The data behind Figs. 2, 3 or 4 of the paper.
+
+    Fig. 2: straight path; (a) ``a`` in {-1.5, -1, -0.5, 0} at 5 m/s, (b) ``a``
+    in {-1.5, -1, -0.5} at 20 m/s, (c) ``a`` in {0, 0.5, 1, 1.5} at 20 m/s.
+    Figs. 3 (5 m/s) and 4 (20 m/s): one panel per ``a`` in {-1.5, -1, -0.5,
+    0, 0.5, 1, 1.5}, each overlaying the curvatures of
+    :data:`PAPER_CURVATURES` (or `curvatures`).
+
+    Each panel's grid covers ``[-1, 1]^2`` (the paper's range), widened where
+    needed (up to ``[-2, 2]``) so that the :math:`\lambda_0` design points are
+    visible; designs outside that are listed in the panel.
+
+    Parameters
+    ----------
+    n : {2, 3, 4}
+        Figure number.
+    model : {"exact", "paper"}, optional
+        Linearisation. On a straight path (Fig. 2) both agree.
+    vehicle : Vehicle, optional
+        Default :data:`PAPER_VEHICLE`.
+    pole : float, optional
+        Double root of the marked gains, default -1.
+    curvatures : sequence of float, optional
+        Curvatures for Figs. 3-4 instead of :data:`PAPER_CURVATURES`.
+    npoints : int, optional
+        Grid points per axis.
+
+    Returns
+    -------
+    list of ChartPanel
+
+    Examples
+    --------
+    >>> from fws_control.paper import paper_figure_panels
+    >>> panels = paper_figure_panels(2, npoints=51)
+    >>> [p.labels for p in panels]
+    [('a = -1.5', 'a = -1', 'a = -0.5', 'a = 0'), ('a = -1.5', 'a = -1', 'a = -0.5'),
+     ('a = 0', 'a = 0.5', 'a = 1', 'a = 1.5')]
+    """
+    check_model(model)
+    vehicle = PAPER_VEHICLE if vehicle is None else vehicle
+    if n == 2:
+        groups = [
+            ("(a) V = 5 m/s", 5.0, (-1.5, -1.0, -0.5, 0.0)),
+            ("(b) V = 20 m/s", 20.0, (-1.5, -1.0, -0.5)),
+            ("(c) V = 20 m/s", 20.0, (0.0, 0.5, 1.0, 1.5)),
+        ]
+        return [
+            _build_panel(
+                vehicle,
+                rf"{t}, $\kappa$ = 0",
+                [(f"a = {a:g}", V, 0.0, a) for a in ratios],
+                model,
+                pole,
+                npoints,
+            )
+            for t, V, ratios in groups
+        ]
+    if n in (3, 4):
+        V = 5.0 if n == 3 else 20.0
+        kappas = PAPER_CURVATURES[n] if curvatures is None else tuple(curvatures)
+        panels = []
+        ratios = (-1.5, -1.0, -0.5, 0.0, 0.5, 1.0, 1.5)
+        for letter, a in zip("abcdefg", ratios, strict=True):
+            panels.append(
+                _build_panel(
+                    vehicle,
+                    f"({letter}) a = {a:g}, V = {V:g} m/s",
+                    [(rf"$\kappa$ = {k:g} 1/m", V, k, a) for k in kappas],
+                    model,
+                    pole,
+                    npoints,
+                )
+            )
+        return panels
+    raise ValueError(f"n must be 2, 3 or 4 (the paper's chart figures), got {n!r}")
+
+
+def _note_box(ax, notes) -> None:
+    if notes:
+        ax.text(
+            0.02,
+            0.02,
+            "\n".join(notes),
+            transform=ax.transAxes,
+            fontsize=7,
+            va="bottom",
+            bbox={"fc": "white", "ec": "0.7", "alpha": 0.9},
+            zorder=10,
+        )
+
+
+def _draw_panel(ax, panel: ChartPanel, legend: bool = True) -> list:
+    from matplotlib.lines import Line2D
+
+    handles = []
+    notes = []
+    for i, (ch, lab) in enumerate(zip(panel.charts, panel.labels, strict=True)):
+        color = f"C{i}"
+        handles += ch.draw(
+            ax,
+            color=color,
+            label=lab,
+            hatch=_HATCHES[i % len(_HATCHES)],
+            alpha=0.1,
+            boundaries=True,
+            design=True,
+        )
+        notes += ch.notes(lab)
+    handles += [
+        Line2D([], [], color="0.3", ls="-", label=r"$p_1 = 0$ (eq. 35)"),
+        Line2D([], [], color="0.3", ls="--", label=r"$p_0 = 0$ (eq. 36)"),
+        Line2D(
+            [],
+            [],
+            marker="o",
+            ls="",
+            color="0.6",
+            mec="k",
+            label=rf"$\lambda_0$ = {panel.charts[0].pole:g} gains",
+        ),
+    ]
+    _note_box(ax, notes)
+    ax.set_title(panel.title, fontsize=10)
+    if legend:
+        # Below the axes: inside, it would hide regions and design points.
+        ax.legend(
+            handles=handles,
+            fontsize=8,
+            loc="upper center",
+            bbox_to_anchor=(0.5, -0.13),
+            ncol=3,
+            frameon=False,
+        )
+    return handles
+
+
+def plot_paper_figure(
+    n: int,
+    *,
+    model: str = "exact",
+    vehicle: Vehicle | None = None,
+    pole: float = -1.0,
+    curvatures=None,
+    npoints: int = _DEFAULT_POINTS,
+    ax=None,
+) -> ct.ControlPlot:
+    r"""Redraw Fig. 2, 3 or 4 of the paper as one matplotlib figure.
+
+    Every panel overlays the stable regions (hatched, translucent) of the
+    charts listed in :func:`paper_figure_panels`, their boundary lines
+    (solid: eq. 35, dashed: eq. 36) and the :math:`\lambda_0` gains.
+
+    Parameters
+    ----------
+    n : {2, 3, 4}
+        Figure number.
+    model, vehicle, pole, curvatures, npoints : optional
+        See :func:`paper_figure_panels`.
+    ax : array of matplotlib.axes.Axes, optional
+        Axes to draw into: 3 for Fig. 2, 8 for Figs. 3-4 (the last holds the
+        legend). A new figure is created if None.
+
+    Returns
+    -------
+    control.ControlPlot
+        ``.figure`` is the figure; ``.axes`` the panels (shape ``(1, 3)`` or
+        ``(2, 4)``).
+
+    Examples
+    --------
+    >>> import matplotlib; matplotlib.use("Agg")
+    >>> import matplotlib.pyplot as plt
+    >>> from fws_control.paper import plot_paper_figure
+    >>> cplt = plot_paper_figure(2, npoints=101)
+    >>> cplt.axes.shape
+    (1, 3)
+    >>> plt.close(cplt.figure)
+    """
+    import matplotlib.pyplot as plt
+
+    panels = paper_figure_panels(
+        n,
+        model=model,
+        vehicle=vehicle,
+        pole=pole,
+        curvatures=curvatures,
+        npoints=npoints,
+    )
+    shape = (1, 3) if n == 2 else (2, 4)
+    if ax is None:
+        size = (15, 6.2) if n == 2 else (19, 9.5)
+        fig, axs = plt.subplots(*shape, figsize=size, layout="constrained")
+    else:
+        axs = np.asarray(ax, dtype=object)
+        if axs.size != shape[0] * shape[1]:
+            raise ValueError(
+                f"ax must hold {shape[0] * shape[1]} axes for Fig. {n}, got {axs.size}"
+            )
+        axs = axs.reshape(shape)
+        fig = axs.flat[0].figure
+    axes = list(axs.flat)
+    lines = np.empty(shape, dtype=object)
+    for i, (a, panel) in enumerate(zip(axes, panels, strict=False)):
+        handles = _draw_panel(a, panel, legend=n == 2)
+        lines.flat[i] = list(a.get_lines())
+    if n != 2:
+        # The eighth slot holds the shared legend.
+        spare = axes[-1]
+        spare.axis("off")
+        spare.legend(handles=handles, loc="center", fontsize=10, title="legend")
+        lines.flat[-1] = []
+    V = {2: "5 and 20", 3: "5", 4: "20"}[n]
+    fig.suptitle(
+        f"Fig. {n}: stable gains (shaded), V = {V} m/s, {model} model", fontsize=13
+    )
+    return ct.ControlPlot(lines, axs, fig)

@@ -1,0 +1,414 @@
+r"""Plants: the operating-point object and how any python-control plant is read.
+
+Every analysis utility of the library takes the plant first. A plant is
+
+* a :class:`LateralPlant`: the kinematic 4WS vehicle at an operating point
+  (speed, path curvature, linearisation model);
+* a :class:`control.StateSpace` of any order whose inputs include
+  ``delta_f`` and ``delta_r`` and whose outputs (or, failing that, states)
+  include ``e`` and ``theta``; a 2-state, 2-input system that carries
+  python-control's default names is read as states ``(e, theta)`` and
+  inputs ``(delta_f, delta_r)``;
+* a :class:`Vehicle` with the keyword-only ``speed=``, ``curvature=`` and
+  ``model=``, a shorthand for the :class:`LateralPlant`.
+
+:func:`loop_matrices` reduces each of them to the matrices of the structured
+loop
+
+.. math::
+    \dot x = \mathbf A x + \mathbf B_f\,\delta_f + \mathbf B_r\,\delta_r,\qquad
+    e = \mathbf c_e x,\quad \theta = \mathbf c_\theta x,
+
+which the characteristic-polynomial engine (:mod:`fws_control.linear`) closes
+with :math:`\delta_f = -k_1 e - k_2\theta`, :math:`\delta_r = a\,\delta_f`.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from typing import Any
+
+import control as ct
+import numpy as np
+
+from .models import STEERING_INPUTS, feedforward_steering
+from .validation import check_finite, check_model, check_nonzero, check_type
+from .vehicle import Vehicle
+
+__all__ = [
+    "LateralPlant",
+    "LoopMatrices",
+    "as_plant",
+    "loop_matrices",
+    "LINEAR_STATES",
+    "PLANT_KEYWORDS",
+]
+
+#: Names of the states (and outputs) of the kinematic linear plant.
+LINEAR_STATES = ("e", "theta")
+
+#: The keywords that turn a :class:`Vehicle` into a :class:`LateralPlant`.
+PLANT_KEYWORDS = ("speed", "curvature", "model")
+
+# python-control's generated signal names: u[0], x[1], y[2], ...
+_DEFAULT_NAME = re.compile(r"^[uxy]\[\d+\]$")
+
+
+@dataclass(frozen=True, eq=False)
+class LateralPlant:
+    r"""The kinematic 4WS vehicle at an operating point (a plant).
+
+    The operating point is the feedforward equilibrium on a path of constant
+    curvature: ``e = theta = 0``, :math:`\delta_f = \arctan(\kappa f)`,
+    :math:`\delta_r = 0` (paper eqs. 26-27). Its linearisation is
+
+    .. math::
+        \mathbf A = \begin{bmatrix}0 & V\\ -V\kappa^2 & 0\end{bmatrix},\quad
+        \mathbf B = \begin{bmatrix}0 & V\\ cV/f & -V/f\end{bmatrix},
+
+    with :math:`c = 1 + f^2\kappa^2` for ``model="exact"`` (the Jacobian of
+    eqs. 18-19) and :math:`c = 1` for ``model="paper"`` (eq. 33, exact only on
+    a straight path).
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Geometry.
+    speed : float or array_like
+        Speed :math:`V` [m/s], finite and nonzero (negative: reversing).
+    curvature : float or array_like, optional
+        Path curvature :math:`\kappa_C` [1/m], default 0 (straight path).
+    model : {"exact", "paper"}, optional
+        Linearisation, default ``"exact"``.
+
+    `speed` and `curvature` broadcast against each other (and against the
+    gains in the analysis functions), like the fields of
+    :class:`SteeringGains`: one object can hold a whole sweep of operating
+    points.
+
+    Raises
+    ------
+    TypeError
+        If `vehicle` is not a :class:`Vehicle`.
+    ValueError
+        For a zero or non-finite `speed`, a non-finite `curvature` or an
+        unknown `model`.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> plant = fws.LateralPlant(veh, speed=5.0, curvature=0.1)
+    >>> sys = plant.linearize()
+    >>> sys.input_labels, sys.output_labels
+    (['delta_f', 'delta_r'], ['e', 'theta'])
+    >>> sys.B.round(4)
+    array([[ 0.    ,  5.    ],
+           [ 1.9869, -1.8519]])
+    >>> round(plant.input_gain_factor, 4)
+    1.0729
+    """
+
+    vehicle: Vehicle
+    speed: float | np.ndarray
+    curvature: float | np.ndarray = 0.0
+    model: str = "exact"
+
+    def __post_init__(self) -> None:
+        check_type("vehicle", self.vehicle, Vehicle)
+        check_model(self.model)
+        speed = check_nonzero("speed", self.speed)
+        curvature = check_finite("curvature", self.curvature)
+        try:
+            np.broadcast_shapes(np.shape(speed), np.shape(curvature))
+        except ValueError:
+            raise ValueError(
+                "speed and curvature must broadcast, got shapes "
+                f"{np.shape(speed)} and {np.shape(curvature)}"
+            ) from None
+        object.__setattr__(self, "speed", speed)
+        object.__setattr__(self, "curvature", curvature)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """Broadcast shape of `speed` and `curvature` (``()`` for one point)."""
+        return np.broadcast_shapes(np.shape(self.speed), np.shape(self.curvature))
+
+    @property
+    def input_gain_factor(self) -> float | np.ndarray:
+        r"""Factor :math:`c` of the front-steering entry :math:`cV/f` of B.
+
+        :math:`c = 1 + f^2\kappa^2` (exact) or 1 (paper, eq. 33).
+        """
+        kappa = np.asarray(self.curvature, dtype=float)
+        if self.model == "paper":
+            out = np.ones_like(kappa)
+        else:
+            out = 1.0 + (self.vehicle.wheelbase * kappa) ** 2
+        return float(out) if out.ndim == 0 else out
+
+    @property
+    def feedforward(self) -> float | np.ndarray:
+        r"""Feedforward front angle :math:`\arctan(\kappa f)` [rad], eq. (26)."""
+        return feedforward_steering(self.vehicle, self.curvature)
+
+    def matrices(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(A, B)`` of the linearisation, shapes ``(..., 2, 2)``.
+
+        Broadcast over `speed` and `curvature`; columns of B are ``delta_f,
+        delta_r``.
+        """
+        V, kappa, c = np.broadcast_arrays(
+            np.asarray(self.speed, dtype=float),
+            np.asarray(self.curvature, dtype=float),
+            np.asarray(self.input_gain_factor, dtype=float),
+        )
+        f = self.vehicle.wheelbase
+        zero = np.zeros_like(V)
+        A = np.stack([np.stack([zero, V], -1), np.stack([-V * kappa**2, zero], -1)], -2)
+        B = np.stack([np.stack([zero, V], -1), np.stack([c * V / f, -V / f], -1)], -2)
+        return A, B
+
+    def linearize(self) -> ct.StateSpace:
+        """The linearisation as a named :class:`control.StateSpace`.
+
+        States and outputs ``e, theta`` (deviations from the operating
+        point); inputs ``delta_f, delta_r`` (deviations from the feedforward
+        angles).
+
+        Raises
+        ------
+        ValueError
+            If `speed` or `curvature` hold several operating points.
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+        >>> fws.LateralPlant(veh, speed=5.0).linearize().A
+        array([[0., 5.],
+               [0., 0.]])
+        """
+        if self.shape != ():
+            raise ValueError(
+                "linearize needs one operating point, but speed and curvature "
+                f"have shape {self.shape}; index them first"
+            )
+        A, B = self.matrices()
+        return ct.ss(
+            A,
+            B,
+            np.eye(2),
+            np.zeros((2, 2)),
+            states=list(LINEAR_STATES),
+            inputs=list(STEERING_INPUTS),
+            outputs=list(LINEAR_STATES),
+            name=f"linear_{self.model}",
+        )
+
+
+def as_plant(
+    plant: Any,
+    *,
+    speed: Any = None,
+    curvature: Any = None,
+    model: Any = None,
+) -> LateralPlant | ct.StateSpace:
+    """Resolve the plant argument of an analysis function.
+
+    Parameters
+    ----------
+    plant : LateralPlant, control.StateSpace or Vehicle
+        The plant; a :class:`Vehicle` needs `speed` (and optionally
+        `curvature`, `model`) to become a :class:`LateralPlant`.
+    speed, curvature, model : optional
+        Only with a :class:`Vehicle`: the operating point and linearisation
+        (defaults: curvature 0, ``"exact"``).
+
+    Returns
+    -------
+    LateralPlant or control.StateSpace
+
+    Raises
+    ------
+    TypeError
+        For any other kind of plant, for `speed`/`curvature`/`model` given
+        with a plant that already fixes them, or for a Vehicle without
+        `speed`.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> fws.as_plant(veh, speed=5.0).speed
+    5.0
+    """
+    given = {
+        k: v
+        for k, v in (("speed", speed), ("curvature", curvature), ("model", model))
+        if v is not None
+    }
+    if isinstance(plant, Vehicle):
+        if "speed" not in given:
+            raise TypeError(
+                "a Vehicle plant needs the keyword speed= (and optionally "
+                "curvature=, model=); or pass a fws.LateralPlant"
+            )
+        return LateralPlant(
+            plant,
+            speed=speed,
+            curvature=0.0 if curvature is None else curvature,
+            model="exact" if model is None else model,
+        )
+    if isinstance(plant, (LateralPlant, ct.StateSpace)):
+        if given:
+            raise TypeError(
+                f"{', '.join(k + '=' for k in given)} applies only to a Vehicle "
+                f"plant; a {type(plant).__name__} already fixes its operating point"
+            )
+        return plant
+    if isinstance(plant, ct.InputOutputSystem):
+        raise TypeError(
+            f"plant must be a fws.LateralPlant, a control.StateSpace or a "
+            f"fws.Vehicle, got {type(plant).__name__}: linearise a nonlinear "
+            "system first (control.linearize) or convert a transfer function "
+            "with control.ss"
+        )
+    raise TypeError(
+        "plant must be a fws.LateralPlant, a control.StateSpace or a fws.Vehicle "
+        f"(with speed=), got {type(plant).__name__}"
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class LoopMatrices:
+    r"""Matrices of the structured steering loop of a plant.
+
+    Attributes
+    ----------
+    A : ndarray
+        State matrix, shape ``(..., n, n)``.
+    B_front, B_rear : ndarray
+        Columns of the inputs ``delta_f`` and ``delta_r``, shape ``(..., n)``.
+    c_e, c_theta : ndarray
+        Rows that measure ``e`` and ``theta``, shape ``(..., n)``.
+    states : tuple of str
+        State names.
+    """
+
+    A: np.ndarray
+    B_front: np.ndarray
+    B_rear: np.ndarray
+    c_e: np.ndarray
+    c_theta: np.ndarray
+    states: tuple[str, ...]
+
+    @property
+    def order(self) -> int:
+        """Number of states ``n``."""
+        return int(self.A.shape[-1])
+
+    def input_vector(self, ratio) -> np.ndarray:
+        r""":math:`\mathbf b = \mathbf B_f + a\mathbf B_r`, shape ``(..., n)``."""
+        a = np.asarray(ratio, dtype=float)[..., np.newaxis]
+        return self.B_front + a * self.B_rear
+
+
+def _index(labels: list[str], name: str) -> int | None:
+    return labels.index(name) if name in labels else None
+
+
+def _statespace_loop(sys: ct.StateSpace) -> LoopMatrices:
+    if not sys.isctime():
+        raise ValueError(
+            f"plant must be a continuous-time system, got sampling time dt={sys.dt}"
+        )
+    A, B, C, D = (np.asarray(m, dtype=float) for m in (sys.A, sys.B, sys.C, sys.D))
+    if A.shape[0] == 0:
+        raise ValueError("plant must have at least one state, got a static gain")
+    if not (np.all(np.isfinite(A)) and np.all(np.isfinite(B))):
+        raise ValueError("plant matrices A and B must be finite")
+    inputs, outputs, states = (
+        list(sys.input_labels),
+        list(sys.output_labels),
+        list(sys.state_labels),
+    )
+    unnamed = all(_DEFAULT_NAME.match(n) for n in inputs + outputs + states)
+    if unnamed and A.shape[0] == 2 and B.shape[1] == 2:
+        # python-control's default names: read as (e, theta; delta_f, delta_r),
+        # feedback on the states.
+        eye = np.eye(2)
+        return LoopMatrices(A, B[:, 0], B[:, 1], eye[0], eye[1], ("e", "theta"))
+    cols = []
+    for name in STEERING_INPUTS:
+        j = _index(inputs, name)
+        if j is None:
+            raise ValueError(
+                f"plant has no input named {name!r} (inputs: {inputs}); name the "
+                "steering inputs delta_f and delta_r"
+            )
+        cols.append(j)
+    rows = []
+    for name in LINEAR_STATES:
+        i = _index(outputs, name)
+        if i is not None:
+            if np.any(D[i, cols] != 0.0):
+                raise ValueError(
+                    f"plant output {name!r} has a direct feedthrough D from the "
+                    "steering inputs: the feedback loop would be algebraic and the "
+                    "characteristic polynomial not affine in the gains"
+                )
+            rows.append(C[i])
+            continue
+        i = _index(states, name)
+        if i is None:
+            raise ValueError(
+                f"plant has no output or state named {name!r} (outputs: {outputs}, "
+                f"states: {states}); the feedback needs e and theta"
+            )
+        rows.append(np.eye(A.shape[0])[i])
+    return LoopMatrices(
+        A, B[:, cols[0]], B[:, cols[1]], rows[0], rows[1], tuple(states)
+    )
+
+
+def loop_matrices(plant: LateralPlant | ct.StateSpace) -> LoopMatrices:
+    """The matrices of the structured loop of a resolved plant.
+
+    Parameters
+    ----------
+    plant : LateralPlant or control.StateSpace
+        A plant resolved by :func:`as_plant`.
+
+    Returns
+    -------
+    LoopMatrices
+        Broadcast over the operating points of a :class:`LateralPlant`.
+
+    Raises
+    ------
+    ValueError
+        If a state space lacks the named signals, has a feedthrough from the
+        steering inputs to ``e``/``theta`` or is discrete-time.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> lm = fws.loop_matrices(fws.LateralPlant(veh, speed=5.0))
+    >>> lm.order, lm.B_rear
+    (2, array([ 5.        , -1.85185185]))
+    """
+    if isinstance(plant, LateralPlant):
+        A, B = plant.matrices()
+        eye = np.broadcast_to(np.eye(2), A.shape)
+        return LoopMatrices(
+            A, B[..., 0], B[..., 1], eye[..., 0, :], eye[..., 1, :], LINEAR_STATES
+        )
+    if isinstance(plant, ct.StateSpace):
+        return _statespace_loop(plant)
+    raise TypeError(
+        f"plant must be a LateralPlant or a control.StateSpace, got "
+        f"{type(plant).__name__}"
+    )
