@@ -21,7 +21,7 @@ __all__ = ["yaw_acceleration", "lateral_acceleration"]
 
 
 def yaw_acceleration(
-    vehicle: Vehicle, speed, delta_f, delta_r, delta_f_rate, delta_r_rate
+    vehicle: Vehicle, delta_f, delta_r, delta_f_rate, delta_r_rate, *, speed
 ) -> float | np.ndarray:
     r"""Yaw acceleration :math:`\ddot\psi` from eq. (10) by the chain rule.
 
@@ -36,7 +36,7 @@ def yaw_acceleration(
     --------
     >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> round(fws.yaw_acceleration(veh, 5.0, 0.0, 0.0, 0.27, 0.0), 6)
+    >>> round(fws.yaw_acceleration(veh, 0.0, 0.0, 0.27, 0.0, speed=5.0), 6)
     0.5
     """
     df = np.asarray(delta_f, dtype=float)
@@ -51,7 +51,7 @@ def yaw_acceleration(
 
 
 def lateral_acceleration(
-    vehicle: Vehicle, speed, delta_f, delta_r, delta_f_rate, delta_r_rate
+    vehicle: Vehicle, delta_f, delta_r, delta_f_rate, delta_r_rate, *, speed
 ) -> float | np.ndarray:
     r"""Lateral acceleration of the centre of gravity G, paper eq. (13).
 
@@ -85,13 +85,13 @@ def lateral_acceleration(
 
     >>> import numpy as np, fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=0.0)
-    >>> delta = fws.feedforward_steering(veh, 0.1)   # radius 10 m
-    >>> round(fws.lateral_acceleration(veh, 5.0, delta, 0.0, 0.0, 0.0), 9)
+    >>> delta = fws.feedforward_steering(veh, curvature=0.1)   # radius 10 m
+    >>> round(fws.lateral_acceleration(veh, delta, 0.0, 0.0, 0.0, speed=5.0), 9)
     2.5
     """
-    psi_dot = yaw_rate(vehicle, speed, delta_f, delta_r)
+    psi_dot = yaw_rate(vehicle, delta_f, delta_r, speed=speed)
     psi_ddot = yaw_acceleration(
-        vehicle, speed, delta_f, delta_r, delta_f_rate, delta_r_rate
+        vehicle, delta_f, delta_r, delta_f_rate, delta_r_rate, speed=speed
     )
     out = (
         speed * (psi_dot + np.asarray(delta_r_rate, dtype=float)) * np.cos(delta_r)

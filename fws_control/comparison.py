@@ -68,7 +68,7 @@ class LinearNonlinearComparison:
 
     def _linear_steering(self):
         y = self.linear.outputs
-        ff = feedforward_steering(self.nonlinear.vehicle, self.curvature)
+        ff = feedforward_steering(self.nonlinear.vehicle, curvature=self.curvature)
         return y[2] + (ff if self.feedforward else 0.0), y[3]
 
     def max_difference(self) -> dict[str, float]:
@@ -253,7 +253,7 @@ def compare_linear_nonlinear(
     if feedforward or curvature == 0.0:
         lin = ct.initial_response(cl, T=t, X0=x0)
     else:
-        w = -feedforward_steering(vehicle, curvature)
+        w = -feedforward_steering(vehicle, curvature=curvature)
         U = np.vstack([np.full_like(t, w), np.zeros_like(t)])
         lin = ct.forced_response(cl, T=t, U=U, X0=x0)
     return LinearNonlinearComparison(

@@ -79,6 +79,7 @@ def steering_command(
     gains: SteeringGains,
     e,
     theta,
+    *,
     curvature=0.0,
     feedforward: bool = True,
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -122,7 +123,7 @@ def steering_command(
     >>> round(float(df), 6), round(float(dr), 6)
     (0.163712, 0.1)
     >>> lim = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35, max_steer_front=0.1)
-    >>> float(fws.steering_command(lim, g, 1.0, 0.0, 0.1)[0])
+    >>> float(fws.steering_command(lim, g, 1.0, 0.0, curvature=0.1)[0])
     0.1
     """
     gains = _check_gains(gains)
@@ -148,9 +149,10 @@ def steering_command_rate(
     gains: SteeringGains,
     e,
     theta,
-    curvature,
     e_rate,
     theta_rate,
+    *,
+    curvature,
     curvature_rate=0.0,
     feedforward: bool = True,
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -185,8 +187,8 @@ def steering_command_rate(
     >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     >>> g = fws.SteeringGains(k1=0.1, k2=0.5, ratio=-1.0)
-    >>> r = fws.steering_command_rate(veh, g, 1.0, 0.0, 0.0, e_rate=-1.0,
-    ...                               theta_rate=0.0)
+    >>> r = fws.steering_command_rate(veh, g, 1.0, 0.0, e_rate=-1.0,
+    ...                               theta_rate=0.0, curvature=0.0)
     >>> [round(float(v), 6) for v in r]
     [0.1, -0.1]
     """
@@ -209,8 +211,8 @@ def steering_command_rate(
             gains,
             e,
             theta,
-            curvature,
-            feedforward,
+            curvature=curvature,
+            feedforward=feedforward,
         )
         rate_f = np.where(np.abs(cmd_f) > max_f, 0.0, rate_f)
         rate_r = np.where(np.abs(cmd_r) > max_r, 0.0, rate_r)
@@ -221,6 +223,7 @@ def steering_command_rate(
 def path_tracking_controller(
     vehicle: Vehicle,
     gains: SteeringGains,
+    *,
     feedforward: bool = True,
     name: str = "controller",
 ) -> ct.NonlinearIOSystem:
@@ -274,7 +277,9 @@ def path_tracking_controller(
 
     def output(t, x, u, params):
         g = SteeringGains(params["k1"], params["k2"], params["ratio"])
-        df, dr = steering_command(vehicle, g, u[0], u[1], u[2], feedforward)
+        df, dr = steering_command(
+            vehicle, g, u[0], u[1], curvature=u[2], feedforward=feedforward
+        )
         return np.array([float(df), float(dr)])
 
     return ct.nlsys(
@@ -292,7 +297,7 @@ def path_tracking_controller(
 
 
 def feedback_controller(
-    vehicle: Vehicle, gains: SteeringGains, name: str = "controller"
+    vehicle: Vehicle, gains: SteeringGains, *, name: str = "controller"
 ) -> ct.NonlinearIOSystem:
     """Feedback-only controller, paper eqs. (28)-(29).
 
@@ -311,7 +316,7 @@ def feedback_controller(
 
 
 def feedforward_feedback_controller(
-    vehicle: Vehicle, gains: SteeringGains, name: str = "controller"
+    vehicle: Vehicle, gains: SteeringGains, *, name: str = "controller"
 ) -> ct.NonlinearIOSystem:
     """Feedforward + feedback controller, paper eqs. (24)-(29).
 
@@ -330,7 +335,7 @@ def feedforward_feedback_controller(
 
 
 def actuator_rate(
-    vehicle: Vehicle, command, angle, time_constant: float
+    vehicle: Vehicle, command, angle, *, time_constant: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """Rates of the rate-limited first-order actuator (see module docstring).
 
@@ -347,6 +352,7 @@ def actuator_rate(
 
 def steering_actuator(
     vehicle: Vehicle,
+    *,
     time_constant: float = DEFAULT_ACTUATOR_TIME_CONSTANT,
     name: str = "actuator",
 ) -> ct.NonlinearIOSystem:
@@ -388,7 +394,7 @@ def steering_actuator(
     tau = float(check_positive("time_constant", time_constant))
 
     def update(t, x, u, params):
-        rf, rr = actuator_rate(vehicle, u, x, tau)
+        rf, rr = actuator_rate(vehicle, u, x, time_constant=tau)
         return np.array([float(rf), float(rr)])
 
     return ct.nlsys(

@@ -83,7 +83,9 @@ def peak_abs(signal) -> float | np.ndarray:
     return _scalar(np.where(np.any(valid, axis=-1), out, np.nan))
 
 
-def settling_time(t, signal, band=None, fraction: float = 0.02) -> float | np.ndarray:
+def settling_time(
+    t, signal, *, band=None, fraction: float = 0.02
+) -> float | np.ndarray:
     r"""Time after which ``|signal|`` stays within a band around zero.
 
     The last crossing of ``|signal| = band`` is located by linear
@@ -140,7 +142,7 @@ def settling_time(t, signal, band=None, fraction: float = 0.02) -> float | np.nd
     return _scalar(out)
 
 
-def overshoot(signal, relative: bool = False) -> float | np.ndarray:
+def overshoot(signal, *, relative: bool = False) -> float | np.ndarray:
     """Largest excursion past zero, on the side opposite to the start.
 
     For an error that starts at ``x0 != 0`` and should decay to zero, this is
@@ -178,7 +180,7 @@ def overshoot(signal, relative: bool = False) -> float | np.ndarray:
     return _scalar(out)
 
 
-def rms(t, signal, t_start: float = 0.0) -> float | np.ndarray:
+def rms(t, signal, *, t_start: float = 0.0) -> float | np.ndarray:
     r"""Root mean square over time, :math:`\sqrt{\frac{1}{T}\int x^2\,dt}`.
 
     Trapezoidal rule over the samples with ``t >= t_start``.
@@ -209,7 +211,7 @@ def rms(t, signal, t_start: float = 0.0) -> float | np.ndarray:
     return _scalar(np.sqrt(_time_average(t, x**2, t_start)))
 
 
-def steady_state(t, signal, window: float = 1.0) -> float | np.ndarray:
+def steady_state(t, signal, *, window: float = 1.0) -> float | np.ndarray:
     """Time average of the signal over the last `window` seconds.
 
     Parameters
@@ -294,7 +296,7 @@ class TrackingMetrics:
 
 
 def tracking_metrics(
-    result, band=None, fraction: float = 0.02, window: float = 1.0
+    result, *, band=None, fraction: float = 0.02, window: float = 1.0
 ) -> TrackingMetrics:
     """All metrics of a :class:`SimulationResult` or :class:`BatchResult`.
 
@@ -317,8 +319,10 @@ def tracking_metrics(
     >>> import fws_control as fws
     >>> from fws_control.paths import Arc
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> g = fws.double_root_gains(veh, 5.0, 0.1, ratio=-1.0, pole=-1.0)
-    >>> res = fws.simulate(veh, Arc(curvature=0.1), g, 5.0, (0.0, -5.0, 0.0), 15.0)
+    >>> g = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=-1.0,
+    ...                           pole=-1.0)
+    >>> res = fws.simulate(veh, Arc(curvature=0.1), g, speed=5.0,
+    ...                    initial_state=(0.0, -5.0, 0.0), duration=15.0)
     >>> m = fws.tracking_metrics(res)
     >>> m.status, round(m.peak_lateral_accel, 2), round(m.settling_time, 2)
     ('ok', 5.37, 6.23)
@@ -333,11 +337,11 @@ def tracking_metrics(
     e = np.asarray(result.e, dtype=float)
     theta = np.asarray(result.theta, dtype=float)
     if t.size >= 2:
-        settle = horizon(settling_time(t, e, band, fraction))
+        settle = horizon(settling_time(t, e, band=band, fraction=fraction))
         ovs = horizon(overshoot(e))
         rms_e = horizon(rms(t, e))
-        ss_e = horizon(steady_state(t, e, window))
-        ss_th = horizon(steady_state(t, theta, window))
+        ss_e = horizon(steady_state(t, e, window=window))
+        ss_th = horizon(steady_state(t, theta, window=window))
     else:  # a run that stopped at t = 0
         settle = ovs = rms_e = ss_e = ss_th = np.nan
     return TrackingMetrics(

@@ -68,7 +68,7 @@ def path_frame_derivatives(speed, wheelbase, curvature, e, theta, delta_f, delta
 
 
 def yaw_rate(
-    vehicle: Vehicle, speed: float | np.ndarray, delta_f, delta_r
+    vehicle: Vehicle, delta_f, delta_r, *, speed: float | np.ndarray
 ) -> float | np.ndarray:
     r"""Yaw rate of the kinematic 4WS model, paper eq. (10).
 
@@ -85,7 +85,7 @@ def yaw_rate(
     --------
     >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> round(fws.yaw_rate(veh, 5.0, 0.1, -0.1), 6)
+    >>> round(fws.yaw_rate(veh, 0.1, -0.1, speed=5.0), 6)
     0.369753
     """
     df = np.asarray(delta_f, dtype=float)
@@ -95,7 +95,7 @@ def yaw_rate(
     return float(out) if np.ndim(out) == 0 else out
 
 
-def feedforward_steering(vehicle: Vehicle, curvature) -> float | np.ndarray:
+def feedforward_steering(vehicle: Vehicle, *, curvature) -> float | np.ndarray:
     r"""Front steering angle that holds R on a path of constant curvature.
 
     Paper eq. (26), :math:`\delta_f^{FF} = \arctan(\kappa_C f)`, with
@@ -106,7 +106,7 @@ def feedforward_steering(vehicle: Vehicle, curvature) -> float | np.ndarray:
     --------
     >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> round(fws.feedforward_steering(veh, 0.1), 6)
+    >>> round(fws.feedforward_steering(veh, curvature=0.1), 6)
     0.263712
     """
     k = check_finite("curvature", curvature)
@@ -148,7 +148,7 @@ def _path_update(t, x, u, params):
 
 
 def global_frame_model(
-    vehicle: Vehicle, speed: float = 1.0, name: str = "vehicle"
+    vehicle: Vehicle, *, speed: float = 1.0, name: str = "vehicle"
 ) -> ct.NonlinearIOSystem:
     r"""Kinematic 4WS bicycle model in the global frame, paper eqs. (8)-(10).
 
@@ -205,6 +205,7 @@ def global_frame_model(
 
 def path_frame_model(
     vehicle: Vehicle,
+    *,
     speed: float = 1.0,
     curvature: float = 0.0,
     name: str = "vehicle_path",
@@ -249,7 +250,7 @@ def path_frame_model(
     >>> import numpy as np, fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     >>> sys = fws.path_frame_model(veh, speed=5.0, curvature=0.1)
-    >>> u_ff = [fws.feedforward_steering(veh, 0.1), 0.0]
+    >>> u_ff = [fws.feedforward_steering(veh, curvature=0.1), 0.0]
     >>> np.allclose(sys.dynamics(0.0, [0.0, 0.0, 0.0], u_ff), [5.0, 0.0, 0.0])
     True
     """

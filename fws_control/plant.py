@@ -151,7 +151,7 @@ class LateralPlant:
     @property
     def feedforward(self) -> float | np.ndarray:
         r"""Feedforward front angle :math:`\arctan(\kappa f)` [rad], eq. (26)."""
-        return feedforward_steering(self.vehicle, self.curvature)
+        return feedforward_steering(self.vehicle, curvature=self.curvature)
 
     def matrices(self) -> tuple[np.ndarray, np.ndarray]:
         """``(A, B)`` of the linearisation, shapes ``(..., 2, 2)``.

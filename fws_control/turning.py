@@ -32,6 +32,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import control as ct
 import numpy as np
 
 from .models import _check_steering
@@ -130,6 +131,7 @@ def steady_turn(vehicle: Vehicle, delta_f, delta_r) -> TurningGeometry:
 
 def turning_radius(
     vehicle: Vehicle,
+    *,
     ratio,
     max_steer_front=None,
     max_steer_rear=None,
@@ -170,7 +172,8 @@ def turning_radius(
     --------
     >>> import numpy as np, fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> r = fws.turning_radius(veh, [0.0, -0.5, -1.0], np.radians(30))
+    >>> r = fws.turning_radius(veh, ratio=[0.0, -0.5, -1.0],
+    ...                        max_steer_front=np.radians(30))
     >>> r.rear_axle.round(3)
     array([4.677, 3.307, 2.7  ])
     """
@@ -201,12 +204,13 @@ def turning_radius(
 
 def plot_turning_radius(
     vehicle: Vehicle,
+    *,
     ratios=None,
     limits=None,
     ax=None,
     max_steer_rear=None,
     ylim: float = 12.0,
-):
+) -> ct.ControlPlot:
     r"""Turning radius of R (solid) and G (dashed) against the ratio ``a``.
 
     Parameters
@@ -226,16 +230,17 @@ def plot_turning_radius(
 
     Returns
     -------
-    matplotlib.axes.Axes
+    control.ControlPlot
+        ``.axes[0, 0]`` the axes, ``.lines[0, 0]`` the curves.
 
     Examples
     --------
     >>> import matplotlib; matplotlib.use("Agg")
     >>> import matplotlib.pyplot as plt, fws_control as fws
-    >>> ax = fws.plot_turning_radius(fws.Vehicle(2.7, 1.35))
-    >>> ax.get_xlabel()
+    >>> cplt = fws.plot_turning_radius(fws.Vehicle(2.7, 1.35))
+    >>> cplt.axes[0, 0].get_xlabel()
     'ratio $a$ [-]'
-    >>> plt.close(ax.figure)
+    >>> plt.close(cplt.figure)
     """
     import matplotlib.pyplot as plt
 
@@ -244,7 +249,9 @@ def plot_turning_radius(
     a = np.linspace(-2.0, 0.8, 301) if ratios is None else np.asarray(ratios, float)
     lims = np.radians([20.0, 30.0, 40.0]) if limits is None else limits
     for i, lim in enumerate(np.atleast_1d(lims)):
-        geo = turning_radius(vehicle, a, lim, max_steer_rear)
+        geo = turning_radius(
+            vehicle, ratio=a, max_steer_front=lim, max_steer_rear=max_steer_rear
+        )
         color = f"C{i}"
         deg = np.degrees(lim)
         ax.plot(
@@ -270,5 +277,7 @@ def plot_turning_radius(
         fontsize=10,
     )
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, ncol=2, loc="upper left")
-    return ax
+    leg = ax.legend(fontsize=8, ncol=2, loc="upper left")
+    lines = np.empty((1, 1), dtype=object)
+    lines[0, 0] = list(ax.get_lines())
+    return ct.ControlPlot(lines, np.array([[ax]]), ax.figure, legend=leg)

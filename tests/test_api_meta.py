@@ -129,6 +129,7 @@ RECORD_CLASSES = {
     "Spline": "path record: Spline(waypoints, closed)",
     "PathChain": "path record: PathChain(segments, closed)",
     "Path": "abstract base of the path records",
+    "LoopMatrices": "record of the loop matrices (A, B_front, B_rear, c_e, ...)",
 }
 
 # Check 2: further parameters that are data for one particular callable.
@@ -159,15 +160,30 @@ POSITIONAL_EXCEPTIONS = {
     ),
     "AffineCoefficients.p1": ({"k1", "k2"}, "evaluates at gain points"),
     "AffineCoefficients.p0": ({"k1", "k2"}, "evaluates at gain points"),
+    "StabilityBoundary.from_coefficients": (
+        {"alpha", "beta", "gamma", "condition"},
+        "alternate constructor of the record: its arguments are the fields",
+    ),
     "Path.placed": (
         {"start", "start_heading"},
         "the new placement is the data (mirrors the record fields)",
     ),
 }
 
+# Check 2: a ``plot`` method may take ``ax`` as its first, positional
+# parameter (spec: ``.plot(ax=None, ...)``); everywhere else ``ax`` is an
+# option and keyword-only, as in python-control's plot functions.
+PLOT_AX_POSITIONAL = "ax"
+
 # Check 4: callables that may take **kwargs (the check fails for any other).
-# Key: public label; value: reason.
-KWARGS_EXCEPTIONS: dict[str, str] = {}
+# Key: public label; value: reason. Each one is also called with a bogus
+# keyword in test_kwargs_exceptions_reject_unknown (see _kwargs_calls).
+KWARGS_EXCEPTIONS = {
+    "StabilityChart.draw": (
+        "forwards the styling keywords of StabilityChart.plot and checks the"
+        " names itself"
+    ),
+}
 
 # Spec 0.2: exact positional parameters and required keyword-only parameters
 # of the analysis functions (VK = the Vehicle convenience keywords).
@@ -227,6 +243,32 @@ SPEC_TOP_LEVEL = (
     "AmbiguousProjectionError",
 )
 SPEC_REMOVED = ("BatchResult",)
+# Spec 0.2: attributes (fields, properties, methods) of the spec's classes,
+# and those that are gone.
+SPEC_ATTRIBUTES = {
+    "LateralPlant": (
+        "vehicle",
+        "speed",
+        "curvature",
+        "model",
+        "linearize",
+        "input_gain_factor",
+    ),
+    "SteeringGains": ("k1", "k2", "ratio", "K", "K_paper", "from_K"),
+    "AffinePolynomial": (
+        "open_loop",
+        "n1",
+        "n2",
+        "order",
+        "coefficients",
+        "evaluate",
+    ),
+    "StabilityBoundaries": ("real_root", "complex_root", "lines"),
+    "BoundaryCurve": ("omega", "k1", "k2"),
+    "StabilityChart": ("k1", "k2", "stable", "stable_fraction", "boundaries"),
+    "SimulationResult": ("t", "x", "y", "psi", "e", "theta", "delta_f", "delta_r"),
+}
+SPEC_REMOVED_ATTRIBUTES = {"SteeringGains": ("matrix",)}
 SPEC_PAPER = (
     "PAPER_VEHICLE",
     "PAPER_CURVATURES",
@@ -386,6 +428,32 @@ def test_spec_names_exported():
     assert not problems, _report(problems, "differences from the spec's names")
 
 
+def _attribute_names(cls):
+    fields = {f.name for f in dataclasses.fields(cls)}
+    return fields | set(dir(cls)) if dataclasses.is_dataclass(cls) else set(dir(cls))
+
+
+def test_spec_class_attributes():
+    problems = []
+    for cls_name, attrs in SPEC_ATTRIBUTES.items():
+        cls = getattr(fws, cls_name, None)
+        if not inspect.isclass(cls):
+            problems.append(f"{cls_name}: not exported")
+            continue
+        names = _attribute_names(cls)
+        problems += [f"{cls_name}.{a}: missing" for a in attrs if a not in names]
+    for cls_name, attrs in SPEC_REMOVED_ATTRIBUTES.items():
+        cls = getattr(fws, cls_name, None)
+        if inspect.isclass(cls):
+            names = _attribute_names(cls)
+            problems += [
+                f"{cls_name}.{a}: removed in 0.2 but present"
+                for a in attrs
+                if a in names
+            ]
+    assert not problems, _report(problems, "differences from the spec's classes")
+
+
 def test_spec_analysis_signatures():
     problems = []
     for name, (positional, keywords) in SPEC_SIGNATURES.items():
@@ -460,6 +528,9 @@ def test_options_are_keyword_only():
         if entry.kind in ("function", "class") and params:
             if params[0].name in FIRST_PARAMETER_NAMES:
                 allowed.add(params[0].name)
+        if entry.kind == "method" and entry.label.endswith(".plot") and params:
+            if params[0].name == PLOT_AX_POSITIONAL:
+                allowed.add(PLOT_AX_POSITIONAL)
         for p in params:
             if p.kind is p.VAR_POSITIONAL:
                 violations.append(f"{_where(entry)}: *{p.name} (positional catch-all)")
@@ -487,9 +558,9 @@ def _numpydoc(entry):
         return npd.FunctionDoc(entry.obj)
 
 
-def _documented_names(doc):
+def _documented_names(doc, sections=("Parameters", "Other Parameters")):
     names = set()
-    for section in ("Parameters", "Other Parameters"):
+    for section in sections:
         for param in doc[section]:
             # numpydoc allows "a, b : float" (and "*args", "**kwargs")
             for name in param.name.split(","):
@@ -506,6 +577,10 @@ def test_parameters_documented():
             violations.append(f"{_where(entry)}: numpydoc error {exc!r}")
             continue
         documented = _documented_names(doc)
+        if entry.kind == "class" and dataclasses.is_dataclass(entry.obj):
+            # a dataclass's constructor parameters are its fields, which
+            # numpydoc documents as Attributes
+            documented |= _documented_names(doc, ("Attributes",))
         for p in parameters(entry):
             if p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD):
                 continue
@@ -524,9 +599,14 @@ def test_no_stale_parameter_docs():
             continue  # reported by test_parameters_documented
         names = {p.name for p in parameters(entry)}
         for name in _documented_names(doc) - names:
-            violations.append(
-                f"{_where(entry)}: documents {name!r}, not in the signature"
-            )
+            if not name.isidentifier():
+                violations.append(
+                    f"{_where(entry)}: free text parsed as a parameter: {name!r}"
+                )
+            else:
+                violations.append(
+                    f"{_where(entry)}: documents {name!r}, not in the signature"
+                )
     assert not violations, _report(violations, "stale parameter docs")
 
 
@@ -567,6 +647,28 @@ def test_no_silent_kwargs():
                 "(list it in KWARGS_EXCEPTIONS with a reason, or remove it)"
             )
     assert not violations, _report(violations, "callables accepting **kwargs")
+
+
+def _kwargs_calls():
+    """KWARGS_EXCEPTIONS label -> call with ``bogus_kw=1``."""
+
+    def draw():
+        veh, plant, _ = _objects()
+        chart = fws.stability_chart(plant, ratio=-1.0, k1=[0.0, 1.0], k2=[0.0, 1.0])
+        _, ax = plt.subplots()
+        chart.draw(ax, bogus_kw=1)
+
+    return {"StabilityChart.draw": draw}
+
+
+@pytest.mark.parametrize("label", sorted(KWARGS_EXCEPTIONS))
+def test_kwargs_exceptions_reject_unknown(label):
+    """A function listed as taking **kwargs still rejects unknown names."""
+    try:
+        with pytest.raises(TypeError, match="bogus_kw"):
+            _kwargs_calls()[label]()
+    finally:
+        plt.close("all")
 
 
 def test_kwargs_exceptions_have_reasons():

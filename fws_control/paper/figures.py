@@ -639,7 +639,9 @@ def _turning_table(vehicle: Vehicle) -> str:
         "|---" * (len(ratios) + 1) + "|",
     ]
     for deg in (20.0, 30.0, 40.0):
-        r = turning_radius(vehicle, np.array(ratios), math.radians(deg))
+        r = turning_radius(
+            vehicle, ratio=np.array(ratios), max_steer_front=math.radians(deg)
+        )
         rows.append(
             f"| {deg:.0f}° | "
             + " | ".join(
