@@ -260,6 +260,17 @@ def _vehicle(args):
     return Vehicle(wheelbase=args.wheelbase, rear_to_cg=args.rear_to_cg)
 
 
+def _plant(args, veh, model=None):
+    from .plant import LateralPlant
+
+    return LateralPlant(
+        veh,
+        speed=args.speed,
+        curvature=args.curvature,
+        model=args.model if model is None else model,
+    )
+
+
 def _gains(args, veh):
     from .design import double_root_gains
     from .gains import SteeringGains
@@ -268,9 +279,7 @@ def _gains(args, veh):
         raise ValueError("give both --k1 and --k2, or neither (then --pole is used)")
     if args.k1 is not None:
         return SteeringGains(args.k1, args.k2, args.ratio)
-    g = double_root_gains(
-        veh, args.speed, args.curvature, args.ratio, args.pole, args.model
-    )
+    g = double_root_gains(_plant(args, veh), ratio=args.ratio, pole=args.pole)
     return SteeringGains(float(g.k1), float(g.k2), args.ratio)
 
 
@@ -291,9 +300,7 @@ def _cmd_gains(args) -> int:
 
     veh = _vehicle(args)
     # Design first so that bad input fails before anything is printed.
-    double_root_gains(
-        veh, args.speed, args.curvature, args.ratio, args.pole, args.model
-    )
+    double_root_gains(_plant(args, veh), ratio=args.ratio, pole=args.pole)
     print(
         f"V = {args.speed:g} m/s, kappa = {args.curvature:g} 1/m, a = {args.ratio:g}, "
         f"lambda0 = {args.pole:g} 1/s, f = {veh.wheelbase:g} m"
@@ -302,7 +309,7 @@ def _cmd_gains(args) -> int:
     for model in order:
         try:
             g = double_root_gains(
-                veh, args.speed, args.curvature, args.ratio, args.pole, model
+                _plant(args, veh, model), ratio=args.ratio, pole=args.pole
             )
         except UncontrollableError as exc:
             if model == args.model:
@@ -314,7 +321,7 @@ def _cmd_gains(args) -> int:
         print(f"  k1 = {float(g.k1):.6f} rad/m   k2 = {float(g.k2):.6f}")
         print(f"  k3 = {float(g.k3):.6f} rad/m   k4 = {float(g.k4):.6f}")
         for lin in ("exact", "paper"):
-            cl = closed_loop(veh, args.speed, args.curvature, g, lin)
+            cl = closed_loop(_plant(args, veh, lin), g)
             print(f"  closed-loop poles, {lin} linearisation: {_fmt_poles(cl.poles())}")
     return 0
 
@@ -323,22 +330,20 @@ def _cmd_chart(args) -> int:
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from .charts import plot_paper_figure, stability_chart
+    from .charts import stability_chart
+    from .paper.charts import plot_paper_figure
 
     _check_out(args.out)
     if args.paper_figure is not None:
-        fig = plot_paper_figure(args.paper_figure, model=args.model)
+        fig = plot_paper_figure(args.paper_figure, model=args.model).figure
     else:
         k1 = np.linspace(*args.k1_range, args.points)
         k2 = np.linspace(*args.k2_range, args.points)
         ch = stability_chart(
-            _vehicle(args),
-            args.curvature,
-            args.ratio,
-            args.speed,
-            k1,
-            k2,
-            model=args.model,
+            _plant(args, _vehicle(args)),
+            ratio=args.ratio,
+            k1=k1,
+            k2=k2,
             pole=args.pole,
         )
         fig = ch.plot().figure
@@ -385,7 +390,7 @@ def _cmd_rlocus(args) -> int:
     if args.param == "gain":
         if args.redesign:
             raise ValueError("--redesign needs --param ratio, speed or curvature")
-        loop = gain_loop(veh, args.speed, args.curvature, g, args.model)
+        loop = gain_loop(_plant(args, veh), g)
         lo, hi = (0.0, 5.0) if args.range is None else args.range
         if lo < 0 or hi <= lo:
             raise ValueError(
@@ -409,13 +414,10 @@ def _cmd_rlocus(args) -> int:
             raise ValueError(f"--range must have MIN < MAX, got {lo:g} {hi:g}")
         values = np.linspace(lo, hi, args.points)
         pz = parameter_locus(
-            veh,
-            args.param,
-            values,
-            args.speed,
-            args.curvature,
+            _plant(args, veh),
             g,
-            model=args.model,
+            parameter=args.param,
+            values=values,
             redesign_pole=args.pole if args.redesign else None,
             design_model=args.design_model,
         )
@@ -478,16 +480,16 @@ def _cmd_simulate(args) -> int:
     g = _gains(args, veh)
     cmp = compare_linear_nonlinear(
         veh,
+        g,
         speed=args.speed,
         curvature=args.curvature if args.path == "arc" else 0.0,
-        gains=g,
         initial_state=(args.x0, args.y0, math.radians(args.psi0)),
         duration=args.duration,
         feedforward=not args.no_feedforward,
         model=args.model,
     )
     res = cmp.nonlinear
-    fig = cmp.plot()
+    fig = cmp.plot().figure
     _save(fig, args.out)
     plt.close(fig)
     print(f"k1 = {float(g.k1):.6f}, k2 = {float(g.k2):.6f}, a = {float(g.ratio):g}")
@@ -520,7 +522,7 @@ def _write_csv(res, path: Path) -> None:
 
 
 def _cmd_reproduce(args) -> int:
-    from .figures import reproduce
+    from .paper.figures import reproduce
 
     res = reproduce(
         args.out,

@@ -18,17 +18,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import control as ct
 import numpy as np
 
 from .gains import SteeringGains
-from .linear import closed_loop
+from .linear import check_gains, closed_loop
 from .models import feedforward_steering
 from .paths import Arc, Straight
+from .plant import LateralPlant, as_plant
 from .simulation import SimulationResult, simulate
 from .validation import check_finite, check_positive
-from .vehicle import Vehicle
 
 __all__ = ["LinearNonlinearComparison", "compare_linear_nonlinear"]
 
@@ -90,28 +91,54 @@ class LinearNonlinearComparison:
             "delta_r": float(np.nanmax(np.abs(dr[:n] - nl.delta_r))),
         }
 
-    def plot(self, fig=None):
+    def plot(self, ax=None) -> ct.ControlPlot:
         """Overlay both responses: errors, trajectory, steering angles.
+
+        Parameters
+        ----------
+        ax : sequence of 5 matplotlib.axes.Axes, optional
+            Axes for lateral error, heading error, front and rear steering
+            (over time) and the trajectory; a new figure if None.
 
         Returns
         -------
-        matplotlib.figure.Figure
-            Four panels over time (lateral error [m], heading error [deg],
-            front and rear steering [deg]; nonlinear solid, linear dashed)
-            and the trajectory of R with the path.
+        control.ControlPlot
+            Axes of shape ``(1, 5)``: four panels over time (lateral error
+            [m], heading error [deg], front and rear steering [deg];
+            nonlinear solid, linear dashed) and the trajectory of R with the
+            path.
+
+        Examples
+        --------
+        >>> import matplotlib; matplotlib.use("Agg")
+        >>> import matplotlib.pyplot as plt, fws_control as fws
+        >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+        >>> plant = fws.LateralPlant(veh, speed=5.0)
+        >>> g = fws.double_root_gains(plant, ratio=0.0, pole=-1.0)
+        >>> cmp = fws.compare_linear_nonlinear(plant, g, duration=2.0)
+        >>> cplt = cmp.plot()
+        >>> cplt.axes.shape
+        (1, 5)
+        >>> plt.close(cplt.figure)
         """
         import matplotlib.pyplot as plt
 
-        if fig is None:
+        if ax is None:
             fig = plt.figure(figsize=(12, 7.5), layout="constrained")
-        gs = fig.add_gridspec(2, 3)
-        axes = [
-            fig.add_subplot(gs[0, 0]),
-            fig.add_subplot(gs[0, 1]),
-            fig.add_subplot(gs[1, 0]),
-            fig.add_subplot(gs[1, 1]),
-        ]
-        ax_xy = fig.add_subplot(gs[:, 2])
+            gs = fig.add_gridspec(2, 3)
+            axes = [
+                fig.add_subplot(gs[0, 0]),
+                fig.add_subplot(gs[0, 1]),
+                fig.add_subplot(gs[1, 0]),
+                fig.add_subplot(gs[1, 1]),
+            ]
+            ax_xy = fig.add_subplot(gs[:, 2])
+        else:
+            given = list(np.asarray(ax, dtype=object).ravel())
+            if len(given) != 5:
+                raise ValueError(f"ax must hold 5 axes, got {len(given)}")
+            axes, ax_xy = given[:4], given[4]
+            fig = ax_xy.figure
         nl, lin = self.nonlinear, self.linear
         df_lin, dr_lin = self._linear_steering()
         deg = 180.0 / math.pi
@@ -154,35 +181,38 @@ class LinearNonlinearComparison:
             + ("" if self.feedforward else ", feedback only"),
             fontsize=11,
         )
-        return fig
+        all_axes = [*axes, ax_xy]
+        lines = np.empty((1, 5), dtype=object)
+        for i, a in enumerate(all_axes):
+            lines[0, i] = list(a.get_lines())
+        return ct.ControlPlot(lines, np.array([all_axes], dtype=object), fig)
 
 
 def compare_linear_nonlinear(
-    vehicle: Vehicle,
-    speed: float,
-    curvature: float,
+    plant: Any,
     gains: SteeringGains,
     *,
     initial_state=None,
     initial_errors=None,
     duration: float = 15.0,
     feedforward: bool = True,
-    model: str = "exact",
     dt: float = 0.01,
+    speed: Any = None,
+    curvature: Any = None,
+    model: Any = None,
 ) -> LinearNonlinearComparison:
     r"""Linear and nonlinear responses from the same initial errors.
 
     Parameters
     ----------
-    vehicle : Vehicle
-        Geometry.
-    speed : float
-        Speed [m/s], nonzero.
-    curvature : float
-        Path curvature [1/m]: 0 is the straight path along the x-axis,
-        otherwise the :class:`Arc` that starts at the origin heading +x.
+    plant : LateralPlant or Vehicle
+        The kinematic plant at one operating point (the nonlinear run needs
+        its vehicle): speed [m/s] and curvature [1/m]; curvature 0 is the
+        straight path along the x-axis, otherwise the :class:`Arc` that
+        starts at the origin heading +x. Its model is the linearisation of
+        the linear prediction.
     gains : SteeringGains
-        Scalar gains. The argument order follows :func:`closed_loop`.
+        Scalar gains.
     initial_state : array_like, optional
         ``(x_R, y_R, psi)`` [m, m, rad] of the rear-axle centre; default
         ``(0, 2, 0)``, the paper's straight-road start.
@@ -193,10 +223,10 @@ def compare_linear_nonlinear(
         [s].
     feedforward : bool, optional
         Curvature feedforward on (default) or off.
-    model : {"exact", "paper"}, optional
-        Linearisation of the linear prediction.
     dt : float, optional
         Output time step [s] of both responses.
+    speed, curvature, model : optional
+        With a :class:`Vehicle` only, as in :func:`linearize`.
 
     Returns
     -------
@@ -211,16 +241,24 @@ def compare_linear_nonlinear(
     --------
     >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> g = fws.double_root_gains(veh, 5.0, 0.1, ratio=-1.0, pole=-1.0)
-    >>> small = fws.compare_linear_nonlinear(veh, 5.0, 0.1, g,
-    ...                                      initial_errors=(0.05, 0.0))
+    >>> plant = fws.LateralPlant(veh, speed=5.0, curvature=0.1)
+    >>> g = fws.double_root_gains(plant, ratio=-1.0, pole=-1.0)
+    >>> small = fws.compare_linear_nonlinear(plant, g, initial_errors=(0.05, 0.0))
     >>> small.max_difference()["e"] < 1e-3
     True
     """
-    if not isinstance(gains, SteeringGains):
-        raise TypeError(f"gains must be a SteeringGains, got {type(gains).__name__}")
-    speed = float(check_finite("speed", speed))
-    curvature = float(check_finite("curvature", curvature))
+    gains = check_gains(gains, scalar=True)
+    p = as_plant(plant, speed=speed, curvature=curvature, model=model)
+    if not isinstance(p, LateralPlant):
+        raise TypeError(
+            "compare_linear_nonlinear needs a fws.LateralPlant (or a Vehicle with "
+            f"speed=): the nonlinear run needs the vehicle, got {type(p).__name__}"
+        )
+    if p.shape != ():
+        raise ValueError(
+            f"plant must be one operating point, got speed/curvature of shape {p.shape}"
+        )
+    vehicle, speed, curvature = p.vehicle, float(p.speed), float(p.curvature)
     duration = float(check_positive("duration", duration))
     path = Straight() if curvature == 0.0 else Arc(curvature=curvature)
     if initial_state is not None and initial_errors is not None:
@@ -242,14 +280,14 @@ def compare_linear_nonlinear(
         vehicle,
         path,
         gains,
-        speed,
-        initial_state,
-        duration,
+        speed=speed,
+        initial_state=initial_state,
+        duration=duration,
         feedforward=feedforward,
         t_eval=t,
     )
     x0 = [float(nl.e[0]), float(nl.theta[0])]
-    cl = closed_loop(vehicle, speed, curvature, gains, model)
+    cl = closed_loop(p, gains)
     if feedforward or curvature == 0.0:
         lin = ct.initial_response(cl, T=t, X0=x0)
     else:
@@ -257,5 +295,5 @@ def compare_linear_nonlinear(
         U = np.vstack([np.full_like(t, w), np.zeros_like(t)])
         lin = ct.forced_response(cl, T=t, U=U, X0=x0)
     return LinearNonlinearComparison(
-        lin, nl, speed, curvature, gains, model, bool(feedforward)
+        lin, nl, speed, curvature, gains, p.model, bool(feedforward)
     )

@@ -21,10 +21,12 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
 
+import control as ct
 import numpy as np
 
 from ..design import UncontrollableError, double_root_gains
 from ..linear import closed_loop
+from ..plant import LateralPlant
 from ..turning import plot_turning_radius, turning_radius
 from ..validation import check_model
 from ..vehicle import Vehicle
@@ -67,14 +69,18 @@ class FigureSpec:
 
 def _chart_figure(n):
     def make(model: str = "exact", quick: bool = False):
-        return plot_paper_figure(n, model=model, npoints=201 if quick else 401)
+        return plot_paper_figure(n, model=model, npoints=201 if quick else 401).figure
 
     return make
 
 
 def plot_root_loci(
-    vehicle: Vehicle | None = None, model: str = "exact", quick: bool = False
-):
+    *,
+    vehicle: Vehicle | None = None,
+    model: str = "exact",
+    quick: bool = False,
+    ax=None,
+) -> ct.ControlPlot:
     r"""Root loci of the :math:`\lambda_0 = -1` designs (extra figure).
 
     (a) Gain locus (:func:`gain_loop`): poles of ``g*(k1, k2)`` for the
@@ -89,25 +95,53 @@ def plot_root_loci(
     (c) Ratio locus at 20 m/s on a straight path with the gains of the
     ``a = 0.5`` design kept fixed.
 
+    Parameters
+    ----------
+    vehicle : Vehicle, optional
+        Default the paper's vehicle.
+    model : {"exact", "paper"}, optional
+        Linearisation of the designs in (a) and (c).
+    quick : bool, optional
+        Fewer points per locus.
+    ax : sequence of 3 matplotlib.axes.Axes, optional
+        Axes of panels (a)-(c); a new figure if None.
+
     Returns
     -------
-    matplotlib.figure.Figure
+    control.ControlPlot
+        Axes of shape ``(1, 3)``.
+
+    Examples
+    --------
+    >>> import matplotlib; matplotlib.use("Agg")
+    >>> import matplotlib.pyplot as plt
+    >>> from fws_control.paper.figures import plot_root_loci
+    >>> cplt = plot_root_loci(quick=True)
+    >>> cplt.axes.shape
+    (1, 3)
+    >>> plt.close(cplt.figure)
     """
-    import control as ct
     import matplotlib.pyplot as plt
 
     from ..rootlocus import gain_loop, parameter_locus, refined_scale
 
     vehicle = PAPER_VEHICLE if vehicle is None else vehicle
-    fig, axes = plt.subplots(1, 3, figsize=(17, 5.2), layout="constrained")
+    if ax is None:
+        fig, axes = plt.subplots(1, 3, figsize=(17, 5.2), layout="constrained")
+    else:
+        axes = list(np.asarray(ax, dtype=object).ravel())
+        if len(axes) != 3:
+            raise ValueError(f"ax must hold 3 axes, got {len(axes)}")
+        fig = axes[0].figure
     n = 200 if quick else 800
 
     ax = axes[0]
     # For any double-root design the loop is L(s) = (-2 l0 s + l0^2 - V^2 k^2)
     # / (s^2 + V^2 k^2): it depends on V*kappa only, not on a or the model.
     for i, (V, kap) in enumerate(((5.0, 0.0), (20.0, 0.01), (5.0, 0.1))):
-        g = double_root_gains(vehicle, V, kap, -1.0, -1.0, model)
-        loop = gain_loop(vehicle, V, kap, g, model)
+        plant = LateralPlant(vehicle, speed=V, curvature=kap, model=model)
+        g = double_root_gains(plant, ratio=-1.0, pole=-1.0)
+        loop = gain_loop(plant, g)
         rl = ct.root_locus_map(loop, gains=refined_scale(0.0, 4.0, n))
         lab = rf"V = {V:g} m/s, $\kappa$ = {kap:g} 1/m"
         for j, branch in enumerate(rl.loci.T):
@@ -133,15 +167,15 @@ def plot_root_loci(
     ax = axes[1]
     kap = np.linspace(0.0, 0.4, n)
     for i, a in enumerate((-1.0, 0.0, 0.5)):
-        g0 = double_root_gains(vehicle, 5.0, 0.0, a, -1.0, "paper")
+        plant = LateralPlant(vehicle, speed=5.0, model="exact")
+        g0 = double_root_gains(
+            LateralPlant(vehicle, speed=5.0, model="paper"), ratio=a, pole=-1.0
+        )
         pz = parameter_locus(
-            vehicle,
-            "curvature",
-            kap,
-            5.0,
-            0.0,
+            plant,
             g0,
-            model="exact",
+            parameter="curvature",
+            values=kap,
             redesign_pole=-1.0,
             design_model="paper",
         )
@@ -173,9 +207,10 @@ def plot_root_loci(
     ax.set_ylabel("Re [1/s]")
 
     ax = axes[2]
-    g = double_root_gains(vehicle, 20.0, 0.0, 0.5, -1.0, model)
+    plant = LateralPlant(vehicle, speed=20.0, model=model)
+    g = double_root_gains(plant, ratio=0.5, pole=-1.0)
     ratios = np.linspace(-1.5, 0.99, n)
-    pz = parameter_locus(vehicle, "ratio", ratios, 20.0, 0.0, g, model=model)
+    pz = parameter_locus(plant, g, parameter="ratio", values=ratios)
     for j, branch in enumerate(pz.loci.T):
         ax.plot(
             branch.real,
@@ -185,7 +220,7 @@ def plot_root_loci(
         )
     ax.plot(pz.loci[0].real, pz.loci[0].imag, "x", color="C3", ms=8, label="a = -1.5")
     ax.plot(pz.loci[-1].real, pz.loci[-1].imag, ">", color="C3", ms=7, label="a = 0.99")
-    at05 = parameter_locus(vehicle, "ratio", [0.5], 20.0, 0.0, g, model=model).loci[0]
+    at05 = parameter_locus(plant, g, parameter="ratio", values=[0.5]).loci[0]
     ax.plot(at05.real, at05.imag, "s", color="C3", mec="k", label="a = 0.5 (design)")
     ax.set_title(
         f"(c) ratio locus, gains k1 = {float(g.k1):.3f}, k2 = {float(g.k2):.3f} "
@@ -199,24 +234,25 @@ def plot_root_loci(
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, loc="lower left" if ax is axes[1] else "upper left")
     fig.suptitle("Root loci of the structured 4WS loop", fontsize=13)
-    return fig
+    lines = np.empty((1, 3), dtype=object)
+    for i, a in enumerate(axes):
+        lines[0, i] = list(a.get_lines())
+    return ct.ControlPlot(lines, np.array([list(axes)], dtype=object), fig)
 
 
 def _comparison_figure(model: str = "exact", quick: bool = False):
     from ..comparison import compare_linear_nonlinear
 
-    g = double_root_gains(PAPER_VEHICLE, 5.0, 0.1, -1.0, -1.0, model)
+    plant = LateralPlant(PAPER_VEHICLE, speed=5.0, curvature=0.1, model=model)
+    g = double_root_gains(plant, ratio=-1.0, pole=-1.0)
     cmp = compare_linear_nonlinear(
-        PAPER_VEHICLE,
-        5.0,
-        0.1,
+        plant,
         g,
         initial_state=(0.0, -5.0, 0.0),
         duration=15.0,
-        model=model,
         dt=0.05 if quick else 0.01,
     )
-    return cmp.plot()
+    return cmp.plot().figure
 
 
 def _turning_figure(model: str = "exact", quick: bool = False):
@@ -512,7 +548,9 @@ FIGURES: dict[str, FigureSpec] = {
     "extra_root_loci": FigureSpec(
         "extra_root_loci",
         "Root loci: gain scaling, paper gains versus curvature, ratio",
-        lambda model="exact", quick=False: plot_root_loci(model=model, quick=quick),
+        lambda model="exact", quick=False: (
+            plot_root_loci(model=model, quick=quick).figure
+        ),
         paper=False,
     ),
     "extra_turning_radius": FigureSpec(
@@ -568,6 +606,7 @@ def _fmt_poles(p) -> str:
 
 
 def gains_table(
+    *,
     vehicle: Vehicle | None = None,
     pole: float = -1.0,
     ratios=TABLE_RATIOS,
@@ -597,8 +636,8 @@ def gains_table(
 
     Examples
     --------
-    >>> import fws_control as fws
-    >>> table = fws.gains_table(ratios=[-1.0], cases=[(5.0, 0.0)])
+    >>> from fws_control.paper import gains_table
+    >>> table = gains_table(ratios=[-1.0], cases=[(5.0, 0.0)])
     >>> print(table.splitlines()[-1])
     | 5 | 0 | -1 | 0.05400 | 0.61290 | 0.05400 | 0.61290 | -1.000, -1.000 |
     """
@@ -614,13 +653,15 @@ def gains_table(
         for a in ratios:
             cells = [f"{V:g}", f"{kap:g}", f"{a:g}"]
             try:
-                ge = double_root_gains(vehicle, V, kap, a, pole, "exact")
-                gp = double_root_gains(vehicle, V, kap, a, pole, "paper")
+                exact = LateralPlant(vehicle, speed=V, curvature=kap)
+                paper = LateralPlant(vehicle, speed=V, curvature=kap, model="paper")
+                ge = double_root_gains(exact, ratio=a, pole=pole)
+                gp = double_root_gains(paper, ratio=a, pole=pole)
             except UncontrollableError:
                 cells += ["—"] * 4 + ["no design (uncontrollable)"]
                 rows.append("| " + " | ".join(cells) + " |")
                 continue
-            poles = closed_loop(vehicle, V, kap, gp, "exact").poles()
+            poles = closed_loop(exact, gp).poles()
             cells += [
                 f"{float(ge.k1):.5f}",
                 f"{float(ge.k2):.5f}",

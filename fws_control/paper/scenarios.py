@@ -38,6 +38,7 @@ from ..batch import BatchResult, _expand_batch, simulate_batch
 from ..design import UncontrollableError, double_root_gains
 from ..gains import SteeringGains
 from ..paths import Arc, Straight
+from ..plant import LateralPlant
 from ..simulation import STATUS_UNCONTROLLABLE, _time_grid
 from ..validation import check_finite, check_model
 from ..vehicle import Vehicle
@@ -173,9 +174,10 @@ def scenario_gains(
     ok = np.ones(a.shape, dtype=bool)
     for idx in np.ndindex(a.shape):
         try:
-            g = double_root_gains(
-                vehicle, sc.speed, sc.curvature, a[idx], lam[idx], model
+            plant = LateralPlant(
+                vehicle, speed=sc.speed, curvature=sc.curvature, model=model
             )
+            g = double_root_gains(plant, ratio=a[idx], pole=lam[idx])
         except UncontrollableError:
             ok[idx] = False
             continue
@@ -553,7 +555,7 @@ def _steady_state_scalar(f, kappa, k1, k2, a):
 
 
 def feedback_only_steady_state(
-    vehicle: Vehicle, curvature, gains: SteeringGains
+    vehicle: Vehicle, gains: SteeringGains, *, curvature
 ) -> SteadyState:
     r"""Steady state of the feedback-only controller on a circle.
 
@@ -585,10 +587,11 @@ def feedback_only_steady_state(
     Examples
     --------
     >>> import fws_control as fws
-    >>> from fws_control.scenarios import feedback_only_steady_state
+    >>> from fws_control.paper.scenarios import feedback_only_steady_state
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> g = fws.double_root_gains(veh, 5.0, 0.1, ratio=0.0, pole=-1.0)
-    >>> ss = feedback_only_steady_state(veh, 0.1, g)
+    >>> g = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=0.0,
+    ...                           pole=-1.0)
+    >>> ss = feedback_only_steady_state(veh, g, curvature=0.1)
     >>> round(ss.e, 4), round(ss.theta, 4), round(ss.delta_f, 4)
     (-2.7617, 0.0, 0.2085)
     """
@@ -678,7 +681,9 @@ def feedback_only_curve(
     )
     if np.any(ok):
         ss = feedback_only_steady_state(
-            vehicle, sc.curvature, SteeringGains(g.k1[ok], g.k2[ok], g.ratio[ok])
+            vehicle,
+            SteeringGains(g.k1[ok], g.k2[ok], g.ratio[ok]),
+            curvature=sc.curvature,
         )
         for name in ("e", "theta", "delta_f", "delta_r", "exists"):
             getattr(ss_all, name)[ok] = getattr(ss, name)
