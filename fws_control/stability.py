@@ -37,6 +37,7 @@ from .validation import check_finite
 __all__ = [
     "is_stable",
     "routh_hurwitz",
+    "hurwitz_columns",
     "StabilityBoundary",
     "BoundaryCurve",
     "StabilityBoundaries",
@@ -82,33 +83,57 @@ def routh_hurwitz(coefficients) -> bool | np.ndarray:
             f"coefficients must have at least 2 entries on the last axis, got "
             f"shape {c.shape}"
         )
-    c = c * np.sign(c[..., :1])  # leading coefficient positive
-    n1 = c.shape[-1]
-    width = (n1 + 1) // 2
-    upper = np.zeros(c.shape[:-1] + (width + 1,))
-    lower = np.zeros(c.shape[:-1] + (width + 1,))
-    upper[..., : len(range(0, n1, 2))] = c[..., 0::2]
-    lower[..., : len(range(1, n1, 2))] = c[..., 1::2]
-    ok = upper[..., 0] > 0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        for _ in range(n1 - 1):
-            pivot = lower[..., :1]
-            ok &= pivot[..., 0] > 0
-            new = np.zeros_like(upper)
-            new[..., :-1] = upper[..., 1:] - upper[..., :1] / pivot * lower[..., 1:]
-            upper, lower = lower, new
-    out = ok & np.all(np.isfinite(c), axis=-1)
-    return bool(out) if out.ndim == 0 else out
+    out = hurwitz_columns([c[..., j] for j in range(c.shape[-1])])
+    return bool(out) if np.ndim(out) == 0 else out
+
+
+def hurwitz_columns(columns) -> np.ndarray:
+    """:func:`routh_hurwitz` on coefficients given as a list of arrays.
+
+    ``columns[j]`` holds the coefficient of :math:`s^{n-j}` for every
+    polynomial (arrays that broadcast). Working on whole contiguous arrays,
+    one per Routh-array entry, keeps the cost at about :math:`n^2/4`
+    array operations.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from fws_control.stability import hurwitz_columns
+    >>> hurwitz_columns([1.0, np.array([1.0, 2.0]), 2.0, 1.0]).tolist()
+    [False, True]
+    """
+    cols = np.broadcast_arrays(*(np.asarray(c, dtype=float) for c in columns))
+    sign = np.sign(cols[0])
+    upper = [c * sign for c in cols[0::2]]
+    lower = [c * sign for c in cols[1::2]]
+    ok = upper[0] > 0
+    finite = np.ones(ok.shape, dtype=bool)
+    for c in cols:
+        finite &= np.isfinite(c)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        for _ in range(len(cols) - 1):
+            pivot = lower[0]
+            ok &= pivot > 0
+            ratio = upper[0] / pivot
+            new = [
+                upper[j + 1] - ratio * (lower[j + 1] if j + 1 < len(lower) else 0.0)
+                for j in range(len(upper) - 1)
+            ]
+            upper, lower = lower, new if new else [np.zeros_like(pivot)]
+    return ok & finite
 
 
 def _stable_from_polynomial(cp: AffinePolynomial, k1, k2) -> bool | np.ndarray:
+    cols = [
+        cp.open_loop[..., j] + k1 * cp.n1[..., j] + k2 * cp.n2[..., j]
+        for j in range(cp.order + 1)
+    ]
     if cp.order == 2:
         # Closed form of eqs. (35)-(36); monic, so p1 > 0 and p0 > 0.
-        p1 = cp.open_loop[..., 1] + k1 * cp.n1[..., 1] + k2 * cp.n2[..., 1]
-        p0 = cp.open_loop[..., 2] + k1 * cp.n1[..., 2] + k2 * cp.n2[..., 2]
-        out = (p1 > 0) & (p0 > 0)
-        return bool(out) if np.ndim(out) == 0 else out
-    return routh_hurwitz(cp.coefficients(k1, k2))
+        out = (cols[1] > 0) & (cols[2] > 0)
+    else:
+        out = hurwitz_columns(cols)
+    return bool(out) if np.ndim(out) == 0 else out
 
 
 def is_stable(

@@ -1,0 +1,41 @@
+"""Timing helpers shared by the benchmarks: best of several runs, machine load.
+
+Benchmarks print ratios measured in one run of one script, so that the
+machine's speed cancels; each time is the best of ``repeat`` runs (the least
+disturbed by other processes), and the load average is printed next to it so
+that a reader can judge how busy the machine was.
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import time
+from collections.abc import Callable
+
+__all__ = ["best_of", "machine_line"]
+
+
+def best_of(fn: Callable[[], object], repeat: int = 3, number: int = 1) -> float:
+    """Best wall time per call of ``fn`` [s] over `repeat` runs of `number` calls."""
+    if repeat < 1 or number < 1:
+        raise ValueError(f"repeat and number must be >= 1, got {repeat}, {number}")
+    best = float("inf")
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        for _ in range(number):
+            fn()
+        best = min(best, (time.perf_counter() - t0) / number)
+    return best
+
+
+def machine_line() -> str:
+    """One line: CPU count, load averages (1, 5, 15 min) and Python version."""
+    try:
+        load = "{:.2f} {:.2f} {:.2f}".format(*os.getloadavg())
+    except OSError:  # pragma: no cover - platforms without getloadavg
+        load = "n/a"
+    return (
+        f"machine: {os.cpu_count()} CPUs, load average {load}, "
+        f"Python {platform.python_version()}"
+    )
