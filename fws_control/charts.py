@@ -21,6 +21,7 @@ from typing import Any
 import control as ct
 import numpy as np
 
+from .delay import check_delay, unstable_root_count
 from .design import double_root_gains
 from .exceptions import UncontrollableError
 from .gains import SteeringGains
@@ -64,7 +65,9 @@ def _axis(name: str, values) -> np.ndarray:
     return arr
 
 
-def _curve_in_box(cp: AffinePolynomial, k1r, k2r, passes: int = 8) -> BoundaryCurve:
+def _curve_in_box(
+    cp: AffinePolynomial, k1r, k2r, delay: float = 0.0, passes: int = 8
+) -> BoundaryCurve:
     """The complex-root curve, sampled densely where it crosses the box.
 
     Starts from :func:`default_frequencies` and bisects (geometrically) every
@@ -77,7 +80,7 @@ def _curve_in_box(cp: AffinePolynomial, k1r, k2r, passes: int = 8) -> BoundaryCu
     lo = np.array([k1r[0], k2r[0]]) - span
     hi = np.array([k1r[1], k2r[1]]) + span
     for _ in range(passes):
-        c = complex_root_curve(cp, w)
+        c = complex_root_curve(cp, w, delay)
         pts = np.column_stack([c.k1, c.k2])
         near = np.all((pts >= lo) & (pts <= hi), axis=1)
         gap = np.hypot(*((np.diff(pts, axis=0)) / span).T)
@@ -87,7 +90,7 @@ def _curve_in_box(cp: AffinePolynomial, k1r, k2r, passes: int = 8) -> BoundaryCu
             return c
         mid = np.sqrt(w[:-1][split] * w[1:][split])
         w = np.sort(np.concatenate([w, mid]))
-    return complex_root_curve(cp, w)
+    return complex_root_curve(cp, w, delay)
 
 
 @dataclass(frozen=True, eq=False)
@@ -115,6 +118,14 @@ class StabilityChart:
         drawing).
     pole : float or None
         Requested double root :math:`\lambda_0` [1/s].
+    delay : float
+        Input delay on the steering command [s] (0: none). With a delay the
+        verdict of each point is the count of right-half-plane roots of the
+        quasi-polynomial (:func:`~fws_control.delay.unstable_root_count`).
+    undecided : int
+        Grid points whose root count could not be decided (a root on or
+        within the frequency resolution of the imaginary axis); they are
+        marked not stable.
     design : SteeringGains or None
         Double-root gains for `pole`; None when no pole was requested or the
         design does not exist (then `design_error` says why).
@@ -139,6 +150,8 @@ class StabilityChart:
     boundaries: StabilityBoundaries
     curve: BoundaryCurve
     pole: float | None = None
+    delay: float = 0.0
+    undecided: int = 0
     design: SteeringGains | None = None
     design_error: str | None = None
 
@@ -220,12 +233,13 @@ class StabilityChart:
 
     def describe(self) -> str:
         """One-line description: a and the operating point or the plant."""
+        tau = f", delay {self.delay:g} s" if self.delay else ""
         if self.lateral:
             return (
                 f"a = {self.ratio:g}, V = {self.speed:g} m/s, "
-                rf"$\kappa$ = {self.curvature:g} 1/m, {self.model} model"
+                rf"$\kappa$ = {self.curvature:g} 1/m, {self.model} model{tau}"
             )
-        return f"a = {self.ratio:g}, {self.order}-state plant"
+        return f"a = {self.ratio:g}, {self.order}-state plant{tau}"
 
     def plot(
         self,
@@ -356,7 +370,7 @@ class StabilityChart:
                 artists.append(line)
                 if label is None:
                     handles.append(line)
-            if self.order > 2:
+            if self.order > 2 or self.delay > 0:
                 first = True
                 for br in self.curve.branches():
                     (line,) = ax.plot(
@@ -462,6 +476,7 @@ def stability_chart(
     ratio: float,
     k1=None,
     k2=None,
+    delay: float = 0.0,
     pole: float | None = None,
     speed: Any = None,
     curvature: Any = None,
@@ -479,6 +494,12 @@ def stability_chart(
     k1, k2 : array_like, optional
         Strictly monotonic 1-D grid axes [rad/m], [-]; default
         :data:`DEFAULT_GAIN_AXIS` (401 points on ``[-1, 1]``).
+    delay : float, optional
+        Input delay on the steering command [s], >= 0. Without delay the
+        verdict is the closed form / Routh-Hurwitz test; with a delay it is
+        the number of right-half-plane roots of the quasi-polynomial (argument
+        principle, :func:`~fws_control.delay.unstable_root_count`), and the
+        boundaries are the D-subdivision curves of all crossing frequencies.
     pole : float, optional
         Double root :math:`\lambda_0 < 0` whose gains
         (:func:`double_root_gains`, 2-state plants) are stored and marked. If
@@ -531,12 +552,20 @@ def stability_chart(
     k2a = _axis("k2", k2)
     # Outer broadcasting (k2 down the rows, k1 across) avoids a meshgrid.
     grid = SteeringGains(k1a[np.newaxis, :], k2a[:, np.newaxis], ratio)
-    stable = is_stable(p, grid)
-    bounds = stability_boundaries(p, ratio=ratio)
+    tau = check_delay(delay)
+    undecided = 0
+    if tau > 0.0:
+        count = unstable_root_count(p, grid, delay=tau)
+        stable = count == 0
+        undecided = int(np.count_nonzero(count < 0))
+    else:
+        stable = is_stable(p, grid)
+    bounds = stability_boundaries(p, ratio=ratio, delay=tau)
     k1r = (float(k1a.min()), float(k1a.max()))
     k2r = (float(k2a.min()), float(k2a.max()))
-    if bounds.order > 2:
-        curve = _curve_in_box(characteristic_coefficients(p, ratio=ratio), k1r, k2r)
+    if bounds.order > 2 or tau > 0.0:
+        cp = characteristic_coefficients(p, ratio=ratio)
+        curve = _curve_in_box(cp, k1r, k2r, tau)
     else:
         curve = bounds.complex_root
     design = err = None
@@ -556,6 +585,8 @@ def stability_chart(
         boundaries=bounds,
         curve=curve,
         pole=pole,
+        delay=tau,
+        undecided=undecided,
         design=design,
         design_error=err,
     )

@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from .delay import check_delay, unstable_root_count
 from .gains import SteeringGains
 from .linear import AffinePolynomial, characteristic_coefficients, check_gains
 from .plant import LateralPlant, as_plant
@@ -140,6 +141,7 @@ def is_stable(
     plant: Any,
     gains: SteeringGains,
     *,
+    delay: float = 0.0,
     speed: Any = None,
     curvature: Any = None,
     model: Any = None,
@@ -154,6 +156,11 @@ def is_stable(
         Gains and ratio; arrays broadcast with each other and with the
         operating points of a :class:`LateralPlant`, so a whole grid is one
         call.
+    delay : float, optional
+        Input delay on the steering command [s], >= 0. With a delay the
+        verdict is the root count of
+        :func:`~fws_control.delay.unstable_root_count` (one operating point,
+        scalar ratio); undecided points (a root on the axis) are not stable.
     speed, curvature, model : optional
         With a :class:`Vehicle` only, as in :func:`linearize`.
 
@@ -178,6 +185,12 @@ def is_stable(
            [0, 0, 1]])
     """
     g = check_gains(gains)
+    if check_delay(delay) > 0.0:
+        count = unstable_root_count(
+            plant, g, delay=delay, speed=speed, curvature=curvature, model=model
+        )
+        out = count == 0
+        return bool(out) if out.ndim == 0 else out
     cp = characteristic_coefficients(
         plant, ratio=g.ratio, speed=speed, curvature=curvature, model=model
     )
@@ -394,15 +407,20 @@ def default_frequencies(cp: AffinePolynomial, num: int = 2001) -> np.ndarray:
     return np.geomspace(1e-3 * scale, 1e3 * scale, num)
 
 
-def complex_root_curve(cp: AffinePolynomial, omega) -> BoundaryCurve:
+def complex_root_curve(
+    cp: AffinePolynomial, omega, delay: float = 0.0
+) -> BoundaryCurve:
     r"""Solve :math:`p(j\omega) = 0` for ``(k1, k2)`` at each frequency.
 
     .. math::
         \begin{bmatrix}\operatorname{Re} n_1 & \operatorname{Re} n_2\\
         \operatorname{Im} n_1 & \operatorname{Im} n_2\end{bmatrix}
         \begin{bmatrix}k_1\\ k_2\end{bmatrix}
-        = -\begin{bmatrix}\operatorname{Re} d\\ \operatorname{Im} d\end{bmatrix}
-        \quad\text{at } s = j\omega.
+        = -\begin{bmatrix}\operatorname{Re} r\\ \operatorname{Im} r\end{bmatrix}
+        \quad\text{at } s = j\omega,\quad r = d(j\omega)\,e^{j\omega\tau},
+
+    i.e. :math:`d(j\omega) + e^{-j\omega\tau}(k_1 n_1 + k_2 n_2) = 0` with
+    the input delay :math:`\tau` (0: no delay).
 
     Examples
     --------
@@ -414,6 +432,8 @@ def complex_root_curve(cp: AffinePolynomial, omega) -> BoundaryCurve:
     """
     w = np.asarray(omega, dtype=float)
     d, n1, n2 = cp.polynomials_at(1j * w)
+    if delay:
+        d = d * np.exp(1j * w * delay)
     det = n1.real * n2.imag - n2.real * n1.imag
     scale = np.abs(n1) * np.abs(n2)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -431,6 +451,7 @@ def stability_boundaries(
     *,
     ratio: float,
     omega=None,
+    delay: float = 0.0,
     speed: Any = None,
     curvature: Any = None,
     model: Any = None,
@@ -458,6 +479,11 @@ def stability_boundaries(
     omega : array_like, optional
         Frequencies [rad/s] of the complex-root curve; default
         :func:`default_frequencies`.
+    delay : float, optional
+        Input delay [s], >= 0: the complex-root curve becomes the
+        D-subdivision curve of the quasi-polynomial (many branches); the
+        straight lines other than ``p(0) = 0`` no longer bound the stable set
+        and are omitted.
     speed, curvature, model : optional
         With a :class:`Vehicle` only, as in :func:`linearize`.
 
@@ -486,7 +512,8 @@ def stability_boundaries(
     real = StabilityBoundary.from_coefficients(
         cp.n1[..., last], cp.n2[..., last], cp.open_loop[..., last], "p0 > 0"
     )
-    if cp.order == 2:
+    tau = check_delay(delay)
+    if cp.order == 2 and tau == 0.0:
         p1 = StabilityBoundary.from_coefficients(
             cp.n1[..., 1], cp.n2[..., 1], cp.open_loop[..., 1], "p1 > 0"
         )
@@ -503,7 +530,7 @@ def stability_boundaries(
             )
     return StabilityBoundaries(
         real_root=real,
-        complex_root=complex_root_curve(cp, w),
+        complex_root=complex_root_curve(cp, w, tau),
         lines=lines,
         order=cp.order,
     )

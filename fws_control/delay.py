@@ -1,0 +1,526 @@
+r"""Feedback delay: critical delay, rightmost roots and root counts.
+
+With a constant delay :math:`\tau` on the steering command, the rank-one
+feedback of the structured controller gives the characteristic
+quasi-polynomial
+
+.. math::
+    D(s) = d(s) + e^{-s\tau} q(s),\qquad q(s) = k_1 n_1(s) + k_2 n_2(s),
+
+with :math:`d, n_1, n_2` of :func:`~fws_control.characteristic_coefficients`
+(a steering lag is part of the plant, so it simply adds states). Since
+:math:`\deg q < \deg d` the equation is of *retarded* type: finitely many
+roots lie in any right half plane and they move continuously with the
+gains and the delay. Three computations build on that:
+
+:func:`critical_delay`
+    A root is on the imaginary axis, :math:`D(j\omega) = 0` with
+    :math:`\omega > 0`, only where :math:`|d(j\omega)| = |q(j\omega)|` — a
+    polynomial equation in :math:`\omega^2` of degree ``n`` — and then
+    :math:`e^{-j\omega\tau} = -d(j\omega)/q(j\omega)` fixes the delays
+    :math:`\tau_m = (\tau_0 + 2\pi m)/\omega`. The smallest of them over the
+    crossing frequencies is the delay margin of a loop that is stable
+    without delay (a root at ``s = 0`` does not depend on the delay).
+:func:`unstable_root_count`
+    The number of roots in the open right half plane by the argument
+    principle on the imaginary axis: for a retarded quasi-polynomial with
+    monic ``d`` of degree ``n``, :math:`N = n/2 - \Delta_{[0,\infty)}\arg
+    D(j\omega)/\pi`. The phase increment is summed on a frequency grid fine
+    enough for the delay term, up to a frequency beyond which
+    :math:`|q| < |d|/2` for the gains asked, and the tail to infinity is
+    added in closed form from the roots of ``d``. Points where the phase
+    cannot be followed (a root on or very near the axis) are reported as
+    undecided, never guessed.
+:func:`rightmost_roots`
+    The rightmost characteristic roots by spectral (Chebyshev collocation)
+    discretisation of the infinitesimal generator of the delay equation
+    (Breda, Maset and Vermiglio, *SIAM J. Sci. Comput.* 27, 2005), whose
+    eigenvalues converge to the roots spectrally fast in the number of
+    nodes, each then refined by Newton's method on :math:`D(s)`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .gains import SteeringGains
+from .linear import AffinePolynomial, characteristic_coefficients, check_gains, horner
+from .plant import as_plant, loop_matrices
+from .validation import check_finite
+
+__all__ = [
+    "CriticalDelay",
+    "critical_delay",
+    "rightmost_roots",
+    "unstable_root_count",
+    "check_delay",
+]
+
+
+def check_delay(delay: Any) -> float:
+    """Return `delay` as a float if it is a finite number >= 0 [s].
+
+    Examples
+    --------
+    >>> from fws_control.delay import check_delay
+    >>> check_delay(0.24)
+    0.24
+    """
+    if isinstance(delay, bool):
+        raise TypeError(f"delay must be a number of seconds, got {delay!r}")
+    d = check_finite("delay", delay)
+    if np.ndim(d) != 0 or d < 0:
+        raise ValueError(f"delay must be a finite scalar >= 0 s, got {delay!r}")
+    return float(d)
+
+
+def _even_odd(c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    r"""Split ``p(j w) = R(w^2) + j w I(w^2)``; coefficients in ``x = w^2``.
+
+    `c` has shape ``(..., m)`` highest power first; outputs are highest power
+    first in ``x`` with the same leading shape.
+    """
+    c = np.asarray(c)
+    asc = c[..., ::-1]  # ascending powers of s
+    m = asc.shape[-1]
+    even = asc[..., 0::2] * (-1.0) ** np.arange((m + 1) // 2)
+    odd = asc[..., 1::2] * (-1.0) ** np.arange(m // 2)
+    return even[..., ::-1], odd[..., ::-1]
+
+
+def _polymul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Batch product of polynomials (highest power first) on the last axis."""
+    a = np.asarray(a)
+    b = np.asarray(b)
+    shape = np.broadcast_shapes(a.shape[:-1], b.shape[:-1])
+    out = np.zeros(shape + (a.shape[-1] + b.shape[-1] - 1,))
+    for i in range(a.shape[-1]):
+        out[..., i : i + b.shape[-1]] += a[..., i : i + 1] * b
+    return out
+
+
+def _polyadd(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    n = max(a.shape[-1], b.shape[-1])
+    pad = [
+        np.concatenate([np.zeros(p.shape[:-1] + (n - p.shape[-1],)), p], -1)
+        for p in (a, b)
+    ]
+    return pad[0] + pad[1]
+
+
+def _abs2_in_x(c: np.ndarray) -> np.ndarray:
+    r""":math:`|p(j\omega)|^2` as a polynomial in :math:`x = \omega^2`."""
+    re, im = _even_odd(c)
+    x = np.array([1.0, 0.0])
+    return _polyadd(_polymul(re, re), _polymul(_polymul(im, im), x))
+
+
+def _batch_roots(c: np.ndarray) -> np.ndarray:
+    """Roots of monic polynomials ``(..., m)`` via stacked companion matrices."""
+    c = np.asarray(c, dtype=float)
+    n = c.shape[-1] - 1
+    comp = np.zeros(c.shape[:-1] + (n, n))
+    comp[..., 0, :] = -c[..., 1:] / c[..., :1]
+    if n > 1:
+        comp[..., np.arange(1, n), np.arange(n - 1)] = 1.0
+    return np.linalg.eigvals(comp)
+
+
+@dataclass(frozen=True)
+class CriticalDelay:
+    r"""The delay margin of a loop: the smallest delay with a root at ``±jω``.
+
+    Attributes
+    ----------
+    delay : float or ndarray
+        Critical delay :math:`\tau_c` [s]: the loop is stable for every
+        delay in :math:`[0, \tau_c)`. ``inf`` when no delay destabilises it;
+        0 when it is not stable without delay.
+    frequency : float or ndarray
+        Crossing frequency :math:`\omega_c` [rad/s] at :math:`\tau_c` (NaN
+        when ``delay`` is ``inf`` or 0).
+    stable_without_delay : bool or ndarray
+        Whether the loop is stable at zero delay.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> plant = fws.LateralPlant(veh, speed=5.0)
+    >>> g = fws.double_root_gains(plant, ratio=0.0, pole=-1.0)
+    >>> cd = fws.critical_delay(plant, g)
+    >>> round(cd.delay, 4), round(cd.frequency, 4)
+    (0.4796, 1.4553)
+    """
+
+    delay: float | np.ndarray
+    frequency: float | np.ndarray
+    stable_without_delay: bool | np.ndarray
+
+
+def _scalar(v):
+    return v.item() if isinstance(v, np.ndarray) and v.ndim == 0 else v
+
+
+def critical_delay(
+    plant: Any,
+    gains: SteeringGains,
+    *,
+    speed: Any = None,
+    curvature: Any = None,
+    model: Any = None,
+) -> CriticalDelay:
+    r"""Smallest input delay at which a closed-loop root reaches the imaginary axis.
+
+    Solves :math:`|d(j\omega)|^2 = |q(j\omega)|^2` (a polynomial of degree
+    ``n`` in :math:`\omega^2`, roots from its companion matrix) for the
+    crossing frequencies and takes the smallest delay
+    :math:`\tau = \arg(-q(j\omega)/d(j\omega)) / \omega \bmod 2\pi/\omega`
+    over them. Vectorised over array gains.
+
+    Parameters
+    ----------
+    plant : LateralPlant, control.StateSpace or Vehicle
+        The plant (see :mod:`fws_control.plant`), any order; a steering lag
+        belongs in the plant.
+    gains : SteeringGains
+        Gains (arrays broadcast).
+    speed, curvature, model : optional
+        With a :class:`Vehicle` only, as in :func:`linearize`.
+
+    Returns
+    -------
+    CriticalDelay
+        ``.delay`` [s] (``inf``: no delay destabilises; 0: unstable without
+        delay) and ``.frequency`` [rad/s].
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> plant = fws.LateralPlant(veh, speed=20.0)
+    >>> g = fws.double_root_gains(plant, ratio=0.5, pole=-1.0)
+    >>> round(fws.critical_delay(plant, g).delay, 4)
+    0.4796
+    """
+    g = check_gains(gains)
+    p = as_plant(plant, speed=speed, curvature=curvature, model=model)
+    cp = characteristic_coefficients(p, ratio=g.ratio)
+    k1 = np.asarray(g.k1, dtype=float)[..., np.newaxis]
+    k2 = np.asarray(g.k2, dtype=float)[..., np.newaxis]
+    q = k1 * cp.n1 + k2 * cp.n2
+    d = np.broadcast_to(cp.open_loop, q.shape)
+    F = _polyadd(_abs2_in_x(d), -_abs2_in_x(q))  # monic, degree n in x
+    x = _batch_roots(F)
+    real = np.abs(x.imag) <= 1e-7 * np.maximum(1.0, np.abs(x))
+    pos = real & (x.real > 0)
+    # Newton on F for the real roots: the eigenvalues of a companion matrix
+    # are accurate to about eps*cond; two steps recover full precision.
+    deg = F.shape[-1] - 1
+    dF = F[..., :-1] * np.arange(deg, 0, -1)
+    xr = np.where(pos, x.real, 1.0)
+    for _ in range(2):
+        f = horner(F[..., np.newaxis, :], xr)
+        fp = horner(dF[..., np.newaxis, :], xr)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = np.where(pos & (fp != 0), f / fp, 0.0)
+        xr = np.where(np.abs(step) < 1e-3 * xr, xr - step, xr)
+    w = np.sqrt(xr)
+    s = 1j * w
+    dv = horner(d[..., np.newaxis, :], s)
+    qv = horner(q[..., np.newaxis, :], s)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        phase = np.angle(-qv / dv)  # e^{-jw tau} = -d/q  <=>  w tau = arg(-q/d)
+    tau = np.mod(phase, 2 * math.pi) / w
+    tau = np.where(pos & np.isfinite(tau), tau, np.inf)
+    j = np.argmin(tau, axis=-1)
+    tau_c = np.take_along_axis(tau, j[..., np.newaxis], -1)[..., 0]
+    w_c = np.take_along_axis(w, j[..., np.newaxis], -1)[..., 0]
+    # Stability without delay from the roots of d + q (this module sits below
+    # the stability module, which uses it for delayed charts).
+    stable0 = np.max(_batch_roots(d + q).real, axis=-1) < 0.0
+    w_c = np.where(np.isfinite(tau_c) & stable0, w_c, np.nan)
+    tau_c = np.where(stable0, tau_c, 0.0)
+    return CriticalDelay(
+        delay=_scalar(tau_c) if tau_c.ndim else float(tau_c),
+        frequency=_scalar(w_c) if w_c.ndim else float(w_c),
+        stable_without_delay=bool(stable0) if stable0.ndim == 0 else stable0.copy(),
+    )
+
+
+def _cheb(N: int) -> tuple[np.ndarray, np.ndarray]:
+    """Chebyshev extremal nodes on [-1, 1] (descending), differentiation matrix."""
+    x = np.cos(np.pi * np.arange(N + 1) / N)
+    c = np.ones(N + 1)
+    c[0] = c[-1] = 2.0
+    c *= (-1.0) ** np.arange(N + 1)
+    X = x[:, None] - x[None, :]
+    Dm = np.outer(c, 1.0 / c) / (X + np.eye(N + 1))
+    Dm -= np.diag(Dm.sum(axis=1))
+    return x, Dm
+
+
+def _quasi(cp: AffinePolynomial, k1, k2, delay, s):
+    d = horner(cp.open_loop, s)
+    q = k1 * horner(cp.n1, s) + k2 * horner(cp.n2, s)
+    dd = horner(np.polyder(cp.open_loop), s)
+    dq = k1 * horner(np.polyder(cp.n1), s) + k2 * horner(np.polyder(cp.n2), s)
+    e = np.exp(-s * delay)
+    return d + e * q, dd + e * (dq - delay * q)
+
+
+def rightmost_roots(
+    plant: Any,
+    gains: SteeringGains,
+    *,
+    delay: float,
+    n: int = 6,
+    nodes: int = 40,
+    speed: Any = None,
+    curvature: Any = None,
+    model: Any = None,
+) -> np.ndarray:
+    r"""The rightmost characteristic roots of the delayed closed loop.
+
+    The loop :math:`\dot x(t) = \mathbf A x(t) - \mathbf b (k_1\mathbf c_e +
+    k_2\mathbf c_\theta) x(t-\tau)` is discretised by Chebyshev collocation
+    of its infinitesimal generator on ``nodes + 1`` points of
+    :math:`[-\tau, 0]`; the eigenvalues of that matrix of size
+    ``n_states * (nodes + 1)`` converge spectrally to the characteristic
+    roots, the rightmost first. Each of the `n` rightmost is then refined by
+    Newton's method on :math:`D(s) = d(s) + e^{-s\tau}q(s)` (up to 20 steps,
+    to a relative step of 1e-14).
+
+    Parameters
+    ----------
+    plant : LateralPlant, control.StateSpace or Vehicle
+        The plant (see :mod:`fws_control.plant`), one operating point.
+    gains : SteeringGains
+        Scalar gains.
+    delay : float
+        Input delay :math:`\tau \ge 0` [s]; 0 gives the eigenvalues of the
+        undelayed closed loop.
+    n : int, optional
+        How many roots to return.
+    nodes : int, optional
+        Chebyshev nodes of the first discretisation. The nodes are doubled
+        until the `n` rightmost eigenvalues agree (to 1e-6 relative) between
+        two successive discretisations, at most five times.
+    speed, curvature, model : optional
+        With a :class:`Vehicle` only, as in :func:`linearize`.
+
+    Returns
+    -------
+    ndarray of complex
+        The `n` rightmost roots [1/s], by decreasing real part.
+
+    Raises
+    ------
+    RuntimeError
+        If the discretisation does not converge for `n` roots (with a
+        message saying what to change).
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> plant = fws.LateralPlant(veh, speed=5.0)
+    >>> g = fws.double_root_gains(plant, ratio=0.0, pole=-1.0)
+    >>> tc = fws.critical_delay(plant, g)
+    >>> r = fws.rightmost_roots(plant, g, delay=tc.delay, n=2)
+    >>> np.allclose(r.real, 0.0, atol=1e-9), np.allclose(abs(r.imag), tc.frequency)
+    (True, True)
+    """
+    g = check_gains(gains, scalar=True)
+    tau = check_delay(delay)
+    if isinstance(n, bool) or int(n) != n or n < 1:
+        raise ValueError(f"n must be an integer >= 1, got {n!r}")
+    if isinstance(nodes, bool) or int(nodes) != nodes or nodes < 4:
+        raise ValueError(f"nodes must be an integer >= 4, got {nodes!r}")
+    p = as_plant(plant, speed=speed, curvature=curvature, model=model)
+    lm = loop_matrices(p)
+    A = np.asarray(lm.A, dtype=float)
+    if A.ndim != 2:
+        raise ValueError("rightmost_roots needs one operating point")
+    b = lm.input_vector(g.ratio)
+    A1 = -np.outer(b, g.k1 * lm.c_e + g.k2 * lm.c_theta)
+    cp = characteristic_coefficients(p, ratio=g.ratio)
+    m = A.shape[0]
+    k = int(n)
+    if tau == 0.0:
+        lam = np.linalg.eigvals(A + A1)
+        return lam[np.argsort(-lam.real, kind="stable")][:k]
+
+    def spectrum(N):
+        _, Dm = _cheb(N)
+        big = np.kron(Dm * (2.0 / tau), np.eye(m))  # theta = tau (x - 1)/2
+        big[:m, :] = 0.0
+        big[:m, :m] = A
+        big[:m, -m:] = A1
+        lam = np.linalg.eigvals(big)
+        return lam[np.argsort(-lam.real, kind="stable")]
+
+    N = int(nodes)
+    coarse = spectrum(N)
+    for _ in range(5):
+        fine = spectrum(2 * N)
+        # the k rightmost of the finer discretisation must be reproduced by
+        # the coarser one (spectral convergence) before they are polished
+        lead = fine[:k]
+        dist = np.min(np.abs(lead[:, None] - coarse[None, :]), axis=1)
+        if np.all(dist <= 1e-6 * (1.0 + np.abs(lead))):
+            out = np.array([_newton(cp, g.k1, g.k2, tau, z) for z in lead])
+            moved = np.abs(out - lead) > 1e-4 * (1.0 + np.abs(lead))
+            gaps = np.abs(out[:, None] - out[None, :])
+            np.fill_diagonal(gaps, np.inf)
+            if not np.any(moved) and not np.any(gaps <= 1e-9 * (1.0 + np.abs(out))):
+                return out[np.argsort(-out.real, kind="stable")]
+        coarse, N = fine, 2 * N
+    raise RuntimeError(
+        f"rightmost_roots did not converge with {N} Chebyshev nodes for n={k} "
+        "roots; ask for fewer roots (n) or a larger nodes"
+    )
+
+
+def _newton(cp: AffinePolynomial, k1, k2, tau, s):
+    """Polish a root of D(s) = d(s) + e^{-s tau} q(s) by Newton's method."""
+    for _ in range(30):
+        f, df = _quasi(cp, k1, k2, tau, s)
+        if df == 0:
+            break
+        step = f / df
+        s = s - step
+        if abs(step) <= 1e-14 * max(1.0, abs(s)):
+            break
+    return s
+
+
+def _tail_phase(roots_d: np.ndarray, w_max: float) -> float:
+    """Phase change of d(jw) from w_max to infinity (roots of d below w_max)."""
+    return float(np.sum(math.pi / 2 - np.angle(1j * w_max - roots_d)))
+
+
+def unstable_root_count(
+    plant: Any,
+    gains: SteeringGains,
+    *,
+    delay: float = 0.0,
+    speed: Any = None,
+    curvature: Any = None,
+    model: Any = None,
+) -> np.ndarray:
+    r"""Number of characteristic roots in the open right half plane.
+
+    By the argument principle on the imaginary axis (see the module
+    docstring); vectorised over array gains, so a whole chart is one call.
+
+    Parameters
+    ----------
+    plant : LateralPlant, control.StateSpace or Vehicle
+        The plant (see :mod:`fws_control.plant`), one operating point.
+    gains : SteeringGains
+        Gains (arrays broadcast).
+    delay : float, optional
+        Input delay :math:`\tau \ge 0` [s].
+    speed, curvature, model : optional
+        With a :class:`Vehicle` only, as in :func:`linearize`.
+
+    Returns
+    -------
+    ndarray of int
+        The count per gain point; ``-1`` where it cannot be decided (a root
+        on, or within the frequency resolution of, the imaginary axis: a
+        boundary point).
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> plant = fws.LateralPlant(veh, speed=5.0)
+    >>> g = fws.double_root_gains(plant, ratio=0.0, pole=-1.0)
+    >>> fws.unstable_root_count(plant, g, delay=0.4).item()
+    0
+    >>> fws.unstable_root_count(plant, g, delay=0.6).item()
+    2
+    """
+    g = check_gains(gains)
+    tau = check_delay(delay)
+    p = as_plant(plant, speed=speed, curvature=curvature, model=model)
+    cp = characteristic_coefficients(p, ratio=g.ratio)
+    if cp.open_loop.ndim > 1 or cp.n1.ndim > 1:
+        # one operating point and a scalar ratio: the polynomials are shared
+        if np.ndim(g.ratio) or cp.open_loop.shape[:-1]:
+            raise ValueError(
+                "unstable_root_count needs one operating point and a scalar ratio"
+            )
+    k1, k2 = np.broadcast_arrays(
+        np.asarray(g.k1, dtype=float), np.asarray(g.k2, dtype=float)
+    )
+    shape = k1.shape
+    k1 = k1.ravel()
+    k2 = k2.ravel()
+    n = cp.order
+    d_c, n1_c, n2_c = (
+        np.asarray(c, dtype=float).reshape(-1) for c in (cp.open_loop, cp.n1, cp.n2)
+    )
+    roots_d = np.roots(d_c) if n > 0 else np.array([])
+    # Frequency beyond which |q| < |d|/2 for every gain asked, and beyond the
+    # imaginary parts of d's roots (so the tail is closed form).
+    K1, K2 = (
+        float(np.max(np.abs(k1), initial=0.0)),
+        float(np.max(np.abs(k2), initial=0.0)),
+    )
+    w_hi = max(1.0, float(np.max(np.abs(roots_d), initial=0.0)) * 2.0 + 1.0)
+    for _ in range(200):
+        ww = w_hi * np.geomspace(1.0, 1e3, 64)
+        s = 1j * ww
+        bound = K1 * np.abs(horner(n1_c, s)) + K2 * np.abs(horner(n2_c, s))
+        if np.all(bound < 0.5 * np.abs(horner(d_c, s))):
+            break
+        w_hi *= 2.0
+    else:  # pragma: no cover - deg q < deg d guarantees termination
+        raise RuntimeError("no frequency bound found")
+    # Grid: resolve the delay's phase (tau*dw <= pi/8) and the polynomials'
+    # time scales (geometric near 0).
+    m_lin = int(math.ceil(8.0 * tau * w_hi / math.pi)) + 64
+    w = np.unique(
+        np.concatenate(
+            [[0.0], np.geomspace(1e-4 * w_hi, w_hi, 256), np.linspace(0.0, w_hi, m_lin)]
+        )
+    )
+    count = np.full(k1.size, -1, dtype=int)
+    todo = np.arange(k1.size)
+    tail = _tail_phase(roots_d, w_hi)
+    for _refinement in range(3):
+        if todo.size == 0:
+            break
+        s = 1j * w
+        dv, v1, v2 = horner(d_c, s), horner(n1_c, s), horner(n2_c, s)
+        e = np.exp(-s * tau)
+        chunk = max(1, 2_000_000 // w.size)
+        still = []
+        for lo in range(0, todo.size, chunk):
+            idx = todo[lo : lo + chunk]
+            D = dv + e * (k1[idx, None] * v1 + k2[idx, None] * v2)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                inc = np.angle(D[:, 1:] / D[:, :-1])
+                end = np.angle(D[:, -1] / dv[-1])
+            total = np.sum(inc, axis=1) + tail - end
+            N = n / 2.0 - total / math.pi
+            ok = (
+                np.all(np.isfinite(inc), axis=1)
+                & (np.max(np.abs(inc), axis=1) < math.pi / 2)
+                & (np.abs(N - np.round(N)) < 0.1)
+                & (np.abs(D[:, 0]) > 0)
+            )
+            count[idx[ok]] = np.round(N[ok]).astype(int)
+            still.append(idx[~ok])
+        todo = np.concatenate(still) if still else todo[:0]
+        # refine for the undecided points: 8x denser grid
+        frac = np.linspace(0.0, 1.0, 9)[:-1]
+        w = np.append((w[:-1, None] + np.diff(w)[:, None] * frac).ravel(), w[-1])
+    return count.reshape(shape)
