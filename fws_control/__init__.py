@@ -45,6 +45,12 @@ from .controllers import (
     steering_command,
     steering_command_rate,
 )
+from .delay import (
+    CriticalDelay,
+    critical_delay,
+    rightmost_roots,
+    unstable_root_count,
+)
 from .design import double_root_gains
 from .exceptions import (
     AmbiguousProjectionError,
@@ -128,6 +134,10 @@ __all__ = [
     "characteristic_polynomial",
     "SteeringGains",
     "UncontrollableError",
+    "CriticalDelay",
+    "critical_delay",
+    "rightmost_roots",
+    "unstable_root_count",
     "double_root_gains",
     "is_stable",
     "StabilityBoundary",

@@ -291,22 +291,23 @@ def horner(coefficients: np.ndarray, s) -> np.ndarray:
 def _faddeev_leverrier(A: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
     """Characteristic polynomial and adjugate terms of ``s I - A``.
 
-    Returns ``(d, M)`` with ``d`` the monic coefficients (highest power
-    first) and ``adj(sI - A) = sum_k M[k] s^(n-1-k)``. The recursion gives
-    the exact structure (degrees below ``n`` of every ``c adj b``), which
-    an eigenvalue route does not; its rounding grows with the order, which
-    is why it serves the low-order plants of lateral control.
+    `A` has shape ``(..., n, n)`` (a stack of matrices). Returns ``(d, M)``
+    with ``d`` the monic coefficients ``(..., n + 1)`` (highest power first)
+    and ``adj(sI - A) = sum_k M[k] s^(n-1-k)``. The recursion gives the exact
+    structure (degrees below ``n`` of every ``c adj b``), which an
+    eigenvalue route does not; its rounding grows with the order, which is
+    why it serves the low-order plants of lateral control.
     """
-    n = A.shape[0]
+    n = A.shape[-1]
     eye = np.eye(n)
-    d = np.zeros(n + 1)
-    d[0] = 1.0
+    d = np.zeros(A.shape[:-2] + (n + 1,))
+    d[..., 0] = 1.0
     M = []
     Mk = np.zeros_like(A)
     for k in range(1, n + 1):
-        Mk = A @ Mk + d[k - 1] * eye
+        Mk = A @ Mk + d[..., k - 1, None, None] * eye
         M.append(Mk)
-        d[k] = -np.trace(A @ Mk) / k
+        d[..., k] = -np.trace(A @ Mk, axis1=-2, axis2=-1) / k
     return d, M
 
 
@@ -329,20 +330,22 @@ def _lateral_coefficients(plant: LateralPlant, ratio) -> AffinePolynomial:
 
 
 def _statespace_coefficients(lm: LoopMatrices, ratio) -> AffinePolynomial:
-    d, M = _faddeev_leverrier(lm.A)
-    n = lm.order
+    d, M = _faddeev_leverrier(np.asarray(lm.A, dtype=float))
 
     # n_i(s) = c_i adj(sI - A) (B_f + a B_r): four fixed polynomials, then a
     # broadcast over the ratio.
     def poly(c, b):
-        return np.concatenate([[0.0], [c @ Mk @ b for Mk in M]])
+        terms = [np.einsum("...i,...ij,...j->...", c, Mk, b) for Mk in M]
+        return np.stack([np.zeros_like(terms[0]), *terms], axis=-1)
 
     ef, er = poly(lm.c_e, lm.B_front), poly(lm.c_e, lm.B_rear)
     tf_, tr = poly(lm.c_theta, lm.B_front), poly(lm.c_theta, lm.B_rear)
     a = np.asarray(ratio, dtype=float)[..., np.newaxis]
     n1 = ef + a * er
     n2 = tf_ + a * tr
-    open_loop = np.broadcast_to(d, n1.shape[:-1] + (n + 1,))
+    open_loop = np.broadcast_to(d, np.broadcast_shapes(d.shape, n1.shape))
+    n1 = np.broadcast_to(n1, open_loop.shape)
+    n2 = np.broadcast_to(n2, open_loop.shape)
     return AffinePolynomial(open_loop=open_loop, n1=n1, n2=n2)
 
 
@@ -390,7 +393,7 @@ def characteristic_coefficients(
     """
     p = as_plant(plant, speed=speed, curvature=curvature, model=model)
     ratio = check_finite("ratio", ratio)
-    if isinstance(p, LateralPlant):
+    if isinstance(p, LateralPlant) and p.steering_lag is None:
         return _lateral_coefficients(p, ratio)
     return _statespace_coefficients(loop_matrices(p), ratio)
 

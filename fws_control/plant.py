@@ -33,7 +33,13 @@ import control as ct
 import numpy as np
 
 from .models import STEERING_INPUTS, feedforward_steering
-from .validation import check_finite, check_model, check_nonzero, check_type
+from .validation import (
+    check_finite,
+    check_model,
+    check_nonzero,
+    check_positive,
+    check_type,
+)
 from .vehicle import Vehicle
 
 __all__ = [
@@ -81,6 +87,16 @@ class LateralPlant:
         Path curvature :math:`\kappa_C` [1/m], default 0 (straight path).
     model : {"exact", "paper"}, optional
         Linearisation, default ``"exact"``.
+    steering_lag : float or (float, float) or None, optional
+        Time constants :math:`T_f, T_r` [s] of a first-order lag between the
+        steering command and the wheel angle,
+        :math:`T\dot\delta = \delta_{cmd} - \delta`; one number for both
+        axles, a pair for (front, rear), ``None`` (default) for none. With a
+        lag the plant has four states ``e, theta, delta_f_act, delta_r_act``
+        (the wheel angles) and its inputs ``delta_f, delta_r`` are the
+        commands; the analysis then goes through the general engine (no
+        double-root design: two gains cannot place four poles). Rate limits
+        remain a matter of the simulation.
 
     `speed` and `curvature` broadcast against each other (and against the
     gains in the analysis functions), like the fields of
@@ -114,10 +130,21 @@ class LateralPlant:
     speed: float | np.ndarray
     curvature: float | np.ndarray = 0.0
     model: str = "exact"
+    steering_lag: float | tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         check_type("vehicle", self.vehicle, Vehicle)
         check_model(self.model)
+        if self.steering_lag is not None:
+            lag = self.steering_lag
+            pair = (lag, lag) if np.ndim(lag) == 0 else tuple(np.ravel(lag))
+            if len(pair) != 2:
+                raise ValueError(
+                    "steering_lag must be one time constant or a (front, rear) "
+                    f"pair [s], got {lag!r}"
+                )
+            pair = tuple(float(check_positive("steering_lag", v)) for v in pair)
+            object.__setattr__(self, "steering_lag", pair)
         speed = check_nonzero("speed", self.speed)
         curvature = check_finite("curvature", self.curvature)
         try:
@@ -153,12 +180,33 @@ class LateralPlant:
         r"""Feedforward front angle :math:`\arctan(\kappa f)` [rad], eq. (26)."""
         return feedforward_steering(self.vehicle, curvature=self.curvature)
 
+    @property
+    def states(self) -> tuple[str, ...]:
+        """State names: ``e, theta`` (and the wheel angles with a lag)."""
+        if self.steering_lag is None:
+            return LINEAR_STATES
+        return (*LINEAR_STATES, "delta_f_act", "delta_r_act")
+
     def matrices(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(A, B)`` of the linearisation, shapes ``(..., 2, 2)``.
+        """``(A, B)`` of the linearisation, shapes ``(..., n, n)``, ``(..., n, 2)``.
 
         Broadcast over `speed` and `curvature`; columns of B are ``delta_f,
-        delta_r``.
+        delta_r``; ``n = 2``, or 4 with a steering lag.
         """
+        A, B = self._kinematic_matrices()
+        if self.steering_lag is None:
+            return A, B
+        inv = np.diag([1.0 / t for t in self.steering_lag])
+        shape = A.shape[:-2]
+        A4 = np.zeros(shape + (4, 4))
+        A4[..., :2, :2] = A
+        A4[..., :2, 2:] = B
+        A4[..., 2:, 2:] = -inv
+        B4 = np.zeros(shape + (4, 2))
+        B4[..., 2:, :] = inv
+        return A4, B4
+
+    def _kinematic_matrices(self) -> tuple[np.ndarray, np.ndarray]:
         V, kappa, c = np.broadcast_arrays(
             np.asarray(self.speed, dtype=float),
             np.asarray(self.curvature, dtype=float),
@@ -196,12 +244,13 @@ class LateralPlant:
                 f"have shape {self.shape}; index them first"
             )
         A, B = self.matrices()
+        n = A.shape[-1]
         return ct.ss(
             A,
             B,
-            np.eye(2),
+            np.eye(n)[:2],
             np.zeros((2, 2)),
-            states=list(LINEAR_STATES),
+            states=list(self.states),
             inputs=list(STEERING_INPUTS),
             outputs=list(LINEAR_STATES),
             name=f"linear_{self.model}",
@@ -402,9 +451,9 @@ def loop_matrices(plant: LateralPlant | ct.StateSpace) -> LoopMatrices:
     """
     if isinstance(plant, LateralPlant):
         A, B = plant.matrices()
-        eye = np.broadcast_to(np.eye(2), A.shape)
+        eye = np.broadcast_to(np.eye(A.shape[-1]), A.shape)
         return LoopMatrices(
-            A, B[..., 0], B[..., 1], eye[..., 0, :], eye[..., 1, :], LINEAR_STATES
+            A, B[..., 0], B[..., 1], eye[..., 0, :], eye[..., 1, :], plant.states
         )
     if isinstance(plant, ct.StateSpace):
         return _statespace_loop(plant)
