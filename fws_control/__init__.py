@@ -34,8 +34,12 @@ Modules: :mod:`~fws_control.vehicle`, :mod:`~fws_control.exceptions`,
 
 from . import symbolic
 from .acceleration import lateral_acceleration, yaw_acceleration
-from .batch import BatchResult, simulate_batch
-from .charts import StabilityChart, stability_chart
+from .charts import (
+    DelayMarginChart,
+    StabilityChart,
+    delay_margin_chart,
+    stability_chart,
+)
 from .comparison import LinearNonlinearComparison, compare_linear_nonlinear
 from .controllers import (
     feedback_controller,
@@ -96,6 +100,7 @@ from .simulation import (
     closed_loop_system,
     projection_system,
     simulate,
+    simulate_batch,
 )
 from .stability import (
     BoundaryCurve,
@@ -145,6 +150,8 @@ __all__ = [
     "symbolic",
     "StabilityChart",
     "stability_chart",
+    "DelayMarginChart",
+    "delay_margin_chart",
     "gain_loop",
     "gain_locus",
     "parameter_locus",
@@ -166,7 +173,6 @@ __all__ += [
     "simulate",
     "closed_loop_system",
     "projection_system",
-    "BatchResult",
     "simulate_batch",
     "peak_abs",
     "settling_time",

@@ -21,12 +21,12 @@ from typing import Any
 import control as ct
 import numpy as np
 
-from .delay import check_delay, unstable_root_count
+from .delay import check_delay, critical_delay, unstable_root_count
 from .design import double_root_gains
 from .exceptions import UncontrollableError
 from .gains import SteeringGains
 from .linear import AffinePolynomial, characteristic_coefficients
-from .plant import LateralPlant, as_plant
+from .plant import LateralPlant, as_plant, loop_matrices
 from .stability import (
     BoundaryCurve,
     StabilityBoundaries,
@@ -37,7 +37,14 @@ from .stability import (
 )
 from .validation import check_finite, check_scalar
 
-__all__ = ["StabilityChart", "stability_chart", "note_box", "DEFAULT_GAIN_AXIS"]
+__all__ = [
+    "StabilityChart",
+    "stability_chart",
+    "DelayMarginChart",
+    "delay_margin_chart",
+    "note_box",
+    "DEFAULT_GAIN_AXIS",
+]
 
 #: Default grid axis of k1 and k2: 401 points on [-1, 1].
 DEFAULT_GAIN_AXIS = np.linspace(-1.0, 1.0, 401)
@@ -589,4 +596,215 @@ def stability_chart(
         undecided=undecided,
         design=design,
         design_error=err,
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class DelayMarginChart:
+    r"""Critical delay of double-root designs over ratios and poles.
+
+    Returned by :func:`delay_margin_chart`. A design tolerates every delay
+    below its critical delay, so in the (pole, delay) or (ratio, delay)
+    plane the stable designs lie *below* each curve.
+
+    Attributes
+    ----------
+    plant : LateralPlant or control.StateSpace
+        The plant the delay margins are computed on.
+    design_plant : LateralPlant or control.StateSpace
+        The 2-state plant the gains were designed on.
+    ratio, pole : ndarray
+        1-D axes: ratios :math:`a` and double roots :math:`\lambda_0` [1/s].
+    delay : ndarray
+        Critical delays [s], shape ``(len(ratio), len(pole))``; ``inf`` where
+        no delay destabilises, 0 where the design is unstable on `plant`
+        without delay, NaN where no design exists (uncontrollable).
+    frequency : ndarray
+        Crossing frequencies [rad/s] at the critical delays (same shape).
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> ch = fws.delay_margin_chart(fws.LateralPlant(veh, speed=20.0),
+    ...                             ratio=[-1.0, 0.5], pole=[-1.0, -2.0])
+    >>> ch.delay.round(4)
+    array([[0.6474, 0.3237],
+           [0.6474, 0.3237]])
+    """
+
+    plant: Any
+    design_plant: Any
+    ratio: np.ndarray
+    pole: np.ndarray
+    delay: np.ndarray
+    frequency: np.ndarray
+
+    def tolerates(self, delay: float) -> np.ndarray:
+        """Boolean mask of the designs stable with an input delay of `delay` [s].
+
+        Parameters
+        ----------
+        delay : float
+            Input delay [s].
+
+        Returns
+        -------
+        ndarray of bool
+            Shape ``(len(ratio), len(pole))``.
+        """
+        tau = check_delay(delay)
+        return np.nan_to_num(self.delay, nan=-1.0) > tau
+
+    def plot(
+        self, ax=None, *, against: str = "pole", delay: float | None = None
+    ) -> ct.ControlPlot:
+        """Critical delay against the pole (one curve per ratio) or the ratio.
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw on; a new figure if None.
+        against : {"pole", "ratio"}, optional
+            The horizontal axis; one curve per value of the other.
+        delay : float, optional
+            Draw this delay [s] as a horizontal reference line (e.g. a
+            measured loop delay): designs whose curve lies above it survive.
+
+        Returns
+        -------
+        control.ControlPlot
+
+        Examples
+        --------
+        >>> import matplotlib; matplotlib.use("Agg")
+        >>> import matplotlib.pyplot as plt, fws_control as fws
+        >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+        >>> ch = fws.delay_margin_chart(fws.LateralPlant(veh, speed=5.0),
+        ...                             ratio=[-1.0, 0.0], pole=[-1.0, -2.0, -3.0])
+        >>> cplt = ch.plot(delay=0.24)
+        >>> cplt.axes[0, 0].get_ylabel()
+        'critical delay [s]'
+        >>> plt.close(cplt.figure)
+        """
+        import matplotlib.pyplot as plt
+
+        if against not in ("pole", "ratio"):
+            raise ValueError(f"against must be 'pole' or 'ratio', got {against!r}")
+        if ax is None:
+            _, ax = plt.subplots(figsize=(6.5, 4.6), layout="constrained")
+        if against == "pole":
+            x, curves, names = self.pole, self.delay, self.ratio
+            xlabel, what = r"double root $\lambda_0$ [1/s]", "a = {:g}"
+        else:
+            x, curves, names = self.ratio, self.delay.T, self.pole
+            xlabel, what = "ratio $a$ [-]", r"$\lambda_0$ = {:g} 1/s"
+        finite = self.delay[np.isfinite(self.delay)]
+        top = float(np.max(finite)) * 1.1 if finite.size else 1.0
+        lines = []
+        for i, (name, y) in enumerate(zip(names, curves, strict=True)):
+            (ln,) = ax.plot(
+                x, np.where(np.isinf(y), np.nan, y), "o-", ms=3, color=f"C{i % 10}",
+                label=what.format(name),
+            )  # fmt: skip
+            lines.append(ln)
+            inf = np.isinf(y)
+            if np.any(inf):
+                (m,) = ax.plot(
+                    x[inf], np.full(inf.sum(), top), "^", color=ln.get_color()
+                )
+                lines.append(m)
+        if delay is not None:
+            lines.append(
+                ax.axhline(
+                    check_delay(delay),
+                    color="k",
+                    ls="--",
+                    lw=1.0,
+                    label=f"delay {delay:g} s",
+                )  # fmt: skip
+            )
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel("critical delay [s]")
+        ax.set_ylim(0.0, top * 1.05)
+        ax.grid(alpha=0.3)
+        where = (
+            f"V = {float(self.plant.speed):g} m/s, "
+            rf"$\kappa$ = {float(self.plant.curvature):g} 1/m"
+            if isinstance(self.plant, LateralPlant)
+            else f"{loop_matrices(self.plant).order}-state plant"
+        )
+        ax.set_title(
+            f"delay margin of the double-root designs ({where});\n"
+            "stable below each curve, ▲: no delay destabilises",
+            fontsize=10,
+        )
+        leg = ax.legend(fontsize=8)
+        arr = np.empty((1, 1), dtype=object)
+        arr[0, 0] = lines
+        return ct.ControlPlot(arr, np.array([[ax]]), ax.figure, legend=leg)
+
+
+def delay_margin_chart(
+    plant: Any,
+    *,
+    ratio,
+    pole,
+    design_plant: Any = None,
+    speed: Any = None,
+    curvature: Any = None,
+    model: Any = None,
+) -> DelayMarginChart:
+    r"""Critical delays of double-root designs over ratios and poles.
+
+    For every ratio :math:`a` and double root :math:`\lambda_0` the gains of
+    :func:`double_root_gains` are designed on `design_plant` (a 2-state
+    plant; default `plant`) and their delay margin
+    (:func:`~fws_control.critical_delay`) is computed on `plant` — which may
+    carry a steering lag (``LateralPlant(..., steering_lag=...)``), so that
+    the chart answers which of the paper's designs survive a real actuator.
+
+    Parameters
+    ----------
+    plant : LateralPlant, control.StateSpace or Vehicle
+        The plant the margins are computed on (one operating point).
+    ratio, pole : float or array_like
+        1-D ratios and double roots (< 0) [1/s].
+    design_plant : LateralPlant or control.StateSpace, optional
+        2-state plant for the design; default `plant`.
+    speed, curvature, model : optional
+        With a :class:`Vehicle` only, as in :func:`linearize`.
+
+    Returns
+    -------
+    DelayMarginChart
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> lagged = fws.LateralPlant(veh, speed=20.0, steering_lag=0.27)
+    >>> ch = fws.delay_margin_chart(lagged, ratio=0.0, pole=[-1.0, -3.0],
+    ...                             design_plant=fws.LateralPlant(veh, speed=20.0))
+    >>> ch.delay.round(3)
+    array([[0.376, 0.   ]])
+    """
+    p = as_plant(plant, speed=speed, curvature=curvature, model=model)
+    dp = p if design_plant is None else as_plant(design_plant)
+    a = np.atleast_1d(check_finite("ratio", ratio)).astype(float)
+    lam = np.atleast_1d(check_finite("pole", pole)).astype(float)
+    if a.ndim != 1 or lam.ndim != 1:
+        raise ValueError("ratio and pole must be scalars or 1-D arrays")
+    delay = np.full((a.size, lam.size), np.nan)
+    freq = np.full((a.size, lam.size), np.nan)
+    for i, ai in enumerate(a):
+        try:
+            g = double_root_gains(dp, ratio=ai, pole=lam)
+        except UncontrollableError:
+            continue  # no design: stays NaN
+        cd = critical_delay(p, g)
+        delay[i] = cd.delay
+        freq[i] = cd.frequency
+    return DelayMarginChart(
+        plant=p, design_plant=dp, ratio=a, pole=lam, delay=delay, frequency=freq
     )
