@@ -787,7 +787,7 @@ def delay_margin_chart(
     >>> ch = fws.delay_margin_chart(lagged, ratio=0.0, pole=[-1.0, -3.0],
     ...                             design_plant=fws.LateralPlant(veh, speed=20.0))
     >>> ch.delay.round(3)
-    array([[0.376, 0.   ]])
+    array([[0.455, 0.09 ]])
     """
     p = as_plant(plant, speed=speed, curvature=curvature, model=model)
     dp = p if design_plant is None else as_plant(design_plant)

@@ -154,7 +154,7 @@ class CriticalDelay:
     >>> g = fws.double_root_gains(plant, ratio=0.0, pole=-1.0)
     >>> cd = fws.critical_delay(plant, g)
     >>> round(cd.delay, 4), round(cd.frequency, 4)
-    (0.4796, 1.4553)
+    (0.6474, 2.0582)
     """
 
     delay: float | np.ndarray
@@ -205,7 +205,7 @@ def critical_delay(
     >>> plant = fws.LateralPlant(veh, speed=20.0)
     >>> g = fws.double_root_gains(plant, ratio=0.5, pole=-1.0)
     >>> round(fws.critical_delay(plant, g).delay, 4)
-    0.4796
+    0.6474
     """
     g = check_gains(gains)
     p = as_plant(plant, speed=speed, curvature=curvature, model=model)
@@ -444,7 +444,7 @@ def unstable_root_count(
     >>> g = fws.double_root_gains(plant, ratio=0.0, pole=-1.0)
     >>> fws.unstable_root_count(plant, g, delay=0.4).item()
     0
-    >>> fws.unstable_root_count(plant, g, delay=0.6).item()
+    >>> fws.unstable_root_count(plant, g, delay=0.7).item()
     2
     """
     g = check_gains(gains)
