@@ -325,7 +325,7 @@ def _lateral_coefficients(plant: LateralPlant, ratio) -> AffinePolynomial:
     return AffinePolynomial(
         open_loop=np.stack([one, zero, V**2 * kappa**2], -1),
         n1=np.stack([zero, V * a, V**2 * (c - a) / f], -1),
-        n2=np.stack([zero, V * (c - a) / f, -(V**2) * a * kappa**2], -1),
+        n2=np.stack([zero, V * (c - a) / f, -(V**2) * a * kappa**2 + 0.0], -1),
     )
 
 

@@ -214,7 +214,9 @@ class LateralPlant:
         )
         f = self.vehicle.wheelbase
         zero = np.zeros_like(V)
-        A = np.stack([np.stack([zero, V], -1), np.stack([-V * kappa**2, zero], -1)], -2)
+        A = np.stack(
+            [np.stack([zero, V], -1), np.stack([-V * kappa**2 + 0.0, zero], -1)], -2
+        )
         B = np.stack([np.stack([zero, V], -1), np.stack([c * V / f, -V / f], -1)], -2)
         return A, B
 
