@@ -7,6 +7,7 @@ Subcommands::
     fws-control chart     --paper-figure 3 --out fig3.png
     fws-control rlocus    --speed 5 --curvature 0.1 --ratio -1 --out rl.png
     fws-control simulate  --path arc --curvature 0.1 --y0 -5 --out sim.png
+    fws-control delay-margin --speed 20 --ratio 0.5 --pole -1 --steering-lag 0.27
     fws-control reproduce --out figures
 
 Angles are given and printed in degrees; everything else is SI. Invalid
@@ -223,6 +224,34 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--csv", type=Path, help="also write the time series as CSV")
     _add_vehicle(p)
     p.set_defaults(func=_cmd_simulate)
+
+    p = sub.add_parser(
+        "delay-margin",
+        help="critical input delay of a design (with an optional steering lag)",
+        description="The smallest delay on the steering command at which a "
+        "closed-loop root reaches the imaginary axis (the delay margin), with "
+        "the crossing frequency. The double-root gains are designed on the "
+        "kinematic model without lag; --steering-lag puts a first-order "
+        "actuator in the plant they are evaluated on. With --delay, also the "
+        "rightmost roots at that delay.",
+    )
+    _add_operating_point(p)
+    _add_gains(p)
+    p.add_argument(
+        "--steering-lag",
+        nargs="+",
+        type=_finite,
+        metavar="T",
+        help="first-order steering time constant [s]: one for both axles or "
+        "front and rear (none)",
+    )
+    p.add_argument(
+        "--delay",
+        type=_finite,
+        help="also report the rightmost roots at this delay [s]",
+    )
+    _add_vehicle(p)
+    p.set_defaults(func=_cmd_delay_margin)
 
     p = sub.add_parser(
         "reproduce",
@@ -519,6 +548,54 @@ def _write_csv(res, path: Path) -> None:
     data = np.column_stack([np.asarray(getattr(res, n), dtype=float) for n in names])
     path.parent.mkdir(parents=True, exist_ok=True)
     np.savetxt(path, data, delimiter=",", header=",".join(names), comments="")
+
+
+def _cmd_delay_margin(args) -> int:
+    from .delay import critical_delay, rightmost_roots
+    from .plant import LateralPlant
+
+    veh = _vehicle(args)
+    g = _gains(args, veh)
+    lag = args.steering_lag
+    if lag is not None and len(lag) not in (1, 2):
+        raise ValueError(
+            f"--steering-lag takes one or two time constants, got {len(lag)}"
+        )
+    plant = LateralPlant(
+        veh,
+        speed=args.speed,
+        curvature=args.curvature,
+        model=args.model,
+        steering_lag=None if lag is None else (lag[0] if len(lag) == 1 else lag),
+    )
+    cd = critical_delay(plant, g)
+    design = "given gains" if args.k1 is not None else f"lambda0 = {args.pole:g} design"
+    print(
+        f"V = {args.speed:g} m/s, kappa = {args.curvature:g} 1/m, a = {args.ratio:g}, "
+        f"k1 = {float(g.k1):.6f} rad/m, k2 = {float(g.k2):.6f} ({design}, "
+        f"{args.model} model)"
+    )
+    if plant.steering_lag is None:
+        print("steering lag: none")
+    else:
+        tf_, tr = plant.steering_lag
+        print(f"steering lag: {tf_:g} s front, {tr:g} s rear")
+    if not cd.stable_without_delay:
+        print("critical delay: 0 s (the loop is unstable without delay)")
+    elif math.isinf(cd.delay):
+        print("critical delay: inf (no delay destabilises the loop)")
+    else:
+        print(
+            f"critical delay: {cd.delay:.6g} s (crossing at {cd.frequency:.6g} rad/s "
+            f"= {cd.frequency / (2 * math.pi):.4g} Hz)"
+        )
+    if args.delay is not None:
+        roots = rightmost_roots(plant, g, delay=args.delay, n=2)
+        verdict = "stable" if roots[0].real < 0 else "unstable"
+        print(
+            f"at delay {args.delay:g} s: {verdict}; rightmost roots {_fmt_poles(roots)}"
+        )
+    return 0
 
 
 def _cmd_reproduce(args) -> int:
