@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .models import _check_steering, yaw_rate
+from .models import check_steering, yaw_rate
 from .vehicle import Vehicle
 
 __all__ = ["yaw_acceleration", "lateral_acceleration"]
@@ -41,7 +41,7 @@ def yaw_acceleration(
     """
     df = np.asarray(delta_f, dtype=float)
     dr = np.asarray(delta_r, dtype=float)
-    _check_steering(df)
+    check_steering(df)
     cf = np.cos(df)
     out = (speed / vehicle.wheelbase) * (
         np.cos(dr) / cf**2 * np.asarray(delta_f_rate, dtype=float)

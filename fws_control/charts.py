@@ -213,7 +213,7 @@ class StabilityChart:
             and self.k2.min() <= k2d <= self.k2.max()
         )
 
-    def notes(self, label: str = "") -> list[str]:
+    def notes(self, *, label: str = "") -> list[str]:
         """Remarks a reader needs that the drawing cannot show.
 
         Parameters

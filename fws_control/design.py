@@ -14,10 +14,12 @@ which equals the determinant of the controllability matrix of
 special about ``a = 0`` (the paper's eqs. (43)-(46) are singular there only
 because of how they are written).
 
-A plant of higher order has ``n`` poles but only two gains: a double root
-does not determine them. Use :func:`control.place` or :func:`control.acker`
-on ``(A, B[:, delta_f] + a B[:, delta_r])`` for a full state feedback
-instead (:meth:`SteeringGains.from_K` converts a rank-one result).
+A plant of higher order has ``n`` poles but the structured controller only
+two gains, ``k1`` on ``e`` and ``k2`` on ``theta``: a double root does not
+determine them and the other poles go where they must. Choose the gains from
+:func:`stability_chart` (and :func:`parameter_locus`) instead; a full state
+feedback from :func:`control.place` on ``(A, B[:, delta_f] + a B[:,
+delta_r])`` is a different controller (it feeds back every state).
 """
 
 from __future__ import annotations
@@ -111,10 +113,10 @@ def double_root_gains(
     if cp.order != 2:
         raise ValueError(
             f"double_root_gains needs a 2-state plant, got one of order {cp.order}: "
-            "two gains cannot place a double root and fix the other poles. Use "
-            "control.place or control.acker on (A, B[:, delta_f] + a*B[:, "
-            "delta_r]) and SteeringGains.from_K, or stability_chart to see the "
-            "stable gains"
+            "two gains on e and theta cannot place a double root and fix the "
+            "other poles. Choose (k1, k2) from stability_chart or parameter_locus; "
+            "control.place on (A, B[:, delta_f] + a*B[:, delta_r]) gives a full "
+            "state feedback, a different controller"
         )
     a1, b1, g1 = cp.n1[..., 1], cp.n2[..., 1], cp.open_loop[..., 1]
     a0, b0, g0 = cp.n1[..., 2], cp.n2[..., 2], cp.open_loop[..., 2]

@@ -164,14 +164,23 @@ def closed_loop(
     others = [j for j in range(B.shape[1]) if j not in steer]
     K = -g.K  # paper's sign: u = K_paper [e, theta]
     Cs = np.stack([lm.c_e, lm.c_theta])
+    # Feedthrough of the other inputs into the measured e, theta (the steering
+    # inputs have none there: loop_matrices refuses that algebraic loop). It
+    # reaches the steering through the controller too.
+    outputs = list(sys.output_labels)
+    Dso = np.zeros((2, len(others)))
+    for row, name in enumerate(("e", "theta")):
+        if name in outputs:
+            Dso[row] = D[outputs.index(name), others]
     Bs, Ds = B[:, steer], D[:, steer]
+    Bo, Do = B[:, others], D[:, others]
     A_cl = A + Bs @ K @ Cs
-    B_cl = np.hstack([Bs, B[:, others]])
+    B_cl = np.hstack([Bs, Bo + Bs @ K @ Dso])
     C_cl = np.vstack([C + Ds @ K @ Cs, K @ Cs])
     D_cl = np.vstack(
         [
-            np.hstack([Ds, D[:, others]]),
-            np.hstack([np.eye(2), np.zeros((2, len(others)))]),
+            np.hstack([Ds, Do + Ds @ K @ Dso]),
+            np.hstack([np.eye(2), K @ Dso]),
         ]
     )
     return ct.ss(

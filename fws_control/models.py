@@ -31,6 +31,7 @@ __all__ = [
     "path_frame_model",
     "yaw_rate",
     "feedforward_steering",
+    "check_steering",
     "GLOBAL_STATES",
     "PATH_STATES",
     "STEERING_INPUTS",
@@ -41,7 +42,22 @@ PATH_STATES = ("s", "e", "theta")
 STEERING_INPUTS = ("delta_f", "delta_r")
 
 
-def _check_steering(delta_f: np.ndarray) -> None:
+def check_steering(delta_f) -> None:
+    """Raise :class:`SingularStateError` where ``|delta_f| >= pi/2``.
+
+    The kinematic yaw rate of eq. (10) has ``cos(delta_f)`` in the
+    denominator.
+
+    Parameters
+    ----------
+    delta_f : float or array_like
+        Front steering angle(s) [rad].
+
+    Examples
+    --------
+    >>> from fws_control.models import check_steering
+    >>> check_steering([0.1, -1.5])   # fine: nothing raised
+    """
     if np.any(np.abs(delta_f) >= math.pi / 2):
         raise SingularStateError(
             f"front steering angle delta_f={delta_f!r} rad has |delta_f| >= pi/2: "
@@ -90,7 +106,7 @@ def yaw_rate(
     """
     df = np.asarray(delta_f, dtype=float)
     dr = np.asarray(delta_r, dtype=float)
-    _check_steering(df)
+    check_steering(df)
     out = _yaw_rate(speed, vehicle.wheelbase, df, dr)
     return float(out) if np.ndim(out) == 0 else out
 
@@ -119,7 +135,7 @@ def _global_update(t, x, u, params):
     f = params["wheelbase"]
     psi = x[2]
     delta_f, delta_r = u[0], u[1]
-    _check_steering(delta_f)
+    check_steering(delta_f)
     return np.array(
         [
             speed * math.cos(psi + delta_r),
@@ -135,7 +151,7 @@ def _path_update(t, x, u, params):
     kappa = params["curvature"]
     e, theta = x[1], x[2]
     delta_f, delta_r = u[0], u[1]
-    _check_steering(delta_f)
+    check_steering(delta_f)
     gap = 1.0 - kappa * e
     if gap <= 0.0:
         raise SingularStateError(

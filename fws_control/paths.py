@@ -405,8 +405,8 @@ class Path(ABC):
         self,
         x: ArrayLike,
         y: ArrayLike,
-        s_guess: ArrayLike | None = None,
         *,
+        s_guess: ArrayLike | None = None,
         strict: bool = False,
         window: float = 10.0,
     ) -> Projection:
@@ -524,8 +524,8 @@ class Path(ABC):
         x: ArrayLike,
         y: ArrayLike,
         psi: ArrayLike,
-        s_guess: ArrayLike | None = None,
         *,
+        s_guess: ArrayLike | None = None,
         strict: bool = False,
         window: float = 10.0,
     ) -> tuple[Array, Array, Array, Array]:
@@ -560,7 +560,7 @@ class Path(ABC):
         (4.0, 1.5, 0.25, 0.0)
         """
         h = _finite_array("psi", psi)
-        proj = self.project(x, y, s_guess, strict=strict, window=window)
+        proj = self.project(x, y, s_guess=s_guess, strict=strict, window=window)
         try:
             theta = _wrap_angle(h - proj.heading)
         except ValueError as exc:

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
-from .models import _check_steering
+from .models import check_steering
 from .validation import check_finite
 from .vehicle import Vehicle
 
@@ -109,7 +109,7 @@ def steady_turn(vehicle: Vehicle, delta_f, delta_r) -> TurningGeometry:
     """
     df = np.asarray(check_finite("delta_f", delta_f), dtype=float)
     dr = np.asarray(check_finite("delta_r", delta_r), dtype=float)
-    _check_steering(df)
+    check_steering(df)
     df, dr = np.broadcast_arrays(df, dr)
     f, d = vehicle.wheelbase, vehicle.rear_to_cg
     kappa = np.sin(df - dr) / (f * np.cos(df))

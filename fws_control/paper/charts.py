@@ -211,7 +211,7 @@ def _draw_panel(ax, panel: ChartPanel, legend: bool = True) -> list:
             boundaries=True,
             design=True,
         )
-        notes += ch.notes(lab)
+        notes += ch.notes(label=lab)
     handles += [
         Line2D([], [], color="0.3", ls="-", label=r"$p_1 = 0$ (eq. 35)"),
         Line2D([], [], color="0.3", ls="--", label=r"$p_0 = 0$ (eq. 36)"),
