@@ -124,16 +124,40 @@ def hurwitz_columns(columns) -> np.ndarray:
     return ok & finite
 
 
+#: Relative rounding bound of a coefficient ``d_j + k1 n1_j + k2 n2_j``
+#: (three terms, two products): a few units of the machine epsilon.
+_ROUNDING = 8 * np.finfo(float).eps
+
+
 def _stable_from_polynomial(cp: AffinePolynomial, k1, k2) -> bool | np.ndarray:
     cols = [
         cp.open_loop[..., j] + k1 * cp.n1[..., j] + k2 * cp.n2[..., j]
         for j in range(cp.order + 1)
     ]
+    # A coefficient within rounding of zero is zero: a point on a boundary line
+    # (p1 = 0 or p0 = 0) must not come out stable by a floating-point tie. The
+    # bound uses the largest gains asked, so it costs no extra pass over a grid.
+    big1 = float(np.max(np.abs(k1), initial=0.0))
+    big2 = float(np.max(np.abs(k2), initial=0.0))
+    tol = [
+        _ROUNDING
+        * float(
+            np.max(
+                np.abs(cp.open_loop[..., j])
+                + big1 * np.abs(cp.n1[..., j])
+                + big2 * np.abs(cp.n2[..., j]),
+                initial=0.0,
+            )
+        )
+        for j in range(cp.order + 1)
+    ]
     if cp.order == 2:
         # Closed form of eqs. (35)-(36); monic, so p1 > 0 and p0 > 0.
-        out = (cols[1] > 0) & (cols[2] > 0)
+        out = (cols[1] > tol[1]) & (cols[2] > tol[2])
     else:
         out = hurwitz_columns(cols)
+        for c, t in zip(cols[1:], tol[1:], strict=True):
+            out &= c > t  # every coefficient of a Hurwitz polynomial is > 0
     return bool(out) if np.ndim(out) == 0 else out
 
 
