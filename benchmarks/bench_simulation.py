@@ -30,7 +30,8 @@ import control as ct
 import numpy as np
 
 import fws_control as fws
-from fws_control.scenarios import PAPER_VEHICLE, paper_scenario
+from fws_control.paper import PAPER_VEHICLE
+from fws_control.paper.scenarios import paper_scenario
 
 TOL = {"rtol": 1e-10, "atol": 1e-12}
 
@@ -46,7 +47,8 @@ def main() -> None:
     sc = paper_scenario("curve_5")
     path = sc.path
     ratios = np.linspace(-1.5, 0.6, args.runs)
-    g = fws.double_root_gains(veh, sc.speed, sc.curvature, ratios, -1.0)
+    plant = fws.LateralPlant(veh, speed=sc.speed, curvature=sc.curvature)
+    g = fws.double_root_gains(plant, ratio=ratios, pole=-1.0)
     t = np.linspace(0.0, sc.duration, 1501)
     x0 = list(sc.initial_state)
     print(
@@ -55,9 +57,10 @@ def main() -> None:
         f"{t.size} output times"
     )
 
-    fws.simulate_batch(veh, path, g, sc.speed, x0, 1.0, progress=False)  # warm-up
+    kw = {"speed": sc.speed, "initial_state": x0}
+    fws.simulate_batch(veh, path, g, **kw, duration=1.0, progress=False)  # warm-up
     t0 = time.perf_counter()
-    batch = fws.simulate_batch(veh, path, g, sc.speed, x0, sc.duration, t_eval=t)
+    batch = fws.simulate_batch(veh, path, g, **kw, duration=sc.duration, t_eval=t)
     t_batch = time.perf_counter() - t0
     if not np.all(batch.ok):
         raise SystemExit(f"unexpected stopped runs: {set(batch.status)}")
@@ -68,9 +71,8 @@ def main() -> None:
             veh,
             path,
             fws.SteeringGains(g.k1[i], g.k2[i], g.ratio[i]),
-            sc.speed,
-            x0,
-            sc.duration,
+            **kw,
+            duration=sc.duration,
             t_eval=t,
         )
         for i in range(args.runs)
@@ -81,7 +83,7 @@ def main() -> None:
     refs = []
     for i in range(args.runs):
         sys = fws.closed_loop_system(
-            veh, path, fws.SteeringGains(g.k1[i], g.k2[i], g.ratio[i]), sc.speed
+            veh, path, fws.SteeringGains(g.k1[i], g.k2[i], g.ratio[i]), speed=sc.speed
         )
         resp = ct.input_output_response(
             sys,

@@ -52,6 +52,18 @@ class LinearNonlinearComparison:
         Linearisation of the linear prediction.
     feedforward : bool
         Whether the curvature feedforward was used.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> plant = fws.LateralPlant(veh, speed=5.0)
+    >>> g = fws.double_root_gains(plant, ratio=0.0, pole=-1.0)
+    >>> cmp = fws.compare_linear_nonlinear(plant, g, duration=2.0)
+    >>> cmp.initial_errors          # default: e0 = 2 m, theta0 = 0
+    (2.0, 0.0)
+    >>> round(cmp.max_difference()["e"], 4)   # linearisation error [m]
+    0.0012
     """
 
     linear: ct.TimeResponseData

@@ -1,8 +1,10 @@
 r"""Performance metrics of closed-loop time responses.
 
-The functions take arrays with time on the **last** axis, so that a
-:class:`BatchResult` signal of shape ``(runs, time)`` gives one value per
-run, and a single response of shape ``(time,)`` gives a scalar.
+The functions take arrays with time on the **last** axis, so that a signal
+of a batch :class:`~fws_control.SimulationResult` (from
+:func:`~fws_control.simulate_batch`, shape ``(runs, time)``) gives one value
+per run, and the signal of a single run (from :func:`~fws_control.simulate`
+or ``result[i]``, shape ``(time,)``) gives a scalar.
 
 Two kinds of metric:
 
@@ -15,17 +17,22 @@ Two kinds of metric:
   a run with missing samples gives NaN, so an incomplete run is never
   mistaken for a converged one.
 
-:func:`tracking_metrics` collects all of them for a :class:`SimulationResult`
-or :class:`BatchResult`, with the run status alongside.
+:func:`tracking_metrics` collects all of them for a
+:class:`~fws_control.SimulationResult` of one run or many, with the run
+status alongside.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .validation import check_positive
+
+if TYPE_CHECKING:  # for the annotation only: metrics need no simulation code
+    from .simulation import SimulationResult
 
 __all__ = [
     "peak_abs",
@@ -259,6 +266,11 @@ def _time_average(t, signal, t_start):
 class TrackingMetrics:
     """Metrics of one run (floats) or of a batch (arrays of shape ``(runs,)``).
 
+    Returned by :func:`tracking_metrics`: floats for a squeezed
+    :class:`~fws_control.SimulationResult` (from :func:`~fws_control.simulate`
+    or ``result[i]``), arrays for a batch (from
+    :func:`~fws_control.simulate_batch`).
+
     Attributes
     ----------
     peak_lateral_accel : float or ndarray
@@ -280,6 +292,17 @@ class TrackingMetrics:
         Peak absolute steering rate [rad/s] (up to the stop).
     status : str or ndarray of str
         The run status; horizon metrics are NaN unless it is ``"ok"``.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> g = fws.SteeringGains(k1=[0.1, -0.1], k2=0.5, ratio=0.0)
+    >>> batch = fws.simulate_batch(veh, fws.Straight(), g, speed=5.0,
+    ...                            initial_state=(0.0, 1.0, 0.0), duration=10.0)
+    >>> m = fws.tracking_metrics(batch)     # k1 < 0: e does not settle
+    >>> m.status.tolist(), m.settling_time.round(2).tolist()
+    (['ok', 'ok'], [8.54, inf])
     """
 
     peak_lateral_accel: float | np.ndarray
@@ -296,13 +319,19 @@ class TrackingMetrics:
 
 
 def tracking_metrics(
-    result, *, band=None, fraction: float = 0.02, window: float = 1.0
+    result: SimulationResult,
+    *,
+    band=None,
+    fraction: float = 0.02,
+    window: float = 1.0,
 ) -> TrackingMetrics:
-    """All metrics of a :class:`SimulationResult` or :class:`BatchResult`.
+    """All metrics of a :class:`~fws_control.SimulationResult`.
 
     Parameters
     ----------
-    result : SimulationResult or BatchResult
+    result : SimulationResult
+        One run (squeezed: from :func:`~fws_control.simulate` or
+        ``result[i]``) or a batch (from :func:`~fws_control.simulate_batch`).
     band, fraction
         Settling band of the lateral error, see :func:`settling_time`.
     window : float, optional
@@ -311,7 +340,8 @@ def tracking_metrics(
     Returns
     -------
     TrackingMetrics
-        Floats for a single run, arrays of shape ``(runs,)`` for a batch.
+        Floats for a squeezed result, arrays of shape ``(runs,)`` for a
+        batch (whatever its number of runs).
         Horizon metrics are NaN for runs whose status is not ``"ok"``.
 
     Examples

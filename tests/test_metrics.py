@@ -75,8 +75,10 @@ def test_peak_abs_ignores_nan_tail():
 
 def test_tracking_metrics_single_and_batch_agree_with_direct_computation():
     ratios = np.array([-1.0, 0.0, 0.5])
-    g = fws.double_root_gains(VEH, 5.0, 0.1, ratios, -1.0)
-    batch = fws.simulate_batch(VEH, Arc(0.1), g, 5.0, (0, -5, 0), 15.0, dt=0.01)
+    g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=ratios, pole=-1.0)
+    batch = fws.simulate_batch(
+        VEH, Arc(0.1), g, speed=5.0, initial_state=(0, -5, 0), duration=15.0, dt=0.01
+    )
     m = fws.tracking_metrics(batch)
     assert m.status.tolist() == ["ok"] * 3
     np.testing.assert_allclose(
@@ -89,6 +91,13 @@ def test_tracking_metrics_single_and_batch_agree_with_direct_computation():
         single = fws.tracking_metrics(batch[i])
         assert single.settling_time == pytest.approx(m.settling_time[i])
         assert single.rms_error == pytest.approx(m.rms_error[i])
+        # a squeezed run gives floats; the metric functions on its arrays agree
+        assert isinstance(single.settling_time, float) and single.status == "ok"
+        run = batch[i]
+        assert single.overshoot == fws.overshoot(run.e)
+        assert single.steady_state_heading_error == fws.steady_state(
+            run.t, run.theta, window=1.0
+        )
     # with feedforward the error converges: steady-state mean over the last
     # second is far below the 2 % band of e0 = -5 m
     assert np.all(np.abs(m.steady_state_error) < 1e-3)
@@ -96,9 +105,23 @@ def test_tracking_metrics_single_and_batch_agree_with_direct_computation():
 
 def test_tracking_metrics_of_stopped_run_has_nan_horizon_metrics():
     g = fws.SteeringGains(0.1, -0.5, 0.0)  # runs into |delta_f| = pi/2
-    res = fws.simulate(VEH, Straight(), g, 5.0, (0, 1, 0), 10.0, feedforward=False)
+    kw = {"speed": 5.0, "initial_state": (0, 1, 0), "duration": 10.0}
+    res = fws.simulate(VEH, Straight(), g, feedforward=False, **kw)
     m = fws.tracking_metrics(res)
     assert m.status == "singular_steering"
     assert math.isnan(m.settling_time) and math.isnan(m.rms_error)
     assert m.peak_delta_f == pytest.approx(np.max(np.abs(res.delta_f)))
     assert m.peak_delta_f < math.pi / 2
+    # the same run in a batch (NaN tail after the stop): the same metrics, up
+    # to the integration (the batch shares one solver's steps between its runs)
+    both = fws.simulate_batch(
+        VEH,
+        Straight(),
+        [g, fws.SteeringGains(0.1, 0.5, 0.0)],
+        feedforward=False,
+        **kw,
+    )
+    mb = fws.tracking_metrics(both)
+    assert mb.status.tolist() == ["singular_steering", "ok"]
+    assert math.isnan(mb.settling_time[0]) and np.isfinite(mb.settling_time[1])
+    assert mb.peak_delta_f[0] == pytest.approx(m.peak_delta_f, rel=1e-6)

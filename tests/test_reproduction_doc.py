@@ -16,7 +16,11 @@ import numpy as np
 import pytest
 
 import fws_control as fws
-from fws_control.scenarios import fig6_to_9_responses
+from fws_control.paper import PAPER_VEHICLE
+from fws_control.paper.scenarios import (
+    feedback_only_steady_state,
+    fig6_to_9_responses,
+)
 
 PAGE = Path(__file__).resolve().parents[1] / "docs" / "reproduction.md"
 
@@ -53,19 +57,19 @@ def test_figs_6_to_9_table_matches_simulation(responses):
         m = fws.tracking_metrics(resp.result)
         for i, a in enumerate(resp.ratios):
             cells = rows[fig, float(a)]
-            status = str(np.atleast_1d(m.status)[i])
+            status = str(m.status[i])
             assert cells[4].startswith(status), (fig, a, cells[4], status)
             if status != "ok":
                 continue
-            k1 = float(np.atleast_1d(resp.result.k1)[i])
-            k2 = float(np.atleast_1d(resp.result.k2)[i])
+            k1 = float(resp.result.k1[i])
+            k2 = float(resp.result.k2[i])
             quoted = {
                 2: k1,
                 3: k2,
-                5: np.atleast_1d(m.peak_lateral_accel)[i],
-                6: np.atleast_1d(m.settling_time)[i],
-                7: np.atleast_1d(m.rms_error)[i],
-                9: np.degrees(np.atleast_1d(m.peak_delta_f)[i]),
+                5: m.peak_lateral_accel[i],
+                6: m.settling_time[i],
+                7: m.rms_error[i],
+                9: np.degrees(m.peak_delta_f[i]),
             }
             for col, value in quoted.items():
                 assert _matches(cells[col], float(value)), (
@@ -85,8 +89,7 @@ def test_quoted_steady_state_errors_of_feedback_only():
     quoted = re.search(r"`curve_5`: \$e_\{ss\}\$ = ([^m]+) m", text)[1]
     values = [float(v.replace("−", "-")) for v in quoted.split(",")]
     for a, e_q in zip((-1.0, -0.5, 0.0, 0.5), values, strict=True):
-        g = fws.double_root_gains(fws.scenarios.PAPER_VEHICLE, 5.0, 0.1, a, -1.0)
-        ss = fws.scenarios.feedback_only_steady_state(
-            fws.scenarios.PAPER_VEHICLE, 0.1, g
-        )
+        plant = fws.LateralPlant(PAPER_VEHICLE, speed=5.0, curvature=0.1)
+        g = fws.double_root_gains(plant, ratio=a, pole=-1.0)
+        ss = feedback_only_steady_state(PAPER_VEHICLE, g, curvature=0.1)
         assert _matches(f"{e_q:.2f}", float(ss.e))

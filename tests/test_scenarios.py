@@ -6,11 +6,9 @@ import numpy as np
 import pytest
 
 import fws_control as fws
-from fws_control.paths import Arc, Straight
-from fws_control.scenarios import (
-    FIG5_RATIOS,
+from fws_control.paper import FIG5_RATIOS, PAPER_VEHICLE
+from fws_control.paper.scenarios import (
     PAPER_SCENARIOS,
-    PAPER_VEHICLE,
     feedback_only_curve,
     feedback_only_steady_state,
     fig5_peak_lateral_accel,
@@ -19,6 +17,7 @@ from fws_control.scenarios import (
     scenario_gains,
     scenario_responses,
 )
+from fws_control.paths import Arc, Straight
 
 
 def test_scenarios_are_the_papers():
@@ -59,9 +58,10 @@ def test_scenario_gains_mark_only_a_equal_one_on_straight_roads():
             expect_ok = ~((ratios == 1.0) & (sc.curvature == 0.0))
             np.testing.assert_array_equal(ok, expect_ok)
             for i in np.flatnonzero(ok):
-                g = fws.double_root_gains(
-                    PAPER_VEHICLE, sc.speed, sc.curvature, ratios[i], -1.0, model
+                plant = fws.LateralPlant(
+                    PAPER_VEHICLE, speed=sc.speed, curvature=sc.curvature, model=model
                 )
+                g = fws.double_root_gains(plant, ratio=ratios[i], pole=-1.0)
                 assert (k1[i], k2[i]) == (g.k1, g.k2)
             assert np.all(np.isnan(k1[~ok]))
 
@@ -77,19 +77,28 @@ def test_scenario_responses_keep_uncontrollable_rows_and_match_simulate():
     assert "uncontrollable" in res.message[1]
     assert r.feedforward is False and r.ratios.tolist() == [-1.0, 1.0, 0.5]
     for i in (0, 2):
-        g = fws.double_root_gains(PAPER_VEHICLE, 20.0, 0.0, r.ratios[i], -1.0)
+        g = fws.double_root_gains(
+            PAPER_VEHICLE, speed=20.0, curvature=0.0, ratio=r.ratios[i], pole=-1.0
+        )
         single = fws.simulate(
             PAPER_VEHICLE,
             Straight(),
             g,
-            20.0,
-            (0, 2, 0),
-            4.0,
+            speed=20.0,
+            initial_state=(0, 2, 0),
+            duration=4.0,
             feedforward=False,
             dt=0.05,
         )
         np.testing.assert_allclose(res.e[i], single.e, rtol=0, atol=1e-6)
+        assert (res.k1[i], res.k2[i]) == (g.k1, g.k2)
     assert res[1].gains is None and res[1].t.size == 0
+    # the result is a batch (not squeezed) and keeps every run's design
+    assert not res.squeeze and res.ratio.tolist() == [-1.0, 1.0, 0.5]
+    assert res.speed.tolist() == [20.0] * 3
+    df = res.to_pandas()
+    assert df.groupby("run")["ratio"].first().tolist() == [-1.0, 1.0, 0.5]
+    assert df.loc[df["run"] == 1, "status"].tolist() == ["uncontrollable"]
 
 
 def test_fig5_peaks_match_single_simulations_and_flag_stopped_runs():
@@ -107,9 +116,17 @@ def test_fig5_peaks_match_single_simulations_and_flag_stopped_runs():
     # an ok point equals the peak of the single simulation
     sc = PAPER_SCENARIOS["curve_20"]
     for j, lam in enumerate(fig5["d"].poles):
-        g = fws.double_root_gains(PAPER_VEHICLE, 20.0, 0.01, -1.0, lam)
+        g = fws.double_root_gains(
+            PAPER_VEHICLE, speed=20.0, curvature=0.01, ratio=-1.0, pole=lam
+        )
         single = fws.simulate(
-            PAPER_VEHICLE, sc.path, g, 20.0, sc.initial_state, 4.0, dt=0.01
+            PAPER_VEHICLE,
+            sc.path,
+            g,
+            speed=20.0,
+            initial_state=sc.initial_state,
+            duration=4.0,
+            dt=0.01,
         )
         assert fig5["d"].status[j, 0] == "ok"
         assert fig5["d"].peak_lateral_accel[j, 0] == pytest.approx(
@@ -136,13 +153,20 @@ def _path_frame_rates(vehicle, kappa, e, theta, df, dr, V=5.0):
 def test_feedback_only_steady_state_is_an_equilibrium_of_the_model():
     ratios = np.array([-1.0, -0.5, 0.0, 0.5])
     for V, kappa in ((5.0, 0.1), (20.0, 0.01)):
-        g = fws.double_root_gains(PAPER_VEHICLE, V, kappa, ratios, -1.0)
-        ss = feedback_only_steady_state(PAPER_VEHICLE, kappa, g)
+        g = fws.double_root_gains(
+            PAPER_VEHICLE, speed=V, curvature=kappa, ratio=ratios, pole=-1.0
+        )
+        ss = feedback_only_steady_state(PAPER_VEHICLE, g, curvature=kappa)
         assert np.all(ss.exists)
         for i in range(ratios.size):
             gi = fws.SteeringGains(g.k1[i], g.k2[i], g.ratio[i])
             df, dr = fws.steering_command(
-                PAPER_VEHICLE, gi, ss.e[i], ss.theta[i], kappa, feedforward=False
+                PAPER_VEHICLE,
+                gi,
+                ss.e[i],
+                ss.theta[i],
+                curvature=kappa,
+                feedforward=False,
             )
             assert (float(df), float(dr)) == pytest.approx(
                 (ss.delta_f[i], ss.delta_r[i])
@@ -154,7 +178,7 @@ def test_feedback_only_steady_state_is_an_equilibrium_of_the_model():
             assert abs(ss.e[i]) > 0.5  # a real steady-state error
     # a = 1: delta_f = delta_r, no yaw, no equilibrium on a circle
     g1 = fws.SteeringGains(0.3, 0.5, 1.0)
-    assert not feedback_only_steady_state(PAPER_VEHICLE, 0.1, g1).exists
+    assert not feedback_only_steady_state(PAPER_VEHICLE, g1, curvature=0.1).exists
 
 
 def test_feedback_only_simulation_converges_to_the_analytic_steady_state():

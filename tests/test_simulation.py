@@ -32,7 +32,9 @@ def _path(kappa):
 
 
 def _reference(vehicle, path, gains, speed, x0, t, feedforward=True, **kw):
-    sys = fws.closed_loop_system(vehicle, path, gains, speed, feedforward, **kw)
+    sys = fws.closed_loop_system(
+        vehicle, path, gains, speed=speed, feedforward=feedforward, **kw
+    )
     resp = ct.input_output_response(sys, t, initial_state=x0, **TIGHT)
     return dict(zip(sys.output_labels, resp.outputs, strict=True))
 
@@ -44,9 +46,18 @@ def test_fast_engine_agrees_with_interconnected_reference(name, model):
     path = _path(kappa)
     ratios = [-1.0, -0.5, 0.0, 0.5] + ([1.0] if kappa else [])
     for a in ratios:
-        g = fws.double_root_gains(VEH, V, kappa, a, -1.0, model=model)
+        g = fws.double_root_gains(
+            VEH, speed=V, curvature=kappa, ratio=a, pole=-1.0, model=model
+        )
         res = fws.simulate(
-            VEH, path, g, V, (0.0, y0, 0.0), 10.0, feedforward=ff, dt=0.05
+            VEH,
+            path,
+            g,
+            speed=V,
+            initial_state=(0.0, y0, 0.0),
+            duration=10.0,
+            feedforward=ff,
+            dt=0.05,
         )
         if not res.ok:
             # a = 1 on the curves: huge gains drive |delta_f| to pi/2, at once at
@@ -60,7 +71,14 @@ def test_fast_engine_agrees_with_interconnected_reference(name, model):
             t_ref = np.linspace(0.0, 0.999 * res.t_stop, 21)
             ref = _reference(VEH, path, g, V, [0.0, y0, 0.0], t_ref, ff)
             near = fws.simulate(
-                VEH, path, g, V, (0.0, y0, 0.0), t_ref[-1], feedforward=ff, t_eval=t_ref
+                VEH,
+                path,
+                g,
+                speed=V,
+                initial_state=(0.0, y0, 0.0),
+                duration=t_ref[-1],
+                feedforward=ff,
+                t_eval=t_ref,
             )
             np.testing.assert_allclose(near.e, ref["e"], rtol=0, atol=1e-6)
             assert abs(ref["delta_f"][-1]) > math.pi / 2 - 0.1
@@ -128,7 +146,9 @@ def _fd_lateral_accel(res, d):
 )
 def test_lateral_acceleration_and_rates_match_finite_differences(path, V, x0, ff):
     g = fws.SteeringGains(k1=0.15, k2=0.8, ratio=-0.5)
-    res = fws.simulate(VEH, path, g, V, x0, 8.0, feedforward=ff, dt=2e-3)
+    res = fws.simulate(
+        VEH, path, g, speed=V, initial_state=x0, duration=8.0, feedforward=ff, dt=2e-3
+    )
     assert res.ok
     fd = _fd_lateral_accel(res, VEH.rear_to_cg)
     scale = np.max(np.abs(res.lateral_accel))
@@ -143,10 +163,16 @@ def test_lateral_acceleration_and_rates_match_finite_differences(path, V, x0, ff
 
 def test_singular_steering_at_start_is_reported_not_raised():
     # paper gains at 5 m/s, a = 0.5, pole -2: k1*e0 > pi/2
-    g = fws.double_root_gains(VEH, 5.0, 0.0, 0.5, -2.0)
+    g = fws.double_root_gains(VEH, speed=5.0, curvature=0.0, ratio=0.5, pole=-2.0)
     assert g.k1 * 2.0 > math.pi / 2
     res = fws.simulate(
-        VEH, Straight(), g, 5.0, (0.0, 2.0, 0.0), 10.0, feedforward=False
+        VEH,
+        Straight(),
+        g,
+        speed=5.0,
+        initial_state=(0.0, 2.0, 0.0),
+        duration=10.0,
+        feedforward=False,
     )
     assert res.status == "singular_steering" and res.singular and not res.ok
     assert res.t_stop == 0.0 and res.t.tolist() == [0.0]
@@ -159,7 +185,13 @@ def test_singular_steering_during_run_stops_there():
     # k2 < 0 feeds the heading back positively: delta_f runs to pi/2
     g = fws.SteeringGains(k1=0.1, k2=-0.5, ratio=0.0)
     res = fws.simulate(
-        VEH, Straight(), g, 5.0, (0.0, 1.0, 0.0), 10.0, feedforward=False
+        VEH,
+        Straight(),
+        g,
+        speed=5.0,
+        initial_state=(0.0, 1.0, 0.0),
+        duration=10.0,
+        feedforward=False,
     )
     assert res.status == "singular_steering"
     assert 0.0 < res.t_stop < 10.0
@@ -175,7 +207,13 @@ def test_singular_curvature_when_driving_into_the_centre():
     # circle: 1 - kappa*e = 0 after 5 m, i.e. at t = 1 s exactly
     g = fws.SteeringGains(0.0, 0.0, 0.0)
     res = fws.simulate(
-        VEH, Arc(0.1), g, 5.0, (0.0, 5.0, math.pi / 2), 3.0, feedforward=False
+        VEH,
+        Arc(0.1),
+        g,
+        speed=5.0,
+        initial_state=(0.0, 5.0, math.pi / 2),
+        duration=3.0,
+        feedforward=False,
     )
     assert res.status == "singular_curvature"
     assert res.t_stop == pytest.approx(1.0, abs=1e-9)
@@ -185,7 +223,13 @@ def test_singular_curvature_when_driving_into_the_centre():
 def test_end_of_open_path():
     g = fws.SteeringGains(0.0, 0.0, 0.0)
     res = fws.simulate(
-        VEH, Straight(length=20.0), g, 5.0, (0.0, 1.0, 0.0), 10.0, feedforward=False
+        VEH,
+        Straight(length=20.0),
+        g,
+        speed=5.0,
+        initial_state=(0.0, 1.0, 0.0),
+        duration=10.0,
+        feedforward=False,
     )
     assert res.status == "end_of_path"
     assert res.t_stop == pytest.approx(4.0, abs=1e-6)  # s = V t reaches 20 m
@@ -194,8 +238,16 @@ def test_end_of_open_path():
 
 def test_angle_saturation_agrees_with_reference():
     lim = fws.Vehicle(2.7, 1.35, max_steer_front=0.15, max_steer_rear=0.05)
-    g = fws.double_root_gains(lim, 5.0, 0.1, -1.0, -1.0)
-    res = fws.simulate(lim, Arc(0.1), g, 5.0, (0.0, -5.0, 0.0), 10.0, dt=0.05)
+    g = fws.double_root_gains(lim, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
+    res = fws.simulate(
+        lim,
+        Arc(0.1),
+        g,
+        speed=5.0,
+        initial_state=(0.0, -5.0, 0.0),
+        duration=10.0,
+        dt=0.05,
+    )
     assert res.ok
     assert np.max(res.delta_f) == pytest.approx(0.15)  # saturation is active
     assert np.min(res.delta_r) == pytest.approx(-0.05)
@@ -205,15 +257,15 @@ def test_angle_saturation_agrees_with_reference():
 
 def test_rate_limited_actuator_agrees_with_reference_and_limits_rates():
     lim = fws.Vehicle(2.7, 1.35, max_steer_rate_front=0.2, max_steer_rate_rear=0.1)
-    g = fws.double_root_gains(lim, 5.0, 0.0, -0.5, -1.0)
+    g = fws.double_root_gains(lim, speed=5.0, curvature=0.0, ratio=-0.5, pole=-1.0)
     x0 = (0.0, 2.0, 0.0)
     res = fws.simulate(
         lim,
         Straight(),
         g,
-        5.0,
-        x0,
-        10.0,
+        speed=5.0,
+        initial_state=x0,
+        duration=10.0,
         feedforward=False,
         dt=1e-3,
         actuator_time_constant=0.1,
@@ -239,9 +291,11 @@ def test_rate_limited_actuator_agrees_with_reference_and_limits_rates():
 
 
 def test_psi_keeps_the_given_branch_and_is_continuous():
-    g = fws.double_root_gains(VEH, 5.0, 0.1, -1.0, -1.0)
+    g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
     psi0 = 2 * math.pi + 0.1
-    res = fws.simulate(VEH, Arc(0.1), g, 5.0, (0.0, -5.0, psi0), 20.0)
+    res = fws.simulate(
+        VEH, Arc(0.1), g, speed=5.0, initial_state=(0.0, -5.0, psi0), duration=20.0
+    )
     assert res.psi[0] == pytest.approx(psi0)
     assert np.max(np.abs(np.diff(res.psi))) < 0.05
     assert res.theta[0] == pytest.approx(0.1)
@@ -249,51 +303,197 @@ def test_psi_keeps_the_given_branch_and_is_continuous():
     assert res.psi[-1] - res.psi[0] > 2 * math.pi
 
 
-def test_result_to_pandas_and_plot():
-    g = fws.double_root_gains(VEH, 5.0, 0.1, -1.0, -1.0)
-    res = fws.simulate(VEH, Arc(0.1), g, 5.0, (0.0, -5.0, 0.0), 5.0, dt=0.1)
+def _curve_run(**kw):
+    g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
+    args = {"speed": 5.0, "initial_state": (0.0, -5.0, 0.0), "duration": 5.0}
+    args.update(kw)
+    return g, fws.simulate(VEH, Arc(0.1), g, **args)
+
+
+def test_simulate_is_a_squeezed_batch_of_one():
+    g, res = _curve_run(dt=0.1)
+    batch = fws.simulate_batch(
+        VEH,
+        Arc(0.1),
+        g,
+        speed=5.0,
+        initial_state=(0.0, -5.0, 0.0),
+        duration=5.0,
+        dt=0.1,
+    )
+    # simulate squeezes; simulate_batch never does, even for one run
+    assert res.squeeze and not batch.squeeze
+    assert len(res) == len(batch) == 1
+    assert (
+        res.signals.shape == batch.signals.shape == (1, len(fws.simulation.SIGNALS), 51)
+    )
+    for name in fws.simulation.SIGNALS:
+        assert getattr(res, name).shape == (51,)
+        assert getattr(batch, name).shape == (1, 51)
+        np.testing.assert_array_equal(getattr(res, name), getattr(batch, name)[0])
+    assert res.status == "ok" and isinstance(res.status, str)
+    assert batch.status.tolist() == ["ok"]
+    assert res.ok is True and batch.ok.tolist() == [True]
+    assert isinstance(res.t_stop, float) and res.t_stop == 5.0
+    assert (res.speed, res.k1, res.k2, res.ratio) == (5.0, g.k1, g.k2, g.ratio)
+    assert res.gains == g and res.message == ""
+    np.testing.assert_array_equal(res.initial_state, [0.0, -5.0, 0.0])
+    assert batch.initial_state.shape == (1, 3)
+    # indexing a squeezed result gives the run again
+    np.testing.assert_array_equal(res[0].e, res.e)
+    np.testing.assert_array_equal(res[-1].t, res.t)
+    assert [r.status for r in res] == ["ok"] and len(res.runs) == 1
+    with pytest.raises(IndexError):
+        res[1]
+
+
+def test_squeezed_stopped_run_ends_at_its_stop_and_the_batch_keeps_the_grid():
+    g = fws.SteeringGains(k1=0.1, k2=-0.5, ratio=0.0)  # delta_f runs to pi/2
+    kw = {"speed": 5.0, "initial_state": (0.0, 1.0, 0.0), "duration": 10.0}
+    res = fws.simulate(VEH, Straight(), g, feedforward=False, **kw)
+    batch = fws.simulate_batch(VEH, Straight(), g, feedforward=False, **kw)
+    assert res.status == "singular_steering"
+    grid = np.linspace(0.0, 10.0, 1001)
+    np.testing.assert_array_equal(batch.t, grid)
+    # the squeezed run keeps exactly the output times up to its stop
+    np.testing.assert_array_equal(res.t, grid[grid <= res.t_stop])
+    n = res.t.size
+    np.testing.assert_array_equal(res.e, batch.e[0, :n])
+    assert np.all(np.isnan(batch.e[0, n:])) and np.all(np.isfinite(res.e))
+
+
+def test_to_pandas_of_one_run():
+    g, res = _curve_run(dt=0.1)
     df = res.to_pandas()
-    assert df.index.name == "t" and len(df) == 51
-    np.testing.assert_array_equal(df["e"].to_numpy(), res.e)
-    assert df.attrs["status"] == "ok"
-    fig = res.plot(label="a=-1")
-    labels = [ax.get_ylabel() for ax in fig.axes]
-    assert "lateral error e [m]" in labels and "front steering δf [deg]" in labels
-    # steering is plotted in degrees
-    line = fig.axes[3].get_lines()[0]
-    np.testing.assert_allclose(line.get_ydata(), np.degrees(res.delta_f))
-    plt.close(fig)
+    signals = list(fws.simulation.SIGNALS)
+    assert list(df.columns) == [
+        "run",
+        "t",
+        *signals,
+        "status",
+        "t_stop",
+        "speed",
+        "k1",
+        "k2",
+        "ratio",
+    ]
+    assert len(df) == res.t.size == 51
+    np.testing.assert_array_equal(df["t"], res.t)
+    for name in signals:
+        np.testing.assert_array_equal(df[name], getattr(res, name))
+    assert set(df["run"]) == {0} and set(df["status"]) == {"ok"}
+    assert set(df["speed"]) == {5.0} and set(df["t_stop"]) == {5.0}
+    assert (set(df["k1"]), set(df["k2"]), set(df["ratio"])) == (
+        {g.k1},
+        {g.k2},
+        {g.ratio},
+    )
+    assert df.attrs["feedforward"] is True
+
+
+def test_plot_of_one_run_returns_controlplot_and_reuses_axes():
+    g, res = _curve_run(dt=0.1)
+    cplt = res.plot(labels="a=-1")
+    try:
+        assert isinstance(cplt, ct.ControlPlot)
+        assert cplt.axes.shape == (3, 2) and cplt.lines.shape == (3, 2)
+        ylabels = [ax.get_ylabel() for ax in cplt.axes.flat]
+        assert ylabels[0] == "lateral error e [m]"
+        assert ylabels[3] == "front steering δf [deg]"
+        # steering is drawn in degrees, over time
+        line = cplt.lines[1, 1][0]
+        np.testing.assert_allclose(line.get_xdata(), res.t)
+        np.testing.assert_allclose(line.get_ydata(), np.degrees(res.delta_f))
+        # the trajectory panel: the run's (x, y) and the dashed path
+        xy = cplt.lines[1, 0]
+        np.testing.assert_allclose(xy[0].get_ydata(), res.y)
+        assert xy[-1].get_label() == "path"
+        legend = [t.get_text() for t in cplt.axes[0, 0].get_legend().get_texts()]
+        assert legend == ["a=-1"]
+        # overlay a second run into the same axes
+        _, other = _curve_run(dt=0.1, initial_state=(0.0, -3.0, 0.0))
+        again = other.plot(ax=cplt.axes, labels="e0=-3")
+        assert again.figure is cplt.figure
+        assert all(a is b for a, b in zip(again.axes.flat, cplt.axes.flat, strict=True))
+        np.testing.assert_allclose(again.lines[0, 0][0].get_ydata(), other.e)
+        assert len(cplt.axes[0, 0].get_lines()) == 2
+        with pytest.raises(ValueError, match="6 matplotlib axes"):
+            res.plot(ax=cplt.axes.flat[:5])
+        with pytest.raises(ValueError, match="one label per run"):
+            res.plot(labels=["a", "b"])
+    finally:
+        plt.close("all")
+
+
+def test_to_time_response_matches_the_python_control_reference():
+    g, res = _curve_run(dt=0.05)
+    resp = res.to_time_response()
+    assert isinstance(resp, ct.TimeResponseData)
+    assert resp.output_labels == list(fws.simulation.SIGNALS)
+    assert resp.ntraces == 0 and resp.outputs.shape == (11, res.t.size)
+    assert resp.success and resp.params["k1"] == g.k1
+    np.testing.assert_array_equal(resp.time, res.t)
+    # the same signals, by name, as the interconnected reference's response
+    ref_sys = fws.closed_loop_system(VEH, Arc(0.1), g, speed=5.0)
+    ref = ct.input_output_response(ref_sys, res.t, initial_state=[0, -5, 0], **TIGHT)
+    for name in ("x", "y", "psi", "s", "e", "theta", "delta_f", "delta_r"):
+        mine = resp.outputs[resp.output_labels.index(name)]
+        theirs = ref.outputs[ref.output_labels.index(name)]
+        np.testing.assert_allclose(mine, theirs, rtol=0, atol=1e-6)
+    # python-control plots it: one panel per signal, the data of the result
+    cplt = ct.time_response_plot(resp)
+    try:
+        assert isinstance(cplt, ct.ControlPlot) and cplt.axes.shape == (11, 1)
+        e_row = resp.output_labels.index("e")
+        np.testing.assert_allclose(cplt.lines[e_row, 0][0].get_ydata(), res.e)
+    finally:
+        plt.close("all")
 
 
 def test_invalid_arguments():
     g = fws.SteeringGains(0.1, 0.5, 0.0)
+    kw = {"speed": 5.0, "initial_state": (0, 1, 0), "duration": 5.0}
+    # everything after the gains is keyword-only: a positional call fails
+    with pytest.raises(TypeError):
+        fws.simulate(VEH, Straight(), g, 5.0, (0, 1, 0), 5.0)
+    with pytest.raises(TypeError):
+        fws.closed_loop_system(VEH, Straight(), g, 5.0)
+    with pytest.raises(TypeError, match="path"):
+        fws.simulate(VEH, "straight", g, **kw)
+    with pytest.raises(TypeError, match="vehicle"):
+        fws.simulate((2.7, 1.35), Straight(), g, **kw)
     with pytest.raises(ValueError, match="speed"):
-        fws.simulate(VEH, Straight(), g, 0.0, (0, 1, 0), 5.0)
+        fws.simulate(VEH, Straight(), g, **{**kw, "speed": 0.0})
     with pytest.raises(ValueError, match="duration"):
-        fws.simulate(VEH, Straight(), g, 5.0, (0, 1, 0), -1.0)
+        fws.simulate(VEH, Straight(), g, **{**kw, "duration": -1.0})
     with pytest.raises(ValueError, match="initial_state"):
-        fws.simulate(VEH, Straight(), g, 5.0, (0, 1), 5.0)
+        fws.simulate(VEH, Straight(), g, **{**kw, "initial_state": (0, 1)})
     with pytest.raises(ValueError, match="simulate_batch"):
-        fws.simulate(
-            VEH,
-            Straight(),
-            fws.SteeringGains([0.1, 0.2], 0.5, 0.0),
-            5.0,
-            (0, 1, 0),
-            5.0,
-        )
+        fws.simulate(VEH, Straight(), fws.SteeringGains([0.1, 0.2], 0.5, 0.0), **kw)
+    with pytest.raises(ValueError, match="simulate_batch"):
+        fws.simulate(VEH, Straight(), g, **{**kw, "speed": [5.0, 6.0]})
+    with pytest.raises(ValueError, match="simulate_batch"):
+        fws.simulate(VEH, Straight(), g, **{**kw, "initial_state": [(0, 1, 0)] * 2})
     with pytest.raises(ValueError, match="t_eval"):
-        fws.simulate(VEH, Straight(), g, 5.0, (0, 1, 0), 5.0, t_eval=[0.0, 6.0])
+        fws.simulate(VEH, Straight(), g, **kw, t_eval=[0.0, 6.0])
+    with pytest.raises(ValueError, match="method must be one of"):
+        fws.simulate(VEH, Straight(), g, **kw, method="Euler")
+    with pytest.raises(ValueError, match="rtol"):
+        fws.simulate(VEH, Straight(), g, **kw, rtol=0.0)
     with pytest.raises(AmbiguousProjectionError):
-        fws.simulate(VEH, Arc(0.1), g, 5.0, (0.0, 10.0, 0.0), 5.0)  # the centre
+        fws.simulate(
+            VEH, Arc(0.1), g, **{**kw, "initial_state": (0.0, 10.0, 0.0)}
+        )  # the centre of the circle
 
 
 @pytest.mark.parametrize("kappa", [0.0, 0.05])
 def test_reversing_agrees_with_interconnected_reference(kappa):
     """V < 0: gains designed for reversing; both engines must agree."""
     V, path = -3.0, _path(kappa)
-    g = fws.double_root_gains(VEH, V, kappa, -0.5, -0.8)
-    res = fws.simulate(VEH, path, g, V, (0.0, -1.0, 0.1), 8.0, dt=0.05)
+    g = fws.double_root_gains(VEH, speed=V, curvature=kappa, ratio=-0.5, pole=-0.8)
+    res = fws.simulate(
+        VEH, path, g, speed=V, initial_state=(0.0, -1.0, 0.1), duration=8.0, dt=0.05
+    )
     assert res.ok and res.s[-1] < -10.0  # it really drove backwards
     ref = _reference(VEH, path, g, V, [0.0, -1.0, 0.1], res.t)
     np.testing.assert_allclose(res.e, ref["e"], rtol=0, atol=1e-6)

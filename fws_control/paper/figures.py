@@ -6,7 +6,7 @@ a function returning a :class:`matplotlib.figure.Figure`, listed in
 :data:`FIGURES`, so that scripts and the documentation can draw a single one.
 
 Figures 2-4 are stability charts (:mod:`fws_control.charts`); Figs. 5-9 are
-simulations of the nonlinear closed loop (:mod:`fws_control.scenarios`).
+simulations of the nonlinear closed loop (:mod:`fws_control.paper.scenarios`).
 Three extra figures go beyond the paper: root loci, linear-versus-nonlinear
 responses and the turning radius that the paper's conclusion is about.
 """
@@ -260,7 +260,7 @@ def _turning_figure(model: str = "exact", quick: bool = False):
 
 
 # --------------------------------------------------------------------------
-# Simulation figures (Figs. 5-9), drawn from fws_control.scenarios data.
+# Simulation figures (Figs. 5-9), drawn from fws_control.paper.scenarios data.
 
 _DEG = 180.0 / math.pi
 _FIG5_TITLES = {
@@ -562,7 +562,7 @@ FIGURES: dict[str, FigureSpec] = {
 }
 
 
-def make_figure(name: str, model: str = "exact", quick: bool = False):
+def make_figure(name: str, *, model: str = "exact", quick: bool = False):
     """Draw one figure of :data:`FIGURES` by name.
 
     Parameters
@@ -581,8 +581,9 @@ def make_figure(name: str, model: str = "exact", quick: bool = False):
     Examples
     --------
     >>> import matplotlib; matplotlib.use("Agg")
-    >>> import matplotlib.pyplot as plt, fws_control as fws
-    >>> fig = fws.make_figure("fig2", quick=True)
+    >>> import matplotlib.pyplot as plt
+    >>> from fws_control.paper import make_figure
+    >>> fig = make_figure("fig2", quick=True)
     >>> len(fig.axes)
     3
     >>> plt.close(fig)
@@ -722,6 +723,7 @@ def _progress(iterable, enabled, total=None, desc=None):
 
 def reproduce(
     out: str | os.PathLike,
+    *,
     model: str = "exact",
     quick: bool = False,
     progress: bool = True,
@@ -748,6 +750,16 @@ def reproduce(
     Returns
     -------
     ReproduceResult
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> import matplotlib; matplotlib.use("Agg")
+    >>> from fws_control.paper import reproduce
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     res = reproduce(tmp, quick=True, progress=False, names=["fig2"], dpi=40)
+    ...     [p.name for p in res.figures], res.summary.name, res.summary.is_file()
+    (['fig2.png'], 'summary.md', True)
     """
     import matplotlib.pyplot as plt
 

@@ -1,7 +1,7 @@
 r"""The paper's simulation scenarios (sections 4.3 and 5) as data.
 
 Every function here returns plain data (frozen dataclasses holding numpy
-arrays and :class:`BatchResult` objects); figures are drawn from them
+arrays and :class:`~fws_control.SimulationResult` batches); figures are drawn from them
 elsewhere. The closed loop is always the **nonlinear** kinematic model; the
 ``model`` argument only selects the linearisation used to design the
 double-root gains (``"exact"`` Jacobian or the ``"paper"``'s eq. 33).
@@ -34,12 +34,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import brentq
 
-from ..batch import BatchResult, _expand_batch, simulate_batch
 from ..design import UncontrollableError, double_root_gains
 from ..gains import SteeringGains
 from ..paths import Arc, Straight
 from ..plant import LateralPlant
-from ..simulation import STATUS_UNCONTROLLABLE, _time_grid
+from ..simulation import STATUS_UNCONTROLLABLE, SimulationResult, simulate_batch
+from ..simulation.engine import time_grid
+from ..simulation.result import expand_runs
 from ..validation import check_finite, check_model
 from ..vehicle import Vehicle
 from .data import FIG5_POLES, FIG5_RATIOS, FIG6_TO_9_RATIOS, PAPER_VEHICLE
@@ -113,7 +114,7 @@ def paper_scenario(name: str) -> Scenario:
 
     Examples
     --------
-    >>> from fws_control.scenarios import paper_scenario
+    >>> from fws_control.paper.scenarios import paper_scenario
     >>> sc = paper_scenario("curve_5")
     >>> sc.speed, sc.curvature, sc.initial_state, sc.feedforward
     (5.0, 0.1, (0.0, -5.0, 0.0), True)
@@ -158,7 +159,7 @@ def scenario_gains(
 
     Examples
     --------
-    >>> from fws_control.scenarios import scenario_gains
+    >>> from fws_control.paper.scenarios import scenario_gains
     >>> k1, k2, ok = scenario_gains("straight_5", [0.0, 1.0], -1.0)
     >>> k1.round(4).tolist(), ok.tolist()
     ([0.108, nan], [True, False])
@@ -197,42 +198,42 @@ def _simulate_designs(
     dt: float,
     client,
     progress,
-) -> BatchResult:
-    """Simulate the controllable designs; keep the others as marked rows."""
+) -> SimulationResult:
+    """Simulate the controllable designs; keep the others as marked runs."""
     n = ratios.size
     positions = np.flatnonzero(ok)
-    t = _time_grid(duration, dt, None)
     sub = None
     if positions.size:
         sub = simulate_batch(
             vehicle,
             sc.path,
             SteeringGains(k1[positions], k2[positions], ratios[positions]),
-            sc.speed,
-            sc.initial_state,
-            duration,
+            speed=sc.speed,
+            initial_state=sc.initial_state,
+            duration=duration,
             feedforward=feedforward,
             dt=dt,
             client=client,
             progress=progress,
         )
-    return _expand_batch(
+    return expand_runs(
         sub,
-        positions,
-        n,
-        STATUS_UNCONTROLLABLE,
-        "no double-root gains exist: ratio = 1 on a straight path makes "
+        positions=positions,
+        k1=k1,
+        k2=k2,
+        ratio=ratios,
+        speed=np.full(n, sc.speed),
+        initial_state=np.broadcast_to(
+            np.asarray(sc.initial_state, dtype=float), (n, 3)
+        ),
+        t=time_grid(duration, dt=dt) if sub is None else sub.t,
+        feedforward=feedforward,
+        vehicle=vehicle,
+        path=sc.path,
+        status=STATUS_UNCONTROLLABLE,
+        message="no double-root gains exist: ratio = 1 on a straight path makes "
         "delta_r = delta_f, the yaw rate is identically zero and the heading is "
         "uncontrollable (not simulated)",
-        k1,
-        k2,
-        ratios,
-        np.full(n, sc.speed),
-        np.broadcast_to(np.asarray(sc.initial_state, dtype=float), (n, 3)).copy(),
-        t,
-        feedforward,
-        vehicle,
-        sc.path,
     )
 
 
@@ -251,11 +252,12 @@ class ScenarioResponses:
         Linearisation used for the design.
     feedforward : bool
         Controller used in the simulation.
-    result : BatchResult
-        All runs, in the order of `ratios`. ``result.status`` marks
-        ``"uncontrollable"`` designs (not simulated; NaN signals) and runs that
-        stopped at a singular state; ``result.k1``, ``result.k2`` hold the
-        gains.
+    result : SimulationResult
+        All runs (a batch, not squeezed), in the order of `ratios`.
+        ``result.status`` marks ``"uncontrollable"`` designs (not simulated;
+        NaN signals) and runs that stopped at a singular state;
+        ``result.k1``, ``result.k2`` hold the gains (NaN where no design
+        exists).
     """
 
     scenario: Scenario
@@ -263,7 +265,7 @@ class ScenarioResponses:
     pole: float
     model: str
     feedforward: bool
-    result: BatchResult = field(repr=False)
+    result: SimulationResult = field(repr=False)
 
 
 def scenario_responses(
@@ -308,7 +310,7 @@ def scenario_responses(
 
     Examples
     --------
-    >>> from fws_control.scenarios import scenario_responses
+    >>> from fws_control.paper.scenarios import scenario_responses
     >>> r = scenario_responses("straight_5", ratios=[0.0, 1.0], duration=5.0)
     >>> r.result.status.tolist()
     ['ok', 'uncontrollable']
@@ -347,7 +349,7 @@ def fig6_to_9_responses(
 
     Examples
     --------
-    >>> from fws_control.scenarios import fig6_to_9_responses
+    >>> from fws_control.paper.scenarios import fig6_to_9_responses
     >>> figs = fig6_to_9_responses(duration=2.0, dt=0.1)
     >>> sorted(figs), figs[7].scenario.name, figs[6].result.status.tolist()[-1]
     ([6, 7, 8, 9], 'curve_5', 'uncontrollable')
@@ -444,7 +446,7 @@ def fig5_peak_lateral_accel(
 
     Examples
     --------
-    >>> from fws_control.scenarios import fig5_peak_lateral_accel
+    >>> from fws_control.paper.scenarios import fig5_peak_lateral_accel
     >>> fig5 = fig5_peak_lateral_accel(ratios=[-1.0, 1.0], duration=3.0)
     >>> fig5["a"].status.tolist()
     [['ok', 'uncontrollable'], ['ok', 'uncontrollable']]
@@ -654,7 +656,7 @@ def feedback_only_curve(
 
     Examples
     --------
-    >>> from fws_control.scenarios import feedback_only_curve
+    >>> from fws_control.paper.scenarios import feedback_only_curve
     >>> fb = feedback_only_curve("curve_5", ratios=[0.0], duration=30.0)
     >>> e_sim = fb.responses.result.e[0, -1]      # simulated e at t = 30 s
     >>> round(float(e_sim), 4), round(float(fb.steady_state.e[0]), 4)

@@ -1,283 +1,300 @@
-r"""Many closed-loop runs integrated together, locally or on a Dask cluster.
+r"""The public runners: :func:`simulate` (one run) and :func:`simulate_batch`.
 
-:func:`simulate_batch` stacks the path-frame states of all runs of a chunk
-into one state vector and integrates them with a single
-:func:`scipy.integrate.solve_ivp` call, using the same right-hand side as
-:func:`simulate`. Gains, ratios, speeds and initial poses may differ per run
-(numpy broadcasting). A run that meets a singular state leaves the stacked
-state at that time (the integration restarts from there for the others) and
-is marked in :attr:`BatchResult.status`; its samples after the stop are NaN.
+Both validate the arguments, project the initial poses onto the path, let
+the engine (:mod:`~fws_control.simulation.engine`) integrate the closed loop
+and return a :class:`~fws_control.simulation.result.SimulationResult`;
+:func:`simulate` is a batch of one run, squeezed.
 
-Large sweeps are split into chunks of ``chunk_size`` runs. With a
-``dask.distributed`` client (optional extra ``distributed``) the chunks are
-submitted to the cluster; otherwise they run one after the other here. A
-tqdm progress bar over the chunks is shown on interactive terminals.
+:func:`simulate_batch` stacks the path-frame states of the runs of a chunk
+into one state vector and integrates them with one solver. Gains, ratios,
+speeds and initial poses may differ per run (numpy broadcasting). A run that
+meets a singular state leaves the stacked state at that time (the
+integration restarts from there for the others) and is marked in its status;
+its samples after the stop are NaN. Large sweeps are split into chunks of
+``chunk_size`` runs. With a ``dask.distributed`` client (optional extra
+``distributed``) the chunks are submitted to the cluster; otherwise they run
+one after the other here. A tqdm progress bar over the chunks is shown on
+interactive terminals.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass, field
+import sys
 from typing import Any
 
 import numpy as np
 
-from .gains import SteeringGains
-from .simulation import (
-    SIGNALS,
-    SimulationResult,
-    _check_initial_state,
-    _initial_path_state,
-    _integrate,
-    _outputs,
-    _prepare_limits,
-    _single_result,
-    _stderr_is_tty,
-    _time_grid,
-    check_path,
-    plot_responses,
+from ..gains import SteeringGains
+from ..paths import Path
+from ..validation import check_nonzero, check_positive, check_type
+from ..vehicle import Vehicle
+from .engine import (
+    check_initial_state,
+    check_method,
+    compute_outputs,
+    initial_path_state,
+    integrate,
+    resolve_time_constant,
+    run_gains,
+    time_grid,
 )
-from .validation import check_nonzero, check_type
-from .vehicle import Vehicle
+from .result import SimulationResult
 
-__all__ = ["BatchResult", "simulate_batch", "DEFAULT_CHUNK_SIZE"]
+__all__ = ["simulate", "simulate_batch", "DEFAULT_CHUNK_SIZE"]
 
-#: Runs per chunk (one solve_ivp call, one Dask task) unless told otherwise.
+#: Runs per chunk (one solver, one Dask task) unless told otherwise.
 DEFAULT_CHUNK_SIZE = 256
 
 
-@dataclass(frozen=True, eq=False)
-class BatchResult:
-    """Time responses of many runs on a common time grid.
-
-    Every signal of :class:`SimulationResult` (``x, y, psi, s, e, theta,
-    delta_f, delta_r, delta_f_rate, delta_r_rate, lateral_accel``) is an
-    array of shape ``(runs, time)``; samples after a run stopped are NaN.
-
-    Attributes
-    ----------
-    t : ndarray
-        Output times [s], shape ``(time,)``.
-    status : ndarray of str
-        Per run: ``"ok"`` or why it stopped (see :class:`SimulationResult`).
-    message : tuple of str
-        Per run explanation ("" for ``"ok"``).
-    t_stop : ndarray
-        Per run end time [s]; NaN for runs that were not simulated.
-    speed : ndarray
-        Per run speed [m/s].
-    k1, k2, ratio : ndarray
-        Per run gains, shape ``(runs,)``; NaN gains mark a design that could
-        not be built (status ``"uncontrollable"``). :attr:`gains` gives them
-        as a :class:`SteeringGains`.
-    initial_state : ndarray
-        Per run ``(x_R, y_R, psi)``, shape ``(runs, 3)``.
-    feedforward : bool
-    vehicle : Vehicle
-    path : path object
-
-    Indexing (``result[i]``) or :attr:`runs` gives :class:`SimulationResult`
-    objects holding each run's data up to its stop.
-    """
-
-    t: np.ndarray
-    x: np.ndarray
-    y: np.ndarray
-    psi: np.ndarray
-    s: np.ndarray
-    e: np.ndarray
-    theta: np.ndarray
-    delta_f: np.ndarray
-    delta_r: np.ndarray
-    delta_f_rate: np.ndarray
-    delta_r_rate: np.ndarray
-    lateral_accel: np.ndarray
-    status: np.ndarray
-    message: tuple[str, ...]
-    t_stop: np.ndarray
-    speed: np.ndarray
-    k1: np.ndarray
-    k2: np.ndarray
-    ratio: np.ndarray
-    initial_state: np.ndarray
-    feedforward: bool = True
-    vehicle: Vehicle | None = field(default=None, repr=False)
-    path: Any = field(default=None, repr=False)
-
-    def __len__(self) -> int:
-        return int(self.status.shape[0])
-
-    @property
-    def gains(self) -> SteeringGains:
-        """The per-run gains as one :class:`SteeringGains` (arrays).
-
-        Raises
-        ------
-        ValueError
-            If some runs have no gains (NaN, status ``"uncontrollable"``).
-        """
-        return SteeringGains(self.k1, self.k2, self.ratio)
-
-    @property
-    def ok(self) -> np.ndarray:
-        """Boolean mask of the runs that reached the final time."""
-        return self.status == "ok"
-
-    def __getitem__(self, i: int) -> SimulationResult:
-        n = len(self)
-        if not isinstance(i, (int, np.integer)):
-            raise TypeError(f"run index must be an integer, got {type(i).__name__}")
-        if not -n <= i < n:
-            raise IndexError(f"run index {i} out of range for {n} runs")
-        i = int(i) % n
-        return _single_result(
-            self.t,
-            {name: getattr(self, name)[i] for name in SIGNALS},
-            self.status[i],
-            self.message[i],
-            self.t_stop[i],
-            float(self.speed[i]),
-            _gains_or_none(self.k1[i], self.k2[i], self.ratio[i]),
-            self.feedforward,
-            self.vehicle,
-            self.path,
-        )
-
-    @property
-    def runs(self) -> list[SimulationResult]:
-        """Each run as a :class:`SimulationResult`."""
-        return [self[i] for i in range(len(self))]
-
-    def plot(self, labels: Sequence[str] | None = None, fig=None):
-        """Overlay all runs (see :meth:`SimulationResult.plot`).
-
-        Parameters
-        ----------
-        labels : sequence of str, optional
-            Legend label per run; default ``"a=<ratio>"``.
-        fig : matplotlib.figure.Figure, optional
-
-        Returns
-        -------
-        matplotlib.figure.Figure
-        """
-        if labels is None:
-            labels = [f"a={float(r):g}" for r in self.ratio]
-        return plot_responses(self.runs, labels, fig=fig)
-
-    def to_pandas(self):
-        """Long-format :class:`pandas.DataFrame` with columns ``run, t, ...``.
-
-        Only the samples up to each run's stop are included; the per-run
-        status is in the column ``status``.
-
-        Raises
-        ------
-        ImportError
-            If pandas is not installed.
-        """
-        from .simulation import _import_pandas
-
-        pd = _import_pandas()
-        n, T = self.s.shape
-        valid = np.isfinite(self.s)
-        run = np.broadcast_to(np.arange(n)[:, None], (n, T))[valid]
-        data = {"run": run, "t": np.broadcast_to(self.t, (n, T))[valid]}
-        data.update({name: getattr(self, name)[valid] for name in SIGNALS})
-        data["status"] = self.status[run]
-        return pd.DataFrame(data)
-
-
-def _gains_or_none(k1, k2, ratio) -> SteeringGains | None:
-    if np.isfinite(k1) and np.isfinite(k2) and np.isfinite(ratio):
-        return SteeringGains(float(k1), float(k2), float(ratio))
-    return None
-
-
-def _normalise_gains(gains, name: str = "gains_list") -> SteeringGains:
-    """One SteeringGains with 1-D arrays from a SteeringGains or a sequence.
-
-    `name` is the caller's argument name, used in error messages.
-    """
-    if isinstance(gains, SteeringGains):
-        k1, k2, a = np.broadcast_arrays(
-            np.asarray(gains.k1, dtype=float),
-            np.asarray(gains.k2, dtype=float),
-            np.asarray(gains.ratio, dtype=float),
-        )
-        return SteeringGains(k1.ravel().copy(), k2.ravel().copy(), a.ravel().copy())
+def _stderr_is_tty() -> bool:
     try:
-        items = list(gains)
-    except TypeError:
-        raise TypeError(
-            f"{name} must be a SteeringGains or a sequence of SteeringGains, got "
-            f"{type(gains).__name__}"
-        ) from None
-    if not items or not all(isinstance(g, SteeringGains) for g in items):
-        raise TypeError(
-            f"{name} must be a SteeringGains or a non-empty sequence of "
-            f"SteeringGains, got {gains!r}"
-        )
-    parts = [_normalise_gains(g, name) for g in items]
-    return SteeringGains(
-        np.concatenate([p.k1 for p in parts]),
-        np.concatenate([p.k2 for p in parts]),
-        np.concatenate([p.ratio for p in parts]),
-    )
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):
+        return False
 
 
 def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts):
-    """Simulate one chunk; module-level so that Dask can pickle it."""
+    """Simulate one chunk; module-level so that Dask can pickle it.
+
+    Returns ``(signals (n, len(SIGNALS), T), status, message, t_stop)``.
+    """
     g = SteeringGains(k1, k2, a)
-    z0 = _initial_path_state(path, x0)
-    states, status, message, t_stop = _integrate(
-        vehicle, path, g, speed, feedforward, z0, t, tau, **opts
+    z0 = initial_path_state(path, x0)
+    states, status, message, t_stop = integrate(
+        vehicle,
+        path,
+        g,
+        speed=speed,
+        feedforward=feedforward,
+        path_state=z0,
+        t_eval=t,
+        time_constant=tau,
+        **opts,
     )
-    sig = _outputs(vehicle, path, g, speed, feedforward, tau, states, x0[:, 2])
-    return sig, status, message, t_stop
+    signals = compute_outputs(
+        vehicle,
+        path,
+        g,
+        speed=speed,
+        feedforward=feedforward,
+        time_constant=tau,
+        states=states,
+        initial_heading=x0[:, 2],
+    )
+    return signals, status, message, t_stop
+
+
+def _prepare(
+    vehicle, path, gains, speed, initial_state, duration, dt, t_eval, tau, opts
+):
+    """Validate the arguments shared by both runners; broadcast the runs."""
+    check_type("vehicle", vehicle, Vehicle)
+    check_type("path", path, Path, "a fws_control Path (e.g. fws.Straight())")
+    g = run_gains(gains, name="gains")
+    speed_arr = np.atleast_1d(np.asarray(check_nonzero("speed", speed), dtype=float))
+    if speed_arr.ndim != 1:
+        raise ValueError(f"speed must be a scalar or 1-D, got shape {speed_arr.shape}")
+    x0 = check_initial_state(initial_state)
+    sizes = {g.k1.size, speed_arr.size, x0.shape[0]} - {1}
+    if len(sizes) > 1:
+        raise ValueError(
+            "gains, speed and initial_state must have one entry or the same "
+            f"number of runs, got {g.k1.size}, {speed_arr.size} and {x0.shape[0]}"
+        )
+    n = sizes.pop() if sizes else 1
+    k1, k2, a, V = (
+        np.broadcast_to(v, (n,)).copy() for v in (g.k1, g.k2, g.ratio, speed_arr)
+    )
+    x0 = np.broadcast_to(x0, (n, 3)).copy()
+    t = time_grid(duration, dt=dt, t_eval=t_eval)
+    tau = resolve_time_constant(vehicle, tau)
+    check_method(opts["method"])
+    for name in ("rtol", "atol"):
+        opts[name] = float(check_positive(name, opts[name]))
+    return k1, k2, a, V, x0, t, tau
+
+
+def simulate(
+    vehicle: Vehicle,
+    path: Path,
+    gains: SteeringGains,
+    *,
+    speed: float,
+    initial_state: Any,
+    duration: float,
+    feedforward: bool = True,
+    dt: float = 0.01,
+    t_eval: Any = None,
+    actuator_time_constant: float | None = None,
+    method: str = "DOP853",
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
+) -> SimulationResult:
+    r"""Simulate the closed loop (one run) with the fast path-frame engine.
+
+    Integrates the corrected path-frame model (eqs. 17-19 with the curvature
+    :math:`\kappa(s)` of the path at the projection point) closed with the
+    controller of eqs. (24)-(29) in one right-hand side. The initial pose is
+    projected onto the path once; the global pose is reconstructed from
+    ``(s, e, theta)``.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Geometry and optional steering limits. Angle limits clip the
+        commands; rate limits insert the actuator of
+        :func:`~fws_control.steering_actuator`.
+    path : Path
+        Reference path (e.g. :class:`~fws_control.Straight`,
+        :class:`~fws_control.Arc`).
+    gains : SteeringGains
+        Scalar ``k1, k2, ratio``.
+    speed : float
+        Speed :math:`V` [m/s], nonzero (negative: reversing).
+    initial_state : array_like
+        ``(x_R, y_R, psi)`` of the rear-axle centre [m, m, rad].
+    duration : float
+        Final time [s], > 0.
+    feedforward : bool, optional
+        Include the curvature feedforward (default ``True``); ``False`` is
+        the feedback-only controller.
+    dt : float, optional
+        Nominal spacing of the output times [s] (the solver chooses its own
+        steps). The grid is ``linspace(0, duration, round(duration/dt) + 1)``,
+        so the actual spacing is ``duration/round(duration/dt)`` (at least
+        one interval): pass `t_eval` for exact times.
+    t_eval : array_like, optional
+        Output times instead of `dt`; increasing, from 0 to at most
+        `duration`.
+    actuator_time_constant : float, optional
+        Lag :math:`\tau` [s] of the rate-limited actuator, used only when the
+        vehicle has a rate limit (default
+        :data:`~fws_control.controllers.DEFAULT_ACTUATOR_TIME_CONSTANT`).
+    method : str or scipy.integrate.OdeSolver, optional
+        Integration method: a name in ``"DOP853", "RK45", "RK23", "Radau",
+        "BDF", "LSODA"`` or an OdeSolver class. The engine steps that solver
+        itself, as :func:`scipy.integrate.solve_ivp` would, so that it can
+        stop a run at a singular state.
+    rtol, atol : float, optional
+        Relative and absolute tolerances of the solver, > 0.
+
+    Returns
+    -------
+    SimulationResult
+        One run, squeezed: ``res.e`` etc. have shape ``(time,)``,
+        ``res.status`` is a str. If the run meets a singular state it stops
+        there; ``status`` and ``message`` say why and the data end at the
+        last output time before ``t_stop``.
+
+    Raises
+    ------
+    ValueError
+        For non-scalar gains, speed or initial state (use
+        :func:`simulate_batch`), a zero speed, a non-positive duration, or an
+        unknown method.
+    AmbiguousProjectionError
+        If the initial position has no unique closest point on the path.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> g = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=-1.0,
+    ...                           pole=-1.0)
+    >>> res = fws.simulate(veh, fws.Arc(curvature=0.1), g, speed=5.0,
+    ...                    initial_state=(0.0, -5.0, 0.0), duration=15.0)
+    >>> res.status, round(float(res.e[0]), 6), round(float(res.e[-1]), 5)
+    ('ok', -5.0, -3e-05)
+    >>> len(res), res.e.shape
+    (1, (1501,))
+    """
+    g = run_gains(gains, name="gains")
+    if g.k1.size != 1:
+        raise ValueError(
+            f"gains must be scalar for simulate (got {g.k1.size} designs); use "
+            "simulate_batch for several runs"
+        )
+    if np.size(speed) != 1:
+        raise ValueError(
+            f"speed must be a scalar for simulate, got {speed!r}; use "
+            "simulate_batch for several runs"
+        )
+    if np.ndim(initial_state) != 1:
+        raise ValueError(
+            "initial_state must be (x_R, y_R, psi) for simulate, got shape "
+            f"{np.shape(initial_state)}; use simulate_batch for several runs"
+        )
+    batch = simulate_batch(
+        vehicle,
+        path,
+        g,
+        speed=speed,
+        initial_state=initial_state,
+        duration=duration,
+        feedforward=feedforward,
+        dt=dt,
+        t_eval=t_eval,
+        actuator_time_constant=actuator_time_constant,
+        method=method,
+        rtol=rtol,
+        atol=atol,
+        chunk_size=1,
+        progress=False,
+    )
+    return batch[0]
 
 
 def simulate_batch(
     vehicle: Vehicle,
-    path,
-    gains_list,
-    speed,
-    initial_state,
-    duration: float,
+    path: Path,
+    gains: SteeringGains | Any,
     *,
+    speed: Any,
+    initial_state: Any,
+    duration: float,
     feedforward: bool = True,
     dt: float = 0.01,
-    t_eval=None,
+    t_eval: Any = None,
     actuator_time_constant: float | None = None,
     method: str = "DOP853",
     rtol: float = 1e-10,
     atol: float = 1e-12,
     chunk_size: int | None = None,
-    client=None,
+    client: Any = None,
     progress: bool | None = None,
-) -> BatchResult:
+) -> SimulationResult:
     r"""Simulate many closed loops at once on stacked numpy state.
 
     Parameters
     ----------
     vehicle : Vehicle
         Geometry and optional limits (shared by all runs).
-    path : path object
+    path : Path
         Reference path (shared by all runs).
-    gains_list : SteeringGains or sequence of SteeringGains
-        Per-run gains: a sequence, or one :class:`SteeringGains` whose
-        fields are arrays (e.g. from :func:`double_root_gains` over an array
-        of ratios).
+    gains : SteeringGains or sequence of SteeringGains
+        Per-run gains: one :class:`~fws_control.SteeringGains` whose fields
+        are arrays (e.g. from :func:`~fws_control.double_root_gains` over an
+        array of ratios; flattened), or a sequence of them.
     speed : float or array_like
         Speed [m/s], scalar or one per run; nonzero.
     initial_state : array_like
         ``(x_R, y_R, psi)`` for all runs, or shape ``(runs, 3)``.
     duration : float
-        Final time [s].
-    feedforward, dt, t_eval, actuator_time_constant, method, rtol, atol
-        As in :func:`simulate`.
+        Final time [s], > 0.
+    feedforward : bool, optional
+        Include the curvature feedforward (default), as in :func:`simulate`.
+    dt : float, optional
+        Nominal output spacing [s], as in :func:`simulate`.
+    t_eval : array_like, optional
+        Output times instead of `dt`, as in :func:`simulate`.
+    actuator_time_constant : float, optional
+        Actuator lag [s] for a rate-limited vehicle, as in :func:`simulate`.
+    method : str or scipy.integrate.OdeSolver, optional
+        Integration method, as in :func:`simulate`.
+    rtol, atol : float, optional
+        Solver tolerances, as in :func:`simulate`.
     chunk_size : int, optional
-        Runs per chunk (one solve_ivp call; one Dask task); default
+        Runs per chunk (one solver; one Dask task); default
         :data:`DEFAULT_CHUNK_SIZE`. Smaller chunks decouple the step sizes of
         runs with very different dynamics.
     client : dask.distributed.Client, optional
@@ -290,61 +307,65 @@ def simulate_batch(
 
     Returns
     -------
-    BatchResult
-        Signals of shape ``(runs, time)`` on the common output grid. The
+    SimulationResult
+        Not squeezed, whatever the number of runs: signals of shape ``(runs,
+        time)`` on the common output grid, NaN after a run's stop; per-run
+        ``status``, ``t_stop``, ``speed``, ``k1``, ``k2``, ``ratio``. The
         number of runs is the broadcast of the numbers of gains, speeds and
         initial states.
 
     Raises
     ------
     ValueError
-        If the per-run arguments do not broadcast, or as in :func:`simulate`.
+        If the per-run arguments do not broadcast, for an invalid
+        `chunk_size`, or as in :func:`simulate`.
+    TypeError
+        If `gains` is not a SteeringGains or a sequence of them.
 
     Examples
     --------
     Peak lateral acceleration over a sweep of the ratio ``a``:
 
     >>> import numpy as np, fws_control as fws
-    >>> from fws_control.paths import Straight
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     >>> ratios = np.array([-1.0, -0.5, 0.0, 0.5])
-    >>> g = fws.double_root_gains(veh, 20.0, 0.0, ratio=ratios, pole=-1.0)
-    >>> res = fws.simulate_batch(veh, Straight(), g, speed=20.0,
+    >>> g = fws.double_root_gains(veh, speed=20.0, ratio=ratios, pole=-1.0)
+    >>> res = fws.simulate_batch(veh, fws.Straight(), g, speed=20.0,
     ...                          initial_state=(0.0, 2.0, 0.0), duration=10.0,
     ...                          feedforward=False)
     >>> res.e.shape, res.status.tolist()
     ((4, 1001), ['ok', 'ok', 'ok', 'ok'])
     >>> bool(np.all(np.abs(res.e[:, -1]) < 1e-2))
     True
+    >>> fws.tracking_metrics(res).peak_lateral_accel.round(2).tolist()
+    [2.0, 1.91, 1.73, 1.19]
     """
-    check_type("vehicle", vehicle, Vehicle)
-    check_path(path)
-    g = _normalise_gains(gains_list)
-    speed_arr = np.atleast_1d(np.asarray(check_nonzero("speed", speed), dtype=float))
-    x0 = _check_initial_state(initial_state)
-    if speed_arr.ndim != 1:
-        raise ValueError(f"speed must be a scalar or 1-D, got shape {speed_arr.shape}")
-    sizes = {g.k1.size, speed_arr.size, x0.shape[0]} - {1}
-    if len(sizes) > 1:
-        raise ValueError(
-            "gains_list, speed and initial_state must have one entry or the same "
-            f"number of runs, got {g.k1.size}, {speed_arr.size} and {x0.shape[0]}"
-        )
-    n = sizes.pop() if sizes else 1
-    k1, k2, a, V = (
-        np.broadcast_to(v, (n,)).copy() for v in (g.k1, g.k2, g.ratio, speed_arr)
+    opts = {"method": method, "rtol": rtol, "atol": atol}
+    k1, k2, a, V, x0, t, tau = _prepare(
+        vehicle,
+        path,
+        gains,
+        speed,
+        initial_state,
+        duration,
+        dt,
+        t_eval,
+        actuator_time_constant,
+        opts,
     )
-    x0 = np.broadcast_to(x0, (n, 3)).copy()
-    t = _time_grid(duration, dt, t_eval)
-    tau = _prepare_limits(vehicle, actuator_time_constant)
+    n = k1.size
     feedforward = bool(feedforward)
     if chunk_size is None:
         chunk_size = DEFAULT_CHUNK_SIZE
-    if int(chunk_size) != chunk_size or chunk_size < 1:
+    if (
+        isinstance(chunk_size, bool)
+        or not isinstance(chunk_size, (int, np.integer, float))
+        or int(chunk_size) != chunk_size
+        or chunk_size < 1
+    ):
         raise ValueError(f"chunk_size must be an integer >= 1, got {chunk_size!r}")
     chunk_size = int(chunk_size)
     bounds = [(i, min(i + chunk_size, n)) for i in range(0, n, chunk_size)]
-    opts = {"method": method, "rtol": rtol, "atol": atol}
     if progress is None:
         progress = _stderr_is_tty()
 
@@ -392,70 +413,19 @@ def simulate_batch(
     finally:
         bar.close()
 
-    sig = {name: np.concatenate([c[0][name] for c in chunks]) for name in SIGNALS}
-    return BatchResult(
+    return SimulationResult(
         t=t,
-        **sig,
-        status=np.concatenate([c[1] for c in chunks]).astype(str),
-        message=tuple(str(m) for c in chunks for m in c[2]),
-        t_stop=np.concatenate([c[3] for c in chunks]),
-        speed=V,
-        k1=k1,
-        k2=k2,
-        ratio=a,
-        initial_state=x0,
+        signals=np.concatenate([c[0] for c in chunks]),
+        run_status=np.concatenate([c[1] for c in chunks]).astype(str),
+        run_message=tuple(str(m) for c in chunks for m in c[2]),
+        run_t_stop=np.concatenate([c[3] for c in chunks]),
+        run_speed=V,
+        run_k1=k1,
+        run_k2=k2,
+        run_ratio=a,
+        run_initial_state=x0,
         feedforward=feedforward,
-        vehicle=vehicle,
-        path=path,
-    )
-
-
-def _expand_batch(
-    result: BatchResult | None,
-    positions: np.ndarray,
-    n_total: int,
-    fill_status: str,
-    fill_message: str,
-    k1: np.ndarray,
-    k2: np.ndarray,
-    ratio: np.ndarray,
-    speed: np.ndarray,
-    initial_state: np.ndarray,
-    t: np.ndarray,
-    feedforward: bool,
-    vehicle: Vehicle,
-    path,
-) -> BatchResult:
-    """Place `result`'s runs at `positions` of a batch of `n_total` runs.
-
-    The other runs get all-NaN signals and `fill_status`; used for designs
-    that could not be simulated (e.g. uncontrollable), so that they stay in
-    the data instead of being dropped.
-    """
-    T = t.size
-    sig = {name: np.full((n_total, T), np.nan) for name in SIGNALS}
-    status = np.full(n_total, fill_status, dtype=object)
-    message = [fill_message] * n_total
-    t_stop = np.full(n_total, np.nan)
-    if result is not None:
-        for name in SIGNALS:
-            sig[name][positions] = getattr(result, name)
-        status[positions] = result.status
-        for p, m in zip(positions, result.message, strict=True):
-            message[p] = m
-        t_stop[positions] = result.t_stop
-    return BatchResult(
-        t=t,
-        **sig,
-        status=status.astype(str),
-        message=tuple(message),
-        t_stop=t_stop,
-        speed=speed,
-        k1=k1,
-        k2=k2,
-        ratio=ratio,
-        initial_state=initial_state,
-        feedforward=feedforward,
+        squeeze=False,
         vehicle=vehicle,
         path=path,
     )

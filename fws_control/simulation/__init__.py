@@ -1,0 +1,53 @@
+r"""Closed-loop simulation of the 4WS path-tracking controller.
+
+The subpackage is layered in one direction (each module imports only those
+above it)::
+
+    engine     the numerical engine: vectorised path-frame right-hand side,
+       │       integration of many runs with per-run stops, output signals
+       ▼
+    result     SimulationResult: one type for one run or many (a run axis)
+       │
+       ▼
+    runners    simulate (one run) and simulate_batch (many, chunks, Dask)
+
+    reference  closed_loop_system, projection_system: the same loop as a
+               python-control interconnection (uses the engine's argument
+               checks only), the tests' reference for the engine
+
+A run stops, and is marked in its result rather than raising, when the model
+becomes singular (``status`` :data:`STATUS_SINGULAR_STEERING`,
+:data:`STATUS_SINGULAR_CURVATURE`) or leaves an open path
+(:data:`STATUS_END_OF_PATH`); the data up to that time are kept.
+"""
+
+from .engine import (
+    SIGNALS,
+    STATUS_END_OF_PATH,
+    STATUS_FAILED,
+    STATUS_OK,
+    STATUS_SINGULAR_CURVATURE,
+    STATUS_SINGULAR_STEERING,
+    STATUS_UNCONTROLLABLE,
+    STATUSES,
+)
+from .reference import closed_loop_system, projection_system
+from .result import SimulationResult
+from .runners import DEFAULT_CHUNK_SIZE, simulate, simulate_batch
+
+__all__ = [
+    "simulate",
+    "simulate_batch",
+    "SimulationResult",
+    "closed_loop_system",
+    "projection_system",
+    "SIGNALS",
+    "DEFAULT_CHUNK_SIZE",
+    "STATUS_OK",
+    "STATUS_SINGULAR_STEERING",
+    "STATUS_SINGULAR_CURVATURE",
+    "STATUS_END_OF_PATH",
+    "STATUS_FAILED",
+    "STATUS_UNCONTROLLABLE",
+    "STATUSES",
+]

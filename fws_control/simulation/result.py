@@ -1,0 +1,824 @@
+r"""The result of a closed-loop simulation: one type for one run or many.
+
+:class:`SimulationResult` holds a run axis, as
+:class:`control.TimeResponseData` holds one trace or many: every signal is
+stored as an array of shape ``(runs, time)`` on a common time grid, with NaN
+after a run's stop. :func:`~fws_control.simulation.simulate` returns a batch
+of one run; :func:`~fws_control.simulation.simulate_batch` a batch of any
+size.
+
+**Squeeze rule.** A result is *squeezed* (``result.squeeze`` is True) when it
+comes from :func:`~fws_control.simulation.simulate` or from indexing a run,
+``result[i]``; a result from :func:`~fws_control.simulation.simulate_batch`
+is never squeezed, whatever its number of runs (so code written for a batch
+does not change shape when a sweep happens to hold one run). A squeezed
+result holds exactly one run, its time grid ends at the run's last sample
+(no NaN tail), and every per-run attribute drops the run axis:
+
+================================  ==========================  ======================
+attribute                         squeezed (one run)          not squeezed
+================================  ==========================  ======================
+``t``                             ``(time,)``                 ``(time,)``
+``x, y, ..., lateral_accel``      ``(time,)``                 ``(runs, time)``
+``status``                        ``str``                     ndarray of str
+``message``                       ``str``                     tuple of str
+``t_stop, speed, k1, k2, ratio``  ``float``                   ndarray ``(runs,)``
+``initial_state``                 ``(3,)``                    ``(runs, 3)``
+``ok``, ``singular``              ``bool``                    ndarray of bool
+``gains``                         SteeringGains of floats     SteeringGains of arrays
+================================  ==========================  ======================
+
+The stored fields (:attr:`~SimulationResult.signals` and the ``run_*``
+fields) always keep the run axis.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import control as ct
+import numpy as np
+
+from ..gains import SteeringGains
+from ..paths import Path
+from ..vehicle import Vehicle
+from .engine import (
+    SIGNALS,
+    STATUS_OK,
+    STATUS_SINGULAR_CURVATURE,
+    STATUS_SINGULAR_STEERING,
+    STATUS_UNCONTROLLABLE,
+)
+
+__all__ = ["SimulationResult", "expand_runs"]
+
+_DEG = 180.0 / math.pi
+# A run has a state wherever its arclength is finite (the other signals may
+# be NaN at a valid sample, e.g. the lateral acceleration at |delta_f| = pi/2).
+_S = SIGNALS.index("s")
+
+
+class _Signal:
+    """Read-only attribute giving one signal of :data:`SIGNALS`, squeezed."""
+
+    def __init__(self, doc: str) -> None:
+        self.__doc__ = doc
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = name
+        self.index = SIGNALS.index(name)
+
+    def __get__(self, obj: Any, objtype: type | None = None) -> Any:
+        if obj is None:
+            return self
+        values = obj.signals[:, self.index, :]
+        return values[0] if obj.squeeze else values
+
+
+def _import_pandas():
+    try:
+        import pandas as pd
+    except ImportError as exc:  # pragma: no cover - depends on the environment
+        raise ImportError(
+            "to_pandas() needs pandas; install it with `pip install pandas` "
+            "(or the extra `fws-control[test]`)"
+        ) from exc
+    return pd
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class SimulationResult:
+    r"""Time responses of one or more closed-loop runs.
+
+    Built by :func:`~fws_control.simulation.simulate` (one run, squeezed) and
+    :func:`~fws_control.simulation.simulate_batch` (any number of runs, not
+    squeezed); see the module documentation for the squeeze rule.
+    ``len(result)`` is the number of runs, ``result[i]`` the run ``i`` as a
+    squeezed result holding its data up to its stop, ``result[i:j]`` (or an
+    index array or boolean mask) a batch of the selected runs, and iterating
+    gives the runs one by one.
+
+    Parameters
+    ----------
+    t : ndarray
+        Output times [s], shape ``(time,)``.
+    signals : ndarray
+        All signals, shape ``(runs, len(SIGNALS), time)`` in the order of
+        :data:`~fws_control.simulation.SIGNALS`; NaN after a run's stop.
+    run_status : ndarray of str
+        Per run ``"ok"`` or why it stopped: ``"singular_steering"``,
+        ``"singular_curvature"``, ``"end_of_path"``, ``"failed"`` or
+        ``"uncontrollable"`` (no design, not simulated: NaN signals).
+    run_message : tuple of str
+        Per run explanation ("" for ``"ok"``).
+    run_t_stop : ndarray
+        Per run end time [s]; NaN for runs that were not simulated.
+    run_speed : ndarray
+        Per run speed :math:`V` [m/s].
+    run_k1, run_k2, run_ratio : ndarray
+        Per run gains; ``k1, k2`` are NaN for a design that does not exist.
+    run_initial_state : ndarray
+        Per run ``(x_R, y_R, psi)``, shape ``(runs, 3)``.
+    feedforward : bool, optional
+        Whether the curvature feedforward was used (all runs).
+    squeeze : bool, optional
+        Drop the run axis from every per-run attribute; only for one run.
+    vehicle : Vehicle, optional
+        The simulated vehicle.
+    path : Path, optional
+        The reference path; :meth:`plot` draws it.
+
+    Attributes
+    ----------
+    x, y, psi : ndarray
+        Global pose of the rear-axle centre R [m, m, rad]; ``psi`` is
+        continuous (not wrapped) and starts at the given initial heading.
+    s, e, theta : ndarray
+        Arclength of the projection point [m], lateral error [m] (positive
+        left of the path) and heading error :math:`\theta = \psi - \psi_C`
+        [rad].
+    delta_f, delta_r : ndarray
+        Front and rear steering angles [rad] applied to the vehicle.
+    delta_f_rate, delta_r_rate : ndarray
+        Their time derivatives [rad/s], exact (chain rule through the
+        controller and the path's curvature derivative).
+    lateral_accel : ndarray
+        Lateral acceleration of the centre of gravity G, eq. (13) [m/s^2].
+    status, message, t_stop, speed, k1, k2, ratio, initial_state
+        The ``run_*`` fields, squeezed (see the module documentation).
+    gains : SteeringGains or None
+        The per-run gains; None if a run has no design (its ``k1``, ``k2``
+        are NaN, which a SteeringGains cannot hold).
+    ok : bool or ndarray of bool
+        The run reached the final time.
+    runs : list of SimulationResult
+        Every run, squeezed.
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> g = fws.double_root_gains(veh, speed=20.0, ratio=np.array([-1.0, 0.0]),
+    ...                           pole=-1.0)
+    >>> batch = fws.simulate_batch(veh, fws.Straight(), g, speed=20.0,
+    ...                            initial_state=(0.0, 2.0, 0.0), duration=5.0,
+    ...                            feedforward=False)
+    >>> len(batch), batch.e.shape, batch.status.tolist()
+    (2, (2, 501), ['ok', 'ok'])
+    >>> run = batch[1]                    # one run: squeezed
+    >>> run.e.shape, run.status, run.ratio
+    ((501,), 'ok', 0.0)
+    """
+
+    t: np.ndarray
+    signals: np.ndarray
+    run_status: np.ndarray
+    run_message: tuple[str, ...]
+    run_t_stop: np.ndarray
+    run_speed: np.ndarray
+    run_k1: np.ndarray
+    run_k2: np.ndarray
+    run_ratio: np.ndarray
+    run_initial_state: np.ndarray
+    feedforward: bool = True
+    squeeze: bool = False
+    vehicle: Vehicle | None = None
+    path: Path | None = None
+
+    x = _Signal("Global x of the rear-axle centre R [m].")
+    y = _Signal("Global y of the rear-axle centre R [m].")
+    psi = _Signal("Heading [rad], continuous in time, on the initial branch.")
+    s = _Signal("Arclength of the projection point on the path [m].")
+    e = _Signal("Lateral error [m], positive left of the path.")
+    theta = _Signal("Heading error theta = psi - psi_C [rad].")
+    delta_f = _Signal("Front steering angle applied to the vehicle [rad].")
+    delta_r = _Signal("Rear steering angle applied to the vehicle [rad].")
+    delta_f_rate = _Signal("Front steering rate [rad/s].")
+    delta_r_rate = _Signal("Rear steering rate [rad/s].")
+    lateral_accel = _Signal("Lateral acceleration of G, eq. (13) [m/s^2].")
+
+    def __post_init__(self) -> None:
+        t = np.asarray(self.t, dtype=float)
+        sig = np.asarray(self.signals, dtype=float)
+        if t.ndim != 1 or sig.ndim != 3 or sig.shape[1:] != (len(SIGNALS), t.size):
+            raise ValueError(
+                f"signals must have shape (runs, {len(SIGNALS)}, {t.size}) for "
+                f"t of shape {t.shape}, got {sig.shape}"
+            )
+        n = sig.shape[0]
+        # Small per-run arrays are copied (they may be broadcast views).
+        per_run = {
+            "run_status": np.array(self.run_status, dtype=str),
+            "run_t_stop": np.array(self.run_t_stop, dtype=float),
+            "run_speed": np.array(self.run_speed, dtype=float),
+            "run_k1": np.array(self.run_k1, dtype=float),
+            "run_k2": np.array(self.run_k2, dtype=float),
+            "run_ratio": np.array(self.run_ratio, dtype=float),
+        }
+        for name, value in per_run.items():
+            if value.shape != (n,):
+                raise ValueError(
+                    f"{name} must have one entry per run, shape ({n},), got "
+                    f"{value.shape}"
+                )
+        x0 = np.array(self.run_initial_state, dtype=float)
+        if x0.shape != (n, 3):
+            raise ValueError(
+                f"run_initial_state must have shape ({n}, 3), got {x0.shape}"
+            )
+        message = tuple(str(m) for m in self.run_message)
+        if len(message) != n:
+            raise ValueError(
+                f"run_message must hold one str per run ({n}), got {len(message)}"
+            )
+        if self.squeeze and n != 1:
+            raise ValueError(f"squeeze=True needs exactly one run, got {n}")
+        for name, value in (
+            ("t", t),
+            ("signals", sig),
+            ("run_initial_state", x0),
+            ("run_message", message),
+            ("feedforward", bool(self.feedforward)),
+            ("squeeze", bool(self.squeeze)),
+            *per_run.items(),
+        ):
+            object.__setattr__(self, name, value)
+
+    # ------------------------------------------------------------------
+    # Runs
+
+    def __len__(self) -> int:
+        return int(self.signals.shape[0])
+
+    def __iter__(self) -> Iterator[SimulationResult]:
+        return (self[i] for i in range(len(self)))
+
+    def __getitem__(self, index: Any) -> SimulationResult:
+        """Run `index` (an int) squeezed, or a batch of the selected runs."""
+        n = len(self)
+        if isinstance(index, (int, np.integer)) and not isinstance(index, bool):
+            if not -n <= index < n:
+                raise IndexError(f"run index {index} out of range for {n} runs")
+            i = int(index) % n
+            # Keep the samples up to the stop.
+            count = int(np.count_nonzero(np.isfinite(self.signals[i, _S])))
+            return self._select([i], count, squeeze=True)
+        if isinstance(index, slice):
+            return self._select(np.arange(n)[index], self.t.size, squeeze=False)
+        idx = np.asarray(index)
+        if idx.dtype == bool:
+            if idx.shape != (n,):
+                raise IndexError(
+                    f"a boolean run mask must have shape ({n},), got {idx.shape}"
+                )
+            idx = np.flatnonzero(idx)
+        elif idx.ndim != 1 or not np.issubdtype(idx.dtype, np.integer):
+            raise TypeError(
+                "run index must be an int, a slice, an integer array or a boolean "
+                f"mask, got {index!r}"
+            )
+        if idx.size and not (np.all(idx < n) and np.all(idx >= -n)):
+            raise IndexError(f"run indices {idx.tolist()} out of range for {n} runs")
+        return self._select(idx % n if n else idx, self.t.size, squeeze=False)
+
+    def _select(self, idx, count: int, *, squeeze: bool) -> SimulationResult:
+        idx = np.asarray(idx, dtype=int)
+        return SimulationResult(
+            t=self.t[:count].copy(),
+            signals=self.signals[idx, :, :count].copy(),
+            run_status=self.run_status[idx],
+            run_message=tuple(self.run_message[i] for i in idx),
+            run_t_stop=self.run_t_stop[idx],
+            run_speed=self.run_speed[idx],
+            run_k1=self.run_k1[idx],
+            run_k2=self.run_k2[idx],
+            run_ratio=self.run_ratio[idx],
+            run_initial_state=self.run_initial_state[idx],
+            feedforward=self.feedforward,
+            squeeze=squeeze,
+            vehicle=self.vehicle,
+            path=self.path,
+        )
+
+    @property
+    def runs(self) -> list[SimulationResult]:
+        """Every run as a squeezed result (data up to its stop)."""
+        return list(self)
+
+    def __repr__(self) -> str:
+        counts = {}
+        for s in self.run_status.tolist():
+            counts[s] = counts.get(s, 0) + 1
+        span = f"[{self.t[0]:g}, {self.t[-1]:g}] s" if self.t.size else "[]"
+        return (
+            f"SimulationResult(runs={len(self)}, samples={self.t.size} over {span}, "
+            f"status={counts}, squeeze={self.squeeze})"
+        )
+
+    # ------------------------------------------------------------------
+    # Per-run attributes (squeezed)
+
+    def _per_run(self, values: np.ndarray, kind: type) -> Any:
+        return kind(values[0]) if self.squeeze else values
+
+    @property
+    def status(self) -> str | np.ndarray:
+        """``"ok"`` or why the run stopped (see ``run_status``)."""
+        return self._per_run(self.run_status, str)
+
+    @property
+    def message(self) -> str | tuple[str, ...]:
+        """Why the run stopped ("" for ``"ok"``)."""
+        return self.run_message[0] if self.squeeze else self.run_message
+
+    @property
+    def t_stop(self) -> float | np.ndarray:
+        """Time at which the run ended [s] (the final time for ``"ok"``)."""
+        return self._per_run(self.run_t_stop, float)
+
+    @property
+    def speed(self) -> float | np.ndarray:
+        """Speed :math:`V` [m/s]."""
+        return self._per_run(self.run_speed, float)
+
+    @property
+    def k1(self) -> float | np.ndarray:
+        """Lateral-error gain [rad/m]; NaN where no design exists."""
+        return self._per_run(self.run_k1, float)
+
+    @property
+    def k2(self) -> float | np.ndarray:
+        """Heading-error gain [rad/rad]; NaN where no design exists."""
+        return self._per_run(self.run_k2, float)
+
+    @property
+    def ratio(self) -> float | np.ndarray:
+        """Rear-to-front steering ratio :math:`a`."""
+        return self._per_run(self.run_ratio, float)
+
+    @property
+    def initial_state(self) -> np.ndarray:
+        """``(x_R, y_R, psi)`` at t = 0, shape ``(3,)`` or ``(runs, 3)``."""
+        return self.run_initial_state[0] if self.squeeze else self.run_initial_state
+
+    @property
+    def gains(self) -> SteeringGains | None:
+        """The gains as one :class:`SteeringGains`; None if a run has no design."""
+        values = (self.run_k1, self.run_k2, self.run_ratio)
+        if not all(np.all(np.isfinite(v)) for v in values):
+            return None
+        if self.squeeze:
+            return SteeringGains(*(float(v[0]) for v in values))
+        return SteeringGains(*(v.copy() for v in values))
+
+    @property
+    def ok(self) -> bool | np.ndarray:
+        """True for a run that reached the final time."""
+        return self._per_run(self.run_status == STATUS_OK, bool)
+
+    @property
+    def singular(self) -> bool | np.ndarray:
+        """True for a run that stopped at a singular state of the model."""
+        mask = np.isin(
+            self.run_status, (STATUS_SINGULAR_STEERING, STATUS_SINGULAR_CURVATURE)
+        )
+        return self._per_run(mask, bool)
+
+    # ------------------------------------------------------------------
+    # Conversions
+
+    def _default_labels(self) -> list[str | None]:
+        """Legend labels naming what differs between the runs.
+
+        The ratio, speed and initial pose that differ; the gains too if those
+        do not tell the runs apart (the gains of a design follow from its
+        ratio and speed); ``run i`` if nothing differs.
+        """
+        n = len(self)
+        if n == 1:
+            return [None]
+
+        def differing(items):
+            out = [[] for _ in range(n)]
+            for values, fmt in items:
+                if np.unique(values, axis=0).shape[0] > 1:
+                    for i in range(n):
+                        out[i].append(fmt(values[i]))
+            return out
+
+        parts = differing(
+            (
+                (self.run_ratio, "a={:g}".format),
+                (self.run_speed, "V={:g}".format),
+                (
+                    self.run_initial_state,
+                    lambda x0: f"R0=({x0[0]:g}, {x0[1]:g}, {x0[2]:g})",
+                ),
+            )
+        )
+        if len({tuple(p) for p in parts}) < n:
+            gains = differing(
+                ((self.run_k1, "k1={:.4g}".format), (self.run_k2, "k2={:.4g}".format))
+            )
+            parts = [p + q for p, q in zip(parts, gains, strict=True)]
+        if all(parts):
+            return [", ".join(p) for p in parts]
+        return [f"run {i}" for i in range(n)]
+
+    def _labels(self, labels: Any) -> list[str | None]:
+        n = len(self)
+        if labels is None:
+            return self._default_labels()
+        if isinstance(labels, str):
+            labels = [labels]
+        labels = list(labels)
+        if len(labels) != n:
+            raise ValueError(
+                f"labels must hold one label per run ({n}), got {len(labels)}: "
+                f"{labels!r}"
+            )
+        return [None if lab is None else str(lab) for lab in labels]
+
+    def to_time_response(self) -> ct.TimeResponseData:
+        """The signals as a :class:`control.TimeResponseData`.
+
+        Outputs are the signals of :data:`~fws_control.simulation.SIGNALS`
+        (with those names), the traces are the runs. A squeezed result gives
+        a single-trace response (outputs of shape ``(signals, time)``), a
+        batch a multi-trace one (``(signals, runs, time)``, trace labels as
+        in :meth:`plot`), so :func:`control.time_response_plot` draws it.
+        ``success`` is True if every run reached the final time;
+        ``message`` joins the runs' messages; ``params`` holds the per-run
+        ``speed, k1, k2, ratio`` and ``feedforward``.
+
+        Returns
+        -------
+        control.TimeResponseData
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+        >>> g = fws.SteeringGains(k1=0.1, k2=0.5, ratio=0.0)
+        >>> res = fws.simulate(veh, fws.Straight(), g, speed=5.0,
+        ...                    initial_state=(0.0, 1.0, 0.0), duration=2.0)
+        >>> resp = res.to_time_response()
+        >>> resp.output_labels[4], resp.outputs.shape, resp.ntraces
+        ('e', (11, 201), 0)
+        """
+        params = {
+            "speed": self.speed,
+            "k1": self.k1,
+            "k2": self.k2,
+            "ratio": self.ratio,
+            "feedforward": self.feedforward,
+        }
+        if self.squeeze:
+            outputs = self.signals[0]
+            trace_labels = None
+        else:
+            outputs = np.transpose(self.signals, (1, 0, 2))
+            trace_labels = [
+                lab if lab is not None else f"run {i}"
+                for i, lab in enumerate(self._default_labels())
+            ]
+        notes = [m for m in self.run_message if m]
+        return ct.TimeResponseData(
+            self.t,
+            outputs,
+            output_labels=list(SIGNALS),
+            issiso=False,
+            multi_trace=not self.squeeze,
+            trace_labels=trace_labels,
+            title="closed-loop path tracking",
+            sysname="closed_loop",
+            plot_inputs=False,
+            params=params,
+            success=bool(np.all(self.run_status == STATUS_OK)),
+            message="; ".join(notes) if notes else None,
+        )
+
+    def to_pandas(self):
+        """Long-format :class:`pandas.DataFrame`, one row per run and sample.
+
+        Columns ``run, t``, the signals of
+        :data:`~fws_control.simulation.SIGNALS`, then the per-run ``status,
+        t_stop, speed, k1, k2, ratio`` (repeated on each of the run's rows).
+        A run's rows are its samples up to its stop; a run without any
+        sample (e.g. ``"uncontrollable"``, not simulated) keeps one row with
+        NaN ``t`` and signals, so that no run is dropped. ``attrs`` holds
+        ``feedforward``.
+
+        Returns
+        -------
+        pandas.DataFrame
+
+        Raises
+        ------
+        ImportError
+            If pandas is not installed.
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+        >>> g = fws.SteeringGains(k1=[0.1, 0.2], k2=0.5, ratio=0.0)
+        >>> res = fws.simulate_batch(veh, fws.Straight(), g, speed=5.0,
+        ...                          initial_state=(0.0, 1.0, 0.0), duration=1.0,
+        ...                          dt=0.5)
+        >>> res.to_pandas()[["run", "t", "e", "k1", "status"]]
+           run    t         e   k1 status
+        0    0  0.0  1.000000  0.1     ok
+        1    0  0.5  0.901922  0.1     ok
+        2    0  1.0  0.676418  0.1     ok
+        3    1  0.0  1.000000  0.2     ok
+        4    1  0.5  0.806609  0.2     ok
+        5    1  1.0  0.398119  0.2     ok
+        """
+        pd = _import_pandas()
+        n = len(self)
+        rows_run, rows_k = np.nonzero(np.isfinite(self.signals[:, _S, :]))
+        # A run without samples keeps one row of NaN, so that it is not lost.
+        empty = np.setdiff1d(np.arange(n), rows_run)
+        run = np.concatenate([rows_run, empty])
+        t = np.concatenate([self.t[rows_k], np.full(empty.size, np.nan)])
+        values = np.concatenate(
+            [
+                self.signals[rows_run, :, rows_k],
+                np.full((empty.size, len(SIGNALS)), np.nan),
+            ]
+        )
+        order = np.argsort(run, kind="stable")
+        run, t, values = run[order], t[order], values[order]
+        data: dict[str, Any] = {"run": run, "t": t}
+        data.update({name: values[:, j] for j, name in enumerate(SIGNALS)})
+        for name, per_run in (
+            ("status", self.run_status),
+            ("t_stop", self.run_t_stop),
+            ("speed", self.run_speed),
+            ("k1", self.run_k1),
+            ("k2", self.run_k2),
+            ("ratio", self.run_ratio),
+        ):
+            data[name] = per_run[run]
+        df = pd.DataFrame(data)
+        df.attrs["feedforward"] = self.feedforward
+        return df
+
+    # ------------------------------------------------------------------
+    # Plot
+
+    def plot(
+        self,
+        ax: Any = None,
+        *,
+        labels: str | Sequence[str | None] | None = None,
+        title: str | None = None,
+    ) -> ct.ControlPlot:
+        """Plot every run: errors, trajectory, steering, lateral acceleration.
+
+        Parameters
+        ----------
+        ax : array_like of 6 matplotlib.axes.Axes, optional
+            Axes to draw into, in the order lateral error, heading error,
+            trajectory, front steering, rear steering, lateral acceleration
+            (e.g. the ``axes`` of an earlier call, to overlay results). A new
+            figure with a 3 x 2 grid if None.
+        labels : str or sequence of str, optional
+            Legend label per run (a str for a single run). Default: none for
+            one run; for several, the per-run values that differ (``a=...``,
+            ``V=...``, ...).
+        title : str, optional
+            Figure title.
+
+        Returns
+        -------
+        control.ControlPlot
+            ``axes``: the shape of `ax` (one row of 6 for a flat sequence;
+            ``(3, 2)`` when created) and ``lines``: per axes, the lines
+            drawn. Panels: ``e`` [m], ``theta`` [deg], the trajectory of R
+            with the reference path [m], ``delta_f`` and ``delta_r`` [deg],
+            lateral acceleration of G [m/s^2]. A run that
+            stopped early is marked with an ``x`` at its last sample and its
+            status in the legend; a run that was not simulated appears only
+            in the legend.
+
+        Raises
+        ------
+        ValueError
+            If `ax` does not hold 6 axes or `labels` not one label per run.
+
+        Examples
+        --------
+        >>> import matplotlib; matplotlib.use("Agg")
+        >>> import matplotlib.pyplot as plt, fws_control as fws
+        >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+        >>> g = fws.SteeringGains(k1=0.1, k2=0.5, ratio=0.0)
+        >>> res = fws.simulate(veh, fws.Straight(), g, speed=5.0,
+        ...                    initial_state=(0.0, 1.0, 0.0), duration=2.0)
+        >>> cplt = res.plot(labels="a = 0")
+        >>> cplt.axes.shape
+        (3, 2)
+        >>> plt.close(cplt.figure)
+        """
+        import matplotlib.pyplot as plt
+
+        names = self._labels(labels)
+        if ax is None:
+            fig = plt.figure(figsize=(11, 9), layout="constrained")
+            axes = np.empty((3, 2), dtype=object)
+            axes[...] = fig.subplots(3, 2)
+        else:
+            axes = np.empty(np.shape(ax), dtype=object)
+            axes[...] = ax
+            if axes.size != 6:
+                raise ValueError(
+                    f"ax must hold 6 matplotlib axes (e, theta, trajectory, "
+                    f"delta_f, delta_r, lateral_accel), got {axes.size}"
+                )
+            # ControlPlot keeps its axes 2-D; keep the lines in the same shape.
+            axes = axes.reshape(1, 6) if axes.ndim < 2 else axes
+            fig = axes.flat[0].figure
+        flat = list(axes.flat)
+        ax_e, ax_th, ax_xy, ax_df, ax_dr, ax_a = flat
+        before = [len(a.get_lines()) for a in flat]
+        panels = (
+            (ax_e, "e", 1.0, "lateral error e [m]"),
+            (ax_th, "theta", _DEG, "heading error θ [deg]"),
+            (ax_df, "delta_f", _DEG, "front steering δf [deg]"),
+            (ax_dr, "delta_r", _DEG, "rear steering δr [deg]"),
+            (ax_a, "lateral_accel", 1.0, "lateral acceleration of G [m/s²]"),
+        )
+        index = {name: SIGNALS.index(name) for name in ("x", "y")}
+        legend_needed = False
+        for i in range(len(self)):
+            status = self.run_status[i]
+            text = names[i] or ""
+            if status == STATUS_UNCONTROLLABLE:
+                text = f"{text} (uncontrollable: not simulated)".strip()
+            elif status != STATUS_OK:
+                text = f"{text} ({status} at t={self.run_t_stop[i]:.3g} s)".strip()
+            legend_needed |= bool(text)
+            label = text or None
+            count = int(np.count_nonzero(np.isfinite(self.signals[i, _S])))
+            t = self.t[:count]
+            color = None
+            for a, name, scale, _ in panels:
+                y = scale * self.signals[i, SIGNALS.index(name), :count]
+                (line,) = a.plot(t, y, label=label, color=color)
+                color = line.get_color()
+                if status != STATUS_OK and count:
+                    a.plot(t[-1], y[-1], "x", color=color)
+            xs = self.signals[i, index["x"], :count]
+            ys = self.signals[i, index["y"], :count]
+            ax_xy.plot(xs, ys, color=color, label=label)
+            if status != STATUS_OK and count:
+                ax_xy.plot(xs[-1], ys[-1], "x", color=color)
+        s = self.signals[:, _S, :]
+        if self.path is not None and np.any(np.isfinite(s)):
+            s_lo, s_hi = float(np.nanmin(s)), float(np.nanmax(s))
+            span = max(s_hi - s_lo, 1.0)
+            ss = np.linspace(s_lo - 0.05 * span, s_hi + 0.05 * span, 400)
+            if not self.path.closed:
+                ss = np.clip(ss, 0.0, self.path.length)
+            px, py = self.path.position(ss)
+            ax_xy.plot(px, py, "k--", lw=1.0, label="path")
+            ax_xy.legend(fontsize="small")
+        for a, _, _, ylabel in panels:
+            a.set_xlabel("time t [s]")
+            a.set_ylabel(ylabel)
+            a.grid(True, alpha=0.3)
+        ax_xy.set_xlabel("x [m]")
+        ax_xy.set_ylabel("y [m]")
+        ax_xy.set_title("trajectory of R")
+        ax_xy.set_aspect("equal", adjustable="datalim")
+        ax_xy.grid(True, alpha=0.3)
+        legend = ax_e.legend(fontsize="small") if legend_needed else None
+        lines = np.empty(axes.shape, dtype=object)
+        for k, a in enumerate(flat):
+            lines.flat[k] = list(a.get_lines()[before[k] :])
+        if title is not None:
+            # fig.suptitle, not ControlPlot.set_plot_title: the latter
+            # switches a constrained layout to a tight one.
+            fig.suptitle(title)
+        return ct.ControlPlot(lines, axes, fig, legend=legend)
+
+
+def expand_runs(
+    result: SimulationResult | None,
+    *,
+    positions: Any,
+    k1: Any,
+    k2: Any,
+    ratio: Any,
+    speed: Any,
+    initial_state: Any,
+    t: np.ndarray,
+    feedforward: bool,
+    vehicle: Vehicle | None,
+    path: Path | None,
+    status: str = STATUS_UNCONTROLLABLE,
+    message: str = "",
+) -> SimulationResult:
+    """Place `result`'s runs among runs that were not simulated.
+
+    For designs that cannot be simulated (e.g. no gains exist, status
+    ``"uncontrollable"``) but must stay in the data instead of being
+    dropped: the batch has ``len(ratio)`` runs; the runs of `result` go to
+    `positions`, every other run gets NaN signals and ``t_stop``, `status`
+    and `message`.
+
+    Parameters
+    ----------
+    result : SimulationResult or None
+        The simulated runs (not squeezed, on the time grid `t`); None if no
+        run was simulated.
+    positions : array_like of int
+        Run index of each run of `result` in the expanded batch.
+    k1, k2, ratio, speed : array_like
+        Per run values of the expanded batch, shape ``(runs,)``; ``k1, k2``
+        NaN where no design exists.
+    initial_state : array_like
+        Per run ``(x_R, y_R, psi)``, shape ``(runs, 3)``.
+    t : ndarray
+        Output times (those of `result`).
+    feedforward : bool
+        Controller of all runs.
+    vehicle : Vehicle or None
+        The simulated vehicle.
+    path : Path or None
+        The reference path.
+    status : str, optional
+        Status of the runs that were not simulated.
+    message : str, optional
+        Their explanation.
+
+    Returns
+    -------
+    SimulationResult
+        Not squeezed, ``len(ratio)`` runs.
+
+    Raises
+    ------
+    ValueError
+        If `result` does not have one run per position or another time grid.
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> from fws_control.simulation.result import expand_runs
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> g = fws.SteeringGains(0.1, 0.5, 0.0)
+    >>> res = fws.simulate_batch(veh, fws.Straight(), g, speed=5.0,
+    ...                          initial_state=(0.0, 1.0, 0.0), duration=1.0)
+    >>> full = expand_runs(res, positions=[1], k1=[np.nan, 0.1],
+    ...                    k2=[np.nan, 0.5], ratio=[1.0, 0.0], speed=[5.0, 5.0],
+    ...                    initial_state=[(0.0, 1.0, 0.0)] * 2, t=res.t,
+    ...                    feedforward=True, vehicle=veh, path=fws.Straight(),
+    ...                    message="no design")
+    >>> full.status.tolist(), bool(np.all(np.isnan(full.e[0])))
+    (['uncontrollable', 'ok'], True)
+    """
+    k1 = np.asarray(k1, dtype=float)
+    n = k1.size
+    t = np.asarray(t, dtype=float)
+    positions = np.asarray(positions, dtype=int).ravel()
+    signals = np.full((n, len(SIGNALS), t.size), np.nan)
+    run_status = np.full(n, status, dtype=object)
+    run_message = [str(message)] * n
+    t_stop = np.full(n, np.nan)
+    if result is not None:
+        if len(result) != positions.size or result.t.shape != t.shape:
+            raise ValueError(
+                f"result must hold one run per position ({positions.size}) on the "
+                f"time grid t ({t.size} samples), got {len(result)} runs and "
+                f"{result.t.size} samples"
+            )
+        signals[positions] = result.signals
+        run_status[positions] = result.run_status
+        for p, m in zip(positions, result.run_message, strict=True):
+            run_message[p] = m
+        t_stop[positions] = result.run_t_stop
+    elif positions.size:
+        raise ValueError(f"positions must be empty without a result, got {positions}")
+    return SimulationResult(
+        t=t,
+        signals=signals,
+        run_status=run_status.astype(str),
+        run_message=tuple(run_message),
+        run_t_stop=t_stop,
+        run_speed=np.broadcast_to(np.asarray(speed, dtype=float), (n,)),
+        run_k1=k1,
+        run_k2=np.asarray(k2, dtype=float),
+        run_ratio=np.asarray(ratio, dtype=float),
+        run_initial_state=np.broadcast_to(
+            np.asarray(initial_state, dtype=float), (n, 3)
+        ),
+        feedforward=feedforward,
+        squeeze=False,
+        vehicle=vehicle,
+        path=path,
+    )
