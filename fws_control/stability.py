@@ -253,7 +253,32 @@ class StabilityBoundary:
 
     @classmethod
     def from_coefficients(cls, alpha, beta, gamma, condition: str) -> StabilityBoundary:
-        """Normalised boundary from raw coefficients (scalars)."""
+        """Normalised boundary from raw coefficients (scalars).
+
+        Parameters
+        ----------
+        alpha : float
+            Coefficient of ``k1`` (per rad/m), finite.
+        beta : float
+            Coefficient of ``k2`` (per rad/rad), finite.
+        gamma : float
+            Gain-independent term, finite. Only the ratios of `alpha`,
+            `beta` and `gamma` matter: the three are divided by
+            ``hypot(alpha, beta)``; with ``alpha = beta = 0`` the boundary
+            is degenerate and keeps only the sign of `gamma`.
+        condition : str
+            The coefficient condition the line bounds, e.g. ``"p0 > 0"``.
+
+        Returns
+        -------
+        StabilityBoundary
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> fws.StabilityBoundary.from_coefficients(3.0, 4.0, -5.0, "p1 > 0")
+        StabilityBoundary(alpha=0.6, beta=0.8, gamma=-1.0, condition='p1 > 0')
+        """
         alpha, beta, gamma = float(alpha), float(beta), float(gamma)
         norm = float(np.hypot(alpha, beta))
         # No tolerance: a = c on a straight path cancels to an exact 0.0, and
@@ -280,7 +305,20 @@ class StabilityBoundary:
         return bool(self.gamma > 0)
 
     def satisfied(self, k1, k2) -> bool | np.ndarray:
-        """True where this condition holds strictly (broadcasts)."""
+        """True where this condition holds strictly (broadcasts).
+
+        Parameters
+        ----------
+        k1 : float or array_like
+            Lateral-error gains [rad/m], finite.
+        k2 : float or array_like
+            Heading-error gains [rad/rad], finite; broadcasts with `k1`.
+
+        Returns
+        -------
+        bool or ndarray of bool
+            ``alpha*k1 + beta*k2 + gamma > 0``; a bool for scalar gains.
+        """
         out = self.alpha * np.asarray(k1) + self.beta * np.asarray(k2) + self.gamma > 0
         return bool(out) if np.ndim(out) == 0 else out
 
@@ -290,7 +328,23 @@ class StabilityBoundary:
         return self.beta == 0.0 and self.alpha != 0.0
 
     def k2_at(self, k1) -> np.ndarray:
-        """``k2`` on the line for given ``k1`` (not for vertical lines)."""
+        """``k2`` on the line for given ``k1`` (not for vertical lines).
+
+        Parameters
+        ----------
+        k1 : float or array_like
+            Lateral-error gains [rad/m], finite.
+
+        Returns
+        -------
+        ndarray
+            Heading-error gains ``k2`` [rad/rad] on the line, same shape.
+
+        Raises
+        ------
+        ValueError
+            If the line is vertical (``beta == 0``) or degenerate.
+        """
         if self.beta == 0.0:
             raise ValueError(
                 f"boundary {self.condition} is vertical or degenerate: use k1_at"
@@ -298,7 +352,23 @@ class StabilityBoundary:
         return -(self.alpha * np.asarray(k1, dtype=float) + self.gamma) / self.beta
 
     def k1_at(self, k2) -> np.ndarray:
-        """``k1`` on the line for given ``k2`` (not for horizontal lines)."""
+        """``k1`` on the line for given ``k2`` (not for horizontal lines).
+
+        Parameters
+        ----------
+        k2 : float or array_like
+            Heading-error gains [rad/rad], finite.
+
+        Returns
+        -------
+        ndarray
+            Lateral-error gains ``k1`` [rad/m] on the line, same shape.
+
+        Raises
+        ------
+        ValueError
+            If the line is horizontal (``alpha == 0``) or degenerate.
+        """
         if self.alpha == 0.0:
             raise ValueError(
                 f"boundary {self.condition} is horizontal or degenerate: use k2_at"
@@ -308,8 +378,29 @@ class StabilityBoundary:
     def segment(self, k1_range, k2_range) -> np.ndarray | None:
         """End points of the part of the line inside a rectangle.
 
-        Returns an array ``[[k1a, k2a], [k1b, k2b]]`` or None if the line
-        misses the rectangle (or is degenerate).
+        Parameters
+        ----------
+        k1_range : (float, float)
+            The rectangle's ``k1`` interval [rad/m], finite, in either order.
+        k2_range : (float, float)
+            The rectangle's ``k2`` interval [rad/rad], finite, in either
+            order.
+
+        Returns
+        -------
+        ndarray or None
+            ``[[k1a, k2a], [k1b, k2b]]``, sorted by ``k1``, or None if the
+            line misses the rectangle (or is degenerate).
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> b = fws.StabilityBoundary(0.6, 0.8, -1.0, "p1 > 0")
+        >>> b.segment((-1.0, 1.0), (-1.0, 1.0)).round(4)
+        array([[0.3333, 1.    ],
+               [1.    , 0.5   ]])
+        >>> print(b.segment((-1.0, 0.0), (-1.0, 0.0)))
+        None
         """
         if self.degenerate:
             return None
@@ -411,8 +502,24 @@ class StabilityBoundaries:
 def default_frequencies(cp: AffinePolynomial, num: int = 2001) -> np.ndarray:
     """Logarithmic frequency grid covering the plant's time scales [rad/s].
 
-    From ``1e-3`` to ``1e3`` times the largest magnitude of the roots of the
-    open loop and of :math:`n_1, n_2` (at least 1 rad/s).
+    From ``1e-3`` times the smallest to ``1e3`` times the largest nonzero
+    root magnitude of the open loop and of :math:`n_1, n_2` (1 rad/s
+    included). Leading coefficients that are negligible against the others
+    (below 1e-9 of the largest) are dropped first: they stand for roots near
+    infinity (e.g. ``n1``'s ``V a`` for a tiny ratio), not for a time scale.
+    At least 200 points per decade.
+
+    Parameters
+    ----------
+    cp : AffinePolynomial
+        Characteristic polynomial of one operating point.
+    num : int, optional
+        Minimum number of frequencies.
+
+    Returns
+    -------
+    ndarray
+        Increasing frequencies [rad/s].
 
     Examples
     --------
@@ -423,12 +530,22 @@ def default_frequencies(cp: AffinePolynomial, num: int = 2001) -> np.ndarray:
     >>> float(w[0]), float(w[-1])
     (0.001, 1000.0)
     """
-    scale = 1.0
+    lo = hi = 1.0
     for c in (cp.open_loop, cp.n1, cp.n2):
-        c = np.trim_zeros(np.asarray(c, dtype=float).reshape(-1, c.shape[-1])[0], "f")
+        c = np.asarray(c, dtype=float).reshape(-1, c.shape[-1])[0]
+        big = float(np.max(np.abs(c), initial=0.0))
+        if big == 0.0:
+            continue
+        keep = np.flatnonzero(np.abs(c) > 1e-9 * big)
+        c = c[keep[0] :]
         if c.size > 1:
-            scale = max(scale, float(np.max(np.abs(np.roots(c)), initial=0.0)))
-    return np.geomspace(1e-3 * scale, 1e3 * scale, num)
+            r = np.abs(np.roots(c))
+            r = r[r > 1e-9 * max(1.0, float(np.max(r, initial=0.0)))]
+            if r.size:
+                lo = min(lo, float(np.min(r)))
+                hi = max(hi, float(np.max(r)))
+    decades = np.log10(hi / lo) + 6.0
+    return np.geomspace(1e-3 * lo, 1e3 * hi, max(int(num), int(200 * decades)))
 
 
 def complex_root_curve(
