@@ -1,4 +1,9 @@
-"""Shared fixtures and the hypothesis profile (fixed seed: derandomized)."""
+"""Shared fixtures, hand-written references and the hypothesis profile.
+
+The hypothesis profile has a fixed seed (derandomized). The helpers below are
+written out in the tests from the paper's equations, independent of the
+library code they check.
+"""
 
 import os
 
@@ -22,6 +27,7 @@ settings.register_profile(
 )
 settings.load_profile("fws")
 
+#: The paper's vehicle, written out here: f = 2.7 m, d = 1.35 m.
 PAPER_VEHICLE = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
 
 
@@ -45,3 +51,16 @@ _ARGS = [
 def lambdify(expr):
     """Numeric function of (V, f, kappa, a, k1, k2, lam0) from a sympy expr."""
     return sp.lambdify(_ARGS, expr, modules="numpy")
+
+
+def gain_factor(wheelbase, curvature, model):
+    """Factor c of the front-steering entry c V / f of B, written out.
+
+    c = 1 + f^2 kappa^2 for the exact Jacobian of eqs. (18)-(19) (the
+    derivative of V tan(delta_f)/f at delta_f = atan(kappa f)); c = 1 in the
+    paper's eq. (33). Broadcasts over `curvature`.
+    """
+    kappa = np.asarray(curvature, dtype=float)
+    if model == "paper":
+        return np.ones_like(kappa)
+    return 1.0 + (wheelbase * kappa) ** 2

@@ -27,7 +27,7 @@ def test_lateral_acceleration_matches_finite_differences_of_trajectory(veh):
 
     def rhs(t, x):
         df, dr, _, _ = _steering(t)
-        return fws.global_frame_model(veh, speed).dynamics(t, x, [df, dr])
+        return fws.global_frame_model(veh, speed=speed).dynamics(t, x, [df, dr])
 
     h = 1e-3
     t = np.arange(0.0, 8.0 + h / 2, h)
@@ -41,7 +41,7 @@ def test_lateral_acceleration_matches_finite_differences_of_trajectory(veh):
     ay = (yg[2:] - 2 * yg[1:-1] + yg[:-2]) / h**2
     lat_fd = -ax * np.sin(psi[1:-1]) + ay * np.cos(psi[1:-1])
     df, dr, dfd, drd = _steering(t[1:-1])
-    lat = fws.lateral_acceleration(veh, speed, df, dr, dfd, drd)
+    lat = fws.lateral_acceleration(veh, df, dr, dfd, drd, speed=speed)
     assert np.max(np.abs(lat - lat_fd)) < 1e-4
     assert np.max(np.abs(lat)) > 1.0  # the check is not vacuous
 
@@ -53,10 +53,10 @@ def test_yaw_acceleration_is_derivative_of_yaw_rate(veh, rng):
         df, dr = rng.uniform(-1.2, 1.2), rng.uniform(-1, 1)
         dfd, drd = rng.uniform(-1, 1), rng.uniform(-1, 1)
         fd = (
-            fws.yaw_rate(veh, speed, df + h * dfd, dr + h * drd)
-            - fws.yaw_rate(veh, speed, df - h * dfd, dr - h * drd)
+            fws.yaw_rate(veh, df + h * dfd, dr + h * drd, speed=speed)
+            - fws.yaw_rate(veh, df - h * dfd, dr - h * drd, speed=speed)
         ) / (2 * h)
-        got = fws.yaw_acceleration(veh, speed, df, dr, dfd, drd)
+        got = fws.yaw_acceleration(veh, df, dr, dfd, drd, speed=speed)
         assert abs(got - fd) < 1e-6 * max(1.0, abs(fd))
 
 
@@ -65,13 +65,20 @@ def test_steady_turn_gives_centripetal_acceleration():
     veh = fws.Vehicle(2.5, 0.0)
     delta, speed = 0.2, 12.0
     radius = 2.5 / np.tan(delta)
-    got = fws.lateral_acceleration(veh, speed, delta, 0.0, 0.0, 0.0)
+    got = fws.lateral_acceleration(veh, delta, 0.0, 0.0, 0.0, speed=speed)
     assert abs(got - speed**2 / radius) < 1e-12
 
 
 def test_broadcasting(veh):
     df = np.linspace(-0.3, 0.3, 7)
-    out = fws.lateral_acceleration(veh, 5.0, df[:, None], 0.1, 0.0, np.zeros((1, 3)))
+    out = fws.lateral_acceleration(
+        veh, df[:, None], 0.1, 0.0, np.zeros((1, 3)), speed=5.0
+    )
     assert out.shape == (7, 3)
-    ref = [fws.lateral_acceleration(veh, 5.0, v, 0.1, 0.0, 0.0) for v in df]
+    ref = [fws.lateral_acceleration(veh, v, 0.1, 0.0, 0.0, speed=5.0) for v in df]
     np.testing.assert_allclose(out[:, 0], ref, rtol=1e-14)
+    # speed broadcasts too
+    speeds = np.array([-3.0, 2.0, 9.0])
+    out = fws.lateral_acceleration(veh, 0.2, 0.1, 0.3, -0.2, speed=speeds)
+    ref = [fws.lateral_acceleration(veh, 0.2, 0.1, 0.3, -0.2, speed=v) for v in speeds]
+    np.testing.assert_allclose(out, ref, rtol=1e-14)

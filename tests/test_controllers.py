@@ -18,12 +18,14 @@ finite = st.floats(-3.0, 3.0, allow_nan=False)
 @given(e=finite, theta=st.floats(-1, 1), kappa=st.floats(-0.2, 0.2), a=finite)
 def test_command_matches_paper_equations(e, theta, kappa, a):
     g = fws.SteeringGains(k1=0.3, k2=0.7, ratio=a)
-    df, dr = fws.steering_command(VEH, g, e, theta, kappa)
+    df, dr = fws.steering_command(VEH, g, e, theta, curvature=kappa)
     # eqs. (24)-(29) written out by hand
     fb_f = -0.3 * e - 0.7 * theta
     assert float(df) == pytest.approx(math.atan(kappa * 2.7) + fb_f, abs=1e-14)
     assert float(dr) == pytest.approx(-a * 0.3 * e - a * 0.7 * theta, abs=1e-14)
-    df0, dr0 = fws.steering_command(VEH, g, e, theta, kappa, feedforward=False)
+    df0, dr0 = fws.steering_command(
+        VEH, g, e, theta, curvature=kappa, feedforward=False
+    )
     assert float(df0) == pytest.approx(fb_f, abs=1e-14)
     assert float(dr0) == float(dr)
 
@@ -31,7 +33,7 @@ def test_command_matches_paper_equations(e, theta, kappa, a):
 def test_command_broadcasts_over_gains_and_errors():
     g = fws.SteeringGains(k1=np.array([0.1, 0.2, 0.3]), k2=0.5, ratio=-1.0)
     e = np.array([[1.0], [2.0]])
-    df, dr = fws.steering_command(VEH, g, e, 0.0, 0.0)
+    df, dr = fws.steering_command(VEH, g, e, 0.0)  # curvature defaults to 0
     assert df.shape == dr.shape == (2, 3)
     np.testing.assert_allclose(df, -np.outer([1.0, 2.0], [0.1, 0.2, 0.3]))
     np.testing.assert_allclose(dr, -df)
@@ -39,10 +41,10 @@ def test_command_broadcasts_over_gains_and_errors():
 
 def test_no_saturation_without_limits_and_clip_with_limits():
     g = fws.SteeringGains(k1=1.0, k2=0.0, ratio=0.5)
-    df, dr = fws.steering_command(VEH, g, -1.4, 0.0, 0.0)
+    df, dr = fws.steering_command(VEH, g, -1.4, 0.0, curvature=0.0)
     assert (float(df), float(dr)) == (1.4, 0.7)  # beyond any plausible limit
     lim = fws.Vehicle(2.7, 1.35, max_steer_front=0.5, max_steer_rear=0.2)
-    df, dr = fws.steering_command(lim, g, np.array([-1.4, 1.4, 0.1]), 0.0, 0.0)
+    df, dr = fws.steering_command(lim, g, np.array([-1.4, 1.4, 0.1]), 0.0)
     np.testing.assert_array_equal(df, [0.5, -0.5, -0.1])
     np.testing.assert_array_equal(dr, [0.2, -0.2, -0.05])
 
@@ -55,6 +57,13 @@ def _signals(t):
     return e, th, kap
 
 
+def _command(vehicle, g, t, feedforward=True):
+    e, th, kap = _signals(t)
+    return fws.steering_command(
+        vehicle, g, e, th, curvature=kap, feedforward=feedforward
+    )
+
+
 @pytest.mark.parametrize("feedforward", [True, False])
 def test_command_rate_matches_finite_differences(feedforward):
     g = fws.SteeringGains(k1=0.4, k2=0.9, ratio=-0.6)
@@ -65,10 +74,18 @@ def test_command_rate_matches_finite_differences(feedforward):
     th_rate = (_signals(t + h)[1] - _signals(t - h)[1]) / (2 * h)
     kap_rate = (_signals(t + h)[2] - _signals(t - h)[2]) / (2 * h)
     rf, rr = fws.steering_command_rate(
-        VEH, g, e, th, kap, e_rate, th_rate, kap_rate, feedforward
+        VEH,
+        g,
+        e,
+        th,
+        e_rate,
+        th_rate,
+        curvature=kap,
+        curvature_rate=kap_rate,
+        feedforward=feedforward,
     )
-    plus = fws.steering_command(VEH, g, *_signals(t + h), feedforward)
-    minus = fws.steering_command(VEH, g, *_signals(t - h), feedforward)
+    plus = _command(VEH, g, t + h, feedforward)
+    minus = _command(VEH, g, t - h, feedforward)
     np.testing.assert_allclose(rf, (plus[0] - minus[0]) / (2 * h), atol=1e-8)
     np.testing.assert_allclose(rr, (plus[1] - minus[1]) / (2 * h), atol=1e-8)
 
@@ -78,27 +95,21 @@ def test_command_rate_is_zero_where_saturated():
     g = fws.SteeringGains(k1=0.4, k2=0.9, ratio=-0.6)
     t = np.linspace(0.0, 10.0, 401)
     h = 1e-6
-    rf, rr = fws.steering_command_rate(
-        lim,
-        g,
-        *_signals(t),
-        *[
-            (a - b) / (2 * h)
-            for a, b in zip(_signals(t + h), _signals(t - h), strict=True)
-        ],
+    e, th, kap = _signals(t)
+    e_rate, th_rate, kap_rate = (
+        (a - b) / (2 * h) for a, b in zip(_signals(t + h), _signals(t - h), strict=True)
     )
-    plus = fws.steering_command(lim, g, *_signals(t + h))
-    minus = fws.steering_command(lim, g, *_signals(t - h))
+    rf, rr = fws.steering_command_rate(
+        lim, g, e, th, e_rate, th_rate, curvature=kap, curvature_rate=kap_rate
+    )
+    plus = _command(lim, g, t + h)
+    minus = _command(lim, g, t - h)
     fd_f = (plus[0] - minus[0]) / (2 * h)
     fd_r = (plus[1] - minus[1]) / (2 * h)
     # Away from the switching instants the derivative of the clipped signal
     # is the finite difference; both channels do saturate somewhere.
-    smooth_f = (
-        np.abs(np.abs(fws.steering_command(lim, g, *_signals(t))[0]) - 0.3) > 1e-4
-    )
-    smooth_r = (
-        np.abs(np.abs(fws.steering_command(lim, g, *_signals(t))[1]) - 0.1) > 1e-4
-    )
+    smooth_f = np.abs(np.abs(_command(lim, g, t)[0]) - 0.3) > 1e-4
+    smooth_r = np.abs(np.abs(_command(lim, g, t)[1]) - 0.1) > 1e-4
     assert np.any(rf == 0.0) and np.any(rr == 0.0)
     np.testing.assert_allclose(rf[smooth_f], fd_f[smooth_f], atol=1e-6)
     np.testing.assert_allclose(rr[smooth_r], fd_r[smooth_r], atol=1e-6)
@@ -111,18 +122,29 @@ def test_blocks_wrap_the_same_law_and_accept_params():
     fb = fws.feedback_controller(VEH, g)
     assert ff.nstates == fb.nstates == 0
     assert ff.input_labels == ["e", "theta", "curvature"]
+    # eqs. (24)-(29) by hand: feedback -k1 e - k2 theta, rear = a * feedback
+    fb_ref = -0.2 * u[0] - 0.6 * u[1]
+    ff_ref = math.atan(2.7 * u[2])
     np.testing.assert_allclose(
-        ff.output(0.0, [], u), fws.steering_command(VEH, g, *u), atol=1e-15
+        ff.output(0.0, [], u), [ff_ref + fb_ref, 0.4 * fb_ref], atol=1e-15
     )
     np.testing.assert_allclose(
-        fb.output(0.0, [], u),
-        fws.steering_command(VEH, g, *u, feedforward=False),
+        ff.output(0.0, [], u),
+        fws.steering_command(VEH, g, u[0], u[1], curvature=u[2]),
         atol=1e-15,
     )
+    np.testing.assert_allclose(
+        fb.output(0.0, [], u), [fb_ref, 0.4 * fb_ref], atol=1e-15
+    )
+    np.testing.assert_allclose(
+        fws.path_tracking_controller(VEH, g, feedforward=False).output(0.0, [], u),
+        fb.output(0.0, [], u),
+        atol=0,
+    )
+    assert fws.path_tracking_controller(VEH, g, name="ctl").name == "ctl"
     # per-call parameters, as ct.input_output_response(params=...) passes them
-    other = fws.SteeringGains(k1=1.0, k2=0.0, ratio=0.0)
     out = ff.output(0.0, [], u, params={"k1": 1.0, "k2": 0.0, "ratio": 0.0})
-    np.testing.assert_allclose(out, fws.steering_command(VEH, other, *u), atol=1e-15)
+    np.testing.assert_allclose(out, [ff_ref - 1.0 * u[0], 0.0], atol=1e-15)
 
 
 def test_block_rejects_wrong_gains():
@@ -134,7 +156,9 @@ def test_block_rejects_wrong_gains():
 
 def test_actuator_rate_clips_each_channel():
     veh = fws.Vehicle(2.7, 1.35, max_steer_rate_front=0.5)
-    rf, rr = actuator_rate(veh, np.array([1.0, 1.0]), np.array([0.0, 0.0]), 0.1)
+    rf, rr = actuator_rate(
+        veh, np.array([1.0, 1.0]), np.array([0.0, 0.0]), time_constant=0.1
+    )
     assert (float(rf), float(rr)) == (0.5, 10.0)  # rear has no limit
 
 

@@ -1,9 +1,11 @@
 """Closed-form double-root gains against control.acker/place and sympy."""
 
+import math
+
 import control as ct
 import numpy as np
 import pytest
-from conftest import lambdify
+from conftest import gain_factor, lambdify
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
@@ -18,9 +20,13 @@ speeds = st.floats(1.0, 40.0)
 poles = st.floats(-5.0, -0.1)
 
 
+def _plant(speed, curvature, model):
+    return fws.LateralPlant(VEH, speed=speed, curvature=curvature, model=model)
+
+
 def _single_input(veh, speed, curvature, ratio, model):
     """(A, b) with b = B [1, a]^T: the structured loop is single-input."""
-    lin = fws.linearize(veh, speed, curvature, model=model)
+    lin = fws.linearize(veh, speed=speed, curvature=curvature, model=model)
     return lin.A, lin.B @ np.array([[1.0], [ratio]])
 
 
@@ -31,14 +37,14 @@ def _well_posed(veh, speed, curvature, ratio, model):
     it the gains grow without bound and every method (acker included) loses
     digits in proportion, so the comparisons use designs where it is not tiny.
     """
-    c = fws.input_gain_factor(veh, curvature, model)
+    c = gain_factor(veh.wheelbase, curvature, model)
     return (ratio * veh.wheelbase * curvature) ** 2 + (c - ratio) ** 2
 
 
 @given(model=models, speed=speeds, curvature=curvatures, ratio=ratios, pole=poles)
 def test_gains_equal_acker(model, speed, curvature, ratio, pole):
     assume(_well_posed(VEH, speed, curvature, ratio, model) > 1e-4)
-    g = fws.double_root_gains(VEH, speed, curvature, ratio, pole, model=model)
+    g = fws.double_root_gains(_plant(speed, curvature, model), ratio=ratio, pole=pole)
     A, b = _single_input(VEH, speed, curvature, ratio, model)
     ref = np.asarray(ct.acker(A, b, [pole, pole])).ravel()
     got = np.array([g.k1, g.k2])
@@ -54,7 +60,9 @@ def test_gains_equal_place_with_split_pole(model, speed, curvature, ratio, pole)
     # eps/1e-6 * cond digits: over this domain its error reaches ~1.5e-5
     # relative (acker, above, agrees to 1e-14). Hence the looser bound here.
     assume(_well_posed(VEH, speed, curvature, ratio, model) > 1e-4)
-    g = fws.double_root_gains(VEH, speed, curvature, ratio, pole, model=model)
+    g = fws.double_root_gains(
+        VEH, speed=speed, curvature=curvature, model=model, ratio=ratio, pole=pole
+    )
     A, b = _single_input(VEH, speed, curvature, ratio, model)
     ref = np.asarray(ct.place(A, b, [pole * (1 + 1e-6), pole * (1 - 1e-6)])).ravel()
     got = np.array([g.k1, g.k2])
@@ -64,8 +72,9 @@ def test_gains_equal_place_with_split_pole(model, speed, curvature, ratio, pole)
 @given(model=models, speed=speeds, curvature=curvatures, ratio=ratios, pole=poles)
 def test_closed_loop_polynomial_is_double_root(model, speed, curvature, ratio, pole):
     assume(_well_posed(VEH, speed, curvature, ratio, model) > 1e-4)
-    g = fws.double_root_gains(VEH, speed, curvature, ratio, pole, model=model)
-    poly = fws.characteristic_polynomial(VEH, speed, curvature, g, model=model)
+    plant = _plant(speed, curvature, model)
+    g = fws.double_root_gains(plant, ratio=ratio, pole=pole)
+    poly = fws.characteristic_polynomial(plant, g)
     target = np.array([1.0, -2 * pole, pole**2])
     assert np.max(np.abs(poly - target)) <= 1e-9 * np.max(np.abs(target))
 
@@ -77,7 +86,7 @@ def test_gains_equal_sympy_solution(rng, model):
     for _ in range(100):
         V, k = rng.uniform(1, 40) * rng.choice([-1, 1]), rng.uniform(-0.3, 0.3)
         a, lam = rng.uniform(-2, 2), rng.uniform(-5, -0.1)
-        g = fws.double_root_gains(VEH, V, k, a, lam, model=model)
+        g = fws.double_root_gains(_plant(V, k, model), ratio=a, pole=lam)
         args = (V, VEH.wheelbase, k, a, 0, 0, lam)
         np.testing.assert_allclose([g.k1, g.k2], [f1(*args), f2(*args)], rtol=1e-10)
 
@@ -85,14 +94,13 @@ def test_gains_equal_sympy_solution(rng, model):
 def test_front_wheel_steering_is_regular_at_ratio_zero():
     """No special case at a = 0: the gains are continuous through it."""
     for model in ("exact", "paper"):
-        at0 = fws.double_root_gains(VEH, 5.0, 0.1, 0.0, -1.0, model=model)
-        eps = fws.double_root_gains(
-            VEH, 5.0, 0.1, np.array([-1e-9, 1e-9]), -1.0, model=model
-        )
+        plant = _plant(5.0, 0.1, model)
+        at0 = fws.double_root_gains(plant, ratio=0.0, pole=-1.0)
+        eps = fws.double_root_gains(plant, ratio=np.array([-1e-9, 1e-9]), pole=-1.0)
         np.testing.assert_allclose(eps.k1, at0.k1, rtol=1e-7)
         np.testing.assert_allclose(eps.k2, at0.k2, rtol=1e-7)
     # paper eq. (44), hand-evaluated: k1 = f(lam^2/V^2 - k^2), k2 = -2 lam f / V
-    g = fws.double_root_gains(VEH, 5.0, 0.1, 0.0, -1.0, model="paper")
+    g = fws.double_root_gains(_plant(5.0, 0.1, "paper"), ratio=0.0, pole=-1.0)
     assert g.k1 == pytest.approx(2.7 * (1 / 25 - 0.01), rel=1e-14)
     assert g.k2 == pytest.approx(2 * 2.7 / 5, rel=1e-14)
 
@@ -101,16 +109,23 @@ def test_front_wheel_steering_is_regular_at_ratio_zero():
 def test_uncontrollable_design_is_refused(model):
     A, b = _single_input(VEH, 5.0, 0.0, 1.0, model)
     assert np.linalg.matrix_rank(ct.ctrb(A, b)) == 1  # the reason
+    plant = _plant(5.0, 0.0, model)
     with pytest.raises(fws.UncontrollableError, match="uncontrollable"):
-        fws.double_root_gains(VEH, 5.0, 0.0, 1.0, -1.0, model=model)
+        fws.double_root_gains(plant, ratio=1.0, pole=-1.0)
     with pytest.raises(fws.UncontrollableError):
-        fws.double_root_gains(VEH, 5.0, 0.0, np.array([0.0, 1.0]), -1.0, model=model)
+        fws.double_root_gains(plant, ratio=np.array([0.0, 1.0]), pole=-1.0)
+    # it is a ValueError, and lives in fws_control.exceptions
+    from fws_control.exceptions import UncontrollableError
+
+    assert UncontrollableError is fws.UncontrollableError
+    assert issubclass(UncontrollableError, ValueError)
 
 
 def test_ratio_one_on_curve_is_fine():
     for model in ("exact", "paper"):
-        g = fws.double_root_gains(VEH, 5.0, 0.1, 1.0, -1.0, model=model)
-        cl = fws.closed_loop(VEH, 5.0, 0.1, g, model=model)
+        plant = _plant(5.0, 0.1, model)
+        g = fws.double_root_gains(plant, ratio=1.0, pole=-1.0)
+        cl = fws.closed_loop(plant, g)
         np.testing.assert_allclose(cl.poles(), [-1.0, -1.0], atol=1e-6)
 
 
@@ -141,18 +156,113 @@ def test_bad_arguments(kwargs, name):
 
 
 def test_reversing_design_places_the_double_root():
-    g = fws.double_root_gains(VEH, -3.0, 0.05, -0.5, -0.8)
-    cl = fws.closed_loop(VEH, -3.0, 0.05, g)
+    plant = fws.LateralPlant(VEH, speed=-3.0, curvature=0.05)
+    g = fws.double_root_gains(plant, ratio=-0.5, pole=-0.8)
+    cl = fws.closed_loop(plant, g)
     np.testing.assert_allclose(cl.poles(), [-0.8, -0.8], atol=1e-6)
 
 
 def test_broadcast_equals_scalar_calls():
     ratios = np.linspace(-1.5, 1.5, 13)
     poles = np.array([[-1.0], [-2.0]])
-    g = fws.double_root_gains(VEH, 20.0, 0.01, ratios, poles)
+    plant = fws.LateralPlant(VEH, speed=20.0, curvature=0.01)
+    g = fws.double_root_gains(plant, ratio=ratios, pole=poles)
     assert g.k1.shape == (2, 13) and g.ratio.shape == (2, 13)
     for i, lam in enumerate(poles[:, 0]):
         for j, a in enumerate(ratios):
-            s = fws.double_root_gains(VEH, 20.0, 0.01, a, lam)
+            s = fws.double_root_gains(plant, ratio=a, pole=lam)
             assert g.k1[i, j] == pytest.approx(s.k1, rel=1e-14)
             assert g.k2[i, j] == pytest.approx(s.k2, rel=1e-14)
+
+
+@pytest.mark.parametrize("model", ["exact", "paper"])
+def test_array_operating_points_equal_scalar_calls(model):
+    """A LateralPlant holding arrays of speed and curvature broadcasts."""
+    speeds = np.array([-10.0, -2.0, 3.0, 5.0, 20.0])[:, None]  # (5, 1)
+    kappas = np.array([0.0, 0.01, 0.1, -0.2])  # (4,)
+    ratios = np.array([[-1.0], [0.5]])[:, :, None]  # (2, 1, 1)
+    plant = fws.LateralPlant(VEH, speed=speeds, curvature=kappas, model=model)
+    assert plant.shape == (5, 4)
+    g = fws.double_root_gains(plant, ratio=ratios, pole=-1.5)
+    assert g.k1.shape == g.k2.shape == g.ratio.shape == (2, 5, 4)
+    for r in range(2):
+        for i in range(5):
+            for j in range(4):
+                one = fws.LateralPlant(
+                    VEH, speed=speeds[i, 0], curvature=kappas[j], model=model
+                )
+                s = fws.double_root_gains(one, ratio=ratios[r, 0, 0], pole=-1.5)
+                assert g.k1[r, i, j] == pytest.approx(s.k1, rel=1e-13, abs=1e-15)
+                assert g.k2[r, i, j] == pytest.approx(s.k2, rel=1e-13, abs=1e-15)
+                assert g.ratio[r, i, j] == ratios[r, 0, 0]
+    # ratio = 1 on the straight path inside an array is refused as a whole
+    with pytest.raises(fws.UncontrollableError):
+        fws.double_root_gains(plant, ratio=1.0, pole=-1.0)
+
+
+# --------------------------------------------------------------------------
+# SteeringGains.K, K_paper, from_K against control.acker / control.place
+# --------------------------------------------------------------------------
+
+
+def _nonlinear_AB(speed, curvature):
+    """(A, B) of the exact model from ct.linearize of the path-frame model."""
+    nl = fws.path_frame_model(VEH, speed=speed, curvature=curvature)
+    u0 = [math.atan(curvature * VEH.wheelbase), 0.0]
+    lin = ct.linearize(nl, np.zeros(3), u0, eps=1e-8)
+    return lin.A[1:, 1:], lin.B[1:, :]
+
+
+@given(speed=speeds, curvature=curvatures, ratio=ratios, pole=poles)
+def test_K_and_from_K_against_acker(speed, curvature, ratio, pole):
+    assume(_well_posed(VEH, speed, curvature, ratio, "exact") > 1e-2)
+    A, B = _nonlinear_AB(speed, curvature)
+    b = B @ np.array([1.0, ratio])
+    row = np.ravel(ct.acker(A, b[:, None], [pole, pole]))
+    # 2 x 2 python-control K of both inputs: rows delta_f, delta_r = a*delta_f
+    K = np.outer([1.0, ratio], row)
+    g = fws.SteeringGains.from_K(K)
+    assert (g.k1, g.k2) == pytest.approx((row[0], row[1]), rel=1e-12)
+    assert g.ratio == pytest.approx(ratio, rel=1e-12, abs=1e-15)
+    np.testing.assert_allclose(g.K, K, rtol=1e-12, atol=1e-15)
+    np.testing.assert_array_equal(g.K_paper, -g.K)
+    # A single row needs the ratio it was designed for
+    h = fws.SteeringGains.from_K(row, ratio=ratio)
+    assert (h.k1, h.k2, h.ratio) == (row[0], row[1], ratio)
+    # u = -K y closes the loop A - B K: the double root (ct.linearize is a
+    # forward difference, ~1e-7 relative; a double root moves by its sqrt).
+    poly = np.poly(A - B @ g.K)
+    np.testing.assert_allclose(
+        poly, [1.0, -2 * pole, pole**2], atol=1e-5 * (1 + pole**2)
+    )
+    # and the library's own design is this K up to the linearisation error
+    d = fws.double_root_gains(
+        VEH, speed=speed, curvature=curvature, ratio=ratio, pole=pole
+    )
+    np.testing.assert_allclose(d.K, K, rtol=1e-4, atol=1e-6)
+
+
+def test_K_and_from_K_against_place():
+    """ct.place on the two-input pair returns a K the from_K check refuses
+    unless it is rank one; on the single-input pair it round-trips."""
+    plant = fws.LateralPlant(VEH, speed=5.0, curvature=0.1)
+    A, B = (np.asarray(m) for m in (plant.linearize().A, plant.linearize().B))
+    for a in (-1.0, 0.0, 0.5):
+        b = B @ np.array([1.0, a])
+        row = np.ravel(ct.place(A, b[:, None], [-1.0, -2.0]))
+        g = fws.SteeringGains.from_K(np.outer([1.0, a], row))
+        np.testing.assert_allclose(
+            np.sort(np.linalg.eigvals(A - B @ g.K).real), [-2.0, -1.0], atol=1e-9
+        )
+        np.testing.assert_allclose(
+            np.sort(fws.closed_loop(plant, g).poles().real), [-2.0, -1.0], atol=1e-9
+        )
+    # full two-input placement: generally not of the form [[k1, k2], [a k1, a k2]]
+    K2 = np.asarray(ct.place(A, B, [-1.0, -2.0]))
+    assert np.linalg.matrix_rank(K2) == 2
+    with pytest.raises(ValueError, match="rank-one"):
+        fws.SteeringGains.from_K(K2)
+    with pytest.raises(ValueError, match="ratio="):
+        fws.SteeringGains.from_K([0.1, 0.2])
+    with pytest.raises(ValueError, match="ratio="):
+        fws.SteeringGains.from_K([[0.1, 0.2], [0.1, 0.2]], ratio=1.0)

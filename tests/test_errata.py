@@ -29,7 +29,7 @@ def _arc_errors(x, y, psi, k):
 
 def _drive_on_arc(speed, k, delta_f, duration=3.0):
     """Global-frame motion from (0, -1, 0.1) with constant steering."""
-    glob = fws.global_frame_model(VEH, speed)
+    glob = fws.global_frame_model(VEH, speed=speed)
     t = np.linspace(0.0, duration, 301)
     sol = solve_ivp(
         lambda t, x: glob.dynamics(t, x, [delta_f, 0.0]),
@@ -48,7 +48,7 @@ def test_erratum_1_sign_of_curvature_term_eq16():
     t, (s, e, theta) = _drive_on_arc(speed, k, delta)
     theta_dot_geo = np.gradient(theta, t, edge_order=2)
     s_dot = speed * np.cos(theta) / (1 - k * e)
-    psi_dot = fws.yaw_rate(VEH, speed, delta, 0.0)
+    psi_dot = fws.yaw_rate(VEH, delta, 0.0, speed=speed)
     corrected = psi_dot - k * s_dot
     printed = psi_dot + k * s_dot
     assert np.max(np.abs(theta_dot_geo - corrected)[5:-5]) < 1e-5
@@ -68,8 +68,8 @@ def test_erratum_2_missing_speed_in_eq17():
 
 def _nonlinear_closed_loop_poles(speed, k, gains):
     """Poles of the *nonlinear* path-frame closed loop, linearised numerically."""
-    plant = fws.path_frame_model(VEH, speed, k)
-    ff = fws.feedforward_steering(VEH, k)
+    plant = fws.path_frame_model(VEH, speed=speed, curvature=k)
+    ff = fws.feedforward_steering(VEH, curvature=k)
 
     def rhs(t, x, u, params):
         d_fb, r_fb = gains.steering(x[1], x[2])
@@ -84,8 +84,10 @@ def _nonlinear_closed_loop_poles(speed, k, gains):
 def test_erratum_3_paper_gains_miss_the_double_root_on_a_curve(ratio):
     """V = 5 m/s, kappa = 0.1: paper gains for lam0 = -1 do not give -1, -1."""
     speed, k, lam0 = 5.0, 0.1, -1.0
-    paper = fws.double_root_gains(VEH, speed, k, ratio, lam0, model="paper")
-    exact = fws.double_root_gains(VEH, speed, k, ratio, lam0, model="exact")
+    exact_plant = fws.LateralPlant(VEH, speed=speed, curvature=k, model="exact")
+    paper_plant = fws.LateralPlant(VEH, speed=speed, curvature=k, model="paper")
+    paper = fws.double_root_gains(paper_plant, ratio=ratio, pole=lam0)
+    exact = fws.double_root_gains(exact_plant, ratio=ratio, pole=lam0)
     true_paper = _nonlinear_closed_loop_poles(speed, k, paper)
     true_exact = _nonlinear_closed_loop_poles(speed, k, exact)
     # the exact design lands on the double root of the nonlinear model ...
@@ -93,18 +95,18 @@ def test_erratum_3_paper_gains_miss_the_double_root_on_a_curve(ratio):
     # ... the paper's misses it by >= 0.2 1/s (a real or imaginary split)
     assert np.max(np.abs(true_paper - lam0)) > 0.2
     # and the exact linearisation predicts where the paper's poles really are
-    predicted = np.sort_complex(fws.closed_loop(VEH, speed, k, paper).poles())
+    predicted = np.sort_complex(fws.closed_loop(exact_plant, paper).poles())
     np.testing.assert_allclose(true_paper, predicted, atol=1e-5)
 
 
 def test_erratum_4_ratio_one_on_curve_still_needs_k2_below_one():
     """Paper model, a = 1, kappa != 0: p0 = V^2 kappa^2 (1 - k2), so k2 < 1."""
-    speed, k = 5.0, 0.1
+    plant = fws.LateralPlant(VEH, speed=5.0, curvature=0.1, model="paper")
     for k2, expected in ((0.9, True), (1.1, False)):
         g = fws.SteeringGains(0.5, k2, 1.0)
-        poles = fws.closed_loop(VEH, speed, k, g, model="paper").poles()
+        poles = fws.closed_loop(plant, g).poles()
         assert (np.max(poles.real) < 0) == expected
-        assert fws.is_stable(VEH, speed, k, 0.5, k2, 1.0, model="paper") == expected
+        assert fws.is_stable(plant, g) == expected
 
 
 def test_erratum_5_ratio_one_straight_is_uncontrollable_and_eq42_is_wrong():
@@ -119,7 +121,7 @@ def test_erratum_5_ratio_one_straight_is_uncontrollable_and_eq42_is_wrong():
     assert sp.simplify(p1.subs(k1, printed_k1) + 2 * lam0) != 0
     assert sp.solve(sp.Eq(p1, -2 * lam0), k1) == [-2 * lam0 / V]
     with pytest.raises(fws.UncontrollableError):
-        fws.double_root_gains(VEH, 5.0, 0.0, 1.0, -1.0)
+        fws.double_root_gains(VEH, speed=5.0, curvature=0.0, ratio=1.0, pole=-1.0)
 
 
 def test_erratum_6_no_singularity_at_ratio_zero():
@@ -131,30 +133,39 @@ def test_erratum_6_no_singularity_at_ratio_zero():
         f_k1(5.0, 2.7, 0.1, 0.0, 0, 0, -1.0)
     # near a = 0 the printed form cancels two terms of size 1/a
     near = f_k1(5.0, 2.7, 0.1, 1e-12, 0, 0, -1.0)
-    g_near = fws.double_root_gains(VEH, 5.0, 0.1, 1e-12, -1.0, model="paper")
+    paper = fws.LateralPlant(VEH, speed=5.0, curvature=0.1, model="paper")
+    g_near = fws.double_root_gains(paper, ratio=1e-12, pole=-1.0)
     assert abs(near - g_near.k1) > 1e-6 * abs(g_near.k1)
-    g0 = fws.double_root_gains(VEH, 5.0, 0.1, 0.0, -1.0, model="paper")
+    g0 = fws.double_root_gains(paper, ratio=0.0, pole=-1.0)
     assert np.isfinite(g0.k1)
+    # and it is the limit of the regular solution: eq. (44), hand-evaluated
+    assert g0.k1 == pytest.approx(2.7 * (1 / 25 - 0.01), rel=1e-14)
+    assert g_near.k1 == pytest.approx(g0.k1, rel=1e-9)
     # the printed formula agrees away from a = 0 (where it is well defined)
-    g = fws.double_root_gains(VEH, 5.0, 0.1, 0.3, -1.0, model="paper")
+    g = fws.double_root_gains(paper, ratio=0.3, pole=-1.0)
     assert g.k1 == pytest.approx(f_k1(5.0, 2.7, 0.1, 0.3, 0, 0, -1.0), rel=1e-12)
 
 
 def test_erratum_7_reversing_flips_condition_35_only():
     """V < 0: p1 changes sign with V, p0 carries V^2 and does not."""
     k, a, k1, k2 = 0.05, -0.5, 0.3, 0.6
-    fwd = fws.characteristic_coefficients(VEH, 5.0, k, a)
-    rev = fws.characteristic_coefficients(VEH, -5.0, k, a)
-    assert rev.p1(k1, k2) == pytest.approx(-fwd.p1(k1, k2))
-    assert rev.p0(k1, k2) == pytest.approx(fwd.p0(k1, k2))
+    forward = fws.LateralPlant(VEH, speed=5.0, curvature=k)
+    reverse = fws.LateralPlant(VEH, speed=-5.0, curvature=k)
+    fwd = fws.characteristic_coefficients(forward, ratio=a)
+    rev = fws.characteristic_coefficients(reverse, ratio=a)
+    _, p1_f, p0_f = fwd.coefficients(k1, k2)
+    _, p1_r, p0_r = rev.coefficients(k1, k2)
+    assert p1_r == pytest.approx(-p1_f)
+    assert p0_r == pytest.approx(p0_f)
     # hence the forward-stable design is unstable in reverse (eigenvalues)
     g = fws.SteeringGains(k1, k2, a)
-    assert np.max(fws.closed_loop(VEH, 5.0, k, g).poles().real) < 0
-    assert np.max(fws.closed_loop(VEH, -5.0, k, g).poles().real) > 0
+    assert np.max(fws.closed_loop(forward, g).poles().real) < 0
+    assert np.max(fws.closed_loop(reverse, g).poles().real) > 0
     # "both conditions flip" would make p0 < 0 the reverse requirement: a
     # design with p1 < 0 and p0 > 0 (forward form of 36) is stable in reverse
     k1r, k2r = 0.3, -0.6
-    assert rev.p1(k1r, k2r) > 0 and rev.p0(k1r, k2r) > 0
+    _, p1_r, p0_r = rev.coefficients(k1r, k2r)
+    assert p1_r > 0 and p0_r > 0
     g_rev = fws.SteeringGains(k1r, k2r, a)
-    assert np.max(fws.closed_loop(VEH, -5.0, k, g_rev).poles().real) < 0
-    assert fws.is_stable(VEH, -5.0, k, k1r, k2r, a)
+    assert np.max(fws.closed_loop(reverse, g_rev).poles().real) < 0
+    assert fws.is_stable(reverse, g_rev)

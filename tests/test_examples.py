@@ -47,7 +47,7 @@ def run_example(name: str, tmp_path: Path) -> str:
 
 def numeric_jacobians(speed: float, curvature: float):
     """(A, B) of (e, theta) by python-control's finite-difference linearize."""
-    sys_nl = fws.path_frame_model(VEH, speed, curvature)
+    sys_nl = fws.path_frame_model(VEH, speed=speed, curvature=curvature)
     delta_ff = math.atan(curvature * VEH.wheelbase)  # paper eq. (26)
     lin = ct.linearize(sys_nl, [0.0, 0.0, 0.0], [delta_ff, 0.0])
     return lin.A[1:, 1:], lin.B[1:, :]
@@ -66,6 +66,7 @@ def floats_after(label: str, text: str) -> list[float]:
 
 def test_every_example_is_covered():
     tested = {
+        "plot_any_plant.py",
         "plot_fws_vs_4ws.py",
         "plot_quick_start.py",
         "plot_ratio_sweep.py",
@@ -136,6 +137,50 @@ def test_root_loci(tmp_path):
     true = np.sort(np.linalg.eigvals(closed_loop_matrix(A, B, pk1, pk2, 0.5)).real)
     printed = np.sort(floats_after("put the true poles at", out))
     assert printed == pytest.approx(true, abs=2e-3)
+
+
+def test_any_plant(tmp_path):
+    out = run_example("plot_any_plant.py", tmp_path)
+    # Run as a script on the Agg backend, the example saves its figure.
+    assert (tmp_path / "any_plant_charts.png").stat().st_size > 10_000
+    # The 4-state plant built here from the numerical linearisation and the
+    # two lags written out by hand: x = (e, theta, delta_f_act, delta_r_act),
+    # commands u = [1, a] (-k1 e - k2 theta).
+    A, B = numeric_jacobians(5.0, 0.1)
+    tau_f, tau_r, a = 0.1, 0.2, -1.0
+    A4 = np.zeros((4, 4))
+    A4[:2, :2], A4[:2, 2:] = A, B
+    A4[2, 2], A4[3, 3] = -1.0 / tau_f, -1.0 / tau_r
+    b4 = np.array([0.0, 0.0, 1.0 / tau_f, a / tau_r])
+
+    def eigs(k1, k2):
+        row = np.stack([k1, k2, np.zeros_like(k1), np.zeros_like(k1)], axis=-1)
+        return np.linalg.eigvals(A4 - b4[:, None] * row[..., None, :])
+
+    # Brute force on a 201 x 201 subgrid of the example's 401 x 401 grid.
+    g = np.linspace(-1.0, 1.0, 201)
+    K1, K2 = np.meshgrid(g, g)
+    frac4 = np.mean(np.all(eigs(K1, K2).real < 0, axis=-1))
+    M2 = A - (B @ [1.0, a])[:, None] * np.stack([K1, K2], axis=-1)[..., None, :]
+    frac2 = np.mean(np.all(np.linalg.eigvals(M2).real < 0, axis=-1))
+    assert floats_after("stable fraction of the grid, 4 states:", out)[0] == (
+        pytest.approx(frac4, abs=5e-3)
+    )
+    assert floats_after("stable fraction of the grid, 2 states:", out)[0] == (
+        pytest.approx(frac2, abs=5e-3)
+    )
+    assert frac4 < frac2  # the lags shrink the stable set
+    # The printed 2-state design, with the lags: stable, poles as printed.
+    k1, k2 = floats_after("2-state design for lambda0 = -1: k1 =", out)[:2]
+    poles = eigs(np.array(k1), np.array(k2))
+    assert np.all(poles.real < 0)
+    assert "stable with the lags: True" in out
+    # The printed boundary point has closed-loop eigenvalues +-j omega.
+    omega, bk1, bk2 = floats_after("boundary at omega =", out)[:3]
+    lam = eigs(np.array(bk1), np.array(bk2))
+    j = np.argmax(lam.real)
+    assert abs(lam[j].real) < 1e-3
+    assert abs(abs(lam[j].imag) - omega) < 1e-2
 
 
 def test_fws_vs_4ws(tmp_path):

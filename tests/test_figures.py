@@ -2,12 +2,16 @@
 
 import re
 
+import control as ct
 import matplotlib.pyplot as plt
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 
 import fws_control as fws
-from fws_control.figures import FIGURES
+from fws_control.paper import FIGURES, gains_table, make_figure, reproduce
+from fws_control.paper.data import PAPER_VEHICLE as DATA_VEHICLE
+from fws_control.paper.figures import plot_root_loci
 from fws_control.paths import Arc, Straight
 
 PNG = b"\x89PNG\r\n\x1a\n"
@@ -29,9 +33,7 @@ def _rows(table):
 
 
 def test_gains_table_straight_rows_match_eq41():
-    table = fws.gains_table(
-        ratios=[-1.5, -0.5, 0.5, 1.0], cases=[(5.0, 0.0), (20.0, 0.0)]
-    )
+    table = gains_table(ratios=[-1.5, -0.5, 0.5, 1.0], cases=[(5.0, 0.0), (20.0, 0.0)])
     rows = _rows(table)
     assert len(rows) == 8
     for row in rows:
@@ -47,7 +49,7 @@ def test_gains_table_straight_rows_match_eq41():
 
 
 def test_gains_table_curved_row_poles():
-    (row,) = _rows(fws.gains_table(ratios=[0.0], cases=[(5.0, 0.1)]))
+    (row,) = _rows(gains_table(ratios=[0.0], cases=[(5.0, 0.1)]))
     # Paper eq. (44) for a = 0; then the exact characteristic polynomial
     # lambda^2 + (V c k2/f) lambda + V^2 (c k1/f + kappa^2), c = 1 + f^2 kappa^2.
     V, kap = 5.0, 0.1
@@ -63,7 +65,7 @@ def test_gains_table_curved_row_poles():
 
 @pytest.mark.parametrize("name", sorted(FIGURES))
 def test_every_figure_draws(name):
-    fig = fws.make_figure(name, quick=True)
+    fig = make_figure(name, quick=True)
     assert len(fig.axes) >= 1
     for ax in fig.axes:
         if ax.has_data():
@@ -73,13 +75,13 @@ def test_every_figure_draws(name):
 
 def test_make_figure_bad_name():
     with pytest.raises(ValueError, match="name must be one of"):
-        fws.make_figure("fig1")
+        make_figure("fig1")
     with pytest.raises(ValueError, match="model"):
-        fws.make_figure("fig2", model="linear")
+        make_figure("fig2", model="linear")
 
 
 def test_reproduce_subset_writes_pngs_and_summary(tmp_path):
-    res = fws.reproduce(
+    res = reproduce(
         tmp_path / "out",
         quick=True,
         progress=False,
@@ -95,19 +97,26 @@ def test_reproduce_subset_writes_pngs_and_summary(tmp_path):
     k1, k2 = _eq41(5.0, -1.0)
     assert re.search(rf"\| 5 \| 0 \| -1 \| {k1:.5f} \| {k2:.5f} \|", text)
     with pytest.raises(ValueError, match="names"):
-        fws.reproduce(tmp_path / "x", names=["fig99"], progress=False)
+        reproduce(tmp_path / "x", names=["fig99"], progress=False)
 
 
 def test_fig5_points_match_direct_simulation():
-    fig = fws.make_figure("fig5", quick=True)
+    fig = make_figure("fig5", quick=True)
     ax_a = fig.axes[0]
     (line,) = [ln for ln in ax_a.lines if ln.get_label() == r"$\lambda_0$ = -1"]
     a, peak = line.get_xdata(), line.get_ydata()
     veh = fws.Vehicle(2.7, 1.35)
     for ratio in (-1.0, 0.0):
-        g = fws.double_root_gains(veh, 5.0, 0.0, ratio, -1.0)
+        g = fws.double_root_gains(veh, speed=5.0, ratio=ratio, pole=-1.0)
         res = fws.simulate(
-            veh, Straight(), g, 5.0, (0.0, 2.0, 0.0), 15.0, feedforward=False, dt=0.02
+            veh,
+            Straight(),
+            g,
+            speed=5.0,
+            initial_state=(0.0, 2.0, 0.0),
+            duration=15.0,
+            feedforward=False,
+            dt=0.02,
         )
         j = int(np.argmin(np.abs(a - ratio)))
         assert peak[j] == pytest.approx(np.max(np.abs(res.lateral_accel)), rel=1e-6)
@@ -119,19 +128,21 @@ def test_fig5_points_match_direct_simulation():
 
 @pytest.mark.parametrize("n, curvature, y0", [(6, 0.0, 2.0), (7, 0.1, -5.0)])
 def test_response_figures_match_direct_simulation(n, curvature, y0):
-    fig = fws.make_figure(f"fig{n}", quick=True)
+    fig = make_figure(f"fig{n}", quick=True)
     ax = fig.axes[0]
     (line,) = [ln for ln in ax.lines if ln.get_label() == "a = -0.5"]
     veh = fws.Vehicle(2.7, 1.35)
-    g = fws.double_root_gains(veh, 5.0, curvature, -0.5, -1.0)
+    g = fws.double_root_gains(
+        veh, speed=5.0, curvature=curvature, ratio=-0.5, pole=-1.0
+    )
     path = Straight() if curvature == 0.0 else Arc(curvature=curvature)
     res = fws.simulate(
         veh,
         path,
         g,
-        5.0,
-        (0.0, y0, 0.0),
-        15.0,
+        speed=5.0,
+        initial_state=(0.0, y0, 0.0),
+        duration=15.0,
         feedforward=curvature != 0.0,
         t_eval=line.get_xdata(),
     )
@@ -140,3 +151,26 @@ def test_response_figures_match_direct_simulation(n, curvature, y0):
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     assert any(s.startswith("a = 1:") for s in labels)  # a = 1 is marked, not hidden
     plt.close(fig)
+
+
+def test_paper_vehicle_is_the_papers():
+    """paper.data holds the paper's vehicle: f = 2.7 m, d = 1.35 m, no limits."""
+    assert DATA_VEHICLE == PAPER_VEHICLE
+    assert (DATA_VEHICLE.wheelbase, DATA_VEHICLE.rear_to_cg) == (2.7, 1.35)
+    assert not DATA_VEHICLE.has_limits
+
+
+def test_root_loci_figure_panels_match_the_loci():
+    """Panel (a): the g = 1 square of each design is its double root -1."""
+    cplt = plot_root_loci(quick=True)
+    assert isinstance(cplt, ct.ControlPlot) and cplt.axes.shape == (1, 3)
+    squares = [
+        ln
+        for ln in cplt.axes[0, 0].lines
+        if ln.get_marker() == "s" and len(ln.get_xdata())
+    ]
+    assert len(squares) == 3  # one per operating point
+    for ln in squares:
+        np.testing.assert_allclose(ln.get_xdata(), -1.0, atol=1e-6)
+        np.testing.assert_allclose(ln.get_ydata(), 0.0, atol=1e-6)
+    plt.close(cplt.figure)

@@ -23,6 +23,16 @@ def test_names_and_params(veh):
     assert p.state_labels == ["s", "e", "theta"]
     assert g.input_labels == p.input_labels == ["delta_f", "delta_r"]
     assert p.params == {"speed": 5.0, "curvature": 0.1, "wheelbase": 2.7}
+    assert g.params == {"speed": 5.0, "wheelbase": 2.7}
+    assert (g.name, p.name) == ("vehicle", "vehicle_path")
+    named = fws.path_frame_model(veh, speed=5.0, curvature=0.1, name="car")
+    assert fws.global_frame_model(veh, speed=5.0, name="car").name == named.name
+    # defaults: speed 1 m/s, straight path
+    assert fws.path_frame_model(veh).params == {
+        "speed": 1.0,
+        "curvature": 0.0,
+        "wheelbase": 2.7,
+    }
 
 
 def test_global_frame_matches_sympy_solution_of_constraints(veh, rng):
@@ -59,7 +69,8 @@ def test_front_steering_only_matches_textbook_single_track(veh, rng):
             rng.uniform(-3, 3),
             rng.uniform(-1.5, 1.5),
         )
-        got = fws.global_frame_model(veh, speed).dynamics(0, [0, 0, psi], [delta, 0])
+        sys = fws.global_frame_model(veh, speed=speed)
+        got = sys.dynamics(0, [0, 0, psi], [delta, 0])
         ref = [
             speed * math.cos(psi),
             speed * math.sin(psi),
@@ -92,7 +103,8 @@ def test_path_frame_agrees_with_global_frame_on_arc(veh, speed):
     def u(t):
         return [0.25 + 0.1 * np.sin(t), 0.05 * np.cos(2 * t)]
 
-    glob, path = fws.global_frame_model(veh, speed), fws.path_frame_model(veh, speed, k)
+    glob = fws.global_frame_model(veh, speed=speed)
+    path = fws.path_frame_model(veh, speed=speed, curvature=k)
     t = np.linspace(0.0, 6.0, 601)
     x0 = np.array([0.0, -1.0, 0.2])  # (x, y, psi): e0 = -1, theta0 = 0.2
     z0 = [v[0] for v in _arc_coordinates(*x0, k)]
@@ -117,13 +129,18 @@ def test_params_override_speed(veh):
 
 def test_singular_steering_raises(veh):
     with pytest.raises(fws.SingularStateError, match="delta_f"):
-        fws.global_frame_model(veh, 5.0).dynamics(0, [0, 0, 0], [math.pi / 2, 0])
+        fws.global_frame_model(veh, speed=5.0).dynamics(0, [0, 0, 0], [math.pi / 2, 0])
     with pytest.raises(fws.SingularStateError, match="delta_f"):
-        fws.yaw_rate(veh, 5.0, -2.0, 0.0)
+        fws.yaw_rate(veh, -2.0, 0.0, speed=5.0)
+    # the exception lives in fws_control.exceptions and is a ValueError
+    from fws_control.exceptions import SingularStateError
+
+    assert SingularStateError is fws.SingularStateError
+    assert issubclass(SingularStateError, ValueError)
 
 
 def test_beyond_centre_of_curvature_raises(veh):
-    sys = fws.path_frame_model(veh, 5.0, curvature=0.1)
+    sys = fws.path_frame_model(veh, speed=5.0, curvature=0.1)
     with pytest.raises(fws.SingularStateError, match="curvature"):
         sys.dynamics(0, [0, 10.0, 0], [0, 0])
     with pytest.raises(fws.SingularStateError):
@@ -141,14 +158,17 @@ def test_bad_speed(veh, bad):
 
 def test_bad_curvature(veh):
     with pytest.raises(ValueError, match="curvature"):
-        fws.path_frame_model(veh, 5.0, curvature=math.nan)
+        fws.path_frame_model(veh, speed=5.0, curvature=math.nan)
+    with pytest.raises(ValueError, match="curvature"):
+        fws.feedforward_steering(veh, curvature=math.inf)
 
 
 def test_feedforward_is_equilibrium_for_any_speed(veh):
     for speed in (-7.0, 3.0, 30.0):
         for k in (-0.2, 0.0, 0.05):
-            sys = fws.path_frame_model(veh, speed, k)
-            dx = sys.dynamics(0, [0, 0, 0], [fws.feedforward_steering(veh, k), 0.0])
+            sys = fws.path_frame_model(veh, speed=speed, curvature=k)
+            u_ff = [fws.feedforward_steering(veh, curvature=k), 0.0]
+            dx = sys.dynamics(0, [0, 0, 0], u_ff)
             np.testing.assert_allclose(dx, [speed, 0.0, 0.0], atol=1e-14)
     # geometry: with R on a circle of radius 1/k and the rear wheel tangent,
     # the front axle centre F = R + f (cos psi, sin psi) must have its wheel
@@ -156,7 +176,7 @@ def test_feedforward_is_equilibrium_for_any_speed(veh):
     k = 0.1
     radius, f = 1.0 / k, veh.wheelbase
     centre, rear, front = np.array([0.0, radius]), np.zeros(2), np.array([f, 0.0])
-    delta = fws.feedforward_steering(veh, k)
+    delta = fws.feedforward_steering(veh, curvature=k)
     normal = np.array([-np.sin(delta), np.cos(delta)])  # front wheel's left normal
     to_centre = centre - front
     assert abs(normal[0] * to_centre[1] - normal[1] * to_centre[0]) < 1e-12

@@ -1,5 +1,7 @@
 """Root loci: gain loop and parameter loci against closed-loop eigenvalues."""
 
+import math
+
 import control as ct
 import matplotlib.pyplot as plt
 import numpy as np
@@ -18,8 +20,8 @@ def _sorted(z):
 
 def _plant(veh, speed, curvature, ratio):
     """Single-input exact plant (A, b) from ct.linearize of the nonlinear model."""
-    sys = fws.path_frame_model(veh, speed, curvature)
-    u0 = [fws.feedforward_steering(veh, curvature), 0.0]
+    sys = fws.path_frame_model(veh, speed=speed, curvature=curvature)
+    u0 = [math.atan(curvature * veh.wheelbase), 0.0]
     lin = ct.linearize(sys, [0.0, 0.0, 0.0], u0)
     return lin.A[1:, 1:], lin.B[1:, :] @ np.array([1.0, ratio])
 
@@ -36,8 +38,10 @@ def _plant(veh, speed, curvature, ratio):
 def test_gain_loop_matches_state_space(veh, speed, curvature, ratio, k1, k2):
     A, b = _plant(veh, speed, curvature, ratio)
     ref = ct.ss(A, b[:, None], [[k1, k2]], [[0.0]])
-    loop = fws.gain_loop(veh, speed, curvature, fws.SteeringGains(k1, k2, ratio))
+    plant = fws.LateralPlant(veh, speed=speed, curvature=curvature)
+    loop = fws.gain_loop(plant, fws.SteeringGains(k1, k2, ratio))
     assert loop.issiso() and loop.input_labels == ["delta_f"]
+    assert loop.output_labels == ["k_x"]
     for s in (0.3j, 1.0 + 2.0j, -0.7 + 0.1j, 4.0):
         # ct.linearize differentiates numerically: ~1e-7 relative accuracy.
         np.testing.assert_allclose(loop(s), ref(s), rtol=1e-5)
@@ -51,16 +55,24 @@ def test_gain_loop_matches_state_space(veh, speed, curvature, ratio, k1, k2):
 
 @pytest.mark.parametrize("model", ["exact", "paper"])
 def test_gain_locus_at_one_is_closed_loop(veh, model):
-    g = fws.double_root_gains(veh, 20.0, 0.01, ratio=0.5, pole=-2.0, model=model)
+    plant = fws.LateralPlant(veh, speed=20.0, curvature=0.01, model=model)
+    g = fws.double_root_gains(plant, ratio=0.5, pole=-2.0)
     g = fws.SteeringGains(float(g.k1) * 1.3, float(g.k2) * 0.8, 0.5)  # distinct poles
-    pz = fws.gain_locus(veh, 20.0, 0.01, g, scale=[1.0], model=model)
-    cl = fws.closed_loop(veh, 20.0, 0.01, g, model=model)
+    pz = fws.gain_locus(plant, g, scale=[1.0])
+    cl = fws.closed_loop(plant, g)
     np.testing.assert_allclose(_sorted(pz.loci[0]), _sorted(cl.poles()), atol=1e-10)
+    # the Vehicle convenience keywords give the same locus
+    pz2 = fws.gain_locus(
+        veh, g, scale=[0.5, 1.0], speed=20.0, curvature=0.01, model=model
+    )
+    np.testing.assert_allclose(_sorted(pz2.loci[1]), _sorted(cl.poles()), atol=1e-10)
+    np.testing.assert_array_equal(pz2.gains, [0.5, 1.0])
 
 
 def test_gain_locus_default_gains_and_plot(veh):
-    g = fws.double_root_gains(veh, 5.0, 0.1, ratio=-1.0, pole=-1.0)
-    loop = fws.gain_loop(veh, 5.0, 0.1, g)
+    plant = fws.LateralPlant(veh, speed=5.0, curvature=0.1)
+    g = fws.double_root_gains(plant, ratio=-1.0, pole=-1.0)
+    loop = fws.gain_loop(plant, g)
     # Open-loop poles +-j V kappa: the A matrix of eq. (33) (hand-derived).
     np.testing.assert_allclose(_sorted(loop.poles()), [-0.5j, 0.5j], atol=1e-12)
     cplt = ct.root_locus_plot(loop, grid=False, initial_gain=1.0)
@@ -83,7 +95,8 @@ CASES = [
 @pytest.mark.parametrize("name, values, speed, curvature", CASES)
 def test_parameter_locus_equals_closed_loop(veh, name, values, speed, curvature, model):
     g0 = fws.SteeringGains(0.05, 0.6, ratio=-1.0)
-    pz = fws.parameter_locus(veh, name, values, speed, curvature, g0, model=model)
+    plant = fws.LateralPlant(veh, speed=speed, curvature=curvature, model=model)
+    pz = fws.parameter_locus(plant, g0, parameter=name, values=values)
     assert pz.loci.shape == (len(values), 2)
     np.testing.assert_array_equal(pz.gains, values)
     for v, row in zip(values, pz.loci, strict=True):
@@ -96,13 +109,16 @@ def test_parameter_locus_equals_closed_loop(veh, name, values, speed, curvature,
         }
         p[name] = v
         g = fws.SteeringGains(p["k1"], p["k2"], p["ratio"])
-        cl = fws.closed_loop(veh, p["speed"], p["curvature"], g, model=model)
+        cl = fws.closed_loop(
+            veh, g, speed=p["speed"], curvature=p["curvature"], model=model
+        )
         np.testing.assert_allclose(_sorted(row), _sorted(cl.poles()), atol=1e-9)
 
 
 def test_ratio_locus_keeps_k1_k2_fixed(veh):
     g0 = fws.SteeringGains(0.05, 0.6, ratio=-1.0)
-    pz = fws.parameter_locus(veh, "ratio", [0.0], 5.0, 0.0, g0)
+    plant = fws.LateralPlant(veh, speed=5.0)
+    pz = fws.parameter_locus(plant, g0, parameter="ratio", values=[0.0])
     # a = 0, kappa = 0: lambda^2 + (V k2/f) lambda + V^2 k1/f (hand-derived).
     ref = np.roots([1.0, 5.0 * 0.6 / 2.7, 25.0 * 0.05 / 2.7])
     np.testing.assert_allclose(_sorted(pz.loci[0]), _sorted(ref), atol=1e-12)
@@ -111,22 +127,24 @@ def test_ratio_locus_keeps_k1_k2_fixed(veh):
 def test_redesign_and_cross_model(veh):
     g0 = fws.SteeringGains(0.05, 0.6, ratio=-1.0)
     kap = np.linspace(0.0, 0.25, 11)
-    same = fws.parameter_locus(veh, "curvature", kap, 5.0, 0.0, g0, redesign_pole=-1.0)
+    plant = fws.LateralPlant(veh, speed=5.0, curvature=0.0, model="exact")
+    same = fws.parameter_locus(
+        plant, g0, parameter="curvature", values=kap, redesign_pole=-1.0
+    )
     np.testing.assert_allclose(same.loci, -1.0, atol=1e-6)
     cross = fws.parameter_locus(
-        veh,
-        "curvature",
-        kap,
-        5.0,
-        0.0,
+        plant,
         g0,
-        model="exact",
+        parameter="curvature",
+        values=kap,
         redesign_pole=-1.0,
         design_model="paper",
     )
     for k, row in zip(kap, cross.loci, strict=True):
-        gp = fws.double_root_gains(veh, 5.0, k, -1.0, -1.0, model="paper")
-        cl = fws.closed_loop(veh, 5.0, k, gp, model="exact")
+        gp = fws.double_root_gains(
+            veh, speed=5.0, curvature=k, ratio=-1.0, pole=-1.0, model="paper"
+        )
+        cl = fws.closed_loop(veh, gp, speed=5.0, curvature=k, model="exact")
         np.testing.assert_allclose(_sorted(row), _sorted(cl.poles()), atol=1e-9)
     # On a straight path both models agree; with curvature they do not.
     np.testing.assert_allclose(cross.loci[0], -1.0, atol=1e-6)
@@ -136,7 +154,9 @@ def test_redesign_and_cross_model(veh):
 def test_branches_are_continuous(veh):
     g0 = fws.SteeringGains(0.05, 0.6, ratio=-1.0)
     vals = np.linspace(-0.2, 2.0, 2001)  # crosses real/complex transitions
-    pz = fws.parameter_locus(veh, "k1", vals, 5.0, 0.1, g0)
+    pz = fws.parameter_locus(
+        veh, g0, parameter="k1", values=vals, speed=5.0, curvature=0.1
+    )
     # The swapped assignment would jump by the gap between the branches.
     swapped = np.abs(pz.loci[1:, ::-1] - pz.loci[:-1]).max(axis=1)
     direct = np.abs(pz.loci[1:] - pz.loci[:-1]).max(axis=1)
@@ -148,7 +168,10 @@ def test_branches_are_continuous(veh):
 
 def test_parameter_locus_plot(veh):
     g0 = fws.SteeringGains(0.05, 0.6, ratio=-1.0)
-    pz = fws.parameter_locus(veh, "ratio", np.linspace(-1.5, 0.9, 50), 5.0, 0.1, g0)
+    plant = fws.LateralPlant(veh, speed=5.0, curvature=0.1)
+    pz = fws.parameter_locus(
+        plant, g0, parameter="ratio", values=np.linspace(-1.5, 0.9, 50)
+    )
     cplt = pz.plot(grid=False)
     loci_lines = cplt.lines[0, 2]
     assert len(loci_lines) == 2
@@ -173,34 +196,45 @@ def test_quadratic_roots_against_numpy(p1, p0):
 @pytest.mark.parametrize(
     "kwargs, match",
     [
-        ({"name": "mass"}, "name must be one of"),
+        ({"parameter": "mass"}, "parameter must be one of"),
         ({"values": []}, "values"),
         ({"values": [np.nan]}, "values"),
-        ({"name": "speed", "values": [-1.0, 0.0, 1.0]}, "speed"),
-        ({"name": "k1", "redesign_pole": -1.0}, "redesign_pole"),
+        ({"parameter": "speed", "values": [-1.0, 0.0, 1.0]}, "speed"),
+        ({"parameter": "k1", "redesign_pole": -1.0}, "redesign_pole"),
         ({"model": "nonsense"}, "model"),
+        ({"design_model": "nonsense"}, "model"),
     ],
 )
 def test_parameter_locus_bad_input(veh, kwargs, match):
     args = {
-        "name": "ratio",
+        "parameter": "ratio",
         "values": [0.0, 0.5],
         "speed": 5.0,
         "curvature": 0.1,
-        "gains": fws.SteeringGains(0.05, 0.6, -1.0),
     } | kwargs
     with pytest.raises(ValueError, match=match):
-        fws.parameter_locus(veh, **args)
+        fws.parameter_locus(veh, fws.SteeringGains(0.05, 0.6, -1.0), **args)
+
+
+def test_loci_need_one_operating_point_and_scalar_gains(veh):
+    g = fws.SteeringGains(0.05, 0.6, -1.0)
+    many = fws.LateralPlant(veh, speed=[5.0, 20.0])
+    for call in (
+        lambda: fws.gain_loop(many, g),
+        lambda: fws.parameter_locus(many, g, parameter="ratio", values=[0.0]),
+    ):
+        with pytest.raises(ValueError, match=r"one operating point.*\(2,\)"):
+            call()
+    with pytest.raises(ValueError, match="scalar"):
+        fws.gain_loop(veh, fws.SteeringGains([0.1, 0.2], 0.6, -1.0), speed=5.0)
 
 
 def test_uncontrollable_redesign_raises(veh):
     with pytest.raises(fws.UncontrollableError):
         fws.parameter_locus(
-            veh,
-            "ratio",
-            [0.5, 1.0],
-            5.0,
-            0.0,
+            fws.LateralPlant(veh, speed=5.0, curvature=0.0),
             fws.SteeringGains(0.05, 0.6, -1.0),
+            parameter="ratio",
+            values=[0.5, 1.0],
             redesign_pole=-1.0,
         )

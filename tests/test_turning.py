@@ -64,10 +64,10 @@ def test_centre_is_intersection_of_wheel_normals(veh, df, dr):
 def test_hand_derived_values(veh):
     f, d = veh.wheelbase, veh.rear_to_cg
     delta = np.radians([10.0, 25.0, 40.0])
-    fws_only = fws.turning_radius(veh, 0.0, delta)
+    fws_only = fws.turning_radius(veh, ratio=0.0, max_steer_front=delta)
     np.testing.assert_allclose(fws_only.rear_axle, f / np.tan(delta), rtol=1e-12)
     np.testing.assert_allclose(fws_only.cg, np.hypot(f / np.tan(delta), d))
-    counter = fws.turning_radius(veh, -1.0, delta)
+    counter = fws.turning_radius(veh, ratio=-1.0, max_steer_front=delta)
     np.testing.assert_allclose(counter.rear_axle, f / (2 * np.sin(delta)))
     # d = f/2: G is the foot of the perpendicular from the centre.
     np.testing.assert_allclose(counter.cg, f / (2 * np.tan(delta)))
@@ -83,9 +83,9 @@ def test_negative_ratio_shrinks_radius_and_minimum(veh):
     a = np.linspace(-2.5, 0.8, 3301)
     for deg in (20.0, 30.0, 40.0):
         lim = np.radians(deg)
-        r = fws.turning_radius(veh, a, lim).rear_axle
+        r = fws.turning_radius(veh, ratio=a, max_steer_front=lim).rear_axle
         # The paper's claim: a < 0 gives a smaller radius than a = 0 ...
-        r0 = fws.turning_radius(veh, 0.0, lim).rear_axle
+        r0 = fws.turning_radius(veh, ratio=0.0, max_steer_front=lim).rear_axle
         assert np.all(r[(a < 0) & (a >= -1.0)] < r0)
         # ... down to the minimum at (1 - a) delta = pi/2, then it grows.
         a_star = 1 - np.pi / (2 * lim)
@@ -96,25 +96,47 @@ def test_limits_from_vehicle_and_rear_clipping():
     veh = fws.Vehicle(
         2.7, 1.35, max_steer_front=np.radians(30), max_steer_rear=np.radians(10)
     )
-    geo = fws.turning_radius(veh, -1.0)
+    geo = fws.turning_radius(veh, ratio=-1.0)
     np.testing.assert_allclose(geo.delta_f, np.radians(30))
     np.testing.assert_allclose(geo.delta_r, -np.radians(10))
     ref = fws.steady_turn(veh, np.radians(30), -np.radians(10))
     np.testing.assert_allclose(geo.rear_axle, ref.rear_axle)
+    # explicit limits override the vehicle's
+    geo = fws.turning_radius(
+        veh, ratio=-1.0, max_steer_front=np.radians(20), max_steer_rear=np.radians(25)
+    )
+    np.testing.assert_allclose(geo.delta_r, -np.radians(20))
+    np.testing.assert_allclose(geo.rear_axle, 2.7 / (2 * np.sin(np.radians(20))))
     with pytest.raises(ValueError, match="max_steer_front"):
-        fws.turning_radius(fws.Vehicle(2.7, 1.35), -1.0)
+        fws.turning_radius(fws.Vehicle(2.7, 1.35), ratio=-1.0)
     with pytest.raises(ValueError, match="max_steer_front"):
-        fws.turning_radius(veh, -1.0, max_steer_front=2.0)
+        fws.turning_radius(veh, ratio=-1.0, max_steer_front=2.0)
+    with pytest.raises(ValueError, match="max_steer_rear"):
+        fws.turning_radius(veh, ratio=-1.0, max_steer_rear=0.0)
     with pytest.raises(fws.SingularStateError):
         fws.steady_turn(veh, np.pi / 2, 0.0)
 
 
 def test_plot(veh):
-    ax = fws.plot_turning_radius(veh, limits=[np.radians(30)])
+    cplt = fws.plot_turning_radius(veh, limits=[np.radians(30)])
+    assert isinstance(cplt, ct.ControlPlot) and cplt.axes.shape == (1, 1)
+    ax = cplt.axes[0, 0]
     assert ax.get_ylabel() == "steady turning radius [m]"
-    solid = ax.lines[0]
+    solid, dashed = ax.lines[0], ax.lines[1]
     a = solid.get_xdata()
+    # hand-derived: delta_f = 30 deg, delta_r = a delta_f
+    df = np.radians(30)
+    dr = a * df
+    f, d = veh.wheelbase, veh.rear_to_cg
+    t = f * np.cos(df) / np.sin(df - dr)
+    np.testing.assert_allclose(solid.get_ydata(), np.abs(t), rtol=1e-12)
     np.testing.assert_allclose(
-        solid.get_ydata(), fws.turning_radius(veh, a, np.radians(30)).rear_axle
+        dashed.get_ydata(), np.sqrt(t**2 + 2 * d * t * np.sin(dr) + d**2), rtol=1e-12
     )
-    plt.close(ax.figure)
+    assert cplt.lines[0, 0] == list(ax.lines)
+    plt.close(cplt.figure)
+    # into given axes
+    fig, given = plt.subplots()
+    assert fws.plot_turning_radius(veh, ax=given).axes[0, 0] is given
+    assert len(given.lines) > 0
+    plt.close(fig)
