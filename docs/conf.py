@@ -98,10 +98,13 @@ numpydoc_xref_aliases = {
     "SteeringGains": "fws_control.SteeringGains",
     "StabilityBoundary": "fws_control.StabilityBoundary",
     "StabilityChart": "fws_control.StabilityChart",
-    "ChartPanel": "fws_control.ChartPanel",
-    "AffineCoefficients": "fws_control.AffineCoefficients",
+    "StabilityBoundaries": "fws_control.StabilityBoundaries",
+    "BoundaryCurve": "fws_control.BoundaryCurve",
+    "ChartPanel": "fws_control.paper.ChartPanel",
+    "AffinePolynomial": "fws_control.AffinePolynomial",
+    "LateralPlant": "fws_control.LateralPlant",
+    "LoopMatrices": "fws_control.LoopMatrices",
     "SimulationResult": "fws_control.SimulationResult",
-    "BatchResult": "fws_control.BatchResult",
     "Projection": "fws_control.paths.Projection",
     "Path": "fws_control.paths.Path",
     "Straight": "fws_control.paths.Straight",
@@ -187,6 +190,7 @@ _EXAMPLE_RANK = collections.defaultdict(
                 "plot_quick_start.py",
                 "plot_stability_chart.py",
                 "plot_root_loci.py",
+                "plot_any_plant.py",
                 "plot_fws_vs_4ws.py",
                 "plot_spline_course.py",
                 "plot_ratio_sweep.py",
@@ -277,18 +281,21 @@ def _is_constant(obj) -> bool:
 def _public_names() -> dict[str, object]:
     """``{qualified name: object}`` for every public name of the package.
 
-    Public: listed in ``fws_control.__all__`` or in a module's ``__all__``.
+    Public: listed in ``fws_control.__all__`` or in the ``__all__`` of a
+    module or subpackage (``fws_control.paper``, ``fws_control.simulation``
+    and their modules) whose name has no leading underscore.
     """
     out = {}
-    for name in fws_control.__all__:
-        obj = getattr(fws_control, name)
-        if not inspect.ismodule(obj):
-            out[f"fws_control.{name}"] = obj
     pkg = Path(fws_control.__file__).parent
-    for path in sorted(pkg.glob("*.py")):
-        if path.stem.startswith("_"):
+    modnames = []
+    for path in sorted(pkg.rglob("*.py")):
+        parts = list(path.relative_to(pkg.parent).with_suffix("").parts)
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        if any(part.startswith("_") for part in parts):
             continue
-        modname = f"fws_control.{path.stem}"
+        modnames.append(".".join(parts))
+    for modname in modnames:
         mod = importlib.import_module(modname)
         for name in getattr(mod, "__all__", ()):
             obj = getattr(mod, name)
@@ -302,13 +309,16 @@ def _check_api_complete(app) -> None:
 
     A function or class counts as documented under any of its public names
     (``fws_control.simulate`` or ``fws_control.simulation.simulate``); a
-    constant only under its own qualified name.
+    constant under its own qualified name or under a re-export of the same
+    object by the same name (``fws_control.paper.PAPER_SPEEDS`` for
+    ``fws_control.paper.data.PAPER_SPEEDS``).
     """
     from sphinx.util import logging
 
     logger = logging.getLogger("fws_control.api")
     documented = _documented_names()
     documented_ids = set()
+    documented_constants = set()
     for name in documented:
         obj = _resolve(name)
         if obj is None:
@@ -320,10 +330,14 @@ def _check_api_complete(app) -> None:
             )
         elif not _is_constant(obj):
             documented_ids.add(id(obj))
+        else:
+            documented_constants.add((name.rpartition(".")[2], id(obj)))
     for name, obj in sorted(_public_names().items()):
         if name in documented:
             continue
         if not _is_constant(obj) and id(obj) in documented_ids:
+            continue
+        if (name.rpartition(".")[2], id(obj)) in documented_constants:
             continue
         logger.warning(
             "public name %s is missing from docs/api.rst",

@@ -26,7 +26,8 @@ veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
 
 
 def run(speed, curvature, e0, ratios):
-    gains = fws.double_root_gains(veh, speed, curvature, ratio=ratios, pole=-1.0)
+    plant = fws.LateralPlant(veh, speed=speed, curvature=curvature)
+    gains = fws.double_root_gains(plant, ratio=ratios, pole=-1.0)
     return fws.simulate_batch(
         veh,
         Arc(curvature=curvature),
@@ -40,8 +41,7 @@ def run(speed, curvature, e0, ratios):
 
 
 def report(batch):
-    for i in range(len(batch)):
-        r = batch[i]
+    for r in batch:  # each run as a result of its own
         peak = np.max(np.abs(r.lateral_accel))
         g = r.gains
         print(
@@ -60,8 +60,8 @@ def report(batch):
 
 low = run(5.0, 0.1, -5.0, np.array([0.0, -0.5, -1.0]))
 report(low)
-fig = low.plot()
-fig.suptitle("V = 5 m/s, $\\kappa$ = 0.1 1/m, $\\lambda_0$ = -1")
+cplt = low.plot()
+cplt.figure.suptitle("V = 5 m/s, $\\kappa$ = 0.1 1/m, $\\lambda_0$ = -1")
 
 # %%
 # High speed: 20 m/s on a 100 m circle
@@ -75,8 +75,8 @@ fig.suptitle("V = 5 m/s, $\\kappa$ = 0.1 1/m, $\\lambda_0$ = -1")
 high = run(20.0, 0.01, -10.0, np.array([0.0, 0.5]))
 report(high)
 report(run(20.0, 0.01, -10.0, np.array([1.0])))
-fig = high.plot()
-fig.suptitle("V = 20 m/s, $\\kappa$ = 0.01 1/m, $\\lambda_0$ = -1")
+cplt = high.plot()
+cplt.figure.suptitle("V = 20 m/s, $\\kappa$ = 0.01 1/m, $\\lambda_0$ = -1")
 
 # %%
 # Manoeuvrability at low speed
@@ -88,7 +88,7 @@ fig.suptitle("V = 20 m/s, $\\kappa$ = 0.01 1/m, $\\lambda_0$ = -1")
 ratios = np.linspace(-1.5, 0.5, 201)
 fig, ax = plt.subplots(figsize=(7, 4.2), layout="constrained")
 for i, limit_deg in enumerate((25.0, 35.0)):
-    geo = turning_radius(veh, ratios, np.radians(limit_deg))
+    geo = turning_radius(veh, ratio=ratios, max_steer_front=np.radians(limit_deg))
     ax.plot(
         ratios, geo.rear_axle, color=f"C{i}", label=f"R, front limit {limit_deg:g}°"
     )
@@ -98,6 +98,6 @@ ax.set_ylabel("steady turning radius [m]")
 ax.set_ylim(0, 12)
 ax.grid(True, alpha=0.3)
 ax.legend()
-r = turning_radius(veh, [0.0, -1.0], np.radians(35.0)).rear_axle
+r = turning_radius(veh, ratio=[0.0, -1.0], max_steer_front=np.radians(35.0)).rear_axle
 print(f"turning radius of R at a 35° limit: a = 0: {r[0]:.2f} m, a = -1: {r[1]:.2f} m")
 plt.show()

@@ -2,10 +2,11 @@
 Quick start: design a 4WS path-tracking controller and simulate it
 ==================================================================
 
-The ten-line tour of the library: a vehicle, the linearised lateral dynamics
-as a :class:`control.StateSpace`, gains that put both closed-loop poles on a
-chosen double root, a Routh-Hurwitz check, and a simulation of the nonlinear
-closed loop on a circular path.
+The ten-line tour of the library: a vehicle and an operating point (the
+plant), the linearised lateral dynamics as a :class:`control.StateSpace`,
+gains that put both closed-loop poles on a chosen double root, a
+Routh-Hurwitz check, and a simulation of the nonlinear closed loop on a
+circular path.
 """
 
 # %%
@@ -13,10 +14,12 @@ closed loop on a circular path.
 # -------------------------------
 # The paper's vehicle: wheelbase :math:`f = 2.7` m, centre of gravity
 # :math:`d = 1.35` m ahead of the rear axle. On a circle of curvature
-# :math:`\kappa = 0.1` 1/m (radius 10 m) at :math:`V = 5` m/s the
-# linearisation about the feedforward steering angle has states ``e``
-# (lateral error) and ``theta`` (heading error) and inputs ``delta_f``,
-# ``delta_r``.
+# :math:`\kappa = 0.1` 1/m (radius 10 m) at :math:`V = 5` m/s. A
+# :class:`fws_control.LateralPlant` freezes this operating point; every
+# analysis function takes it first (or any :class:`control.StateSpace` with
+# the same signal names). Its linearisation about the feedforward steering
+# angle has states ``e`` (lateral error) and ``theta`` (heading error) and
+# inputs ``delta_f``, ``delta_r``.
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -25,7 +28,8 @@ import fws_control as fws
 from fws_control.paths import Arc
 
 veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-sys = fws.linearize(veh, speed=5.0, curvature=0.1)  # model="exact"
+plant = fws.LateralPlant(veh, speed=5.0, curvature=0.1)  # model="exact"
+sys = fws.linearize(plant)
 print(sys)
 
 # %%
@@ -36,12 +40,13 @@ print(sys)
 # second order. :func:`fws_control.double_root_gains` solves for the gains
 # ``k1, k2`` that place both poles at :math:`\lambda_0 = -1` 1/s.
 
-g = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
+g = fws.double_root_gains(plant, ratio=-1.0, pole=-1.0)
 print(f"k1 = {g.k1:.4f} rad/m, k2 = {g.k2:.4f}, k3 = {g.k3:.4f}, k4 = {g.k4:.4f}")
+print("K (python-control's sign, u = -K y):\n", g.K.round(4))
 
-cl = fws.closed_loop(veh, speed=5.0, curvature=0.1, gains=g)
+cl = fws.closed_loop(plant, g)
 print("closed-loop poles:", np.real_if_close(np.round(cl.poles(), 6)))
-print("stable:", fws.is_stable(veh, 5.0, 0.1, g.k1, g.k2, ratio=-1.0))
+print("stable:", fws.is_stable(plant, g))
 
 # %%
 # The paper's linearisation (eq. 33) treats the front-steering entry of
@@ -49,8 +54,9 @@ print("stable:", fws.is_stable(veh, 5.0, 0.1, g.k1, g.k2, ratio=-1.0))
 # :math:`V(1+f^2\kappa^2)/f`. Gains designed with the paper's model miss the
 # double root of the true linearisation:
 
-g_paper = fws.double_root_gains(veh, 5.0, 0.1, ratio=-1.0, pole=-1.0, model="paper")
-poles = fws.closed_loop(veh, 5.0, 0.1, g_paper).poles()
+paper_plant = fws.LateralPlant(veh, speed=5.0, curvature=0.1, model="paper")
+g_paper = fws.double_root_gains(paper_plant, ratio=-1.0, pole=-1.0)
+poles = fws.closed_loop(plant, g_paper).poles()
 print("paper's gains, true poles:", np.round(np.sort(poles.real), 3))
 
 # %%
@@ -66,6 +72,6 @@ res = fws.simulate(
 print(f"status: {res.status}, final lateral error {res.e[-1]:.1e} m")
 print(f"peak lateral acceleration of G: {np.max(np.abs(res.lateral_accel)):.2f} m/s^2")
 
-fig = res.plot(label="a = -1, $\\lambda_0$ = -1")
-fig.suptitle("4WS path tracking on a 10 m circle at 5 m/s")
+cplt = res.plot(labels=["a = -1, $\\lambda_0$ = -1"])
+cplt.figure.suptitle("4WS path tracking on a 10 m circle at 5 m/s")
 plt.show()

@@ -39,7 +39,8 @@ peaks = {}
 for title, speed, kappa, e0 in scenarios:
     path = Straight() if kappa == 0.0 else Arc(curvature=kappa)
     for pole in poles:
-        gains = fws.double_root_gains(veh, speed, kappa, ratio=ratios, pole=pole)
+        plant = fws.LateralPlant(veh, speed=speed, curvature=kappa)
+        gains = fws.double_root_gains(plant, ratio=ratios, pole=pole)
         batch = fws.simulate_batch(
             veh,
             path,

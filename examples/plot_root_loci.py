@@ -19,7 +19,8 @@ import fws_control as fws
 
 veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
 V, kappa = 5.0, 0.1
-g = fws.double_root_gains(veh, V, kappa, ratio=-1.0, pole=-1.0)
+plant = fws.LateralPlant(veh, speed=V, curvature=kappa)
+g = fws.double_root_gains(plant, ratio=-1.0, pole=-1.0)
 
 # %%
 # Gain root locus
@@ -29,9 +30,9 @@ g = fws.double_root_gains(veh, V, kappa, ratio=-1.0, pole=-1.0)
 # frequency :math:`V\kappa`) and one zero. At :math:`g = 1` both branches
 # meet at the design's double root :math:`\lambda_0 = -1`.
 
-loop = fws.gain_loop(veh, V, kappa, g)
+loop = fws.gain_loop(plant, g)
 print(loop)
-rl = fws.gain_locus(veh, V, kappa, g, scale=np.linspace(0.0, 6.0, 601))
+rl = fws.gain_locus(plant, g, scale=np.linspace(0.0, 6.0, 601))
 print("poles at g = 1:", np.round(ct.root_locus_map(loop, gains=[1.0]).loci[0], 6))
 
 cplt = rl.plot(grid=False, xlim=(-4.0, 0.5), ylim=(-1.5, 1.5), title=False)
@@ -65,23 +66,32 @@ cases = [
     (
         "ratio a [-]",
         "gains fixed",
-        fws.parameter_locus(veh, "ratio", ratios, V, kappa, g),
+        fws.parameter_locus(plant, g, parameter="ratio", values=ratios),
     ),
     (
         "speed V [m/s]",
         "gains fixed",
-        fws.parameter_locus(veh, "speed", np.linspace(1.0, 20.0, 191), V, kappa, g),
+        fws.parameter_locus(
+            plant, g, parameter="speed", values=np.linspace(1.0, 20.0, 191)
+        ),
     ),
     (
         "curvature [1/m]",
         "gains fixed",
-        fws.parameter_locus(veh, "curvature", np.linspace(0.0, 0.3, 241), V, kappa, g),
+        fws.parameter_locus(
+            plant, g, parameter="curvature", values=np.linspace(0.0, 0.3, 241)
+        ),
     ),
     (
         "ratio a [-]",
         "paper's design in the exact model",
         fws.parameter_locus(
-            veh, "ratio", ratios, V, kappa, g, redesign_pole=-1.0, design_model="paper"
+            plant,
+            g,
+            parameter="ratio",
+            values=ratios,
+            redesign_pole=-1.0,
+            design_model="paper",
         ),
     ),
 ]

@@ -47,7 +47,7 @@ print(f"curvature from {kappa.min():.3f} to {kappa.max():.3f} 1/m")
 # for the double root :math:`\lambda_0 = -1` on a straight path.
 
 speed, ratio = 6.0, -0.5
-g = fws.double_root_gains(veh, speed, 0.0, ratio=ratio, pole=-1.0)
+g = fws.double_root_gains(veh, speed=speed, curvature=0.0, ratio=ratio, pole=-1.0)
 runs = {
     "feedforward + feedback": True,
     "feedback only": False,
@@ -104,5 +104,5 @@ for ax in (ax_xy, ax_e, ax_k):
 # The full response of the run with feedforward (errors, trajectory,
 # steering angles and lateral acceleration over time):
 
-fig = results["feedforward + feedback"].plot(label="feedforward + feedback")
+cplt = results["feedforward + feedback"].plot(labels="feedforward + feedback")
 plt.show()

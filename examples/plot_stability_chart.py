@@ -28,9 +28,8 @@ k2 = np.linspace(-1.0, 1.0, 301)
 # (eq. 36); the marker is the design with the double root
 # :math:`\lambda_0 = -1`.
 
-chart = fws.stability_chart(
-    veh, curvature=0.1, ratio=-1.0, speed=5.0, k1=k1, k2=k2, pole=-1.0
-)
+plant = fws.LateralPlant(veh, speed=5.0, curvature=0.1)
+chart = fws.stability_chart(plant, ratio=-1.0, k1=k1, k2=k2, pole=-1.0)
 print(f"stable fraction of the grid: {chart.stable_fraction:.3f}")
 print(f"design: k1 = {chart.design.k1:.4f}, k2 = {chart.design.k2:.4f}")
 chart.plot()
@@ -58,14 +57,16 @@ fig, axes = plt.subplots(
 )
 for ax, a in zip(axes.flat, ratios, strict=True):
     for i, kappa in enumerate(curvatures):
-        ch = fws.stability_chart(veh, kappa, a, 5.0, k1=k1, k2=k2, pole=-1.0)
+        plant = fws.LateralPlant(veh, speed=5.0, curvature=kappa)
+        ch = fws.stability_chart(plant, ratio=a, k1=k1, k2=k2, pole=-1.0)
         ch.plot(
-            ax,
+            ax=ax,
             color=f"C{i}",
             label=f"$\\kappa$ = {kappa:g} 1/m",
             hatch=hatches[i],
             alpha=0.15,
             legend=False,
+            notes=False,  # overlaid charts would write into one note box
             title=f"a = {a:g}, V = 5 m/s",
         )
 # Filled regions make no legend entries of their own: proxies stand in.
@@ -93,8 +94,9 @@ fig.suptitle("Stable gains (shaded) and the $\\lambda_0 = -1$ designs (markers)"
 a_sweep = np.linspace(-2.0, 2.0, 161)
 fig, ax = plt.subplots(figsize=(7, 4), layout="constrained")
 for i, kappa in enumerate(curvatures):
+    plant = fws.LateralPlant(veh, speed=5.0, curvature=kappa)
     frac = [
-        fws.stability_chart(veh, kappa, a, 5.0, k1=k1[::3], k2=k2[::3]).stable_fraction
+        fws.stability_chart(plant, ratio=a, k1=k1[::3], k2=k2[::3]).stable_fraction
         for a in a_sweep
     ]
     ax.plot(a_sweep, frac, color=f"C{i}", label=f"$\\kappa$ = {kappa:g} 1/m")
@@ -115,14 +117,14 @@ ax.legend()
 fig, ax = plt.subplots(figsize=(6, 5), layout="constrained")
 k2_wide = np.linspace(-1.0, 2.0, 451)
 for color, model in (("C0", "exact"), ("C3", "paper")):
-    ch = fws.stability_chart(
-        veh, 0.2, 0.5, 5.0, k1=k1, k2=k2_wide, model=model, pole=-1.0
-    )
+    plant = fws.LateralPlant(veh, speed=5.0, curvature=0.2, model=model)
+    ch = fws.stability_chart(plant, ratio=0.5, k1=k1, k2=k2_wide, pole=-1.0)
     ch.plot(
-        ax,
+        ax=ax,
         color=color,
         label=f"{model} model",
         legend=False,
+        notes=False,
         title="a = 0.5, $\\kappa$ = 0.2 1/m, V = 5 m/s",
     )
     print(f"{model:>5}: design k1 = {ch.design.k1:.3f}, k2 = {ch.design.k2:.3f}")
