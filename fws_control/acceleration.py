@@ -32,6 +32,33 @@ def yaw_acceleration(
 
     Broadcasts over array arguments. Speed is taken constant, as in the paper.
 
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Geometry; ``wheelbase`` is :math:`f` [m].
+    delta_f : float or array_like
+        Front steering angle [rad], ``|delta_f| < pi/2``.
+    delta_r : float or array_like
+        Rear steering angle [rad], finite.
+    delta_f_rate : float or array_like
+        Front steering rate :math:`\dot\delta_f` [rad/s], finite.
+    delta_r_rate : float or array_like
+        Rear steering rate :math:`\dot\delta_r` [rad/s], finite.
+    speed : float or array_like
+        Speed :math:`V` [m/s] (constant in time), finite (negative:
+        reversing).
+
+    Returns
+    -------
+    float or ndarray
+        Yaw acceleration :math:`\ddot\psi` [rad/s^2]; a float for scalar
+        arguments.
+
+    Raises
+    ------
+    SingularStateError
+        If any ``|delta_f| >= pi/2``.
+
     Examples
     --------
     >>> import fws_control as fws

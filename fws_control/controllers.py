@@ -304,6 +304,28 @@ def feedback_controller(
     Same as ``path_tracking_controller(vehicle, gains, feedforward=False)``;
     the ``curvature`` input is ignored.
 
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Geometry; its steering-angle limits [rad], if set, clip the outputs.
+    gains : SteeringGains
+        Scalar ``k1`` [rad/m], ``k2`` [rad/rad] and ``ratio`` [-].
+    name : str, optional
+        System name for :func:`control.interconnect`.
+
+    Returns
+    -------
+    control.NonlinearIOSystem
+        No states; inputs ``e, theta, curvature``; outputs ``delta_f,
+        delta_r`` (see :func:`path_tracking_controller`).
+
+    Raises
+    ------
+    TypeError
+        If `gains` is not a :class:`SteeringGains`.
+    ValueError
+        If the gains are not scalars.
+
     Examples
     --------
     >>> import fws_control as fws
@@ -318,9 +340,33 @@ def feedback_controller(
 def feedforward_feedback_controller(
     vehicle: Vehicle, gains: SteeringGains, *, name: str = "controller"
 ) -> ct.NonlinearIOSystem:
-    """Feedforward + feedback controller, paper eqs. (24)-(29).
+    r"""Feedforward + feedback controller, paper eqs. (24)-(29).
 
     Same as ``path_tracking_controller(vehicle, gains, feedforward=True)``.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Geometry: the wheelbase :math:`f` [m] enters the feedforward
+        :math:`\arctan(\kappa f)`; the steering-angle limits [rad], if set,
+        clip the outputs.
+    gains : SteeringGains
+        Scalar ``k1`` [rad/m], ``k2`` [rad/rad] and ``ratio`` [-].
+    name : str, optional
+        System name for :func:`control.interconnect`.
+
+    Returns
+    -------
+    control.NonlinearIOSystem
+        No states; inputs ``e, theta, curvature``; outputs ``delta_f,
+        delta_r`` (see :func:`path_tracking_controller`).
+
+    Raises
+    ------
+    TypeError
+        If `gains` is not a :class:`SteeringGains`.
+    ValueError
+        If the gains are not scalars.
 
     Examples
     --------

@@ -33,6 +33,8 @@ class SteeringGains:
         Rear-to-front steering ratio :math:`a` (``delta_r = ratio*delta_f``);
         0 is front-wheel steering.
 
+    Notes
+    -----
     Arrays broadcast, so one object can hold a whole sweep of designs.
 
     Examples
@@ -157,6 +159,27 @@ class SteeringGains:
         return cls(float(front[0]), float(front[1]), a)
 
     def steering(self, e, theta) -> tuple[np.ndarray, np.ndarray]:
-        """Feedback steering angles ``(delta_f_fb, delta_r_fb)`` for errors."""
+        """Feedback steering angles ``(delta_f_fb, delta_r_fb)`` for errors.
+
+        Parameters
+        ----------
+        e : float or array_like
+            Lateral error [m], finite (positive: left of the path).
+        theta : float or array_like
+            Heading error [rad], finite; broadcasts with `e` and the gains.
+
+        Returns
+        -------
+        delta_f_fb, delta_r_fb : ndarray
+            :math:`-k_1 e - k_2\\theta` and `ratio` times it [rad], without
+            the curvature feedforward or any steering limit.
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> g = fws.SteeringGains(k1=0.2, k2=0.5, ratio=-1.0)
+        >>> [float(d) for d in g.steering(1.0, 0.1)]
+        [-0.25, 0.25]
+        """
         delta_f = -self.k1 * np.asarray(e) - self.k2 * np.asarray(theta)
         return delta_f, self.ratio * delta_f

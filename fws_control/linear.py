@@ -235,6 +235,20 @@ class AffinePolynomial:
     def coefficients(self, k1, k2) -> np.ndarray:
         """Coefficients of :math:`p(s)` for gains that broadcast, ``(..., n+1)``.
 
+        Parameters
+        ----------
+        k1 : float or array_like
+            Lateral-error gain [rad/m], any finite value.
+        k2 : float or array_like
+            Heading-error gain [rad/rad], any finite value; broadcasts with
+            `k1` and with the leading dimensions of the polynomial.
+
+        Returns
+        -------
+        ndarray
+            Coefficients of :math:`p(s)`, highest power first, shape
+            ``(..., n + 1)``.
+
         Examples
         --------
         >>> import fws_control as fws
@@ -251,6 +265,23 @@ class AffinePolynomial:
     def evaluate(self, s, k1=0.0, k2=0.0) -> np.ndarray:
         """:math:`p(s)` at points `s` (broadcast with the gains), by Horner.
 
+        Parameters
+        ----------
+        s : complex or array_like
+            Points of the complex plane [1/s] (e.g. ``1j*omega`` with
+            :math:`\\omega` in rad/s), any finite value.
+        k1 : float or array_like, optional
+            Lateral-error gain [rad/m], any finite value; default 0.
+        k2 : float or array_like, optional
+            Heading-error gain [rad/rad], any finite value; default 0 (with
+            ``k1 = k2 = 0``, the open-loop :math:`d(s)`).
+
+        Returns
+        -------
+        ndarray
+            :math:`p(s)`, complex where `s` is; the shapes of `s` and of the
+            gains broadcast.
+
         Examples
         --------
         >>> import fws_control as fws
@@ -265,6 +296,18 @@ class AffinePolynomial:
 
     def polynomials_at(self, s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(d(s), n1(s), n2(s))`` at points `s` (broadcast).
+
+        Parameters
+        ----------
+        s : complex or array_like
+            Points of the complex plane [1/s], any finite value; broadcasts
+            with the leading dimensions of the polynomial.
+
+        Returns
+        -------
+        tuple of ndarray
+            :math:`d(s)`, :math:`n_1(s)`, :math:`n_2(s)`, so that
+            :math:`p(s) = d(s) + k_1 n_1(s) + k_2 n_2(s)`.
 
         Examples
         --------

@@ -92,6 +92,23 @@ def yaw_rate(
 
     Broadcasts over array arguments.
 
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Geometry; ``wheelbase`` is :math:`f` [m].
+    delta_f : float or array_like
+        Front steering angle [rad], ``|delta_f| < pi/2``.
+    delta_r : float or array_like
+        Rear steering angle [rad], finite.
+    speed : float or array_like
+        Speed :math:`V` [m/s], finite (negative: reversing).
+
+    Returns
+    -------
+    float or ndarray
+        Yaw rate :math:`\dot\psi` [rad/s], positive counter-clockwise; a
+        float for scalar arguments.
+
     Raises
     ------
     SingularStateError
@@ -117,6 +134,25 @@ def feedforward_steering(vehicle: Vehicle, *, curvature) -> float | np.ndarray:
     Paper eq. (26), :math:`\delta_f^{FF} = \arctan(\kappa_C f)`, with
     :math:`\delta_r^{FF} = 0` (eq. 27). Valid for any speed, including
     reversing.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Geometry; ``wheelbase`` is :math:`f` [m].
+    curvature : float or array_like
+        Path curvature :math:`\kappa_C` [1/m], finite (positive: turning
+        left; 0: straight path).
+
+    Returns
+    -------
+    float or ndarray
+        Front steering angle :math:`\delta_f^{FF}` [rad], in
+        :math:`(-\pi/2, \pi/2)`; a float for a scalar `curvature`.
+
+    Raises
+    ------
+    ValueError
+        If `curvature` is not finite.
 
     Examples
     --------

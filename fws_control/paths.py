@@ -810,6 +810,19 @@ class Straight(Path):
     def placed(self, start: Sequence[float], start_heading: float) -> Straight:
         """Same line starting at another pose (see :meth:`Path.placed`).
 
+        Parameters
+        ----------
+        start : (float, float)
+            New start point ``(x0, y0)`` [m], finite.
+        start_heading : float
+            New start heading [rad] from the x-axis, counter-clockwise
+            positive, finite.
+
+        Returns
+        -------
+        Straight
+            The same length, at the new pose.
+
         Examples
         --------
         >>> from fws_control.paths import Straight
@@ -951,6 +964,19 @@ class Arc(Path):
 
     def placed(self, start: Sequence[float], start_heading: float) -> Arc:
         """Same arc starting at another pose (see :meth:`Path.placed`).
+
+        Parameters
+        ----------
+        start : (float, float)
+            New start point ``(x0, y0)`` [m], finite.
+        start_heading : float
+            New start heading [rad] from the x-axis, counter-clockwise
+            positive, finite.
+
+        Returns
+        -------
+        Arc
+            The same curvature and length (or full circle), at the new pose.
 
         Examples
         --------
@@ -1097,6 +1123,19 @@ class Clothoid(Path):
 
     def placed(self, start: Sequence[float], start_heading: float) -> Clothoid:
         """Same clothoid starting at another pose (see :meth:`Path.placed`).
+
+        Parameters
+        ----------
+        start : (float, float)
+            New start point ``(x0, y0)`` [m], finite.
+        start_heading : float
+            New start heading [rad] from the x-axis, counter-clockwise
+            positive, finite.
+
+        Returns
+        -------
+        Clothoid
+            The same curvatures and length, at the new pose.
 
         Examples
         --------
@@ -1291,6 +1330,20 @@ class Spline(Path):
     def placed(self, start: Sequence[float], start_heading: float) -> Spline:
         """Same spline moved rigidly so it starts at the given pose.
 
+        Parameters
+        ----------
+        start : (float, float)
+            New first waypoint ``(x0, y0)`` [m], finite.
+        start_heading : float
+            New heading of the spline's tangent at its start [rad] from the
+            x-axis, counter-clockwise positive, finite; the waypoints are
+            rotated about the first one to match it.
+
+        Returns
+        -------
+        Spline
+            Spline through the moved waypoints (same `closed`).
+
         Examples
         --------
         >>> from fws_control.paths import Spline
@@ -1462,6 +1515,19 @@ class PathChain(Path):
 
     def placed(self, start: Sequence[float], start_heading: float) -> PathChain:
         """The chain moved rigidly to start at the given pose.
+
+        Parameters
+        ----------
+        start : (float, float)
+            New start point ``(x0, y0)`` of the first segment [m], finite.
+        start_heading : float
+            New start heading of the first segment [rad] from the x-axis,
+            counter-clockwise positive, finite; the other segments follow.
+
+        Returns
+        -------
+        PathChain
+            The same segments (same `closed`), at the new pose.
 
         Examples
         --------

@@ -98,11 +98,6 @@ class LateralPlant:
         double-root design: two gains cannot place four poles). Rate limits
         remain a matter of the simulation.
 
-    `speed` and `curvature` broadcast against each other (and against the
-    gains in the analysis functions), like the fields of
-    :class:`SteeringGains`: one object can hold a whole sweep of operating
-    points.
-
     Raises
     ------
     TypeError
@@ -110,6 +105,13 @@ class LateralPlant:
     ValueError
         For a zero or non-finite `speed`, a non-finite `curvature` or an
         unknown `model`.
+
+    Notes
+    -----
+    `speed` and `curvature` broadcast against each other (and against the
+    gains in the analysis functions), like the fields of
+    :class:`SteeringGains`: one object can hold a whole sweep of operating
+    points.
 
     Examples
     --------
@@ -346,6 +348,19 @@ class LoopMatrices:
         Rows that measure ``e`` and ``theta``, shape ``(..., n)``.
     states : tuple of str
         State names.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> loop = fws.loop_matrices(fws.LateralPlant(veh, speed=5.0))
+    >>> loop.states, loop.order
+    (('e', 'theta'), 2)
+    >>> loop.A
+    array([[0., 5.],
+           [0., 0.]])
+    >>> loop.B_rear.round(6)     # [V, -V/f]
+    array([ 5.      , -1.851852])
     """
 
     A: np.ndarray
@@ -361,7 +376,33 @@ class LoopMatrices:
         return int(self.A.shape[-1])
 
     def input_vector(self, ratio) -> np.ndarray:
-        r""":math:`\mathbf b = \mathbf B_f + a\mathbf B_r`, shape ``(..., n)``."""
+        r"""Input column of the loop, :math:`\mathbf b = \mathbf B_f + a\mathbf B_r`.
+
+        With :math:`\delta_r = a\,\delta_f` the two steering inputs act as
+        one, :math:`\dot x = \mathbf A x + \mathbf b\,\delta_f`.
+
+        Parameters
+        ----------
+        ratio : float or array_like
+            Rear-to-front steering ratio :math:`a` [-], finite (0:
+            front-wheel steering); broadcasts with the leading dimensions of
+            the matrices.
+
+        Returns
+        -------
+        ndarray
+            :math:`\mathbf b`, shape ``(..., n)``.
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+        >>> loop = fws.loop_matrices(fws.LateralPlant(veh, speed=5.0))
+        >>> loop.input_vector(-1.0).round(6)     # [-V, 2V/f]
+        array([-5.      ,  3.703704])
+        >>> loop.input_vector([0.0, -1.0]).shape
+        (2, 2)
+        """
         a = np.asarray(ratio, dtype=float)[..., np.newaxis]
         return self.B_front + a * self.B_rear
 

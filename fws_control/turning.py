@@ -66,6 +66,17 @@ class TurningGeometry:
     centre : ndarray
         Instantaneous centre O in the vehicle frame (R at the origin, x
         forward), shape ``(..., 2)`` [m]; ``inf`` when straight.
+
+    Examples
+    --------
+    Counter-steering with ``a = -1`` puts the centre abeam of G
+    (``rear_to_cg = 1.35`` m):
+
+    >>> import numpy as np, fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> t = fws.steady_turn(veh, np.radians(30), np.radians(-30))
+    >>> round(float(t.curvature), 6), t.centre.round(4)
+    (0.37037, array([1.35  , 2.3383]))
     """
 
     delta_f: np.ndarray

@@ -32,15 +32,25 @@ _HATCHES = (None, "//", "\\\\", "||", "--", "xx", "..")
 
 @dataclass(frozen=True, eq=False)
 class ChartPanel:
-    """One panel of a paper figure: overlaid charts with their labels.
+    r"""One panel of a paper figure: overlaid charts with their labels.
 
     Attributes
     ----------
     title : str
-        Panel title, e.g. ``"(a) V = 5 m/s, kappa = 0"``.
+        Panel title, e.g. ``"(a) V = 5 m/s, $\kappa$ = 0"``.
     charts : tuple of StabilityChart
     labels : tuple of str
         Legend label of each chart (the quantity that varies in the panel).
+
+    Examples
+    --------
+    >>> from fws_control.paper import paper_figure_panels
+    >>> panel = paper_figure_panels(2, npoints=51)[0]
+    >>> print(panel.title)
+    (a) V = 5 m/s, $\kappa$ = 0
+    >>> [(lab, round(c.stable_fraction, 3))
+    ...  for lab, c in zip(panel.labels, panel.charts)]
+    [('a = -1.5', 0.105), ('a = -1', 0.127), ('a = -0.5', 0.176), ('a = 0', 0.279)]
     """
 
     title: str
