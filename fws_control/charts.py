@@ -21,7 +21,7 @@ from typing import Any
 import control as ct
 import numpy as np
 
-from .delay import check_delay, critical_delay, unstable_root_count
+from .delay import critical_delay, unstable_root_count
 from .design import double_root_gains
 from .exceptions import UncontrollableError
 from .gains import SteeringGains
@@ -35,7 +35,7 @@ from .stability import (
     is_stable,
     stability_boundaries,
 )
-from .validation import check_finite, check_scalar
+from .validation import check_delay, check_finite, check_scalar
 
 __all__ = [
     "StabilityChart",

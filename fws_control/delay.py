@@ -50,32 +50,14 @@ import numpy as np
 from .gains import SteeringGains
 from .linear import AffinePolynomial, characteristic_coefficients, check_gains, horner
 from .plant import as_plant, loop_matrices
-from .validation import check_finite
+from .validation import check_delay
 
 __all__ = [
     "CriticalDelay",
     "critical_delay",
     "rightmost_roots",
     "unstable_root_count",
-    "check_delay",
 ]
-
-
-def check_delay(delay: Any) -> float:
-    """Return `delay` as a float if it is a finite number >= 0 [s].
-
-    Examples
-    --------
-    >>> from fws_control.delay import check_delay
-    >>> check_delay(0.24)
-    0.24
-    """
-    if isinstance(delay, bool):
-        raise TypeError(f"delay must be a number of seconds, got {delay!r}")
-    d = check_finite("delay", delay)
-    if np.ndim(d) != 0 or d < 0:
-        raise ValueError(f"delay must be a finite scalar >= 0 s, got {delay!r}")
-    return float(d)
 
 
 def _even_odd(c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

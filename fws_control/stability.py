@@ -29,11 +29,11 @@ from typing import Any
 
 import numpy as np
 
-from .delay import check_delay, unstable_root_count
+from .delay import unstable_root_count
 from .gains import SteeringGains
 from .linear import AffinePolynomial, characteristic_coefficients, check_gains
 from .plant import LateralPlant, as_plant
-from .validation import check_finite
+from .validation import check_delay, check_finite
 
 __all__ = [
     "is_stable",

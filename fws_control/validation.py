@@ -20,6 +20,7 @@ __all__ = [
     "check_model",
     "check_angle_limit",
     "check_rate_limit",
+    "check_delay",
     "MODELS",
 ]
 
@@ -116,3 +117,20 @@ def check_rate_limit(name: str, value: Any) -> float | None:
             f"{name} must be None or a finite value > 0 rad/s, got {value!r}"
         )
     return v
+
+
+def check_delay(delay: Any) -> float:
+    """Return `delay` as a float if it is a finite number >= 0 [s].
+
+    Examples
+    --------
+    >>> from fws_control.validation import check_delay
+    >>> check_delay(0.24)
+    0.24
+    """
+    if isinstance(delay, bool):
+        raise TypeError(f"delay must be a number of seconds, got {delay!r}")
+    d = check_finite("delay", delay)
+    if np.ndim(d) != 0 or d < 0:
+        raise ValueError(f"delay must be a finite scalar >= 0 s, got {delay!r}")
+    return float(d)
