@@ -31,7 +31,13 @@ from .engine import (
     STATUS_UNCONTROLLABLE,
     STATUSES,
 )
-from .reference import closed_loop_system, projection_system
+from .reference import (
+    DEFAULT_PADE_ORDER,
+    closed_loop_system,
+    projection_system,
+    reference_initial_state,
+    simulate_reference,
+)
 from .result import SimulationResult
 from .runners import DEFAULT_CHUNK_SIZE, simulate, simulate_batch
 
@@ -41,6 +47,9 @@ __all__ = [
     "SimulationResult",
     "closed_loop_system",
     "projection_system",
+    "simulate_reference",
+    "reference_initial_state",
+    "DEFAULT_PADE_ORDER",
     "SIGNALS",
     "DEFAULT_CHUNK_SIZE",
     "STATUS_OK",

@@ -25,6 +25,7 @@ subpackage, not part of the top-level API.
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -319,6 +320,37 @@ def _curvature_function(path):
     return path.curvature
 
 
+class _History:
+    """Past states of the runs for an input delay (method of steps).
+
+    Holds the solver's dense output of every accepted step, with the global
+    indices of the runs integrated in it. Before the start the state is held
+    at its initial value (the documented initial history: the steering
+    command is the one computed from the initial state until ``t = delay``).
+    """
+
+    def __init__(self, t0: float, y0: np.ndarray):
+        self.t0 = t0
+        self.y0 = y0  # (m, n) initial states of all runs
+        self.starts: list[float] = []
+        self.pieces: list[tuple[float, Any, np.ndarray]] = []
+
+    def add(self, t_old: float, t_new: float, dense, runs: np.ndarray) -> None:
+        self.starts.append(t_old)
+        self.pieces.append((t_new, dense, runs))
+
+    def state(self, t: float, runs: np.ndarray) -> np.ndarray:
+        """States ``(m, len(runs))`` of the given runs at time `t`."""
+        if t <= self.t0 or not self.pieces:
+            return self.y0[:, runs]
+        k = max(bisect.bisect_right(self.starts, t) - 1, 0)
+        _, dense, piece_runs = self.pieces[k]
+        # Solver stages never ask beyond the last accepted step (max_step is
+        # the delay); evaluation at its very end may extrapolate by rounding.
+        y = np.asarray(dense(t)).reshape(self.y0.shape[0], piece_runs.size)
+        return y[:, np.searchsorted(piece_runs, runs)]
+
+
 class _Engine:
     """Vectorised closed-loop right-hand side for ``n`` runs.
 
@@ -326,7 +358,14 @@ class _Engine:
     theta`` and, with a steering actuator, ``delta_f, delta_r``.
     """
 
-    def __init__(self, vehicle, path, gains, speed, feedforward, tau):
+    def __init__(
+        self, vehicle, path, gains, speed, feedforward, tau, delay=0.0, history=None,
+        runs=None,
+    ):  # fmt: skip
+        self.delay = delay
+        self.history = history
+        self.runs = runs
+        self.delayed = None
         self.vehicle = vehicle
         self.path = path
         self.gains = gains
@@ -353,23 +392,29 @@ class _Engine:
             np.asarray(self._kappa(self.clip(s)), dtype=float), s.shape
         )
 
-    def steering(self, Y, kappa):
+    def command(self, Y, kappa, t):
+        """Controller output at time `t`, from the measurements at ``t - delay``."""
+        if self.delayed is not None:  # delayed states given (output stage)
+            Y, kappa = self.delayed, self.curvature(self.delayed[0])
+        elif self.delay > 0.0 and self.history is not None:
+            # (no history yet only at the start, where the delayed state is the
+            # initial one: the current Y)
+            Yd = self.history.state(t - self.delay, self.runs)
+            Y, kappa = Yd, self.curvature(Yd[0])
+        return steering_command(
+            self.vehicle, self.gains, Y[1], Y[2], curvature=kappa, feedforward=self.ff
+        )
+
+    def steering(self, Y, kappa, t=0.0):
         if self.tau is None:
-            return steering_command(
-                self.vehicle,
-                self.gains,
-                Y[1],
-                Y[2],
-                curvature=kappa,
-                feedforward=self.ff,
-            )
+            return self.command(Y, kappa, t)
         return Y[3], Y[4]
 
-    def derivatives(self, Y):
+    def derivatives(self, Y, t=0.0):
         """Return ``(Ydot, kappa, delta_f, delta_r)`` for states ``Y (m, n)``."""
         s, e, th = Y[0], Y[1], Y[2]
         kappa = self.curvature(s)
-        df, dr = self.steering(Y, kappa)
+        df, dr = self.steering(Y, kappa, t)
         with np.errstate(divide="ignore", invalid="ignore"):
             s_dot, e_dot, th_dot = path_frame_derivatives(
                 self.speed, self.vehicle.wheelbase, kappa, e, th, df, dr
@@ -377,21 +422,19 @@ class _Engine:
         if self.tau is None:
             Ydot = np.stack([s_dot, e_dot, th_dot])
         else:
-            cmd = steering_command(
-                self.vehicle, self.gains, e, th, curvature=kappa, feedforward=self.ff
-            )
+            cmd = self.command(Y, kappa, t)
             rf, rr = actuator_rate(self.vehicle, cmd, (df, dr), time_constant=self.tau)
             Ydot = np.stack([s_dot, e_dot, th_dot, rf, rr])
         return Ydot, kappa, df, dr
 
     def rhs(self, t, y):
         Y = y.reshape(self.m, -1)
-        return self.derivatives(Y)[0].ravel()
+        return self.derivatives(Y, t)[0].ravel()
 
-    def margins(self, Y):
+    def margins(self, Y, t=0.0):
         """Distance to each stop condition, shape ``(3, n)``; stop where <= 0."""
         kappa = self.curvature(Y[0])
-        df, _ = self.steering(Y, kappa)
+        df, _ = self.steering(Y, kappa, t)
         out = np.full((3, Y.shape[1]), np.inf)
         out[0] = 0.5 * math.pi - np.abs(df)
         out[1] = 1.0 - kappa * Y[1]
@@ -401,7 +444,7 @@ class _Engine:
         return out
 
     def event(self, t, y):
-        return float(np.min(self.margins(y.reshape(self.m, -1))))
+        return float(np.min(self.margins(y.reshape(self.m, -1), t)))
 
 
 _STOP_MESSAGES = {
@@ -436,7 +479,12 @@ def _solve_segment(eng, solver_cls, t0, y0, t_end, t_eval, rtol, atol) -> _Segme
     accepted state is kept when the solver fails, so that a collapse of the
     step size at a singular state can be attributed to the run that caused it.
     """
-    solver = solver_cls(eng.rhs, t0, y0, t_end, rtol=rtol, atol=atol)
+    extra = {}
+    if eng.delay > 0.0:
+        # Method of steps: a stage at t + h needs the state at t + h - delay,
+        # which is known (accepted) only if h <= delay.
+        extra["max_step"] = eng.delay
+    solver = solver_cls(eng.rhs, t0, y0, t_end, rtol=rtol, atol=atol, **extra)
     g_old = eng.event(t0, y0)
     recorded: list[np.ndarray] = []
     k = 0  # next output time
@@ -446,8 +494,11 @@ def _solve_segment(eng, solver_cls, t0, y0, t_end, t_eval, rtol, atol) -> _Segme
             y_eval = np.stack(recorded, axis=1) if recorded else np.empty((y0.size, 0))
             return _Segment(y_eval, "failed", float(solver.t), solver.y.copy(), msg)
         t_old, t_new = solver.t_old, solver.t
-        g_new = eng.event(t_new, solver.y)
         dense = None
+        if eng.delay > 0.0:
+            dense = solver.dense_output()
+            eng.history.add(t_old, t_new, dense, eng.runs)
+        g_new = eng.event(t_new, solver.y)
         t_hit = None
         if g_old > 0.0 and g_new <= 0.0:
             dense = solver.dense_output()
@@ -488,6 +539,7 @@ def integrate(
     method: Any = "DOP853",
     rtol: float = 1e-10,
     atol: float = 1e-12,
+    delay: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate ``n`` runs together; a stopped run leaves the stacked state.
 
@@ -510,12 +562,24 @@ def integrate(
         Actuator lag [s] (:func:`resolve_time_constant`); None: no actuator.
     method, rtol, atol
         Solver (see :func:`check_method`) and its tolerances.
+    delay : float, optional
+        Input delay [s] on the steering command: the controller acts on the
+        measurements of ``t - delay``; before ``delay`` the command is the
+        one of the initial state (the state is held at its initial value for
+        ``t < 0``). Integrated by the method of steps: the solver's step is
+        at most the delay, the delayed state comes from the dense output of
+        the accepted steps, and the solver restarts at ``delay``,
+        ``2 delay`` and ``3 delay``, where the solution's first derivatives
+        are not smooth.
 
     Returns
     -------
     states : ndarray
         Shape ``(m, n, T)`` with rows ``s, e, theta`` (and ``delta_f,
-        delta_r`` with an actuator); NaN after a run's stop.
+        delta_r`` with an actuator); NaN after a run's stop. With a delay,
+        six more rows: the path state ``s, e, theta`` at ``t - delay`` and
+        its time derivative (zero before the start), which
+        :func:`compute_outputs` needs for the applied steering.
     status, message : ndarray of object
         Per run status (one of :data:`STATUSES`) and explanation.
     t_stop : ndarray
@@ -548,6 +612,8 @@ def integrate(
     message = np.full(n, "", dtype=object)
     t_stop = np.full(n, t_eval[-1])
 
+    history = None
+
     def engine_for(idx):
         return _Engine(
             vehicle,
@@ -556,6 +622,9 @@ def integrate(
             speed[idx],
             feedforward,
             tau,
+            delay,
+            history,
+            idx,
         )
 
     active = np.arange(n)
@@ -575,7 +644,9 @@ def integrate(
             )
         )
     out[:, :, 0] = Y
-    marg = eng.margins(Y)
+    if delay > 0.0:
+        history = _History(float(t_eval[0]), Y.copy())
+    marg = eng.margins(Y, float(t_eval[0]))
     bad = np.min(marg, axis=0) <= 0.0
     for i in np.flatnonzero(bad):
         kind = _STOP_KINDS[int(np.argmin(marg[:, i]))]
@@ -586,19 +657,26 @@ def integrate(
     t0 = float(t_eval[0])
     t_end = float(t_eval[-1])
     solver_cls = check_method(method)
+    # Restart points: where a delay makes the solution's derivatives jump.
+    breaks = [t0 + k * delay for k in (1, 2, 3)] if delay > 0.0 else []
+    breaks = [b for b in breaks if b < t_end] + [t_end]
     while active.size and t0 < t_end:
         eng = engine_for(active)
         first = int(np.searchsorted(t_eval, t0, side="right"))
+        seg_end = next(b for b in breaks if b > t0)
         seg = _solve_segment(
-            eng, solver_cls, t0, Y.ravel(), t_end, t_eval[first:], rtol, atol
+            eng, solver_cls, t0, Y.ravel(), seg_end, t_eval[first:], rtol, atol
         )
         nt = seg.y_eval.shape[1]
         if nt:
             out[:, active, first : first + nt] = seg.y_eval.reshape(m, active.size, nt)
         if seg.outcome == "done":
-            break
+            if seg_end >= t_end:
+                break
+            Y, t0 = seg.y_last.reshape(m, active.size), seg_end
+            continue
         Y_last = seg.y_last.reshape(m, active.size)
-        marg = eng.margins(Y_last)
+        marg = eng.margins(Y_last, seg.t_last)
         j = int(np.argmin(np.min(marg, axis=0)))
         kind = _STOP_KINDS[int(np.argmin(marg[:, j]))]
         if seg.outcome == "event":
@@ -623,7 +701,29 @@ def integrate(
         message[i] = f"at t={seg.t_last:.6g} s: {note}"
         keep = np.arange(active.size) != j
         active, Y, t0 = active[keep], Y_last[:, keep], seg.t_last
+    if delay > 0.0:
+        out = np.concatenate(
+            [out, _delayed_rows(engine_for, history, out, t_eval, delay)]
+        )
     return out, status, message, t_stop
+
+
+def _delayed_rows(engine_for, history, out, t_eval, delay) -> np.ndarray:
+    """Path state at ``t - delay`` and its derivative at the output times."""
+    n, T = out.shape[1], out.shape[2]
+    rows = np.full((6, n, T), np.nan)
+    for k, t in enumerate(t_eval):
+        runs = np.flatnonzero(np.isfinite(out[0, :, k]))
+        if runs.size == 0:
+            continue
+        td = float(t) - delay
+        Yd = history.state(td, runs)
+        rows[:3, runs, k] = Yd[:3]
+        if td <= history.t0:
+            rows[3:, runs, k] = 0.0  # held initial history
+        else:
+            rows[3:, runs, k] = engine_for(runs).derivatives(Yd, td)[0][:3]
+    return rows
 
 
 def _unwrap_time(psi: np.ndarray) -> np.ndarray:
@@ -651,6 +751,7 @@ def compute_outputs(
     time_constant: float | None,
     states: np.ndarray,
     initial_heading: np.ndarray,
+    delay: float = 0.0,
 ) -> np.ndarray:
     """All signals of :data:`SIGNALS` from the path-frame states.
 
@@ -663,6 +764,9 @@ def compute_outputs(
     initial_heading : ndarray
         Per run initial ``psi`` [rad], shape ``(n,)``: ``psi`` is unwrapped in
         time and put on the branch of this value.
+    delay : float, optional
+        The input delay given to :func:`integrate` [s]; its six extra rows
+        of `states` then give the applied (delayed) steering command.
 
     Returns
     -------
@@ -687,6 +791,9 @@ def compute_outputs(
     """
     tau = time_constant
     psi0 = np.asarray(initial_heading, dtype=float)
+    delayed = None
+    if delay > 0.0:
+        delayed, states = states[-6:], states[:-6]
     m, n, T = states.shape
     valid = np.isfinite(states[0])
     out = {name: np.full((n, T), np.nan) for name in SIGNALS}
@@ -701,8 +808,26 @@ def compute_outputs(
     g = SteeringGains(k1, k2, a)
     V = speed[run_idx]
     eng = _Engine(vehicle, path, g, V, feedforward, tau)
+    if delayed is not None:
+        Yd, Ydd = delayed[:3, valid], delayed[3:, valid]
+        eng.delayed = Yd
     Ydot, kappa, df, dr = eng.derivatives(Y)
-    if tau is None:
+    if tau is None and delayed is not None:
+        # The applied steering is the command of the delayed measurements.
+        kd = eng.curvature(Yd[0])
+        kd_rate = np.asarray(path.curvature_rate(eng.clip(Yd[0])), dtype=float) * Ydd[0]
+        rf, rr = steering_command_rate(
+            vehicle,
+            g,
+            Yd[1],
+            Yd[2],
+            Ydd[1],
+            Ydd[2],
+            curvature=kd,
+            curvature_rate=kd_rate,
+            feedforward=feedforward,
+        )
+    elif tau is None:
         kappa_rate = (
             np.asarray(path.curvature_rate(eng.clip(Y[0])), dtype=float) * Ydot[0]
         )

@@ -21,11 +21,20 @@ from ..controllers import path_tracking_controller, steering_actuator
 from ..gains import SteeringGains
 from ..models import global_frame_model
 from ..paths import Path
-from ..validation import check_nonzero, check_scalar, check_type
+from ..validation import check_delay, check_nonzero, check_scalar, check_type
 from ..vehicle import Vehicle
 from .engine import resolve_time_constant
 
-__all__ = ["closed_loop_system", "projection_system"]
+__all__ = [
+    "closed_loop_system",
+    "projection_system",
+    "reference_initial_state",
+    "simulate_reference",
+    "DEFAULT_PADE_ORDER",
+]
+
+#: Order of the Pade approximation of an input delay in the reference.
+DEFAULT_PADE_ORDER = 10
 
 
 def projection_system(path: Path, *, name: str = "projection") -> ct.NonlinearIOSystem:
@@ -75,6 +84,8 @@ def closed_loop_system(
     speed: float,
     feedforward: bool = True,
     actuator_time_constant: float | None = None,
+    delay: float = 0.0,
+    pade_order: int = DEFAULT_PADE_ORDER,
 ) -> ct.InterconnectedSystem:
     r"""The closed loop as a python-control interconnection (the reference).
 
@@ -100,14 +111,24 @@ def closed_loop_system(
     actuator_time_constant : float, optional
         Actuator lag [s] for a rate-limited vehicle, as in
         :func:`~fws_control.simulation.simulate`.
+    delay : float, optional
+        Input delay [s] on the steering commands, as in
+        :func:`~fws_control.simulation.simulate`, approximated here by a
+        :func:`control.pade` block of order `pade_order` on each channel,
+        between the controller and the vehicle (or actuator).
+    pade_order : int, optional
+        Order of the Pade approximation (>= 1); default
+        :data:`DEFAULT_PADE_ORDER`.
 
     Returns
     -------
     control.InterconnectedSystem
         No inputs; outputs ``x, y, psi, s, e, theta, curvature, delta_f,
-        delta_r``. Simulate it with :func:`control.input_output_response`;
-        the initial state is ``(x_R, y_R, psi)`` (followed by the initial
-        steering angles when an actuator is present).
+        delta_r`` (the applied angles). Simulate it with
+        :func:`control.input_output_response`; the initial state is
+        ``(x_R, y_R, psi)``, followed by the states of the Pade blocks (front,
+        rear) and of the actuator (:func:`reference_initial_state` builds
+        it).
 
     Examples
     --------
@@ -133,6 +154,7 @@ def closed_loop_system(
     ctrl = path_tracking_controller(
         vehicle, gains, feedforward=bool(feedforward), name="controller"
     )
+    delay = check_delay(delay)
     syslist = [veh_sys, proj, ctrl]
     connections = [
         ["projection.x", "vehicle.x"],
@@ -142,18 +164,28 @@ def closed_loop_system(
         ["controller.theta", "projection.theta"],
         ["controller.curvature", "projection.curvature"],
     ]
+    cmd = "controller"
+    if delay > 0.0:
+        for wheel in ("f", "r"):
+            syslist.append(_pade_block(delay, pade_order, f"delay_{wheel}"))
+            connections.append([f"delay_{wheel}.u", f"controller.delta_{wheel}"])
+        cmd = "delay"
+    src = {
+        "f": "delay_f.y" if cmd == "delay" else "controller.delta_f",
+        "r": "delay_r.y" if cmd == "delay" else "controller.delta_r",
+    }
     if tau is None:
-        steer = "controller"
+        applied = src
     else:
         syslist.append(steering_actuator(vehicle, time_constant=tau, name="actuator"))
         connections += [
-            ["actuator.delta_f_cmd", "controller.delta_f"],
-            ["actuator.delta_r_cmd", "controller.delta_r"],
+            ["actuator.delta_f_cmd", src["f"]],
+            ["actuator.delta_r_cmd", src["r"]],
         ]
-        steer = "actuator"
+        applied = {"f": "actuator.delta_f", "r": "actuator.delta_r"}
     connections += [
-        ["vehicle.delta_f", f"{steer}.delta_f"],
-        ["vehicle.delta_r", f"{steer}.delta_r"],
+        ["vehicle.delta_f", applied["f"]],
+        ["vehicle.delta_r", applied["r"]],
     ]
     outlist = [
         "vehicle.x",
@@ -163,8 +195,8 @@ def closed_loop_system(
         "projection.e",
         "projection.theta",
         "projection.curvature",
-        f"{steer}.delta_f",
-        f"{steer}.delta_r",
+        applied["f"],
+        applied["r"],
     ]
     return ct.interconnect(
         syslist,
@@ -173,4 +205,169 @@ def closed_loop_system(
         outlist=outlist,
         outputs=["x", "y", "psi", "s", "e", "theta", "curvature", "delta_f", "delta_r"],
         name="closed_loop",
+    )
+
+
+def _pade_block(delay: float, order: int, name: str) -> ct.StateSpace:
+    if isinstance(order, bool) or int(order) != order or order < 1:
+        raise ValueError(f"pade_order must be an integer >= 1, got {order!r}")
+    num, den = ct.pade(delay, int(order))
+    return ct.ss(ct.tf(num, den), inputs="u", outputs="y", name=name)
+
+
+def reference_initial_state(
+    vehicle: Vehicle,
+    path: Path,
+    gains: SteeringGains,
+    *,
+    initial_state,
+    feedforward: bool = True,
+    actuator_time_constant: float | None = None,
+    delay: float = 0.0,
+    pade_order: int = DEFAULT_PADE_ORDER,
+) -> np.ndarray:
+    """Initial state of :func:`closed_loop_system` matching the fast engine's.
+
+    The vehicle starts at `initial_state`; the Pade blocks start at their
+    steady state for the initial command (the held initial history of
+    :func:`~fws_control.simulation.simulate`), and the actuator at the
+    initial command.
+
+    Parameters
+    ----------
+    vehicle, path, gains
+        As in :func:`closed_loop_system`.
+    initial_state : array_like
+        ``(x_R, y_R, psi)`` [m, m, rad].
+    feedforward, actuator_time_constant, delay, pade_order : optional
+        As in :func:`closed_loop_system`.
+
+    Returns
+    -------
+    ndarray
+        The full initial state vector.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> from fws_control.simulation import reference_initial_state
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> g = fws.SteeringGains(0.1, 0.5, ratio=0.0)
+    >>> x0 = reference_initial_state(veh, fws.Straight(), g,
+    ...                              initial_state=(0.0, 2.0, 0.0), delay=0.2,
+    ...                              pade_order=2)
+    >>> x0.shape
+    (7,)
+    """
+    from ..controllers import steering_command
+
+    x0 = np.asarray(initial_state, dtype=float).reshape(3)
+    _, e, theta, kappa = path.errors(*x0, strict=True)
+    u0 = np.array(
+        steering_command(
+            vehicle,
+            gains,
+            float(e),
+            float(theta),
+            curvature=float(kappa),
+            feedforward=bool(feedforward),
+        ),
+        dtype=float,
+    )
+    parts = [x0]
+    if check_delay(delay) > 0.0:
+        for u in u0:
+            blk = _pade_block(delay, pade_order, "d")
+            parts.append(-np.linalg.solve(blk.A, blk.B[:, 0] * u))
+    if resolve_time_constant(vehicle, actuator_time_constant) is not None:
+        parts.append(u0)
+    return np.concatenate(parts)
+
+
+def simulate_reference(
+    vehicle: Vehicle,
+    path: Path,
+    gains: SteeringGains,
+    *,
+    speed: float,
+    initial_state,
+    duration: float,
+    feedforward: bool = True,
+    dt: float = 0.01,
+    actuator_time_constant: float | None = None,
+    delay: float = 0.0,
+    pade_order: int = DEFAULT_PADE_ORDER,
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
+) -> ct.TimeResponseData:
+    """Simulate :func:`closed_loop_system` with :func:`control.input_output_response`.
+
+    The python-control reference of :func:`~fws_control.simulation.simulate`
+    (DOP853, the given tolerances), started from
+    :func:`reference_initial_state`. No stop at singular states: use it on
+    runs that stay regular.
+
+    Parameters
+    ----------
+    vehicle, path, gains, speed, feedforward, actuator_time_constant, delay
+        As in :func:`closed_loop_system`.
+    initial_state : array_like
+        ``(x_R, y_R, psi)`` [m, m, rad].
+    duration : float
+        Final time [s].
+    dt : float, optional
+        Output spacing [s] (``round(duration / dt)`` intervals).
+    pade_order : int, optional
+        Order of the Pade approximation of the delay.
+    rtol, atol : float, optional
+        Solver tolerances.
+
+    Returns
+    -------
+    control.TimeResponseData
+        Outputs ``x, y, psi, s, e, theta, curvature, delta_f, delta_r``.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> from fws_control.simulation import simulate_reference
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> g = fws.double_root_gains(veh, speed=5.0, ratio=0.0, pole=-1.0)
+    >>> ref = simulate_reference(veh, fws.Straight(), g, speed=5.0,
+    ...                          initial_state=(0.0, 2.0, 0.0), duration=5.0,
+    ...                          delay=0.2)
+    >>> fast = fws.simulate(veh, fws.Straight(), g, speed=5.0,
+    ...                     initial_state=(0.0, 2.0, 0.0), duration=5.0, delay=0.2)
+    >>> bool(abs(ref.outputs[4] - fast.e).max() < 1e-3)
+    True
+    """
+    from .engine import time_grid
+
+    sys = closed_loop_system(
+        vehicle,
+        path,
+        gains,
+        speed=speed,
+        feedforward=feedforward,
+        actuator_time_constant=actuator_time_constant,
+        delay=delay,
+        pade_order=pade_order,
+    )
+    x0 = reference_initial_state(
+        vehicle,
+        path,
+        gains,
+        initial_state=initial_state,
+        feedforward=feedforward,
+        actuator_time_constant=actuator_time_constant,
+        delay=delay,
+        pade_order=pade_order,
+    )
+    t = time_grid(duration, dt=dt)
+    return ct.input_output_response(
+        sys,
+        t,
+        initial_state=x0,
+        solve_ivp_method="DOP853",
+        solve_ivp_kwargs={"rtol": rtol, "atol": atol},
     )

@@ -26,7 +26,7 @@ import numpy as np
 
 from ..gains import SteeringGains
 from ..paths import Path
-from ..validation import check_nonzero, check_positive, check_type
+from ..validation import check_delay, check_nonzero, check_positive, check_type
 from ..vehicle import Vehicle
 from .engine import (
     check_initial_state,
@@ -80,6 +80,7 @@ def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts):
         time_constant=tau,
         states=states,
         initial_heading=x0[:, 2],
+        delay=opts["delay"],
     )
     return signals, status, message, t_stop
 
@@ -126,6 +127,7 @@ def simulate(
     dt: float = 0.01,
     t_eval: Any = None,
     actuator_time_constant: float | None = None,
+    delay: float = 0.0,
     method: str = "DOP853",
     rtol: float = 1e-10,
     atol: float = 1e-12,
@@ -170,6 +172,13 @@ def simulate(
         Lag :math:`\tau` [s] of the rate-limited actuator, used only when the
         vehicle has a rate limit (default
         :data:`~fws_control.controllers.DEFAULT_ACTUATOR_TIME_CONSTANT`).
+    delay : float, optional
+        Input delay :math:`\tau_d \ge 0` [s] on the steering command: the
+        controller acts on the measurements of ``t - delay`` (perception and
+        computation latency). Initial history: the state is held at its
+        initial value before ``t = 0``, so the command is the one of the
+        initial state until ``t = delay``. Integrated by the method of steps
+        (see :func:`~fws_control.simulation.engine.integrate`). Default 0.
     method : str or scipy.integrate.OdeSolver, optional
         Integration method: a name in ``"DOP853", "RK45", "RK23", "Radau",
         "BDF", "LSODA"`` or an OdeSolver class. The engine steps that solver
@@ -235,6 +244,7 @@ def simulate(
         dt=dt,
         t_eval=t_eval,
         actuator_time_constant=actuator_time_constant,
+        delay=delay,
         method=method,
         rtol=rtol,
         atol=atol,
@@ -256,6 +266,7 @@ def simulate_batch(
     dt: float = 0.01,
     t_eval: Any = None,
     actuator_time_constant: float | None = None,
+    delay: float = 0.0,
     method: str = "DOP853",
     rtol: float = 1e-10,
     atol: float = 1e-12,
@@ -289,6 +300,8 @@ def simulate_batch(
         Output times instead of `dt`, as in :func:`simulate`.
     actuator_time_constant : float, optional
         Actuator lag [s] for a rate-limited vehicle, as in :func:`simulate`.
+    delay : float, optional
+        Input delay [s] on the steering command, as in :func:`simulate`.
     method : str or scipy.integrate.OdeSolver, optional
         Integration method, as in :func:`simulate`.
     rtol, atol : float, optional
@@ -340,7 +353,7 @@ def simulate_batch(
     >>> fws.tracking_metrics(res).peak_lateral_accel.round(2).tolist()
     [2.0, 1.91, 1.73, 1.19]
     """
-    opts = {"method": method, "rtol": rtol, "atol": atol}
+    opts = {"method": method, "rtol": rtol, "atol": atol, "delay": check_delay(delay)}
     k1, k2, a, V, x0, t, tau = _prepare(
         vehicle,
         path,
