@@ -224,33 +224,45 @@ def run_gains(gains: Any, *, name: str = "gains") -> SteeringGains:
 
 
 def resolve_time_constant(vehicle: Vehicle, value: float | None) -> float | None:
-    """Lag of the rate-limited actuator, or None if the vehicle has no rate limit.
+    r"""Time constant of the steering actuator, or None when there is none.
 
-    Without a rate limit the steering angles equal the commands (no actuator
-    states); with one, `value` (default
-    :data:`~fws_control.controllers.DEFAULT_ACTUATOR_TIME_CONSTANT`) is the
-    time constant [s] of :func:`~fws_control.controllers.steering_actuator`.
+    The actuator is the first-order lag of
+    :func:`~fws_control.controllers.steering_actuator`,
+    :math:`T\dot\delta = \delta_{cmd} - \delta`, with the vehicle's rate
+    limits (if any) clipping :math:`\dot\delta`. It is in the loop when a
+    time constant is given, or when the vehicle has a rate limit (then with
+    :data:`~fws_control.controllers.DEFAULT_ACTUATOR_TIME_CONSTANT` unless
+    one is given). Otherwise the steering angles equal the commands.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Its rate limits decide whether an actuator is needed by default.
+    value : float or None
+        Time constant [s], > 0, or None.
+
+    Returns
+    -------
+    float or None
 
     Examples
     --------
     >>> import fws_control as fws
     >>> from fws_control.simulation.engine import resolve_time_constant
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> resolve_time_constant(veh, 0.1) is None
-    True
+    >>> resolve_time_constant(veh, None) is None, resolve_time_constant(veh, 0.27)
+    (True, 0.27)
     >>> lim = fws.Vehicle(2.7, 1.35, max_steer_rate_front=0.5)
     >>> resolve_time_constant(lim, None), resolve_time_constant(lim, 0.1)
     (0.05, 0.1)
     """
+    if value is not None:
+        return float(check_positive("actuator_time_constant", value))
     has_rate = (
         vehicle.max_steer_rate_front is not None
         or vehicle.max_steer_rate_rear is not None
     )
-    if not has_rate:
-        return None
-    if value is None:
-        return DEFAULT_ACTUATOR_TIME_CONSTANT
-    return float(check_positive("actuator_time_constant", value))
+    return DEFAULT_ACTUATOR_TIME_CONSTANT if has_rate else None
 
 
 def time_grid(duration: float, *, dt: float = 0.01, t_eval: Any = None) -> np.ndarray:

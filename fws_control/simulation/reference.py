@@ -4,7 +4,7 @@ A second, independent implementation of the loop that
 :func:`~fws_control.simulation.simulate` integrates: the global-frame
 vehicle (eqs. 8-10), a projection block that maps ``(x, y, psi)`` to the
 path errors ``(s, e, theta)`` and the curvature (eqs. 14-16), the controller
-(eqs. 24-29) and, for a rate-limited vehicle, the steering actuator, joined
+(eqs. 24-29) and, if there is one, the steering actuator, joined
 with :func:`control.interconnect` and simulated with
 :func:`control.input_output_response`. It is slower than the engine (a
 projection per right-hand-side call, signal passing between the blocks) and
@@ -91,9 +91,11 @@ def closed_loop_system(
 
     Blocks: :func:`~fws_control.global_frame_model` (states ``x, y, psi``),
     :func:`projection_system`, :func:`~fws_control.path_tracking_controller`
-    and, if the vehicle has a steering-rate limit,
+    with a delay, a :func:`control.pade` block per steering channel, and, if
+    there is an actuator (see
+    :func:`~fws_control.simulation.engine.resolve_time_constant`),
     :func:`~fws_control.steering_actuator` (states ``delta_f, delta_r``
-    appended after the vehicle's).
+    appended last).
 
     Parameters
     ----------
@@ -109,7 +111,7 @@ def closed_loop_system(
         Include the curvature feedforward (default), as in
         :func:`~fws_control.simulation.simulate`.
     actuator_time_constant : float, optional
-        Actuator lag [s] for a rate-limited vehicle, as in
+        Steering actuator time constant [s], as in
         :func:`~fws_control.simulation.simulate`.
     delay : float, optional
         Input delay [s] on the steering commands, as in

@@ -169,9 +169,12 @@ def simulate(
         Output times instead of `dt`; increasing, from 0 to at most
         `duration`.
     actuator_time_constant : float, optional
-        Lag :math:`\tau` [s] of the rate-limited actuator, used only when the
-        vehicle has a rate limit (default
-        :data:`~fws_control.controllers.DEFAULT_ACTUATOR_TIME_CONSTANT`).
+        Time constant :math:`T` [s] of a first-order steering actuator,
+        :math:`T\dot\delta = \delta_{cmd} - \delta` on each axle, whose rate
+        the vehicle's rate limits clip. Given: the actuator is in the loop
+        (its states start at the initial command). None (default): an
+        actuator only if the vehicle has a rate limit, with
+        :data:`~fws_control.controllers.DEFAULT_ACTUATOR_TIME_CONSTANT`.
     delay : float, optional
         Input delay :math:`\tau_d \ge 0` [s] on the steering command: the
         controller acts on the measurements of ``t - delay`` (perception and
@@ -299,7 +302,7 @@ def simulate_batch(
     t_eval : array_like, optional
         Output times instead of `dt`, as in :func:`simulate`.
     actuator_time_constant : float, optional
-        Actuator lag [s] for a rate-limited vehicle, as in :func:`simulate`.
+        Steering actuator time constant [s], as in :func:`simulate`.
     delay : float, optional
         Input delay [s] on the steering command, as in :func:`simulate`.
     method : str or scipy.integrate.OdeSolver, optional
