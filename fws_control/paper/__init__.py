@@ -15,8 +15,10 @@ and 5 as data), :mod:`~fws_control.paper.charts` (Figs. 2-4) and
 """
 
 from . import scenarios
+from .actuator import delay_margin_table, plot_actuator
 from .charts import ChartPanel, paper_figure_panels, plot_paper_figure
 from .data import (
+    ACTUATOR_SOURCE,
     FIG5_POLES,
     FIG5_RATIOS,
     FIG6_TO_9_RATIOS,
@@ -24,6 +26,8 @@ from .data import (
     PAPER_CURVED,
     PAPER_SPEEDS,
     PAPER_VEHICLE,
+    REALISTIC_DELAY,
+    REALISTIC_STEERING_LAG,
     TABLE_RATIOS,
 )
 from .figures import FIGURES, gains_table, make_figure, reproduce
@@ -45,4 +49,9 @@ __all__ = [
     "FIG5_POLES",
     "FIG6_TO_9_RATIOS",
     "TABLE_RATIOS",
+    "REALISTIC_DELAY",
+    "REALISTIC_STEERING_LAG",
+    "ACTUATOR_SOURCE",
+    "delay_margin_table",
+    "plot_actuator",
 ]

@@ -19,6 +19,9 @@ __all__ = [
     "FIG5_POLES",
     "FIG6_TO_9_RATIOS",
     "TABLE_RATIOS",
+    "REALISTIC_DELAY",
+    "REALISTIC_STEERING_LAG",
+    "ACTUATOR_SOURCE",
 ]
 
 #: The paper's vehicle: wheelbase f = 2.7 m, rear axle to CG d = 1.35 m.
@@ -46,3 +49,18 @@ FIG6_TO_9_RATIOS = (-1.0, -0.5, 0.0, 0.5, 1.0)
 
 #: Ratios of the charts (Figs. 3-4) and of the gains table.
 TABLE_RATIOS = (-1.5, -1.0, -0.5, 0.0, 0.5, 1.0, 1.5)
+
+#: A production lateral controller's input delay on the steering command [s]:
+#: Autoware's MPC lateral controller default ``input_delay``.
+REALISTIC_DELAY = 0.24
+
+#: Its first-order steering time constant [s] (``vehicle_model_steer_tau``).
+REALISTIC_STEERING_LAG = 0.27
+
+#: Where the two values come from.
+ACTUATOR_SOURCE = (
+    "Autoware Universe, control/autoware_mpc_lateral_controller/param/"
+    "lateral_controller_defaults.param.yaml: input_delay: 0.24 (steering input "
+    "delay time), vehicle_model_steer_tau: 0.27 (steering dynamics time "
+    "constant, 1st-order approximation)"
+)

@@ -30,8 +30,16 @@ from ..plant import LateralPlant
 from ..turning import plot_turning_radius, turning_radius
 from ..validation import check_model
 from ..vehicle import Vehicle
+from .actuator import delay_margin_table, plot_actuator
 from .charts import plot_paper_figure
-from .data import PAPER_CURVED, PAPER_SPEEDS, PAPER_VEHICLE, TABLE_RATIOS
+from .data import (
+    ACTUATOR_SOURCE,
+    PAPER_CURVED,
+    PAPER_SPEEDS,
+    PAPER_VEHICLE,
+    REALISTIC_DELAY,
+    TABLE_RATIOS,
+)
 
 __all__ = [
     "FigureSpec",
@@ -553,6 +561,16 @@ FIGURES: dict[str, FigureSpec] = {
         ),
         paper=False,
     ),
+    "extra_actuator": FigureSpec(
+        "extra_actuator",
+        "The paper's designs with a 0.24 s input delay and a 0.27 s steering lag "
+        "(Autoware's defaults): delay margin versus lambda0, responses in Fig. 9's "
+        "scenario for lambda0 = -1 and -2",
+        lambda model="exact", quick=False: (
+            plot_actuator(model=model, quick=quick).figure
+        ),
+        paper=False,
+    ),
     "extra_turning_radius": FigureSpec(
         "extra_turning_radius",
         "Steady turning radius of R and G at the front steering limit versus a",
@@ -814,6 +832,15 @@ def _summary_text(model: str, written, quick: bool = False) -> str:
         + (" Quick mode: coarse ratio grid." if quick else ""),
         "",
         _fig5_table(model, quick),
+        "## Delay margin of the paper's designs",
+        "",
+        f"Critical input delay (fws_control.critical_delay) of the double-root "
+        f"designs, ideal steering and with a first-order steering lag; "
+        f"'survives' = stable with a {REALISTIC_DELAY:g} s delay and the lag. "
+        f"Values: {ACTUATOR_SOURCE}.",
+        "",
+        delay_margin_table(),
+        "",
         "## Turning radius at the front steering limit",
         "",
         "Radius of the rear-axle centre R / centre of gravity G [m] with "

@@ -198,6 +198,7 @@ def _simulate_designs(
     dt: float,
     client,
     progress,
+    actuator: dict | None = None,
 ) -> SimulationResult:
     """Simulate the controllable designs; keep the others as marked runs."""
     n = ratios.size
@@ -215,6 +216,7 @@ def _simulate_designs(
             dt=dt,
             client=client,
             progress=progress,
+            **(actuator or {}),
         )
     return expand_runs(
         sub,
@@ -278,6 +280,8 @@ def scenario_responses(
     duration: float | None = None,
     dt: float = 0.01,
     vehicle: Vehicle = PAPER_VEHICLE,
+    delay: float = 0.0,
+    actuator_time_constant: float | None = None,
     client=None,
     progress: bool | None = None,
 ) -> ScenarioResponses:
@@ -301,6 +305,10 @@ def scenario_responses(
         Output spacing [s].
     vehicle : Vehicle, optional
         Default :data:`PAPER_VEHICLE`.
+    delay, actuator_time_constant : float, optional
+        Input delay [s] and steering-actuator time constant [s] of the
+        simulation (:func:`~fws_control.simulate`); the gains are designed
+        without them, as in the paper.
     client, progress
         Passed to :func:`simulate_batch`.
 
@@ -322,8 +330,9 @@ def scenario_responses(
     ff = sc.feedforward if feedforward is None else bool(feedforward)
     dur = sc.duration if duration is None else duration
     k1, k2, ok = scenario_gains(sc, ratios, pole, model, vehicle)
+    act = {"delay": delay, "actuator_time_constant": actuator_time_constant}
     res = _simulate_designs(
-        sc, vehicle, ratios, k1, k2, ok, ff, dur, dt, client, progress
+        sc, vehicle, ratios, k1, k2, ok, ff, dur, dt, client, progress, act
     )
     return ScenarioResponses(sc, ratios, float(pole), model, ff, res)
 
@@ -336,6 +345,8 @@ def fig6_to_9_responses(
     duration: float | None = None,
     dt: float = 0.01,
     vehicle: Vehicle = PAPER_VEHICLE,
+    delay: float = 0.0,
+    actuator_time_constant: float | None = None,
     progress: bool | None = None,
 ) -> dict[int, ScenarioResponses]:
     """The time responses of Figs. 6-9 (e, theta, trajectory, steering, a_lat).
@@ -364,6 +375,8 @@ def fig6_to_9_responses(
             duration=duration,
             dt=dt,
             vehicle=vehicle,
+            delay=delay,
+            actuator_time_constant=actuator_time_constant,
             progress=progress,
         )
     return dict(sorted(out.items()))
@@ -417,6 +430,8 @@ def fig5_peak_lateral_accel(
     duration: float | None = None,
     dt: float = 0.01,
     vehicle: Vehicle = PAPER_VEHICLE,
+    delay: float = 0.0,
+    actuator_time_constant: float | None = None,
     client=None,
     progress: bool | None = None,
 ) -> dict[str, PeakSweep]:
@@ -434,7 +449,7 @@ def fig5_peak_lateral_accel(
     poles : dict, optional
         Double roots per speed; default ``{5: (-1, -2), 20: (-1, -2, -3)}``
         as in the paper.
-    duration, dt, vehicle, client, progress
+    duration, dt, vehicle, delay, actuator_time_constant, client, progress
         As in :func:`scenario_responses`.
 
     Returns
@@ -477,6 +492,7 @@ def fig5_peak_lateral_accel(
             dt,
             client,
             progress,
+            {"delay": delay, "actuator_time_constant": actuator_time_constant},
         )
         good = res.status == "ok"
 
