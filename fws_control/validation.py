@@ -128,7 +128,7 @@ def check_delay(delay: Any) -> float:
     >>> check_delay(0.24)
     0.24
     """
-    if isinstance(delay, bool):
+    if isinstance(delay, (bool, np.bool_)):
         raise TypeError(f"delay must be a number of seconds, got {delay!r}")
     d = check_finite("delay", delay)
     if np.ndim(d) != 0 or d < 0:
