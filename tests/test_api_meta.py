@@ -808,6 +808,10 @@ def _plot_factories():
         paper = importlib.import_module(f"{PACKAGE}.paper")
         return lambda **kw: paper.plot_paper_figure(2, npoints=21, **kw)
 
+    def actuator_figure():
+        paper = importlib.import_module(f"{PACKAGE}.paper")
+        return lambda **kw: paper.plot_actuator(quick=True, **kw)
+
     return {
         "StabilityChart.plot": chart,
         "DelayMarginChart.plot": delay_chart,
@@ -815,6 +819,7 @@ def _plot_factories():
         "LinearNonlinearComparison.plot": comparison,
         "plot_turning_radius": turning_radius,
         "paper.plot_paper_figure": paper_figure,
+        "paper.plot_actuator": actuator_figure,
     }
 
 

@@ -240,6 +240,7 @@ def test_reproduce_quick_writes_every_figure(tmp_path):
     p = run("reproduce", "--out", out, "--quick", "--no-progress", "--dpi", 40)
     assert p.returncode == 0, p.stderr
     expected = [f"fig{n}.png" for n in range(2, 10)] + [
+        "extra_actuator.png",
         "extra_linear_vs_nonlinear.png",
         "extra_root_loci.png",
         "extra_turning_radius.png",
