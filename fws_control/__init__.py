@@ -34,6 +34,16 @@ Modules: :mod:`~fws_control.vehicle`, :mod:`~fws_control.exceptions`,
 
 from . import symbolic
 from .acceleration import lateral_acceleration, yaw_acceleration
+from .baselines import (
+    LateralController,
+    LQRController,
+    PurePursuit,
+    RearWheelFeedback,
+    Stanley,
+    StateFeedback,
+    as_controller,
+    saturate,
+)
 from .charts import (
     DelayMarginChart,
     StabilityChart,
@@ -150,6 +160,14 @@ __all__ = [
     "symbolic",
     "StabilityChart",
     "stability_chart",
+    "LateralController",
+    "StateFeedback",
+    "LQRController",
+    "PurePursuit",
+    "Stanley",
+    "RearWheelFeedback",
+    "saturate",
+    "as_controller",
     "DelayMarginChart",
     "delay_margin_chart",
     "gain_loop",

@@ -35,6 +35,7 @@ from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, OdeSolver, Radau
 from scipy.optimize import brentq
 
 from ..acceleration import lateral_acceleration
+from ..baselines import saturate
 from ..controllers import (
     DEFAULT_ACTUATOR_TIME_CONSTANT,
     actuator_rate,
@@ -65,6 +66,9 @@ __all__ = [
     "initial_path_state",
     "integrate",
     "compute_outputs",
+    "PEAK_SIGNALS",
+    "DenseSolution",
+    "exact_peaks",
 ]
 
 #: The run reached the final time.
@@ -362,6 +366,74 @@ class _History:
         y = np.asarray(dense(t)).reshape(self.y0.shape[0], piece_runs.size)
         return y[:, np.searchsorted(piece_runs, runs)]
 
+    def states_at(self, runs: np.ndarray, times: np.ndarray) -> np.ndarray:
+        """States ``(m, len(runs))`` of run ``runs[j]`` at time ``times[j]``.
+
+        Each pair is evaluated on the dense output of the step that holds
+        that run at that time (a run that stopped at ``t`` is found in the
+        step that ended at ``t``, not in the next segment's first step).
+        """
+        runs = np.asarray(runs, dtype=int)
+        times = np.asarray(times, dtype=float)
+        m = self.y0.shape[0]
+        out = np.empty((m, runs.size))
+        before = times <= self.t0
+        out[:, before] = self.y0[:, runs[before]]
+        idx = np.flatnonzero(~before)
+        if idx.size == 0:
+            return out
+        if not self.pieces:
+            raise ValueError("no integrated step holds the requested times")
+        starts = np.asarray(self.starts)
+        k = np.maximum(np.searchsorted(starts, times[idx], side="right") - 1, 0)
+        while idx.size:
+            done = np.zeros(idx.size, dtype=bool)
+            for kk in np.unique(k):
+                sel = np.flatnonzero(k == kk)
+                _, dense, piece_runs = self.pieces[kk]
+                r = runs[idx[sel]]
+                pos = np.minimum(np.searchsorted(piece_runs, r), piece_runs.size - 1)
+                present = piece_runs[pos] == r
+                sel, pos = sel[present], pos[present]
+                if sel.size:
+                    out[:, idx[sel]] = _dense_at(
+                        dense, times[idx[sel]], pos, m, piece_runs.size
+                    )
+                    done[sel] = True
+            idx, k = idx[~done], k[~done] - 1
+            if np.any(k < 0):
+                raise ValueError("a run was asked for at a time it was not integrated")
+        return out
+
+
+def _dense_at(dense, times, pos, m, width) -> np.ndarray:
+    """Rows ``(m, len(times))`` of the runs at positions `pos` of one step.
+
+    `dense` interpolates the stacked state ``(m, width)`` (flattened
+    row-major); pair ``j`` is run ``pos[j]`` at ``times[j]``. The
+    interpolants of DOP853 and the explicit Runge-Kutta methods are
+    evaluated for the requested components only; other solvers' dense
+    output is called on the distinct times.
+    """
+    from scipy.integrate._ivp.rk import Dop853DenseOutput, RkDenseOutput
+
+    cols = np.arange(m)[:, None] * width + pos[None, :]  # (m, P)
+    if isinstance(dense, Dop853DenseOutput):
+        x = (times - dense.t_old) / dense.h
+        y = np.zeros(cols.shape)
+        for i, f in enumerate(reversed(dense.F)):
+            y += f[cols]
+            y *= x if i % 2 == 0 else 1 - x
+        return y + dense.y_old[cols]
+    if isinstance(dense, RkDenseOutput):
+        x = (times - dense.t_old) / dense.h
+        p = np.cumprod(np.tile(x, (dense.order + 1, 1)), axis=0)  # (order+1, P)
+        y = dense.h * np.einsum("mpj,jp->mp", dense.Q[cols], p)
+        return y + dense.y_old[cols]
+    ut, inv = np.unique(times, return_inverse=True)
+    y = np.asarray(dense(ut)).reshape(m, width, ut.size)
+    return y[:, pos, inv]
+
 
 class _Engine:
     """Vectorised closed-loop right-hand side for ``n`` runs.
@@ -413,9 +485,55 @@ class _Engine:
             # initial one: the current Y)
             Yd = self.history.state(t - self.delay, self.runs)
             Y, kappa = Yd, self.curvature(Yd[0])
+        if not isinstance(self.gains, SteeringGains):  # a LateralController
+            df, dr = self.gains.steering(
+                self.vehicle,
+                self.path,
+                s=self.clip(Y[0]),
+                e=Y[1],
+                theta=Y[2],
+                curvature=kappa,
+                speed=self.speed,
+            )
+            return saturate(self.vehicle, df, dr)
         return steering_command(
             self.vehicle, self.gains, Y[1], Y[2], curvature=kappa, feedforward=self.ff
         )
+
+    def command_rate(self, Y, Ydot, kappa):
+        """Time derivative of the command for (delayed) states and their rates."""
+        kappa_rate = (
+            np.asarray(self.path.curvature_rate(self.clip(Y[0])), dtype=float) * Ydot[0]
+        )
+        if isinstance(self.gains, SteeringGains):
+            return steering_command_rate(
+                self.vehicle,
+                self.gains,
+                Y[1],
+                Y[2],
+                Ydot[1],
+                Ydot[2],
+                curvature=kappa,
+                curvature_rate=kappa_rate,
+                feedforward=self.ff,
+            )
+        ctrl = self.gains
+        kw = dict(
+            s=self.clip(Y[0]), e=Y[1], theta=Y[2], curvature=kappa, speed=self.speed
+        )
+        raw_f, raw_r = ctrl.steering(self.vehicle, self.path, **kw)
+        rf, rr = ctrl.steering_rate(
+            self.vehicle, self.path, s_dot=Ydot[0], e_dot=Ydot[1], theta_dot=Ydot[2],
+            **kw,
+        )  # fmt: skip
+        # a saturated channel does not move
+        lim_f = self.vehicle.max_steer_front
+        lim_r = self.vehicle.max_steer_rear
+        if lim_f is not None:
+            rf = np.where(np.abs(raw_f) > lim_f, 0.0, rf)
+        if lim_r is not None:
+            rr = np.where(np.abs(raw_r) > lim_r, 0.0, rr)
+        return rf, rr
 
     def steering(self, Y, kappa, t=0.0):
         if self.tau is None:
@@ -483,13 +601,18 @@ class _Segment:
     message: str = ""
 
 
-def _solve_segment(eng, solver_cls, t0, y0, t_end, t_eval, rtol, atol) -> _Segment:
+def _solve_segment(
+    eng, solver_cls, t0, y0, t_end, t_eval, rtol, atol, record=None, runs=None
+) -> _Segment:
     """Step `solver_cls` from `t0`; stop at the first sign change of the margin.
 
     Same stepping, dense output and event location as
     :func:`scipy.integrate.solve_ivp` with a terminal event, but the last
     accepted state is kept when the solver fails, so that a collapse of the
     step size at a singular state can be attributed to the run that caused it.
+    With a `record` (:class:`_History`), the dense output of every accepted
+    step is added to it with the global indices `runs` of the stacked runs
+    (the delay's history, and the continuous solution for exact peaks).
     """
     extra = {}
     if eng.delay > 0.0:
@@ -507,9 +630,9 @@ def _solve_segment(eng, solver_cls, t0, y0, t_end, t_eval, rtol, atol) -> _Segme
             return _Segment(y_eval, "failed", float(solver.t), solver.y.copy(), msg)
         t_old, t_new = solver.t_old, solver.t
         dense = None
-        if eng.delay > 0.0:
+        if record is not None:
             dense = solver.dense_output()
-            eng.history.add(t_old, t_new, dense, eng.runs)
+            record.add(t_old, t_new, dense, runs)
         g_new = eng.event(t_new, solver.y)
         t_hit = None
         if g_old > 0.0 and g_new <= 0.0:
@@ -552,6 +675,7 @@ def integrate(
     rtol: float = 1e-10,
     atol: float = 1e-12,
     delay: float = 0.0,
+    solution: list | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate ``n`` runs together; a stopped run leaves the stacked state.
 
@@ -583,6 +707,10 @@ def integrate(
         the accepted steps, and the solver restarts at ``delay``,
         ``2 delay`` and ``3 delay``, where the solution's first derivatives
         are not smooth.
+    solution : list, optional
+        If given, a :class:`DenseSolution` (the solver's dense output of
+        every accepted step: the continuous solution between the output
+        times) is appended to it, for :func:`exact_peaks`.
 
     Returns
     -------
@@ -615,10 +743,12 @@ def integrate(
     n = speed.size
     T = t_eval.size
     m = 3 if tau is None else 5
-    k1, k2, a = (
-        np.broadcast_to(np.asarray(v, dtype=float), (n,))
-        for v in (gains.k1, gains.k2, gains.ratio)
-    )
+    controller = not isinstance(gains, SteeringGains)
+    if not controller:
+        k1, k2, a = (
+            np.broadcast_to(np.asarray(v, dtype=float), (n,))
+            for v in (gains.k1, gains.k2, gains.ratio)
+        )
     out = np.full((m, n, T), np.nan)
     status = np.full(n, STATUS_OK, dtype=object)
     message = np.full(n, "", dtype=object)
@@ -630,7 +760,9 @@ def integrate(
         return _Engine(
             vehicle,
             path,
-            SteeringGains(k1[idx], k2[idx], a[idx]),
+            gains.subset(idx)
+            if controller
+            else SteeringGains(k1[idx], k2[idx], a[idx]),
             speed[idx],
             feedforward,
             tau,
@@ -656,7 +788,7 @@ def integrate(
             )
         )
     out[:, :, 0] = Y
-    if delay > 0.0:
+    if delay > 0.0 or solution is not None:
         history = _History(float(t_eval[0]), Y.copy())
     marg = eng.margins(Y, float(t_eval[0]))
     bad = np.min(marg, axis=0) <= 0.0
@@ -677,7 +809,16 @@ def integrate(
         first = int(np.searchsorted(t_eval, t0, side="right"))
         seg_end = next(b for b in breaks if b > t0)
         seg = _solve_segment(
-            eng, solver_cls, t0, Y.ravel(), seg_end, t_eval[first:], rtol, atol
+            eng,
+            solver_cls,
+            t0,
+            Y.ravel(),
+            seg_end,
+            t_eval[first:],
+            rtol,
+            atol,
+            record=history,
+            runs=active,
         )
         nt = seg.y_eval.shape[1]
         if nt:
@@ -717,6 +858,8 @@ def integrate(
         out = np.concatenate(
             [out, _delayed_rows(engine_for, history, out, t_eval, delay)]
         )
+    if solution is not None:
+        solution.append(DenseSolution(history, engine_for, delay))
     return out, status, message, t_stop
 
 
@@ -813,11 +956,14 @@ def compute_outputs(
         return np.stack([out[name] for name in SIGNALS], axis=1)
     run_idx = np.broadcast_to(np.arange(n)[:, None], (n, T))[valid]
     Y = states[:, valid]
-    k1, k2, a = (
-        np.broadcast_to(np.asarray(v, dtype=float), (n,))[run_idx]
-        for v in (gains.k1, gains.k2, gains.ratio)
-    )
-    g = SteeringGains(k1, k2, a)
+    if isinstance(gains, SteeringGains):
+        k1, k2, a = (
+            np.broadcast_to(np.asarray(v, dtype=float), (n,))[run_idx]
+            for v in (gains.k1, gains.k2, gains.ratio)
+        )
+        g = SteeringGains(k1, k2, a)
+    else:
+        g = gains.subset(run_idx) if gains.runs() else gains
     V = speed[run_idx]
     eng = _Engine(vehicle, path, g, V, feedforward, tau)
     if delayed is not None:
@@ -826,34 +972,9 @@ def compute_outputs(
     Ydot, kappa, df, dr = eng.derivatives(Y)
     if tau is None and delayed is not None:
         # The applied steering is the command of the delayed measurements.
-        kd = eng.curvature(Yd[0])
-        kd_rate = np.asarray(path.curvature_rate(eng.clip(Yd[0])), dtype=float) * Ydd[0]
-        rf, rr = steering_command_rate(
-            vehicle,
-            g,
-            Yd[1],
-            Yd[2],
-            Ydd[1],
-            Ydd[2],
-            curvature=kd,
-            curvature_rate=kd_rate,
-            feedforward=feedforward,
-        )
+        rf, rr = eng.command_rate(Yd, Ydd, eng.curvature(Yd[0]))
     elif tau is None:
-        kappa_rate = (
-            np.asarray(path.curvature_rate(eng.clip(Y[0])), dtype=float) * Ydot[0]
-        )
-        rf, rr = steering_command_rate(
-            vehicle,
-            g,
-            Y[1],
-            Y[2],
-            Ydot[1],
-            Ydot[2],
-            curvature=kappa,
-            curvature_rate=kappa_rate,
-            feedforward=feedforward,
-        )
+        rf, rr = eng.command_rate(Y, Ydot, kappa)
     else:
         rf, rr = Ydot[3], Ydot[4]
     ok = np.abs(df) < math.pi / 2
@@ -890,3 +1011,248 @@ def compute_outputs(
     shift = 2 * math.pi * np.round((psi0 - psi[:, 0]) / (2 * math.pi))
     out["psi"] = psi + shift[:, None]
     return np.stack([out[name] for name in SIGNALS], axis=1)
+
+
+# --------------------------------------------------------------------------
+# Exact peaks of the continuous solution
+
+#: Signals whose peak ``max |signal|`` :func:`exact_peaks` locates.
+PEAK_SIGNALS = (
+    "e",
+    "delta_f",
+    "delta_r",
+    "delta_f_rate",
+    "delta_r_rate",
+    "lateral_accel",
+)
+_PEAK_ROWS = [SIGNALS.index(name) for name in PEAK_SIGNALS]
+# Nodes per solver step on which the signals are first evaluated, candidate
+# local maxima refined per run and signal, and golden-section iterations
+# (0.618**80 shrinks a bracket of a step below 1e-16 of it).
+_NODES_PER_STEP = 8
+_PEAK_CANDIDATES = 3
+_GOLDEN_ITERATIONS = 80
+_GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
+
+
+@dataclass
+class DenseSolution:
+    """The continuous solution of an :func:`integrate` call.
+
+    ``history`` holds the solver's dense output of every accepted step with
+    the runs integrated in it; ``engine_for(runs)`` builds the right-hand
+    side of the given runs (for the derivative of the delayed state).
+    """
+
+    history: _History
+    engine_for: Any
+    delay: float
+
+    def states(self, runs: np.ndarray, times: np.ndarray) -> np.ndarray:
+        """States of run ``runs[j]`` at ``times[j]``, rows as :func:`integrate`.
+
+        With a delay the six rows of the delayed path state and its
+        derivative follow, as :func:`compute_outputs` expects them.
+        """
+        Y = self.history.states_at(runs, times)
+        if self.delay <= 0.0:
+            return Y
+        td = times - self.delay
+        Yd = self.history.states_at(runs, td)
+        rows = np.zeros((6, runs.size))
+        rows[:3] = Yd[:3]
+        live = td > self.history.t0  # before the start: held, derivative 0
+        if np.any(live):
+            eng = self.engine_for(runs[live])
+            # The command at td uses the measurements of td - delay.
+            eng.delayed = self.history.states_at(runs[live], td[live] - self.delay)
+            rows[3:, live] = eng.derivatives(Yd[:, live])[0][:3]
+        return np.concatenate([Y, rows])
+
+
+def exact_peaks(
+    vehicle: Vehicle,
+    path: Path,
+    gains: SteeringGains,
+    *,
+    speed: np.ndarray,
+    feedforward: bool,
+    time_constant: float | None,
+    solution: DenseSolution,
+    t_eval: np.ndarray,
+    signals: np.ndarray,
+    t_stop: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    r"""Peaks ``max |signal|`` of the continuous solution, per run and signal.
+
+    The maximum is taken over the whole integrated interval ``[t0,
+    t_stop]`` of each run, not over the output samples, so it does not
+    depend on the output grid. Each signal of :data:`PEAK_SIGNALS` is
+    evaluated (with :func:`compute_outputs`, on the solver's dense output)
+    at :data:`_NODES_PER_STEP` points per solver step and at the run's
+    stop; the largest local maxima of these nodes and the largest output
+    sample are then refined by a golden-section search between their
+    neighbours. The endpoints (``t = 0``, where the static controller's
+    peaks often lie, and the stop) are nodes themselves. A signal that is
+    not finite at a time where the state is (a rate or the lateral
+    acceleration at a singular stop, where they diverge) has the peak
+    ``inf`` at that time.
+
+    Parameters
+    ----------
+    vehicle, path, gains, speed, feedforward, time_constant
+        As given to :func:`integrate`.
+    solution : DenseSolution
+        From ``integrate(..., solution=[])``.
+    t_eval : ndarray
+        The output times of :func:`integrate`.
+    signals : ndarray
+        :func:`compute_outputs` at the output times, ``(n, len(SIGNALS), T)``.
+    t_stop : ndarray
+        Per run end time, from :func:`integrate`.
+
+    Returns
+    -------
+    values, times : ndarray
+        Shape ``(n, len(PEAK_SIGNALS))``: the peak of ``|signal|`` and the
+        time at which it occurs.
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> from fws_control.simulation.engine import (
+    ...     PEAK_SIGNALS, compute_outputs, exact_peaks, integrate)
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> g = fws.SteeringGains(np.array([0.1]), 0.5, 0.0)
+    >>> kw = dict(speed=np.array([5.0]), feedforward=False, time_constant=None)
+    >>> t = np.linspace(0.0, 10.0, 11)           # a coarse grid: 1 s
+    >>> sol = []
+    >>> states, status, _, t_stop = integrate(
+    ...     veh, fws.Straight(), g, path_state=np.array([[0.0, 1.0, 0.0]]),
+    ...     t_eval=t, solution=sol, **kw)
+    >>> sig = compute_outputs(veh, fws.Straight(), g, states=states,
+    ...                       initial_heading=np.zeros(1), **kw)
+    >>> val, when = exact_peaks(veh, fws.Straight(), g, solution=sol[0],
+    ...                         t_eval=t, signals=sig, t_stop=t_stop, **kw)
+    >>> j = PEAK_SIGNALS.index("delta_f_rate")
+    >>> round(float(when[0, j]), 3) > 0.0      # the rate peaks between samples
+    True
+    """
+    n = speed.size
+    S = len(PEAK_SIGNALS)
+    hist = solution.history
+    t0 = float(hist.t0)
+    t_stop = np.asarray(t_stop, dtype=float)
+    all_runs = np.arange(n)
+
+    def evaluate(times: np.ndarray) -> np.ndarray:
+        """``|signal|`` ``(n, S, K)`` at times ``(n, K)`` (NaN: no point)."""
+        valid = np.isfinite(times)
+        runs = np.broadcast_to(all_runs[:, None], times.shape)[valid]
+        st = solution.states(runs, times[valid])
+        states = np.full((st.shape[0], n, times.shape[1]), np.nan)
+        states[:, valid] = st
+        out = compute_outputs(
+            vehicle,
+            path,
+            gains,
+            speed=speed,
+            feedforward=feedforward,
+            time_constant=time_constant,
+            states=states,
+            initial_heading=np.zeros(n),
+            delay=solution.delay,
+        )
+        vals = np.abs(out[:, _PEAK_ROWS, :])
+        vals = np.where(np.isfinite(vals), vals, np.inf)
+        return np.where(valid[:, None, :], vals, -np.inf)
+
+    # Nodes: the solver's step boundaries (they do not depend on the output
+    # grid), subdivided, then the stop.
+    bounds = [t0]
+    for start, (end, _, _) in zip(hist.starts, hist.pieces, strict=True):
+        bounds += [start, end]
+    bounds = np.unique(np.asarray(bounds, dtype=float))
+    frac = np.arange(_NODES_PER_STEP) / _NODES_PER_STEP
+    grid = (bounds[:-1, None] + frac[None, :] * np.diff(bounds)[:, None]).ravel()
+    grid = np.append(grid, bounds[-1])
+    inside = grid[None, :] < t_stop[:, None]
+    count = np.count_nonzero(inside, axis=1)
+    times = np.full((n, grid.size + 1), np.nan)
+    times[:, :-1] = np.where(inside, grid[None, :], np.nan)
+    times[all_runs, count] = t_stop
+    node_v = evaluate(times)  # (n, S, K)
+    K = times.shape[1]
+
+    # Best so far: the nodes and the output samples (all on the solution).
+    samp = np.abs(np.asarray(signals, dtype=float)[:, _PEAK_ROWS, :])
+    have = np.isfinite(np.asarray(signals)[:, SIGNALS.index("s"), :])
+    samp = np.where(have[:, None, :], np.where(np.isfinite(samp), samp, np.inf), -np.inf)
+    j_node = np.argmax(node_v, axis=2)
+    best_v = np.take_along_axis(node_v, j_node[..., None], 2)[..., 0]
+    best_t = times[all_runs[:, None], j_node]
+    k_samp = np.argmax(samp, axis=2)
+    samp_v = np.take_along_axis(samp, k_samp[..., None], 2)[..., 0]
+    better = samp_v > best_v
+    best_v = np.where(better, samp_v, best_v)
+    best_t = np.where(better, t_eval[k_samp], best_t)
+
+    # Candidate brackets: the largest local maxima of the nodes ...
+    left = np.concatenate([np.full((n, S, 1), -np.inf), node_v[..., :-1]], axis=2)
+    right = np.concatenate([node_v[..., 1:], np.full((n, S, 1), -np.inf)], axis=2)
+    score = np.where((node_v >= left) & (node_v >= right), node_v, -np.inf)
+    C = min(_PEAK_CANDIDATES, K)
+    idx = np.argsort(-score, axis=2, kind="stable")[..., :C]  # (n, S, C)
+    last = count[:, None, None]
+    t_at = times[all_runs[:, None, None], np.clip(idx, 0, None)]
+    lo = times[all_runs[:, None, None], np.maximum(idx - 1, 0)]
+    hi = times[all_runs[:, None, None], np.minimum(idx + 1, last)]
+    lo = np.where(np.isfinite(lo), lo, t_at)
+    hi = np.where(np.isfinite(hi), hi, t_at)
+    # ... and the largest output sample.
+    T = t_eval.size
+    s_lo = t_eval[np.maximum(k_samp - 1, 0)]
+    s_hi = np.minimum(t_eval[np.minimum(k_samp + 1, T - 1)], t_stop[:, None])
+    lo = np.concatenate([lo, s_lo[..., None]], axis=2)
+    hi = np.concatenate([hi, np.maximum(s_hi, s_lo)[..., None]], axis=2)
+    C1 = lo.shape[2]
+    diag = np.arange(S)
+
+    def f(x):  # |signal s| at x[:, s, c], shape (n, S, C1)
+        v = evaluate(x.reshape(n, S * C1)).reshape(n, S, S, C1)
+        return v[:, diag, diag, :]
+
+    def keep_best(x, v):
+        nonlocal best_v, best_t
+        j = np.argmax(v, axis=2)
+        vj = np.take_along_axis(v, j[..., None], 2)[..., 0]
+        tj = np.take_along_axis(x, j[..., None], 2)[..., 0]
+        up = vj > best_v
+        best_v = np.where(up, vj, best_v)
+        best_t = np.where(up, tj, best_t)
+
+    # Golden-section search for the maximum in every bracket at once.
+    a, b = lo, hi
+    c = b - _GOLDEN * (b - a)
+    d = a + _GOLDEN * (b - a)
+    fc, fd = f(c), f(d)
+    keep_best(c, fc)
+    keep_best(d, fd)
+    for _ in range(_GOLDEN_ITERATIONS):
+        if np.all(b - a <= 1e-15 * np.maximum(1.0, np.abs(b))):
+            break
+        left_side = fc > fd  # the maximum is in [a, d]
+        b = np.where(left_side, d, b)
+        a = np.where(left_side, a, c)
+        new_c = b - _GOLDEN * (b - a)
+        new_d = a + _GOLDEN * (b - a)
+        x = np.where(left_side, new_c, new_d)
+        fx = f(x)
+        keep_best(x, fx)
+        c, fc, d, fd = (
+            np.where(left_side, x, d),
+            np.where(left_side, fx, fd),
+            np.where(left_side, c, x),
+            np.where(left_side, fc, fx),
+        )
+    return best_v, best_t

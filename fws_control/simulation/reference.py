@@ -17,6 +17,7 @@ from __future__ import annotations
 import control as ct
 import numpy as np
 
+from ..baselines import LateralController, saturate
 from ..controllers import path_tracking_controller, steering_actuator
 from ..gains import SteeringGains
 from ..models import global_frame_model
@@ -153,9 +154,12 @@ def closed_loop_system(
     tau = resolve_time_constant(vehicle, actuator_time_constant)
     veh_sys = global_frame_model(vehicle, speed=speed, name="vehicle")
     proj = projection_system(path, name="projection")
-    ctrl = path_tracking_controller(
-        vehicle, gains, feedforward=bool(feedforward), name="controller"
-    )
+    if isinstance(gains, LateralController):
+        ctrl = gains.system(vehicle, path, speed=speed, name="controller")
+    else:
+        ctrl = path_tracking_controller(
+            vehicle, gains, feedforward=bool(feedforward), name="controller"
+        )
     delay = check_delay(delay)
     syslist = [veh_sys, proj, ctrl]
     connections = [
@@ -166,6 +170,8 @@ def closed_loop_system(
         ["controller.theta", "projection.theta"],
         ["controller.curvature", "projection.curvature"],
     ]
+    if isinstance(gains, LateralController):
+        connections.append(["controller.s", "projection.s"])
     cmd = "controller"
     if delay > 0.0:
         for wheel in ("f", "r"):
@@ -223,6 +229,7 @@ def reference_initial_state(
     gains: SteeringGains,
     *,
     initial_state,
+    speed: float | None = None,
     feedforward: bool = True,
     actuator_time_constant: float | None = None,
     delay: float = 0.0,
@@ -241,6 +248,9 @@ def reference_initial_state(
         As in :func:`closed_loop_system`.
     initial_state : array_like
         ``(x_R, y_R, psi)`` [m, m, rad].
+    speed : float, optional
+        Speed [m/s]; needed when `gains` is a controller (its law may
+        depend on the speed).
     feedforward, actuator_time_constant, delay, pade_order : optional
         As in :func:`closed_loop_system`.
 
@@ -264,18 +274,37 @@ def reference_initial_state(
     from ..controllers import steering_command
 
     x0 = np.asarray(initial_state, dtype=float).reshape(3)
-    _, e, theta, kappa = path.errors(*x0, strict=True)
-    u0 = np.array(
-        steering_command(
-            vehicle,
-            gains,
-            float(e),
-            float(theta),
-            curvature=float(kappa),
-            feedforward=bool(feedforward),
-        ),
-        dtype=float,
-    )
+    s, e, theta, kappa = path.errors(*x0, strict=True)
+    if isinstance(gains, LateralController):
+        if speed is None:
+            raise TypeError("reference_initial_state needs speed= for a controller")
+        u0 = np.array(
+            saturate(
+                vehicle,
+                *gains.steering(
+                    vehicle,
+                    path,
+                    s=np.array([float(s)]),
+                    e=np.array([float(e)]),
+                    theta=np.array([float(theta)]),
+                    curvature=np.array([float(kappa)]),
+                    speed=np.array([float(speed)]),
+                ),
+            ),
+            dtype=float,
+        ).ravel()
+    else:
+        u0 = np.array(
+            steering_command(
+                vehicle,
+                gains,
+                float(e),
+                float(theta),
+                curvature=float(kappa),
+                feedforward=bool(feedforward),
+            ),
+            dtype=float,
+        )
     parts = [x0]
     if check_delay(delay) > 0.0:
         for u in u0:
@@ -360,6 +389,7 @@ def simulate_reference(
         path,
         gains,
         initial_state=initial_state,
+        speed=speed,
         feedforward=feedforward,
         actuator_time_constant=actuator_time_constant,
         delay=delay,

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from ..baselines import LateralController
 from ..gains import SteeringGains
 from ..paths import Path
 from ..validation import check_delay, check_nonzero, check_positive, check_type
@@ -53,12 +54,12 @@ def _stderr_is_tty() -> bool:
         return False
 
 
-def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts):
+def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl):
     """Simulate one chunk; module-level so that Dask can pickle it.
 
     Returns ``(signals (n, len(SIGNALS), T), status, message, t_stop)``.
     """
-    g = SteeringGains(k1, k2, a)
+    g = SteeringGains(k1, k2, a) if ctrl is None else ctrl
     z0 = initial_path_state(path, x0)
     states, status, message, t_stop = integrate(
         vehicle,
@@ -85,34 +86,46 @@ def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts):
     return signals, status, message, t_stop
 
 
+def _chunk_controller(ctrl, lo: int, hi: int):
+    """The controller of runs ``lo:hi`` (per-run parameters indexed)."""
+    if ctrl is None or not ctrl.runs():
+        return ctrl
+    return ctrl.subset(np.arange(lo, hi))
+
+
 def _prepare(
     vehicle, path, gains, speed, initial_state, duration, dt, t_eval, tau, opts
 ):
     """Validate the arguments shared by both runners; broadcast the runs."""
     check_type("vehicle", vehicle, Vehicle)
     check_type("path", path, Path, "a fws_control Path (e.g. fws.Straight())")
-    g = run_gains(gains, name="gains")
+    ctrl = gains if isinstance(gains, LateralController) else None
+    if ctrl is None:
+        g = run_gains(gains, name="gains")
+        fields = (g.k1, g.k2, g.ratio)
+    else:
+        # a controller carries its own parameters: no gains to record (NaN)
+        fields = (np.full(ctrl.runs() or 1, np.nan),) * 3
+    n_gains = fields[0].size
     speed_arr = np.atleast_1d(np.asarray(check_nonzero("speed", speed), dtype=float))
     if speed_arr.ndim != 1:
         raise ValueError(f"speed must be a scalar or 1-D, got shape {speed_arr.shape}")
     x0 = check_initial_state(initial_state)
-    sizes = {g.k1.size, speed_arr.size, x0.shape[0]} - {1}
+    sizes = {n_gains, speed_arr.size, x0.shape[0]} - {1}
     if len(sizes) > 1:
         raise ValueError(
             "gains, speed and initial_state must have one entry or the same "
-            f"number of runs, got {g.k1.size}, {speed_arr.size} and {x0.shape[0]}"
+            f"number of runs, got {n_gains}, {speed_arr.size} and {x0.shape[0]}"
         )
     n = sizes.pop() if sizes else 1
-    k1, k2, a, V = (
-        np.broadcast_to(v, (n,)).copy() for v in (g.k1, g.k2, g.ratio, speed_arr)
-    )
+    k1, k2, a, V = (np.broadcast_to(v, (n,)).copy() for v in (*fields, speed_arr))
     x0 = np.broadcast_to(x0, (n, 3)).copy()
     t = time_grid(duration, dt=dt, t_eval=t_eval)
     tau = resolve_time_constant(vehicle, tau)
     check_method(opts["method"])
     for name in ("rtol", "atol"):
         opts[name] = float(check_positive(name, opts[name]))
-    return k1, k2, a, V, x0, t, tau
+    return k1, k2, a, V, x0, t, tau, ctrl
 
 
 def simulate(
@@ -149,8 +162,11 @@ def simulate(
     path : Path
         Reference path (e.g. :class:`~fws_control.Straight`,
         :class:`~fws_control.Arc`).
-    gains : SteeringGains
-        Scalar ``k1, k2, ratio``.
+    gains : SteeringGains or LateralController
+        Scalar ``k1, k2, ratio`` of the paper's law, or any controller of
+        :mod:`fws_control.baselines` (e.g. :class:`~fws_control.PurePursuit`),
+        which carries its own feedforward (`feedforward` applies to gains
+        only).
     speed : float
         Speed :math:`V` [m/s], nonzero (negative: reversing).
     initial_state : array_like
@@ -220,10 +236,14 @@ def simulate(
     >>> len(res), res.e.shape
     (1, (1501,))
     """
-    g = run_gains(gains, name="gains")
-    if g.k1.size != 1:
+    n_gains = (
+        (gains.runs() or 1)
+        if isinstance(gains, LateralController)
+        else run_gains(gains, name="gains").k1.size
+    )
+    if n_gains != 1:
         raise ValueError(
-            f"gains must be scalar for simulate (got {g.k1.size} designs); use "
+            f"gains must be scalar for simulate (got {n_gains} designs); use "
             "simulate_batch for several runs"
         )
     if np.size(speed) != 1:
@@ -239,7 +259,7 @@ def simulate(
     batch = simulate_batch(
         vehicle,
         path,
-        g,
+        gains,
         speed=speed,
         initial_state=initial_state,
         duration=duration,
@@ -285,10 +305,12 @@ def simulate_batch(
         Geometry and optional limits (shared by all runs).
     path : Path
         Reference path (shared by all runs).
-    gains : SteeringGains or sequence of SteeringGains
+    gains : SteeringGains, sequence of SteeringGains or LateralController
         Per-run gains: one :class:`~fws_control.SteeringGains` whose fields
         are arrays (e.g. from :func:`~fws_control.double_root_gains` over an
-        array of ratios; flattened), or a sequence of them.
+        array of ratios; flattened), or a sequence of them; or a controller
+        of :mod:`fws_control.baselines` (its array parameters, if any, hold
+        one value per run). A controller's runs record NaN gains.
     speed : float or array_like
         Speed [m/s], scalar or one per run; nonzero.
     initial_state : array_like
@@ -357,7 +379,7 @@ def simulate_batch(
     [2.0, 1.91, 1.73, 1.19]
     """
     opts = {"method": method, "rtol": rtol, "atol": atol, "delay": check_delay(delay)}
-    k1, k2, a, V, x0, t, tau = _prepare(
+    k1, k2, a, V, x0, t, tau, ctrl = _prepare(
         vehicle,
         path,
         gains,
@@ -398,6 +420,7 @@ def simulate_batch(
             t,
             tau,
             opts,
+            _chunk_controller(ctrl, lo, hi),
         )
 
     from tqdm.auto import tqdm
