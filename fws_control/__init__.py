@@ -50,6 +50,7 @@ from .charts import (
     delay_margin_chart,
     stability_chart,
 )
+from .compare import ControllerComparison, compare, default_controllers
 from .comparison import LinearNonlinearComparison, compare_linear_nonlinear
 from .controllers import (
     feedback_controller,
@@ -78,6 +79,14 @@ from .linear import (
     characteristic_polynomial,
     closed_loop,
     linearize,
+)
+from .manoeuvres import (
+    Gate,
+    Manoeuvre,
+    constant_radius,
+    double_lane_change,
+    obstacle_avoidance,
+    slalom,
 )
 from .metrics import (
     TrackingMetrics,
@@ -168,6 +177,15 @@ __all__ = [
     "RearWheelFeedback",
     "saturate",
     "as_controller",
+    "ControllerComparison",
+    "compare",
+    "default_controllers",
+    "Gate",
+    "Manoeuvre",
+    "double_lane_change",
+    "obstacle_avoidance",
+    "slalom",
+    "constant_radius",
     "DelayMarginChart",
     "delay_margin_chart",
     "gain_loop",

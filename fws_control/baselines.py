@@ -485,7 +485,7 @@ class PurePursuit(LateralController):
     >>> df, dr = pp.steering(veh, fws.Straight(), s=0.0, e=1.0, theta=0.0,
     ...                      curvature=0.0, speed=5.0)
     >>> round(float(df), 6)     # atan(2 f sin(alpha)/L), sin(alpha) = -1/5
-    -0.212975
+    -0.212732
     """
 
     lookahead: float | np.ndarray = 5.0
@@ -639,8 +639,8 @@ class RearWheelFeedback(LateralController):
     >>> rw = fws.RearWheelFeedback(k_e=0.1, k_theta=0.5)
     >>> df, _ = rw.steering(veh, fws.Straight(), s=0.0, e=0.0, theta=0.1,
     ...                     curvature=0.0, speed=5.0)
-    >>> round(float(df), 6)      # atan(f * (-K_theta * 0.1))
-    -0.134184
+    >>> round(float(df), 6)      # atan(f * (-K_theta * V * 0.1) / V)
+    -0.134189
     """
 
     k_e: float | np.ndarray = 0.05

@@ -1,0 +1,376 @@
+r"""Lateral controllers side by side on one plant and one manoeuvre.
+
+:func:`compare` simulates every controller on the same vehicle (same steering
+angle and rate limits), the same course, speed, initial pose and optional
+input delay and steering lag, and returns a :class:`ControllerComparison`: a
+table of metrics per controller and a figure.
+
+Metrics (per controller): peak |lateral acceleration of G| [m/s²], peak
+|lateral jerk| [m/s³] (central differences of the lateral acceleration on
+the output grid), RMS and max |e| [m] over the course, max |delta_f|,
+|delta_r| [deg] and their rates [deg/s], cones hit (:meth:`Manoeuvre.cones_hit`)
+and completion (the run reached the end of the last gate without stopping).
+
+:func:`default_controllers` gives a fair starting set at a speed: the
+paper's double-root law (front steering and a rear ratio), rear-wheel
+feedback whose linearisation is that same front-steering design
+(``K_e = k1/f``, ``K_theta = k2/f``), pure pursuit and Stanley with
+commonly used parameters, and LQR with the paper's structure and with an
+independent rear axle.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import control as ct
+import numpy as np
+
+from .baselines import (
+    LateralController,
+    LQRController,
+    PurePursuit,
+    RearWheelFeedback,
+    Stanley,
+    StateFeedback,
+)
+from .design import double_root_gains
+from .gains import SteeringGains
+from .manoeuvres import Manoeuvre
+from .plant import LateralPlant
+from .simulation import SimulationResult, simulate
+from .validation import check_nonzero, check_type
+from .vehicle import Vehicle
+
+__all__ = [
+    "ControllerComparison",
+    "compare",
+    "default_controllers",
+    "COMPARISON_METRICS",
+]
+
+#: Column names of :attr:`ControllerComparison.table` (units in the names).
+COMPARISON_METRICS = (
+    "peak |a_lat| [m/s^2]",
+    "peak |jerk| [m/s^3]",
+    "RMS |e| [m]",
+    "max |e| [m]",
+    "max |delta_f| [deg]",
+    "max |delta_r| [deg]",
+    "max |delta_f rate| [deg/s]",
+    "max |delta_r rate| [deg/s]",
+    "cones hit",
+    "completed",
+)
+
+
+def default_controllers(
+    vehicle: Vehicle, *, speed: float, ratio: float = -0.3, pole: float = -1.0
+) -> dict[str, Any]:
+    """A fair set of controllers designed for `speed` on a straight road.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Geometry.
+    speed : float
+        Design speed [m/s].
+    ratio : float, optional
+        Rear ratio of the four-wheel-steering designs (default -0.3).
+    pole : float, optional
+        Double root [1/s] of the paper's designs (default -1).
+
+    Returns
+    -------
+    dict
+        Label -> controller (or :class:`SteeringGains`).
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> sorted(fws.default_controllers(veh, speed=20.0))[:3]
+    ['LQR (a = -0.3)', 'LQR (independent rear)', 'Stanley']
+    """
+    V = float(check_nonzero("speed", speed))
+    plant = LateralPlant(vehicle, speed=V)
+    g0 = double_root_gains(plant, ratio=0.0, pole=pole)
+    ga = double_root_gains(plant, ratio=ratio, pole=pole)
+    f = vehicle.wheelbase
+    Q = np.diag([1.0, 4.0])
+    return {
+        "paper, a = 0": g0,
+        f"paper, a = {ratio:g}": ga,
+        "rear-wheel feedback": RearWheelFeedback(
+            k_e=float(g0.k1) / f, k_theta=float(g0.k2) / f
+        ),
+        "pure pursuit": PurePursuit(lookahead=3.0, lookahead_time=1.0),
+        "Stanley": Stanley(gain=1.0),
+        f"LQR (a = {ratio:g})": LQRController(plant, Q=Q, R=4.0, ratio=ratio),
+        "LQR (independent rear)": LQRController(plant, Q=Q, R=4.0 * np.eye(2)),
+    }
+
+
+@dataclass(frozen=True, eq=False)
+class ControllerComparison:
+    """Runs and metrics of several controllers on one course.
+
+    Attributes
+    ----------
+    manoeuvre : Manoeuvre
+        The course.
+    speed : float
+        Speed [m/s].
+    delay : float
+        Input delay [s] of every run.
+    labels : tuple of str
+        Controller names, in order.
+    results : tuple of SimulationResult
+        One run per controller.
+    table : dict
+        Metric name (:data:`COMPARISON_METRICS`) -> ndarray, one value per
+        controller.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> m = fws.double_lane_change()
+    >>> cmp = fws.compare(veh, m, {"Stanley": fws.Stanley(gain=1.0)}, speed=10.0)
+    >>> cmp.labels, bool(cmp.table["completed"][0])
+    (('Stanley',), True)
+    """
+
+    manoeuvre: Manoeuvre
+    speed: float
+    delay: float
+    labels: tuple[str, ...]
+    results: tuple[SimulationResult, ...]
+    table: dict
+
+    def __repr__(self) -> str:
+        return (
+            f"ControllerComparison({self.manoeuvre.name!r}, speed={self.speed:g} m/s, "
+            f"delay={self.delay:g} s, controllers={list(self.labels)})"
+        )
+
+    def to_markdown(self, *, digits: int = 3) -> str:
+        """The table as Markdown, one row per controller.
+
+        Parameters
+        ----------
+        digits : int, optional
+            Significant digits of the numbers.
+
+        Returns
+        -------
+        str
+        """
+        head = "| controller | " + " | ".join(COMPARISON_METRICS) + " |"
+        rows = [head, "|---" * (len(COMPARISON_METRICS) + 1) + "|"]
+        for i, lab in enumerate(self.labels):
+            cells = []
+            for name in COMPARISON_METRICS:
+                v = self.table[name][i]
+                if name == "completed":
+                    cells.append("yes" if v else "no")
+                elif name == "cones hit":
+                    cells.append(str(int(v)))
+                else:
+                    cells.append(f"{v:.{digits}g}" if math.isfinite(v) else "—")
+            rows.append(f"| {lab} | " + " | ".join(cells) + " |")
+        return "\n".join(rows)
+
+    def plot(self, ax=None) -> ct.ControlPlot:
+        """Trajectories with the gates, lateral error, front steering, a_lat.
+
+        Parameters
+        ----------
+        ax : sequence of 4 matplotlib.axes.Axes, optional
+            Axes of the panels; a new figure if None.
+
+        Returns
+        -------
+        control.ControlPlot
+            Axes of shape ``(1, 4)``.
+        """
+        import matplotlib.pyplot as plt
+
+        if ax is None:
+            fig = plt.figure(figsize=(14, 8), layout="constrained")
+            gs = fig.add_gridspec(2, 3)
+            axes = [
+                fig.add_subplot(gs[0, :]),
+                fig.add_subplot(gs[1, 0]),
+                fig.add_subplot(gs[1, 1]),
+                fig.add_subplot(gs[1, 2]),
+            ]
+        else:
+            axes = list(np.asarray(ax, dtype=object).ravel())
+            if len(axes) != 4:
+                raise ValueError(f"ax must hold 4 axes, got {len(axes)}")
+            fig = axes[0].figure
+        a_xy, a_e, a_df, a_acc = axes
+        self.manoeuvre.plot_gates(a_xy)
+        deg = 180.0 / math.pi
+        for i, (lab, r) in enumerate(zip(self.labels, self.results, strict=True)):
+            color = f"C{i % 10}"
+            a_xy.plot(r.x, r.y, color=color, lw=1.2, label=lab)
+            a_e.plot(r.t, r.e, color=color, lw=1.0)
+            a_df.plot(r.t, deg * r.delta_f, color=color, lw=1.0)
+            a_acc.plot(r.t, r.lateral_accel, color=color, lw=1.0)
+        s = np.linspace(0.0, self.manoeuvre.path.length, 800)
+        px, py = self.manoeuvre.path.position(s)
+        a_xy.plot(px, py, "k--", lw=0.8, label="centre line")
+        a_xy.set_xlabel("x [m]")
+        a_xy.set_ylabel("y [m]")
+        a_xy.legend(fontsize=8, ncol=4, loc="upper left")
+        a_xy.set_title(
+            f"{self.manoeuvre.name} at {self.speed:g} m/s"
+            + (f", input delay {self.delay:g} s" if self.delay else ""),
+            fontsize=11,
+        )
+        for a, lab in (
+            (a_e, "lateral error e [m]"),
+            (a_df, "front steering δf [deg]"),
+            (a_acc, "lateral acceleration of G [m/s²]"),
+        ):
+            a.set_xlabel("time t [s]")
+            a.set_ylabel(lab)
+            a.grid(alpha=0.3)
+        a_xy.grid(alpha=0.3)
+        lines = np.empty((1, 4), dtype=object)
+        for i, a in enumerate(axes):
+            lines[0, i] = list(a.get_lines())
+        return ct.ControlPlot(lines, np.array([axes], dtype=object), fig)
+
+
+def _metrics(result: SimulationResult, manoeuvre: Manoeuvre, wheelbase: float):
+    t = np.asarray(result.t)
+    ok = np.isfinite(result.lateral_accel)
+    acc = np.asarray(result.lateral_accel)
+    jerk = np.full_like(acc, np.nan)
+    if np.count_nonzero(ok) > 2:
+        jerk[ok] = np.gradient(acc[ok], t[ok])
+    on_course = (np.asarray(result.x) >= manoeuvre.start_x) & (
+        np.asarray(result.x) <= manoeuvre.end_x
+    )
+    e = np.asarray(result.e)[on_course]
+    deg = 180.0 / math.pi
+
+    def peak(v):
+        v = np.abs(np.asarray(v, dtype=float))
+        return float(np.nanmax(v)) if np.any(np.isfinite(v)) else math.nan
+
+    finished = bool(np.nanmax(result.x) >= manoeuvre.end_x) and result.status in (
+        "ok",
+        "end_of_path",
+    )
+    return (
+        peak(acc),
+        peak(jerk),
+        float(np.sqrt(np.mean(e**2))) if e.size else math.nan,
+        peak(e) if e.size else math.nan,
+        deg * peak(result.delta_f),
+        deg * peak(result.delta_r),
+        deg * peak(result.delta_f_rate),
+        deg * peak(result.delta_r_rate),
+        manoeuvre.cones_hit(result.x, result.y, result.psi, wheelbase=wheelbase),
+        finished,
+    )
+
+
+def compare(
+    vehicle: Vehicle,
+    manoeuvre: Manoeuvre,
+    controllers: dict[str, Any],
+    *,
+    speed: float,
+    initial_state=(0.0, 0.0, 0.0),
+    duration: float | None = None,
+    delay: float = 0.0,
+    actuator_time_constant: float | None = None,
+    dt: float = 0.01,
+) -> ControllerComparison:
+    """Run every controller on the same plant and course; tabulate metrics.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Geometry and steering limits (shared by all runs).
+    manoeuvre : Manoeuvre
+        The course (e.g. :func:`~fws_control.double_lane_change`).
+    controllers : dict
+        Label -> :class:`SteeringGains` (the paper's law with feedforward) or
+        a :class:`~fws_control.LateralController`.
+    speed : float
+        Speed [m/s], > 0.
+    initial_state : array_like, optional
+        ``(x_R, y_R, psi)`` [m, m, rad]; default on the path start.
+    duration : float, optional
+        Simulated time [s]; default the time to drive the course's length.
+    delay : float, optional
+        Input delay on the steering command [s] (all runs).
+    actuator_time_constant : float, optional
+        Steering actuator time constant [s] (all runs); rate limits of the
+        vehicle apply through it.
+    dt : float, optional
+        Output spacing [s].
+
+    Returns
+    -------
+    ControllerComparison
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> cmp = fws.compare(veh, fws.double_lane_change(),
+    ...                   {"pure pursuit": fws.PurePursuit(lookahead=5.0)},
+    ...                   speed=10.0)
+    >>> int(cmp.table["cones hit"][0])
+    0
+    """
+    check_type("vehicle", vehicle, Vehicle)
+    check_type("manoeuvre", manoeuvre, Manoeuvre)
+    if not isinstance(controllers, dict) or not controllers:
+        raise TypeError("controllers must be a non-empty dict of label -> controller")
+    V = float(check_nonzero("speed", speed))
+    if V <= 0:
+        raise ValueError(f"speed must be > 0 m/s for a manoeuvre, got {speed!r}")
+    path = manoeuvre.path
+    if duration is None:
+        # stop just before the end of the open course
+        duration = 0.995 * float(path.length) / V
+    labels, results = [], []
+    for label, c in controllers.items():
+        if not isinstance(c, (SteeringGains, LateralController)):
+            raise TypeError(
+                f"controllers[{label!r}] must be a SteeringGains or a lateral "
+                f"controller, got {type(c).__name__}"
+            )
+        if isinstance(c, SteeringGains):
+            c = StateFeedback.from_gains(c)
+        res = simulate(
+            vehicle,
+            path,
+            c,
+            speed=V,
+            initial_state=initial_state,
+            duration=duration,
+            dt=dt,
+            delay=delay,
+            actuator_time_constant=actuator_time_constant,
+        )
+        labels.append(str(label))
+        results.append(res)
+    rows = [_metrics(r, manoeuvre, vehicle.wheelbase) for r in results]
+    table = {
+        name: np.array([row[j] for row in rows])
+        for j, name in enumerate(COMPARISON_METRICS)
+    }
+    return ControllerComparison(
+        manoeuvre, V, float(delay), tuple(labels), tuple(results), table
+    )

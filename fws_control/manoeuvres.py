@@ -1,0 +1,474 @@
+r"""Standard manoeuvres as paths with their cone gates.
+
+Each manoeuvre is a :class:`Manoeuvre`: a :class:`~fws_control.paths.Path`
+(the centre line to track, curvature continuous: straight segments joined by
+clothoid S-bends) plus the cone gates a vehicle must pass, for plotting and
+for the "cones hit" count (:meth:`Manoeuvre.cones_hit`).
+
+Geometry (``b``: vehicle width [m]; ``x`` along the course, ``y`` to the
+left; gate widths are between the cone lines):
+
+ISO 3888-1 double lane change (:func:`double_lane_change`)
+    ======= ================ =============== ============================
+    section length [m]       width [m]       lateral position
+    ======= ================ =============== ============================
+    1       15               1.1 b + 0.25    entry lane, centred on y = 0
+    2       30               —               transition
+    3       25               1.2 b + 0.25    right cone line at y = 3.5 m
+    4       25               —               transition
+    5       15               1.3 b + 0.25    right line aligned with 1
+    ======= ================ =============== ============================
+
+ISO 3888-2 obstacle avoidance (:func:`obstacle_avoidance`)
+    ======= ================ =============== ============================
+    section length [m]       width [m]       lateral position
+    ======= ================ =============== ============================
+    1       12               1.1 b + 0.25    entry lane, centred on y = 0
+    2       13.5             —               transition
+    3       11               b + 1           right line 1 m left of 1's left
+    4       12.5             —               transition
+    5       12               3               right line aligned with 1
+    ======= ================ =============== ============================
+
+The lateral positions follow the layout of the standards' figures as
+implemented in Project Chrono's ISO 3888 double-lane-change demo; the
+centre line runs through the middle of each gate. Cones stand at both ends
+and the middle of every gate line.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import brentq
+
+from .paths import Arc, Clothoid, Path, PathChain, Straight
+from .validation import check_finite, check_positive
+
+__all__ = [
+    "Gate",
+    "Manoeuvre",
+    "double_lane_change",
+    "obstacle_avoidance",
+    "slalom",
+    "constant_radius",
+    "s_bend",
+    "ISO3888_1_SECTIONS",
+    "ISO3888_2_SECTIONS",
+]
+
+#: ISO 3888-1 sections: (length [m], width as (factor of b, + m) or None).
+ISO3888_1_SECTIONS = (
+    (15.0, (1.1, 0.25)),
+    (30.0, None),
+    (25.0, (1.2, 0.25)),
+    (25.0, None),
+    (15.0, (1.3, 0.25)),
+)
+
+#: ISO 3888-2 sections; the exit width is 3 m (b-independent).
+ISO3888_2_SECTIONS = (
+    (12.0, (1.1, 0.25)),
+    (13.5, None),
+    (11.0, (1.0, 1.0)),
+    (12.5, None),
+    (12.0, (0.0, 3.0)),
+)
+
+
+@dataclass(frozen=True)
+class Gate:
+    """A lane section between two lines of cones.
+
+    Attributes
+    ----------
+    x_start, x_end : float
+        Longitudinal extent [m].
+    y_right, y_left : float
+        Lateral positions of the right and left cone lines [m].
+    name : str
+        E.g. ``"section 1"``.
+    """
+
+    x_start: float
+    x_end: float
+    y_right: float
+    y_left: float
+    name: str = ""
+
+    @property
+    def width(self) -> float:
+        """Distance between the cone lines [m]."""
+        return self.y_left - self.y_right
+
+    @property
+    def centre(self) -> float:
+        """Lateral position of the gate's centre line [m]."""
+        return 0.5 * (self.y_left + self.y_right)
+
+    def cones(self) -> np.ndarray:
+        """Cone positions, shape ``(6, 2)``: both lines at start, middle, end."""
+        xs = (self.x_start, 0.5 * (self.x_start + self.x_end), self.x_end)
+        return np.array([(x, y) for y in (self.y_right, self.y_left) for x in xs])
+
+
+def s_bend(offset: float, length: float) -> list[Clothoid]:
+    r"""Four clothoids that shift the path by `offset` over `length` in x.
+
+    Curvature ``0 -> k -> 0 -> -k -> 0`` linear in arc length: the path
+    leaves and rejoins straight lines with continuous heading and curvature.
+    The peak curvature and the segment length are solved (``brentq``) so
+    that the lateral shift is `offset` and the longitudinal extent is
+    `length`.
+
+    Parameters
+    ----------
+    offset : float
+        Lateral shift [m] (positive: to the left).
+    length : float
+        Longitudinal extent [m], > 0.
+
+    Returns
+    -------
+    list of Clothoid
+
+    Examples
+    --------
+    >>> from fws_control.manoeuvres import s_bend
+    >>> from fws_control.paths import PathChain
+    >>> chain = PathChain(s_bend(3.0, 30.0))
+    >>> [round(float(v), 9) for v in chain.position(chain.length)]
+    [30.0, 3.0]
+    """
+    offset = float(check_finite("offset", offset))
+    length = float(check_positive("length", length))
+    if offset == 0.0:
+        return [Clothoid(0.0, 0.0, length)]
+    if abs(offset) >= 0.5 * length:
+        raise ValueError(
+            f"offset must be below half the length, got {offset!r} over {length!r} m"
+        )
+
+    def pieces(k, seg):
+        return [
+            Clothoid(0.0, k, seg),
+            Clothoid(k, 0.0, seg),
+            Clothoid(0.0, -k, seg),
+            Clothoid(-k, 0.0, seg),
+        ]
+
+    def end(k, seg):
+        chain = PathChain(pieces(k, seg))
+        x, y = chain.position(chain.length)
+        return float(x), float(y)
+
+    def k_for(seg):
+        # heading at the middle is k * seg; bracket below a quarter turn
+        hi = (0.5 * math.pi) / seg
+        return brentq(lambda k: end(k, seg)[1] - abs(offset), 0.0, hi, xtol=1e-15)
+
+    seg = brentq(
+        lambda s: end(k_for(s), s)[0] - length, length / 4.0, length / 2.0, xtol=1e-13
+    )
+    return pieces(math.copysign(k_for(seg), offset), seg)
+
+
+@dataclass(frozen=True, eq=False)
+class Manoeuvre:
+    """A course: the path to track and its cone gates.
+
+    Attributes
+    ----------
+    name : str
+        E.g. ``"ISO 3888-1 double lane change"``.
+    path : Path
+        Centre line (starts at the origin heading +x).
+    gates : tuple of Gate
+        Lane sections with cones (empty for manoeuvres without cones).
+    vehicle_width : float
+        Width ``b`` [m] the gates were sized for.
+    start_x : float
+        x of the first gate's entry [m] (the path starts `start_x` before it).
+    """
+
+    name: str
+    path: Path
+    gates: tuple[Gate, ...]
+    vehicle_width: float
+    start_x: float = 0.0
+
+    @property
+    def end_x(self) -> float:
+        """x of the last gate's exit [m] (the path's end for no gates)."""
+        return self.gates[-1].x_end if self.gates else float(self.path.length)
+
+    def cones(self) -> np.ndarray:
+        """All cone positions, shape ``(n, 2)`` [m]."""
+        if not self.gates:
+            return np.empty((0, 2))
+        return np.unique(np.vstack([g.cones() for g in self.gates]), axis=0)
+
+    def cones_hit(self, x, y, psi, *, wheelbase: float) -> int:
+        """Number of cones the vehicle's wheel track sweeps over.
+
+        The footprint is the rectangle between the axles (rear axle centre R
+        to front axle) and ``±b/2`` sideways. A cone counts as hit if it lies
+        inside the footprint at any sample; stopped runs count what they
+        swept.
+
+        Parameters
+        ----------
+        x, y, psi : array_like
+            Pose of R over time [m, m, rad] (NaN samples are skipped).
+        wheelbase : float
+            Distance from R to the front axle [m].
+
+        Returns
+        -------
+        int
+        """
+        cones = self.cones()
+        if cones.size == 0:
+            return 0
+        x, y, psi = (np.asarray(v, dtype=float).ravel() for v in (x, y, psi))
+        ok = np.isfinite(x) & np.isfinite(y) & np.isfinite(psi)
+        x, y, psi = x[ok], y[ok], psi[ok]
+        dx = cones[None, :, 0] - x[:, None]
+        dy = cones[None, :, 1] - y[:, None]
+        c, s = np.cos(psi)[:, None], np.sin(psi)[:, None]
+        lon = c * dx + s * dy
+        lat = -s * dx + c * dy
+        inside = (
+            (lon >= 0.0) & (lon <= wheelbase) & (np.abs(lat) <= self.vehicle_width / 2)
+        )
+        return int(np.count_nonzero(np.any(inside, axis=0)))
+
+    def plot_gates(self, ax) -> list:
+        """Draw the cone lines and cones on `ax`; return the artists.
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes
+            Axes in the x-y plane [m].
+
+        Returns
+        -------
+        list
+        """
+        out = []
+        for g in self.gates:
+            for yy in (g.y_right, g.y_left):
+                (ln,) = ax.plot([g.x_start, g.x_end], [yy, yy], "-", color="0.5", lw=1)
+                out.append(ln)
+        cones = self.cones()
+        if cones.size:
+            (pts,) = ax.plot(cones[:, 0], cones[:, 1], "^", color="tab:orange", ms=5)
+            out.append(pts)
+        return out
+
+
+def _course(name, sections, b, approach, exit_length, offsets) -> Manoeuvre:
+    gates = []
+    # lay out the gates first
+    x = approach
+    centres = []
+    k = 0
+    for i, (length, width_rule) in enumerate(sections):
+        if width_rule is None:
+            x += length
+            continue
+        fac, add = width_rule
+        w = fac * b + add
+        y_right = offsets[k](w)
+        gates.append(Gate(x, x + length, y_right, y_right + w, f"section {i + 1}"))
+        centres.append(y_right + 0.5 * w)
+        x += length
+        k += 1
+    # centre line: straight through each gate, S-bends over the transitions
+    segments: list[Path] = [Straight(length=approach)]
+    y_prev = centres[0]
+    # the path starts at y = 0: the entry gate is centred on 0
+    for i, (length, width_rule) in enumerate(sections):
+        if width_rule is None:
+            nxt = centres[len([s for s in sections[:i] if s[1] is not None])]
+            segments += s_bend(nxt - y_prev, length)
+            y_prev = nxt
+        else:
+            segments.append(Straight(length=length))
+    segments.append(Straight(length=exit_length))
+    return Manoeuvre(name, PathChain(segments), tuple(gates), b, approach)
+
+
+def double_lane_change(
+    *, vehicle_width: float = 1.8, approach: float = 30.0, exit_length: float = 30.0
+) -> Manoeuvre:
+    """ISO 3888-1 double lane change (severe lane change), see the module table.
+
+    Parameters
+    ----------
+    vehicle_width : float, optional
+        Vehicle width ``b`` [m] (default 1.8 m, a mid-size car).
+    approach : float, optional
+        Straight before the entry gate [m].
+    exit_length : float, optional
+        Straight after the exit gate [m].
+
+    Returns
+    -------
+    Manoeuvre
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> m = fws.double_lane_change(vehicle_width=2.0)
+    >>> [(g.x_end - g.x_start, round(g.width, 2)) for g in m.gates]
+    [(15.0, 2.45), (25.0, 2.65), (15.0, 2.85)]
+    >>> m.gates[1].y_right, round(m.gates[2].y_right, 3) == round(m.gates[0].y_right, 3)
+    (3.5, True)
+    """
+    b = float(check_positive("vehicle_width", vehicle_width))
+    a = float(check_positive("approach", approach))
+    ex = float(check_positive("exit_length", exit_length))
+    w1 = 1.1 * b + 0.25
+    offsets = (
+        lambda w: -w / 2,
+        lambda w: 3.5,
+        lambda w: -w1 / 2,  # right lines of sections 1 and 5 aligned
+    )
+    return _course(
+        "ISO 3888-1 double lane change", ISO3888_1_SECTIONS, b, a, ex, offsets
+    )
+
+
+def obstacle_avoidance(
+    *, vehicle_width: float = 1.8, approach: float = 30.0, exit_length: float = 30.0
+) -> Manoeuvre:
+    """ISO 3888-2 obstacle avoidance (moose test), see the module table.
+
+    Parameters
+    ----------
+    vehicle_width : float, optional
+        Vehicle width ``b`` [m].
+    approach : float, optional
+        Straight before the entry gate [m].
+    exit_length : float, optional
+        Straight after the exit gate [m].
+
+    Returns
+    -------
+    Manoeuvre
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> m = fws.obstacle_avoidance(vehicle_width=2.0)
+    >>> [(g.x_end - g.x_start, round(g.width, 2)) for g in m.gates]
+    [(12.0, 2.45), (11.0, 3.0), (12.0, 3.0)]
+    >>> round(m.gates[1].y_right - m.gates[0].y_left, 9)   # 1 m offset
+    1.0
+    """
+    b = float(check_positive("vehicle_width", vehicle_width))
+    a = float(check_positive("approach", approach))
+    ex = float(check_positive("exit_length", exit_length))
+    w1 = 1.1 * b + 0.25
+    offsets = (
+        lambda w: -w / 2,
+        lambda w: w1 / 2 + 1.0,
+        lambda w: -w1 / 2,
+    )
+    return _course(
+        "ISO 3888-2 obstacle avoidance", ISO3888_2_SECTIONS, b, a, ex, offsets
+    )
+
+
+def slalom(
+    *,
+    pitch: float = 18.0,
+    amplitude: float = 1.0,
+    cones: int = 6,
+    approach: float = 30.0,
+    vehicle_width: float = 1.8,
+) -> Manoeuvre:
+    """Slalom through a line of cones (e.g. an 18 m handling slalom).
+
+    Cones stand on ``y = 0`` every `pitch` metres; the centre line weaves
+    ``±amplitude`` between them with S-bends (continuous curvature),
+    passing each cone at the full amplitude. The gates are the cones
+    themselves (zero-length "gates" with the cone on the far side).
+
+    Parameters
+    ----------
+    pitch : float, optional
+        Cone spacing [m].
+    amplitude : float, optional
+        Lateral distance of the centre line from the cone line at a cone [m].
+    cones : int, optional
+        Number of cones (>= 2).
+    approach : float, optional
+        Straight before the first cone [m].
+    vehicle_width : float, optional
+        Vehicle width [m] (for the cones-hit count).
+
+    Returns
+    -------
+    Manoeuvre
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> m = fws.slalom(pitch=18.0, amplitude=1.0, cones=4)
+    >>> m.cones()[:, 0].tolist()
+    [30.0, 48.0, 66.0, 84.0]
+    """
+    p = float(check_positive("pitch", pitch))
+    amp = float(check_positive("amplitude", amplitude))
+    if isinstance(cones, bool) or int(cones) != cones or cones < 2:
+        raise ValueError(f"cones must be an integer >= 2, got {cones!r}")
+    a = float(check_positive("approach", approach))
+    b = float(check_positive("vehicle_width", vehicle_width))
+    n = int(cones)
+    # enter with a half S-bend to +amplitude before the first cone
+    segments: list[Path] = [Straight(length=a - p / 2)]
+    segments += s_bend(amp, p / 2)
+    y = amp
+    for _ in range(n - 1):
+        segments += s_bend(-2 * y, p)
+        y = -y
+    segments += s_bend(-y, p / 2)
+    segments.append(Straight(length=a))
+    gates = tuple(
+        Gate(a + i * p, a + i * p, 0.0, 0.0, f"cone {i + 1}") for i in range(n)
+    )
+    return Manoeuvre(f"slalom, {n} cones, {p:g} m", PathChain(segments), gates, b, a)
+
+
+def constant_radius(*, radius: float = 40.0, turns: float = 1.0) -> Manoeuvre:
+    """Steady-state circular driving (ISO 4138) on a circle of `radius`.
+
+    Parameters
+    ----------
+    radius : float, optional
+        Radius [m] (left turn).
+    turns : float, optional
+        Number of laps of the path (> 0); one or more laps make a closed
+        path.
+
+    Returns
+    -------
+    Manoeuvre
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> m = fws.constant_radius(radius=40.0)
+    >>> round(float(m.path.curvature(10.0)), 6), m.gates
+    (0.025, ())
+    """
+    r = float(check_positive("radius", radius))
+    t = float(check_positive("turns", turns))
+    path = (
+        Arc(curvature=1.0 / r) if t >= 1.0 else Arc(1.0 / r, length=2 * math.pi * r * t)
+    )
+    return Manoeuvre(f"constant radius {r:g} m", path, (), 0.0, 0.0)
