@@ -8,10 +8,19 @@ Subcommands::
     fws-control rlocus    --speed 5 --curvature 0.1 --ratio -1 --out rl.png
     fws-control simulate  --path arc --curvature 0.1 --y0 -5 --out sim.png
     fws-control delay-margin --speed 20 --ratio 0.5 --pole -1 --steering-lag 0.27
+    fws-control compare   --manoeuvre iso3888-1 --speed 20 --delay 0.24
     fws-control reproduce --out figures
 
-Angles are given and printed in degrees; everything else is SI. Invalid
-input ends with a one-line message on stderr and exit status 2; no traceback.
+Angles are given and printed in degrees (also in the CSV of ``simulate``);
+everything else is SI. Every subcommand defaults to the curvature
+:data:`DEFAULT_CURVATURE` (0.1 1/m, the paper's Fig. 7 curve).
+
+Exit status: 0 success; 2 invalid input (a one-line message on stderr, no
+traceback); 3 ``simulate`` ran, but the run stopped early (e.g. at a singular
+steering angle, ``|delta_f| -> 90 deg``): the figure, the CSV and the printed
+status say when and why. Inputs far outside the range of the kinematic model
+(e.g. a curvature above 1 1/m, ``|k2| > 20``) are accepted with a one-line
+warning each on stderr.
 """
 
 from __future__ import annotations
@@ -26,6 +35,23 @@ from pathlib import Path
 __all__ = ["main", "build_parser"]
 
 PROG = "fws-control"
+
+#: Curvature [1/m] of every subcommand when --curvature is not given.
+DEFAULT_CURVATURE = 0.1
+
+#: Exit status of ``simulate`` when the run stopped before --duration.
+EXIT_STOPPED = 3
+
+#: (attribute, limit, what): a one-line warning when |value| exceeds limit.
+_EXTREME = (
+    ("curvature", 1.0, "1/m", "a turn radius below 1 m"),
+    ("speed", 70.0, "m/s", "beyond road speeds"),
+    ("ratio", 5.0, "", "rear steering far beyond any vehicle"),
+    ("pole", 20.0, "1/s", "faster than steering actuators can follow"),
+    ("k1", 10.0, "rad/m", "the steering saturates at centimetre errors"),
+    ("k2", 20.0, "", "the steering saturates at tiny heading errors"),
+    ("wheelbase", 10.0, "m", "not a road vehicle"),
+)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -63,7 +89,7 @@ def _add_vehicle(p: argparse.ArgumentParser) -> None:
     )
 
 
-def _add_operating_point(p, curvature_default: float = 0.0) -> None:
+def _add_operating_point(p, curvature_default: float = DEFAULT_CURVATURE) -> None:
     p.add_argument("--speed", type=_finite, default=5.0, help="V [m/s] (5)")
     p.add_argument(
         "--curvature",
@@ -153,7 +179,9 @@ def build_parser() -> argparse.ArgumentParser:
         choices=(2, 3, 4),
         help="draw the paper's Fig. 2, 3 or 4 instead",
     )
-    p.add_argument("--out", type=Path, default=Path("chart.png"), help="PNG file")
+    p.add_argument(
+        "--out", type=Path, default=Path("chart.png"), help="PNG file (chart.png)"
+    )
     _add_vehicle(p)
     p.set_defaults(func=_cmd_chart)
 
@@ -164,7 +192,7 @@ def build_parser() -> argparse.ArgumentParser:
         "(control.root_locus_plot of the SISO loop), or with --param the "
         "closed-loop poles while ratio, speed, curvature, k1 or k2 varies.",
     )
-    _add_operating_point(p, curvature_default=0.1)
+    _add_operating_point(p)
     _add_gains(p)
     p.add_argument(
         "--param",
@@ -191,7 +219,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="model of the re-design (default --model); --model exact "
         "--design-model paper shows where the paper's gains put the true poles",
     )
-    p.add_argument("--out", type=Path, default=Path("rlocus.png"), help="PNG file")
+    p.add_argument(
+        "--out", type=Path, default=Path("rlocus.png"), help="PNG file (rlocus.png)"
+    )
     _add_vehicle(p)
     p.set_defaults(func=_cmd_rlocus)
 
@@ -200,9 +230,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="nonlinear closed-loop simulation (PNG, optional CSV)",
         description="Simulate the nonlinear closed loop on a straight path or an "
         "arc from the initial pose (x0, y0, psi0) of the rear-axle centre, "
-        "next to the linear closed loop from the same initial errors.",
+        "next to the linear closed loop from the same initial errors. Exit "
+        f"status {EXIT_STOPPED} if the run stopped early (singular steering).",
     )
-    _add_operating_point(p, curvature_default=0.1)
+    _add_operating_point(p)
     _add_gains(p)
     p.add_argument(
         "--path",
@@ -220,8 +251,18 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="feedback only (the paper's straight-road controller)",
     )
-    p.add_argument("--out", type=Path, default=Path("simulation.png"), help="PNG file")
-    p.add_argument("--csv", type=Path, help="also write the time series as CSV")
+    p.add_argument(
+        "--out",
+        type=Path,
+        default=Path("simulation.png"),
+        help="PNG file (simulation.png)",
+    )
+    p.add_argument(
+        "--csv",
+        type=Path,
+        help="also write the time series as CSV: header row with units, angles "
+        "in deg and rates in deg/s as printed, a status column (none)",
+    )
     _add_vehicle(p)
     p.set_defaults(func=_cmd_simulate)
 
@@ -254,12 +295,63 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_delay_margin)
 
     p = sub.add_parser(
+        "compare",
+        help="controllers side by side on a standard manoeuvre (table + PNG)",
+        description="Run the paper's double-root law (front steering and a rear "
+        "ratio), rear-wheel feedback, pure pursuit, Stanley and LQR (paper "
+        "structure and independent rear) on the same vehicle, course, speed, "
+        "delay and steering lag; print a table of peak lateral acceleration and "
+        "jerk, RMS and max lateral error, steering angles and rates, cones hit "
+        "and completion, and write a figure.",
+    )
+    p.add_argument(
+        "--manoeuvre",
+        choices=("iso3888-1", "iso3888-2", "slalom", "circle"),
+        default="iso3888-1",
+        help="course (default: iso3888-1)",
+    )
+    p.add_argument("--speed", type=_finite, default=20.0, help="V [m/s] (20)")
+    p.add_argument(
+        "--ratio",
+        type=_finite,
+        default=-0.3,
+        help="rear ratio of the 4WS designs (-0.3)",
+    )
+    p.add_argument(
+        "--pole", type=_finite, default=-1.0, help="double root of the paper's law (-1)"
+    )
+    p.add_argument(
+        "--delay", type=_finite, default=0.0, help="input delay on the steering [s] (0)"
+    )
+    p.add_argument(
+        "--steering-lag",
+        type=_finite,
+        help="steering actuator time constant [s] (none)",
+    )
+    p.add_argument(
+        "--offset",
+        type=_finite,
+        default=0.0,
+        help="initial lateral offset of R from the centre line [m] (0)",
+    )
+    p.add_argument(
+        "--vehicle-width", type=_finite, default=1.8, help="b for the gates [m] (1.8)"
+    )
+    p.add_argument(
+        "--out", type=Path, default=Path("compare.png"), help="PNG file (compare.png)"
+    )
+    _add_vehicle(p)
+    p.set_defaults(func=_cmd_compare)
+
+    p = sub.add_parser(
         "reproduce",
         help="write every figure of the paper (Figs. 2-9) and summary.md",
         description="Regenerate the paper's Figs. 2-9 (plus extras) as PNG files "
         "and summary.md (gains table, Fig. 5 peak accelerations) in --out.",
     )
-    p.add_argument("--out", type=Path, default=Path("figures"), help="directory")
+    p.add_argument(
+        "--out", type=Path, default=Path("figures"), help="directory (figures)"
+    )
     p.add_argument(
         "--model",
         choices=("exact", "paper"),
@@ -321,6 +413,18 @@ def _fmt_poles(p) -> str:
             f"{z.real:.6f}" if abs(z.imag) < 1e-6 else f"{z.real:.6f}{z.imag:+.6f}j"
         )
     return ", ".join(out)
+
+
+def _fmt_coeffs(c) -> str:
+    """Polynomial coefficients for display, without float noise."""
+    import numpy as np
+
+    vals = [float(f"{v:.10g}") + 0.0 for v in np.asarray(c, dtype=float)]
+    return (
+        "["
+        + ", ".join(f"{v:g}" if abs(v) >= 1e-4 or v == 0 else f"{v:.6g}" for v in vals)
+        + "]"
+    )
 
 
 def _cmd_gains(args) -> int:
@@ -436,7 +540,7 @@ def _cmd_rlocus(args) -> int:
             fontsize=10,
         )
         fig.suptitle("")
-        print(f"L(s) = {loop.num[0][0].tolist()} / {loop.den[0][0].tolist()}")
+        print(f"L(s) = {_fmt_coeffs(loop.num[0][0])} / {_fmt_coeffs(loop.den[0][0])}")
     else:
         lo, hi = _PARAM_RANGE[args.param] if args.range is None else args.range
         if hi <= lo:
@@ -519,16 +623,34 @@ def _cmd_simulate(args) -> int:
     )
     res = cmp.nonlinear
     fig = cmp.plot().figure
+    stopped = str(res.status) != "ok"
+    if stopped:
+        why = str(res.status).replace("_", " ")
+        detail = f" ({res.message})" if res.message else ""
+        fig.text(
+            0.5,
+            0.005,
+            f"run stopped at t = {float(res.t_stop):.3g} s: {why}{detail}; "
+            "curves end there",
+            ha="center",
+            va="bottom",
+            color="C3",
+            fontsize=10,
+            bbox={"fc": "white", "ec": "C3"},
+        )
     _save(fig, args.out)
     plt.close(fig)
     print(f"k1 = {float(g.k1):.6f}, k2 = {float(g.k2):.6f}, a = {float(g.ratio):g}")
     print(f"status: {res.status}{(' - ' + res.message) if res.message else ''}")
     import numpy as np
 
-    print(
-        f"peak |lateral acceleration| = {np.nanmax(np.abs(res.lateral_accel)):.4f}"
-        " m/s^2"
+    acc = np.abs(np.asarray(res.lateral_accel, dtype=float))
+    peak = (
+        f"{np.nanmax(acc):.4f} m/s^2"
+        if np.isfinite(acc).any()
+        else "n/a (no valid sample)"
     )
+    print(f"peak |lateral acceleration| = {peak}")
     print(
         f"final e = {res.e[-1]:.4g} m, final theta = "
         f"{math.degrees(res.theta[-1]):.4g} deg"
@@ -536,18 +658,107 @@ def _cmd_simulate(args) -> int:
     if args.csv is not None:
         _write_csv(res, args.csv)
         print(f"wrote {args.csv}")
+    if stopped:
+        print(
+            f"{PROG} simulate: run stopped at t = {float(res.t_stop):.3g} s "
+            f"({res.status}); exit status {EXIT_STOPPED}",
+            file=sys.stderr,
+        )
+        return EXIT_STOPPED
     return 0
 
 
+#: Unit of each CSV column; angles in degrees as the CLI prints them.
+_CSV_UNITS = {
+    "t": "s",
+    "x": "m",
+    "y": "m",
+    "psi": "deg",
+    "s": "m",
+    "e": "m",
+    "theta": "deg",
+    "delta_f": "deg",
+    "delta_r": "deg",
+    "delta_f_rate": "deg/s",
+    "delta_r_rate": "deg/s",
+    "lateral_accel": "m/s^2",
+}
+
+
 def _write_csv(res, path: Path) -> None:
+    """One row per sample; header ``name [unit]``; last column the status.
+
+    The status column reads ``ok`` while the run is valid and the run's
+    status (e.g. ``singular_steering``) from the stop on; samples after the
+    stop are empty.
+    """
+    import csv
+
     import numpy as np
 
     from .simulation import SIGNALS
 
     names = ("t", *SIGNALS)
-    data = np.column_stack([np.asarray(getattr(res, n), dtype=float) for n in names])
+    cols = []
+    for n in names:
+        v = np.asarray(getattr(res, n), dtype=float)
+        cols.append(np.degrees(v) if _CSV_UNITS[n].startswith("deg") else v)
+    t = cols[0]
+    status = np.full(t.shape, "ok", dtype=object)
+    if str(res.status) != "ok":
+        status[t >= float(res.t_stop) - 1e-12] = str(res.status)
     path.parent.mkdir(parents=True, exist_ok=True)
-    np.savetxt(path, data, delimiter=",", header=",".join(names), comments="")
+    with open(path, "w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow([f"{n} [{_CSV_UNITS[n]}]" for n in names] + ["status"])
+        for i in range(t.size):
+            w.writerow(
+                ["" if not np.isfinite(c[i]) else f"{c[i]:.10g}" for c in cols]
+                + [status[i]]
+            )
+
+
+def _cmd_compare(args) -> int:
+    import matplotlib.pyplot as plt
+
+    from .compare import compare, default_controllers
+    from .manoeuvres import (
+        constant_radius,
+        double_lane_change,
+        obstacle_avoidance,
+        slalom,
+    )
+
+    _check_out(args.out)
+    if args.speed <= 0:
+        raise ValueError(f"--speed must be > 0 m/s, got {args.speed:g}")
+    course = {
+        "iso3888-1": lambda: double_lane_change(vehicle_width=args.vehicle_width),
+        "iso3888-2": lambda: obstacle_avoidance(vehicle_width=args.vehicle_width),
+        "slalom": lambda: slalom(vehicle_width=args.vehicle_width),
+        "circle": lambda: constant_radius(),
+    }[args.manoeuvre]()
+    veh = _vehicle(args)
+    ctrls = default_controllers(veh, speed=args.speed, ratio=args.ratio, pole=args.pole)
+    cmp = compare(
+        veh,
+        course,
+        ctrls,
+        speed=args.speed,
+        initial_state=(0.0, args.offset, 0.0),
+        delay=args.delay,
+        actuator_time_constant=args.steering_lag,
+    )
+    cplt = cmp.plot()
+    _save(cplt.figure, args.out)
+    plt.close(cplt.figure)
+    lag = "none" if args.steering_lag is None else f"{args.steering_lag:g} s"
+    print(
+        f"{course.name}, V = {args.speed:g} m/s, delay {args.delay:g} s, steering "
+        f"lag {lag}, initial offset {args.offset:g} m"
+    )
+    print(cmp.to_markdown())
+    return 0
 
 
 def _cmd_delay_margin(args) -> int:
@@ -628,12 +839,27 @@ def _save(fig, out: Path) -> None:
     print(f"wrote {out}")
 
 
+def _warn_extreme(args) -> None:
+    """One line on stderr per input far outside the model's useful range."""
+    for name, limit, unit, why in _EXTREME:
+        v = getattr(args, name, None)
+        if v is not None and abs(v) > limit:
+            u = f" {unit}" if unit else ""
+            print(
+                f"{PROG} {args.command}: warning: --{name.replace('_', '-')} "
+                f"{v:g}{u} is outside |{name}| <= {limit:g}{u} ({why}); "
+                "results may be meaningless",
+                file=sys.stderr,
+            )
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run ``fws-control``; returns the exit status.
 
     Errors in the input (ValueError, including UncontrollableError and
     SingularStateError, TypeError, OSError) end with one line on stderr and
-    status 2.
+    status 2; ``simulate`` returns 3 (:data:`EXIT_STOPPED`) when the run
+    stopped early. Extreme but valid inputs print one warning line each.
     """
     import logging
 
@@ -645,6 +871,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     logging.getLogger("matplotlib").setLevel(logging.ERROR)
     parser = build_parser()
     args = parser.parse_args(argv)
+    _warn_extreme(args)
     try:
         return int(args.func(args) or 0)
     except BrokenPipeError:

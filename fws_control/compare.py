@@ -52,15 +52,16 @@ __all__ = [
 ]
 
 #: Column names of :attr:`ControllerComparison.table` (units in the names).
+#: Peaks and maxima are of absolute values.
 COMPARISON_METRICS = (
-    "peak |a_lat| [m/s^2]",
-    "peak |jerk| [m/s^3]",
-    "RMS |e| [m]",
-    "max |e| [m]",
-    "max |delta_f| [deg]",
-    "max |delta_r| [deg]",
-    "max |delta_f rate| [deg/s]",
-    "max |delta_r rate| [deg/s]",
+    "peak a_lat [m/s^2]",
+    "peak jerk [m/s^3]",
+    "RMS e [m]",
+    "max e [m]",
+    "max delta_f [deg]",
+    "max delta_r [deg]",
+    "max delta_f rate [deg/s]",
+    "max delta_r rate [deg/s]",
     "cones hit",
     "completed",
 )

@@ -777,16 +777,7 @@ def integrate(
     Y[:3] = z0.T
     if tau is not None:
         # The actuator starts at the command: no initial transient of its own.
-        Y[3:] = np.stack(
-            steering_command(
-                vehicle,
-                eng.gains,
-                Y[1],
-                Y[2],
-                curvature=eng.curvature(Y[0]),
-                feedforward=feedforward,
-            )
-        )
+        Y[3:] = np.stack(eng.command(Y, eng.curvature(Y[0]), float(t_eval[0])))
     out[:, :, 0] = Y
     if delay > 0.0 or solution is not None:
         history = _History(float(t_eval[0]), Y.copy())
@@ -1027,8 +1018,8 @@ PEAK_SIGNALS = (
 )
 _PEAK_ROWS = [SIGNALS.index(name) for name in PEAK_SIGNALS]
 # Nodes per solver step on which the signals are first evaluated, candidate
-# local maxima refined per run and signal, and golden-section iterations
-# (0.618**80 shrinks a bracket of a step below 1e-16 of it).
+# local maxima refined per run and signal, and the most golden-section
+# iterations (0.618**80 shrinks a bracket of a step below 1e-16 of it).
 _NODES_PER_STEP = 8
 _PEAK_CANDIDATES = 3
 _GOLDEN_ITERATIONS = 80
@@ -1152,17 +1143,19 @@ def exact_peaks(
         st = solution.states(runs, times[valid])
         states = np.full((st.shape[0], n, times.shape[1]), np.nan)
         states[:, valid] = st
-        out = compute_outputs(
-            vehicle,
-            path,
-            gains,
-            speed=speed,
-            feedforward=feedforward,
-            time_constant=time_constant,
-            states=states,
-            initial_heading=np.zeros(n),
-            delay=solution.delay,
-        )
+        # (at a singular stop the rates are inf or NaN: they diverge there)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            out = compute_outputs(
+                vehicle,
+                path,
+                gains,
+                speed=speed,
+                feedforward=feedforward,
+                time_constant=time_constant,
+                states=states,
+                initial_heading=np.zeros(n),
+                delay=solution.delay,
+            )
         vals = np.abs(out[:, _PEAK_ROWS, :])
         vals = np.where(np.isfinite(vals), vals, np.inf)
         return np.where(valid[:, None, :], vals, -np.inf)
@@ -1187,7 +1180,8 @@ def exact_peaks(
     # Best so far: the nodes and the output samples (all on the solution).
     samp = np.abs(np.asarray(signals, dtype=float)[:, _PEAK_ROWS, :])
     have = np.isfinite(np.asarray(signals)[:, SIGNALS.index("s"), :])
-    samp = np.where(have[:, None, :], np.where(np.isfinite(samp), samp, np.inf), -np.inf)
+    samp = np.where(np.isfinite(samp), samp, np.inf)
+    samp = np.where(have[:, None, :], samp, -np.inf)
     j_node = np.argmax(node_v, axis=2)
     best_v = np.take_along_axis(node_v, j_node[..., None], 2)[..., 0]
     best_t = times[all_runs[:, None], j_node]
@@ -1239,7 +1233,8 @@ def exact_peaks(
     keep_best(c, fc)
     keep_best(d, fd)
     for _ in range(_GOLDEN_ITERATIONS):
-        if np.all(b - a <= 1e-15 * np.maximum(1.0, np.abs(b))):
+        # A bracket of 1e-10 s leaves a value error of f''/2 * 1e-20: none.
+        if np.all(b - a <= 1e-10 * np.maximum(1.0, np.abs(b))):
             break
         left_side = fc > fd  # the maximum is in [a, d]
         b = np.where(left_side, d, b)
