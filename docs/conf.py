@@ -47,6 +47,9 @@ extensions = [
     "sphinx.ext.autosummary",
     "sphinx.ext.intersphinx",
     "sphinx.ext.mathjax",
+    # MathJax 3 (JS and CHTML woff fonts) copied into _static/mathjax: the
+    # pages render math without a network (docs/check_math_offline.py).
+    "sphinx-mathjax-offline",
     "sphinx.ext.viewcode",
     "numpydoc",
     "myst_parser",
@@ -70,6 +73,10 @@ exclude_patterns = [
 default_role = "py:obj"
 pygments_style = "sphinx"
 nitpicky = False
+
+# The bundled copy, not a CDN (set here as well as by the extension, so that
+# the page never points elsewhere).
+mathjax_path = "mathjax/tex-chtml.js"
 
 # -- MyST (Markdown pages; docs/errata.md uses $...$ math) -------------------
 
@@ -230,6 +237,9 @@ html_static_path = ["_static"]
 html_css_files = ["custom.css"]
 html_theme_options = {
     "navigation_with_keys": False,
+    # Every top-level page up to Errata and Delay in the header (index.md's
+    # order); Changes and Performance under "More".
+    "header_links_before_dropdown": 8,
     "show_toc_level": 2,
     "secondary_sidebar_items": ["page-toc", "sourcelink"],
     "footer_start": ["copyright"],

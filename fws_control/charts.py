@@ -21,6 +21,7 @@ from typing import Any
 import control as ct
 import numpy as np
 
+from ._repr import summary_repr
 from .delay import critical_delay, unstable_root_count
 from .design import double_root_gains
 from .exceptions import UncontrollableError
@@ -100,6 +101,7 @@ def _curve_in_box(
     return complex_root_curve(cp, w, delay)
 
 
+@summary_repr
 @dataclass(frozen=True, eq=False)
 class StabilityChart:
     r"""Stable set of the linear closed loop on a ``(k1, k2)`` grid.
@@ -258,6 +260,7 @@ class StabilityChart:
         alpha: float = 0.3,
         boundaries: bool = True,
         design: bool = True,
+        outline: bool = False,
         legend: bool = True,
         notes: bool = True,
         title: bool | str = True,
@@ -279,11 +282,16 @@ class StabilityChart:
         alpha : float, optional
             Opacity of the region.
         boundaries, design : bool, optional
-            Whether to draw the boundaries and the design point.
+            Whether to draw the boundaries and the design point. A design off
+            the grid is marked by a hollow arrowhead on the frame.
+        outline : bool, optional
+            Whether to trace the edge of the region with a broad translucent
+            band, which keeps overlaid light fills apart.
         legend : bool, optional
             Whether to add a legend.
         notes : bool, optional
-            Whether to write :meth:`notes` into the axes.
+            Whether to write :meth:`notes` into the axes, prefixed with
+            `label`; the notes of charts overlaid on one axes go into one box.
         title : bool or str, optional
             True: :meth:`describe`; a string: that title; False: none.
 
@@ -311,18 +319,18 @@ class StabilityChart:
         if ax is None:
             _, ax = plt.subplots(figsize=(5.5, 4.8), layout="constrained")
         artists, handles = self._draw(
-            ax, color, label, hatch, alpha, boundaries, design
+            ax, color, label, hatch, alpha, boundaries, design, outline
         )
         if title:
             ax.set_title(self.describe() if title is True else title, fontsize=10)
         leg = ax.legend(handles=handles, fontsize=8, loc="best") if legend else None
         if notes:
-            note_box(ax, self.notes())
+            note_box(ax, self.notes(label=label or ""))
         lines = np.empty((1, 1), dtype=object)
         lines[0, 0] = artists
         return ct.ControlPlot(lines, np.array([[ax]]), ax.figure, legend=leg)
 
-    def _draw(self, ax, color, label, hatch, alpha, boundaries, design):
+    def _draw(self, ax, color, label, hatch, alpha, boundaries, design, outline=False):
         """Draw on `ax`; return ``(artists, legend handles)``."""
         from matplotlib.colors import to_rgba
         from matplotlib.patches import Patch
@@ -348,6 +356,19 @@ class StabilityChart:
                 )
                 cs.set_edgecolor(color)
                 cs.set_linewidth(0.0)
+                artists.append(cs)
+            if outline:
+                # A broad translucent band along the inside of the region's
+                # edge: overlaid regions stay readable where fills overlap.
+                cs = ax.contour(
+                    self.k1,
+                    self.k2,
+                    z,
+                    levels=[0.5],
+                    colors=[color],
+                    linewidths=4.0,
+                    alpha=0.45,
+                )
                 artists.append(cs)
         # contourf makes no legend handle; a proxy patch stands in for it.
         handles = [
@@ -408,6 +429,32 @@ class StabilityChart:
             artists.append(pt)
             if label is None:
                 handles.append(pt)
+        elif design and self.design is not None:
+            # Off the chart: a hollow arrowhead on the frame points at it (the
+            # notes give its coordinates).
+            k1d, k2d = float(self.design.k1), float(self.design.k2)
+            px, py = min(max(k1d, k1r[0]), k1r[1]), min(max(k2d, k2r[0]), k2r[1])
+            marker = (
+                ">"
+                if k1d > k1r[1]
+                else "<"
+                if k1d < k1r[0]
+                else "^"
+                if k2d > k2r[1]
+                else "v"
+            )
+            (pt,) = ax.plot(
+                px,
+                py,
+                marker,
+                color=color,
+                mfc="white",
+                mew=2.0,
+                ms=10,
+                clip_on=False,
+                zorder=6,
+            )
+            artists.append(pt)
         ax.set_xlim(*k1r)
         ax.set_ylim(*k2r)
         ax.set_xlabel(r"$k_1$ [rad/m]")
@@ -427,8 +474,8 @@ class StabilityChart:
         ax : matplotlib.axes.Axes
             Axes to draw on.
         **kwargs
-            `color`, `label`, `hatch`, `alpha`, `boundaries`, `design` as in
-            :meth:`plot`.
+            `color`, `label`, `hatch`, `alpha`, `boundaries`, `design`,
+            `outline` as in :meth:`plot`.
 
         Returns
         -------
@@ -442,6 +489,7 @@ class StabilityChart:
             "alpha": 0.3,
             "boundaries": True,
             "design": True,
+            "outline": False,
         }
         unknown = set(kwargs) - set(opts)
         if unknown:
@@ -455,6 +503,9 @@ class StabilityChart:
 def note_box(ax, notes) -> None:
     """Write remarks into the top-left corner of `ax` (nothing if none).
 
+    Called again on the same axes (overlaid charts), it appends to the box
+    already there instead of drawing a second box on top of it.
+
     Parameters
     ----------
     ax : matplotlib.axes.Axes
@@ -464,7 +515,12 @@ def note_box(ax, notes) -> None:
     """
     if not notes:
         return
-    ax.text(
+    box = getattr(ax, "_fws_note_box", None)
+    if box is not None and box.axes is ax:
+        old = box.get_text().split("\n")
+        box.set_text("\n".join(old + [n for n in notes if n not in old]))
+        return
+    ax._fws_note_box = ax.text(
         0.02,
         0.98,
         "\n".join(notes),
@@ -599,6 +655,7 @@ def stability_chart(
     )
 
 
+@summary_repr
 @dataclass(frozen=True, eq=False)
 class DelayMarginChart:
     r"""Critical delay of double-root designs over ratios and poles.

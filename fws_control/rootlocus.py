@@ -261,6 +261,27 @@ def polynomial_roots(coefficients) -> np.ndarray:
     return roots
 
 
+class _ParameterLocusData(ct.PoleZeroData):
+    """PoleZeroData whose ``plot()`` frames the whole locus.
+
+    python-control chooses root-locus limits for a gain locus (around the
+    open-loop poles and zeros); a speed or curvature locus can run far
+    outside them. Explicit `xlim`/`ylim` still win.
+    """
+
+    def plot(self, *args, **kwargs):
+        loci = np.asarray(self.loci)
+        finite = loci[np.isfinite(loci)]
+        if finite.size:
+            re, im = finite.real, finite.imag
+            span = max(float(np.ptp(re)), float(np.ptp(im)), 0.1)
+            pad = 0.08 * span
+            kwargs.setdefault("xlim", (float(re.min()) - pad, float(re.max()) + pad))
+            ymax = max(float(np.abs(im).max()), 0.05 * span) + pad
+            kwargs.setdefault("ylim", (-ymax, ymax))
+        return super().plot(*args, **kwargs)
+
+
 def parameter_locus(
     plant: Any,
     gains: SteeringGains,
@@ -308,7 +329,8 @@ def parameter_locus(
     control.PoleZeroData
         ``.loci`` of shape ``(len(values), n)``; ``.gains`` holds `values`;
         ``.poles`` the poles at the first value (plotted as ``x``);
-        ``.zeros`` is empty. ``.plot()`` draws the locus.
+        ``.zeros`` is empty. ``.plot()`` draws the locus with axis limits
+        that cover all of it (pass ``xlim``/``ylim`` to override).
 
     Raises
     ------
@@ -381,7 +403,7 @@ def parameter_locus(
     else:
         loci = polynomial_roots(coeffs)
     label = f"{parameter} {vals[0]:g} to {vals[-1]:g}"
-    return ct.PoleZeroData(
+    return _ParameterLocusData(
         loci[0].copy(),
         np.array([], dtype=complex),
         gains=vals,

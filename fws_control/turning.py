@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
+from ._repr import summary_repr
 from .models import check_steering
 from .validation import check_finite
 from .vehicle import Vehicle
@@ -47,6 +48,7 @@ __all__ = [
 ]
 
 
+@summary_repr
 @dataclass(frozen=True, eq=False)
 class TurningGeometry:
     r"""Steady turn at constant steering angles (fields broadcast).
@@ -229,7 +231,9 @@ def plot_turning_radius(
     vehicle : Vehicle
         Geometry.
     ratios : array_like, optional
-        Values of ``a``; default 301 points on [-2, 0.8].
+        Values of ``a``; default 381 points on [-3, 0.8], which holds the
+        minimum of every default limit. A minimum at an end of `ratios` is
+        annotated "min beyond range" instead of marked.
     limits : sequence of float, optional
         Front steering limits [rad]; default 20, 30 and 40 degrees.
     ax : matplotlib.axes.Axes, optional
@@ -257,7 +261,7 @@ def plot_turning_radius(
 
     if ax is None:
         _, ax = plt.subplots(figsize=(7, 4.8), layout="constrained")
-    a = np.linspace(-2.0, 0.8, 301) if ratios is None else np.asarray(ratios, float)
+    a = np.linspace(-3.0, 0.8, 381) if ratios is None else np.asarray(ratios, float)
     lims = np.radians([20.0, 30.0, 40.0]) if limits is None else limits
     for i, lim in enumerate(np.atleast_1d(lims)):
         geo = turning_radius(
@@ -276,7 +280,20 @@ def plot_turning_radius(
             a, geo.cg, "--", color=color, label=rf"G, $\delta_{{f,\max}}$ = {deg:.0f}°"
         )
         j = int(np.argmin(geo.rear_axle))
-        ax.plot(a[j], geo.rear_axle[j], "v", color=color, ms=7)
+        if 0 < j < a.size - 1:
+            ax.plot(a[j], geo.rear_axle[j], "v", color=color, ms=7)
+        else:
+            # The minimum lies beyond the plotted ratios: a marker on the
+            # edge would pose as an interior minimum.
+            ax.annotate(
+                "min beyond range",
+                (a[j], geo.rear_axle[j]),
+                xytext=(6 if j == 0 else -6, 8),
+                textcoords="offset points",
+                ha="left" if j == 0 else "right",
+                fontsize=7,
+                color=color,
+            )
     ax.axvline(0.0, color="0.6", lw=0.8)
     ax.plot([], [], "v", color="0.4", label="minimum of R")
     ax.set_ylim(0.0, ylim)

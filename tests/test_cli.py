@@ -46,7 +46,7 @@ def run_many(arg_lists, cwd=None):
     return results
 
 
-SUBCOMMANDS = ["gains", "chart", "rlocus", "simulate", "reproduce"]
+SUBCOMMANDS = ["gains", "chart", "rlocus", "simulate", "delay-margin", "reproduce"]
 
 
 def test_help_subprocess():
@@ -179,12 +179,124 @@ def test_simulate_png_and_csv(tmp_path):
     assert out.read_bytes()[:8] == PNG
     with open(data) as fh:
         rows = list(csv.DictReader(fh))
-    assert float(rows[0]["e"]) == pytest.approx(2.0)
-    assert float(rows[0]["theta"]) == pytest.approx(math.radians(10))
-    assert float(rows[-1]["t"]) == pytest.approx(10.0)
+    # Units in the header; angles in degrees, as the CLI reads and prints them.
+    assert list(rows[0])[:4] == ["t [s]", "x [m]", "y [m]", "psi [deg]"]
+    assert "delta_f_rate [deg/s]" in rows[0] and list(rows[0])[-1] == "status"
+    assert float(rows[0]["e [m]"]) == pytest.approx(2.0)
+    assert float(rows[0]["theta [deg]"]) == pytest.approx(10.0)
+    assert float(rows[-1]["t [s]"]) == pytest.approx(10.0)
     # lambda0 = -1 double root: after 10 s the error is ~ (1 + t) e^-t small.
-    assert abs(float(rows[-1]["e"])) < 0.02
+    assert abs(float(rows[-1]["e [m]"])) < 0.02
+    assert {r["status"] for r in rows} == {"ok"}
     assert "status: ok" in p.stdout
+
+
+def test_simulate_stopped_run_exits_3_and_says_so(tmp_path, capsys):
+    """a = 1 on the 0.1 1/m arc: |delta_f| > 90 deg at t = 0 (singular)."""
+    out, data = tmp_path / "s.png", tmp_path / "s.csv"
+    p = _in_process(
+        ["simulate", "--ratio", 1, "--duration", 2, "--out", out, "--csv", data],
+        capsys,
+    )
+    assert p.returncode == 3
+    assert "singular_steering" in p.stdout
+    err = p.stderr.strip().splitlines()
+    assert len(err) == 1 and "exit status 3" in err[0]
+    assert out.read_bytes()[:8] == PNG
+    with open(data) as fh:
+        rows = list(csv.DictReader(fh))
+    assert rows[0]["status"] == "singular_steering"
+
+
+def test_one_default_curvature_and_out_defaults_in_help(capsys):
+    from fws_control.cli import DEFAULT_CURVATURE, build_parser
+
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a.choices, dict)).choices
+    for name in ("gains", "chart", "rlocus", "simulate", "delay-margin"):
+        assert sub[name].parse_args([]).curvature == DEFAULT_CURVATURE, name
+    for name, default in (
+        ("chart", "chart.png"),
+        ("rlocus", "rlocus.png"),
+        ("simulate", "simulation.png"),
+        ("reproduce", "figures"),
+    ):
+        text = " ".join(sub[name].format_help().split())
+        assert f"--out OUT PNG file ({default})" in text or (
+            f"--out OUT directory ({default})" in text
+        ), name
+
+
+def test_rlocus_prints_no_float_noise(capsys):
+    import fws_control.cli as cli
+
+    assert cli._fmt_coeffs([2.0000000000000004, 0.7499999999999999]) == "[2, 0.75]"
+    assert cli._fmt_coeffs([1.0, 0.0, 0.25]) == "[1, 0, 0.25]"
+
+
+def test_extreme_inputs_warn_one_line_each(tmp_path, capsys):
+    p = _in_process(["gains", "--curvature", 5, "--speed", 5, "--ratio", -1], capsys)
+    assert p.returncode == 0, p.stderr
+    err = p.stderr.strip().splitlines()
+    assert len(err) == 1 and "warning" in err[0] and "--curvature 5" in err[0]
+    p = _in_process(
+        ["rlocus", "--k1", 0.1, "--k2", 30, "--out", tmp_path / "r.png"], capsys
+    )
+    assert p.returncode == 0, p.stderr
+    err = p.stderr.strip().splitlines()
+    assert len(err) == 1 and "--k2 30" in err[0]
+    # A plain run prints no warning.
+    p = _in_process(["gains"], capsys)
+    assert p.returncode == 0 and p.stderr == ""
+
+
+def test_delay_margin_closed_form_and_bad_lags(capsys):
+    """`delay-margin` prints the closed-form margin of a straight-road design.
+
+    With the double root lambda0 the straight-road loop with an input delay is
+    D(s) = s^2 + e^{-s tau}(-2 lambda0 s + lambda0^2) for every speed, ratio
+    and model: |d(jw)| = |q(jw)| gives w^2 = (2 + sqrt(5)) lambda0^2 and the
+    phase w tau = atan(2 w / |lambda0|), so tau_c |lambda0| = atan(2 u)/u with
+    u^2 = 2 + sqrt(5) (0.6474 s for lambda0 = -1).
+    """
+    u = math.sqrt(2.0 + math.sqrt(5.0))
+    for speed, ratio, pole in ((5, -1, -1), (20, 0.5, -2), (5, 1.5, -3)):
+        p = _in_process(
+            ["delay-margin", "--speed", speed, "--curvature", 0, "--ratio", ratio,
+             "--pole", pole],
+            capsys,
+        )  # fmt: skip
+        assert p.returncode == 0 and p.stderr == "", p.stderr
+        assert "steering lag: none" in p.stdout
+        m = re.search(r"critical delay: (\S+) s \(crossing at (\S+) rad/s", p.stdout)
+        assert float(m[1]) == pytest.approx(math.atan(2 * u) / u / abs(pole), rel=1e-5)
+        assert float(m[2]) == pytest.approx(u * abs(pole), rel=1e-5)
+    # --delay reports the rightmost roots: stable just below the margin,
+    # unstable just above it (0.6474 s for lambda0 = -1)
+    for delay, verdict in ((0.64, "stable"), (0.66, "unstable")):
+        p = _in_process(
+            ["delay-margin", "--curvature", 0, "--pole", -1, "--delay", delay], capsys
+        )
+        assert p.returncode == 0, p.stderr
+        assert f"at delay {delay:g} s: {verdict};" in p.stdout
+    # a steering lag shrinks the margin (0.4552 s for a 0.27 s lag)
+    p = _in_process(["delay-margin", "--curvature", 0, "--steering-lag", 0.27], capsys)
+    assert "steering lag: 0.27 s front, 0.27 s rear" in p.stdout
+    lagged = float(re.search(r"critical delay: (\S+) s", p.stdout)[1])
+    assert 0.24 < lagged < math.atan(2 * u) / u
+    # bad lags: exit status 2, nothing on stdout, one line on stderr
+    for args, fragment in (
+        (["--steering-lag", 0.1, 0.2, 0.3], "--steering-lag takes one or two"),
+        (["--steering-lag", -0.27], "steering_lag must be > 0"),
+        (["--steering-lag", 0.27, -0.1], "steering_lag must be > 0"),
+    ):
+        p = _in_process(["delay-margin", *args], capsys)
+        assert p.returncode == 2, args
+        assert p.stdout == "", args
+        err = p.stderr.strip().splitlines()
+        assert len(err) == 1, (args, p.stderr)
+        assert err[0].startswith("fws-control delay-margin: error:"), err
+        assert fragment in err[0], err
 
 
 # Each kind of failure once through a real subprocess ...

@@ -102,7 +102,9 @@ def test_reproduce_subset_writes_pngs_and_summary(tmp_path):
 
 def test_fig5_points_match_direct_simulation():
     fig = make_figure("fig5", quick=True)
-    ax_a = fig.axes[0]
+    # Each panel has a strip above it (runs without a peak); the data axes are
+    # the log-scale ones, in panel order.
+    ax_a = [ax for ax in fig.axes if ax.get_yscale() == "log"][0]
     (line,) = [ln for ln in ax_a.lines if ln.get_label() == r"$\lambda_0$ = -1"]
     a, peak = line.get_xdata(), line.get_ydata()
     veh = fws.Vehicle(2.7, 1.35)
@@ -149,7 +151,37 @@ def test_response_figures_match_direct_simulation(n, curvature, y0):
     ref = res.y if n == 6 else res.e  # panel (a): lateral position / error
     np.testing.assert_allclose(line.get_ydata(), ref, atol=1e-6)
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
-    assert any(s.startswith("a = 1:") for s in labels)  # a = 1 is marked, not hidden
+    # The legend lists drawn curves only; a = 1 stops at t = 0 and is named in
+    # a note instead (marked, not hidden).
+    assert not any(s.startswith("a = 1") for s in labels)
+    notes = [t.get_text() for t in ax.texts]
+    assert any(s.startswith("a = 1:") and "not drawn" in s for s in notes)
+    plt.close(fig)
+
+
+def test_fig5_marks_stopped_runs_outside_the_data_and_explains_1g():
+    fig = make_figure("fig5", quick=True)
+    logs = [ax for ax in fig.axes if ax.get_yscale() == "log"]
+    strips = [ax for ax in fig.axes if ax.get_yscale() != "log"]
+    assert len(logs) == len(strips) == 4
+    # Panel (b) (5 m/s curve) has stopped runs: x markers in its strip only.
+    assert any(ln.get_marker() == "x" and len(ln.get_xdata()) for ln in strips[1].lines)
+    assert not any(ln.get_marker() == "x" for ln in logs[1].lines)
+    assert "1 g" in " ".join(t.get_text() for t in logs[1].texts)
+    assert "full steering" in fig._supxlabel.get_text()
+    plt.close(fig)
+
+
+def test_fig7_lateral_accel_not_squashed_and_steering_panels_share_limits():
+    fig = make_figure("fig7", quick=True)
+    by_title = {ax.get_title(): ax for ax in fig.axes}
+    acc = next(ax for t, ax in by_title.items() if t.startswith("(f)"))
+    lo, hi = acc.get_ylim()
+    assert lo > -10.0  # the t = 0 spike of a = 0.5 reaches about -42 m/s^2
+    assert any("clipped" in t.get_text() for t in acc.texts)
+    df = next(ax for t, ax in by_title.items() if t.startswith("(d)"))
+    dr = next(ax for t, ax in by_title.items() if t.startswith("(e)"))
+    assert df.get_ylim() == dr.get_ylim()
     plt.close(fig)
 
 

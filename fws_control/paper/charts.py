@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
+from .._repr import summary_repr
 from ..charts import StabilityChart, stability_chart
 from ..design import double_root_gains
 from ..exceptions import UncontrollableError
@@ -27,9 +28,9 @@ __all__ = ["ChartPanel", "paper_figure_panels", "plot_paper_figure"]
 _DEFAULT_RANGE = (-1.0, 1.0)
 _DEFAULT_POINTS = 401
 _MAX_RANGE = (-2.0, 2.0)
-_HATCHES = (None, "//", "\\\\", "||", "--", "xx", "..")
 
 
+@summary_repr
 @dataclass(frozen=True, eq=False)
 class ChartPanel:
     r"""One panel of a paper figure: overlaid charts with their labels.
@@ -79,8 +80,7 @@ def _panel_ranges(designs, base=_DEFAULT_RANGE, cap=_MAX_RANGE):
     return out
 
 
-def _build_panel(vehicle, title, specs, model, pole, npoints) -> ChartPanel:
-    """specs: list of (label, speed, curvature, ratio)."""
+def _designs(vehicle, specs, model, pole):
     designs = []
     for _, V, kap, a in specs:
         try:
@@ -88,7 +88,16 @@ def _build_panel(vehicle, title, specs, model, pole, npoints) -> ChartPanel:
             designs.append(double_root_gains(plant, ratio=a, pole=pole))
         except UncontrollableError:
             designs.append(None)
-    (k1lo, k1hi), (k2lo, k2hi) = _panel_ranges(designs)
+    return designs
+
+
+def _build_panel(
+    vehicle, title, specs, model, pole, npoints, ranges=None
+) -> ChartPanel:
+    """specs: list of (label, speed, curvature, ratio)."""
+    if ranges is None:
+        ranges = _panel_ranges(_designs(vehicle, specs, model, pole))
+    (k1lo, k1hi), (k2lo, k2hi) = ranges
     k1 = np.linspace(k1lo, k1hi, npoints)
     k2 = np.linspace(k2lo, k2hi, npoints)
     charts = tuple(
@@ -123,7 +132,8 @@ def paper_figure_panels(
 
     Each panel's grid covers ``[-1, 1]^2`` (the paper's range), widened where
     needed (up to ``[-2, 2]``) so that the :math:`\lambda_0` design points are
-    visible; designs outside that are listed in the panel.
+    visible; designs outside that are listed in the panel and marked by an
+    arrowhead on its frame. The panels of Figs. 3-4 share one range.
 
     Parameters
     ----------
@@ -176,15 +186,22 @@ def paper_figure_panels(
         kappas = PAPER_CURVATURES[n] if curvatures is None else tuple(curvatures)
         panels = []
         ratios = (-1.5, -1.0, -0.5, 0.0, 0.5, 1.0, 1.5)
+        specs = {
+            a: [(rf"$\kappa$ = {k:g} 1/m", V, k, a) for k in kappas] for a in ratios
+        }
+        # One range for every panel, so that the panels compare at a glance.
+        designs = [d for a in ratios for d in _designs(vehicle, specs[a], model, pole)]
+        ranges = _panel_ranges(designs)
         for letter, a in zip("abcdefg", ratios, strict=True):
             panels.append(
                 _build_panel(
                     vehicle,
                     f"({letter}) a = {a:g}, V = {V:g} m/s",
-                    [(rf"$\kappa$ = {k:g} 1/m", V, k, a) for k in kappas],
+                    specs[a],
                     model,
                     pole,
                     npoints,
+                    ranges,
                 )
             )
         return panels
@@ -212,12 +229,15 @@ def _draw_panel(ax, panel: ChartPanel, legend: bool = True) -> list:
     notes = []
     for i, (ch, lab) in enumerate(zip(panel.charts, panel.labels, strict=True)):
         color = f"C{i}"
+        # Light fills with an outline band: overlapping regions darken
+        # instead of merging into one hatched patch, and each edge keeps its
+        # colour.
         handles += ch.draw(
             ax,
             color=color,
             label=lab,
-            hatch=_HATCHES[i % len(_HATCHES)],
-            alpha=0.1,
+            alpha=0.12,
+            outline=True,
             boundaries=True,
             design=True,
         )
@@ -235,6 +255,19 @@ def _draw_panel(ax, panel: ChartPanel, legend: bool = True) -> list:
             label=rf"$\lambda_0$ = {panel.charts[0].pole:g} gains",
         ),
     ]
+    if any(ch.design is not None and not ch.design_on_chart for ch in panel.charts):
+        handles.append(
+            Line2D(
+                [],
+                [],
+                marker=">",
+                ls="",
+                color="0.3",
+                mfc="white",
+                mew=2.0,
+                label="gains off chart (arrow on the frame; values in the note)",
+            )
+        )
     _note_box(ax, notes)
     ax.set_title(panel.title, fontsize=10)
     if legend:
@@ -262,7 +295,7 @@ def plot_paper_figure(
 ) -> ct.ControlPlot:
     r"""Redraw Fig. 2, 3 or 4 of the paper as one matplotlib figure.
 
-    Every panel overlays the stable regions (hatched, translucent) of the
+    Every panel overlays the stable regions (light fill, outlined) of the
     charts listed in :func:`paper_figure_panels`, their boundary lines
     (solid: eq. 35, dashed: eq. 36) and the :math:`\lambda_0` gains.
 
@@ -316,8 +349,12 @@ def plot_paper_figure(
         fig = axs.flat[0].figure
     axes = list(axs.flat)
     lines = np.empty(shape, dtype=object)
+    handles = []
     for i, (a, panel) in enumerate(zip(axes, panels, strict=False)):
-        handles = _draw_panel(a, panel, legend=n == 2)
+        for h in _draw_panel(a, panel, legend=n == 2):
+            base = h.get_label().removesuffix(" (empty)")
+            if base not in [k.get_label().removesuffix(" (empty)") for k in handles]:
+                handles.append(h)
         lines.flat[i] = list(a.get_lines())
     if n != 2:
         # The eighth slot holds the shared legend.
