@@ -113,6 +113,23 @@ class LateralController:
     :meth:`steering_rate` with an analytic rate (the default is a central
     difference along the motion). Array-valued parameters hold one value per
     run and are indexed by :meth:`subset`.
+
+    Examples
+    --------
+    A proportional law on the lateral error only:
+
+    >>> from dataclasses import dataclass
+    >>> import fws_control as fws
+    >>> @dataclass(frozen=True)
+    ... class LateralOnly(fws.LateralController):
+    ...     k: float = 0.1
+    ...     def steering(self, vehicle, path, *, s, e, theta, curvature, speed):
+    ...         return -self.k * e, 0.0 * e
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> res = fws.simulate(veh, fws.Straight(), LateralOnly(), speed=5.0,
+    ...                    initial_state=(0.0, 1.0, 0.0), duration=1.0)
+    >>> round(float(res.delta_f[0]), 6)
+    -0.1
     """
 
     #: Short name used in tables and legends.
@@ -453,7 +470,7 @@ def LQRController(  # noqa: N802 - a constructor in the issue's naming
     return ctrl
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class PurePursuit(LateralController):
     r"""Pure pursuit (Coulter 1992) on the rear axle.
 
@@ -544,7 +561,7 @@ class PurePursuit(LateralController):
         return df, np.asarray(self.ratio) * df
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class Stanley(LateralController):
     r"""Stanley controller (Thrun et al. 2006) on the front axle.
 
@@ -611,7 +628,7 @@ class Stanley(LateralController):
         return df, np.asarray(self.ratio) * df
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class RearWheelFeedback(LateralController):
     r"""Rear-wheel feedback (Samson 1995; PythonRobotics' rear_wheel_feedback).
 

@@ -214,7 +214,7 @@ class ControllerComparison:
                 raise ValueError(f"ax must hold 4 axes, got {len(axes)}")
             fig = axes[0].figure
         a_xy, a_e, a_df, a_acc = axes
-        self.manoeuvre.plot_gates(a_xy)
+        self.manoeuvre.draw_gates(a_xy)
         deg = 180.0 / math.pi
         for i, (lab, r) in enumerate(zip(self.labels, self.results, strict=True)):
             color = f"C{i % 10}"

@@ -90,6 +90,13 @@ class Gate:
         Lateral positions of the right and left cone lines [m].
     name : str
         E.g. ``"section 1"``.
+
+    Examples
+    --------
+    >>> from fws_control.manoeuvres import Gate
+    >>> g = Gate(30.0, 45.0, -1.2, 1.2, "section 1")
+    >>> round(g.width, 9), g.centre, g.cones().shape
+    (2.4, 0.0, (6, 2))
     """
 
     x_start: float
@@ -191,6 +198,16 @@ class Manoeuvre:
         Width ``b`` [m] the gates were sized for.
     start_x : float
         x of the first gate's entry [m] (the path starts `start_x` before it).
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> m = fws.obstacle_avoidance()
+    >>> m.start_x, m.end_x, m.cones().shape
+    (30.0, 91.0, (18, 2))
+    >>> m.cones_hit(np.array([0.0]), np.array([0.0]), np.array([0.0]),
+    ...             wheelbase=2.7)
+    0
     """
 
     name: str
@@ -245,7 +262,7 @@ class Manoeuvre:
         )
         return int(np.count_nonzero(np.any(inside, axis=0)))
 
-    def plot_gates(self, ax) -> list:
+    def draw_gates(self, ax) -> list:
         """Draw the cone lines and cones on `ax`; return the artists.
 
         Parameters

@@ -141,6 +141,10 @@ RECORD_CLASSES = {
     "PathChain": "path record: PathChain(segments, closed)",
     "Path": "abstract base of the path records",
     "LoopMatrices": "record of the loop matrices (A, B_front, B_rear, c_e, ...)",
+    "StateFeedback": "controller record: StateFeedback(K, feedforward), K = data",
+    "Gate": "geometry record (x_start, x_end, y_right, y_left, name)",
+    "Manoeuvre": "course record (name, path, gates, vehicle_width, start_x)",
+    "ControllerComparison": "result record of compare",
 }
 
 # Check 2: further parameters that are data for one particular callable.
@@ -190,6 +194,16 @@ POSITIONAL_EXCEPTIONS = {
     "StabilityChart.draw": (
         {"ax"},
         "overlay helper: the (required) Axes drawn into is its data",
+    ),
+    "Manoeuvre.draw_gates": (
+        {"ax"},
+        "overlay helper: the (required) Axes drawn into is its data",
+    ),
+    "LateralController.subset": ({"idx"}, "selects the runs idx: the data"),
+    "PurePursuit.distance": ({"speed"}, "evaluates L_d at given speeds: the data"),
+    "compare": (
+        {"manoeuvre", "controllers"},
+        "the course and the controllers are what is compared: the data",
     ),
 }
 
@@ -812,7 +826,13 @@ def _plot_factories():
         paper = importlib.import_module(f"{PACKAGE}.paper")
         return lambda **kw: paper.plot_actuator(quick=True, **kw)
 
+    def controller_comparison():
+        m = fws.constant_radius(radius=20.0, turns=0.1)
+        g = fws.SteeringGains(0.05, 0.5, ratio=0.0)
+        return fws.compare(veh, m, {"paper": g}, speed=5.0).plot
+
     return {
+        "ControllerComparison.plot": controller_comparison,
         "StabilityChart.plot": chart,
         "DelayMarginChart.plot": delay_chart,
         "SimulationResult.plot": simulation,
