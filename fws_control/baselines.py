@@ -97,6 +97,7 @@ def saturate(vehicle: Vehicle, delta_f, delta_r) -> tuple[np.ndarray, np.ndarray
     >>> [float(v) for v in fws.saturate(veh, 0.7, -0.7)]
     [0.5, -0.7]
     """
+    check_type("vehicle", vehicle, Vehicle)
     df = np.asarray(delta_f, dtype=float)
     dr = np.asarray(delta_r, dtype=float)
     if vehicle.max_steer_front is not None:
@@ -179,22 +180,43 @@ class LateralController:
         (ndarray, ndarray)
         """
         h = _RATE_STEP
-        out = []
-        for sign in (1.0, -1.0):
-            ss = np.asarray(s) + sign * h * np.asarray(s_dot)
-            out.append(
-                self.steering(
-                    vehicle,
-                    path,
-                    s=ss,
-                    e=np.asarray(e) + sign * h * np.asarray(e_dot),
-                    theta=np.asarray(theta) + sign * h * np.asarray(theta_dot),
-                    curvature=_curvature_at(path, ss),
-                    speed=speed,
-                )
+        s = np.asarray(s, dtype=float)
+        s_dot = np.asarray(s_dot, dtype=float)
+        length = float(getattr(path, "length", math.inf))
+        open_path = math.isfinite(length) and not getattr(path, "closed", False)
+        # one-sided at the ends of an open path, where the other point would
+        # be clipped onto the end (and the arc-length part of the rate lost)
+        fwd = bwd = np.ones(np.shape(s), dtype=bool)
+        if open_path:
+            fwd = s + h * np.abs(s_dot) <= length
+            bwd = s - h * np.abs(s_dot) >= 0.0
+        vals = {}
+        for step in (-1.0, 0.0, 1.0):
+            ss = s + step * h * s_dot
+            vals[step] = self.steering(
+                vehicle,
+                path,
+                s=ss,
+                e=np.asarray(e) + step * h * np.asarray(e_dot),
+                theta=np.asarray(theta) + step * h * np.asarray(theta_dot),
+                curvature=_curvature_at(path, ss),
+                speed=speed,
             )
-        (fp, rp), (fm, rm) = out
-        return (np.asarray(fp) - fm) / (2 * h), (np.asarray(rp) - rm) / (2 * h)
+        out = []
+        for ch in (0, 1):
+            fp, f0, fm = (
+                np.asarray(vals[k][ch], dtype=float) for k in (1.0, 0.0, -1.0)
+            )
+            central = (fp - fm) / (2 * h)
+            if open_path:
+                ahead = s_dot >= 0
+                # which neighbour lies off the path: use the other one-sidedly
+                lost_fp = np.where(ahead, ~fwd, ~bwd)
+                lost_fm = np.where(ahead, ~bwd, ~fwd)
+                central = np.where(lost_fp, (f0 - fm) / h, central)
+                central = np.where(lost_fm & ~lost_fp, (fp - f0) / h, central)
+            out.append(central)
+        return out[0], out[1]
 
     def subset(self, idx) -> LateralController:
         """The controller of the runs `idx` (array parameters indexed).

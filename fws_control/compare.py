@@ -5,11 +5,12 @@ angle and rate limits), the same course, speed, initial pose and optional
 input delay and steering lag, and returns a :class:`ControllerComparison`: a
 table of metrics per controller and a figure.
 
-Metrics (per controller): peak |lateral acceleration of G| [m/s²], peak
-|lateral jerk| [m/s³] (central differences of the lateral acceleration on
-the output grid), RMS and max |e| [m] over the course, max |delta_f|,
-|delta_r| [deg] and their rates [deg/s], cones hit (:meth:`Manoeuvre.cones_hit`)
-and completion (the run reached the end of the last gate without stopping).
+Metrics (per controller, while R is between the first gate's entry and the
+last gate's exit): peak |lateral acceleration of G| [m/s²], peak |lateral
+jerk| [m/s³] (central differences of the lateral acceleration on the output
+grid), RMS and max |e| [m], max |delta_f|, |delta_r| [deg] and their rates
+[deg/s]; cones hit (:meth:`Manoeuvre.cones_hit`, over the whole run) and
+completion (the run reached the end of the last gate without stopping).
 
 :func:`default_controllers` gives a fair starting set at a speed: the
 paper's double-root law (front steering and a rear ratio), rear-wheel
@@ -255,14 +256,18 @@ def _metrics(result: SimulationResult, manoeuvre: Manoeuvre, wheelbase: float):
     jerk = np.full_like(acc, np.nan)
     if np.count_nonzero(ok) > 2:
         jerk[ok] = np.gradient(acc[ok], t[ok])
-    on_course = (np.asarray(result.x) >= manoeuvre.start_x) & (
-        np.asarray(result.x) <= manoeuvre.end_x
-    )
+    # Every metric is taken while R is on the course (first gate's entry to
+    # the last gate's exit): the approach and the exit straight (where a
+    # look-ahead point can reach the path's end) do not count.
+    x = np.asarray(result.x)
+    on_course = (x >= manoeuvre.start_x) & (x <= manoeuvre.end_x)
+    if not manoeuvre.gates:
+        on_course = np.isfinite(x)
     e = np.asarray(result.e)[on_course]
     deg = 180.0 / math.pi
 
     def peak(v):
-        v = np.abs(np.asarray(v, dtype=float))
+        v = np.abs(np.asarray(v, dtype=float)[on_course])
         return float(np.nanmax(v)) if np.any(np.isfinite(v)) else math.nan
 
     finished = bool(np.nanmax(result.x) >= manoeuvre.end_x) and result.status in (
@@ -273,7 +278,7 @@ def _metrics(result: SimulationResult, manoeuvre: Manoeuvre, wheelbase: float):
         peak(acc),
         peak(jerk),
         float(np.sqrt(np.mean(e**2))) if e.size else math.nan,
-        peak(e) if e.size else math.nan,
+        float(np.max(np.abs(e))) if e.size else math.nan,
         deg * peak(result.delta_f),
         deg * peak(result.delta_r),
         deg * peak(result.delta_f_rate),

@@ -319,7 +319,7 @@ def _course(name, sections, b, approach, exit_length, offsets) -> Manoeuvre:
 
 
 def double_lane_change(
-    *, vehicle_width: float = 1.8, approach: float = 30.0, exit_length: float = 30.0
+    *, vehicle_width: float = 1.8, approach: float = 30.0, exit_length: float = 60.0
 ) -> Manoeuvre:
     """ISO 3888-1 double lane change (severe lane change), see the module table.
 
@@ -330,7 +330,8 @@ def double_lane_change(
     approach : float, optional
         Straight before the entry gate [m].
     exit_length : float, optional
-        Straight after the exit gate [m].
+        Straight after the exit gate [m] (default 60 m: room for a
+        look-ahead point beyond the last gate).
 
     Returns
     -------
@@ -360,7 +361,7 @@ def double_lane_change(
 
 
 def obstacle_avoidance(
-    *, vehicle_width: float = 1.8, approach: float = 30.0, exit_length: float = 30.0
+    *, vehicle_width: float = 1.8, approach: float = 30.0, exit_length: float = 60.0
 ) -> Manoeuvre:
     """ISO 3888-2 obstacle avoidance (moose test), see the module table.
 
@@ -371,7 +372,8 @@ def obstacle_avoidance(
     approach : float, optional
         Straight before the entry gate [m].
     exit_length : float, optional
-        Straight after the exit gate [m].
+        Straight after the exit gate [m] (default 60 m: room for a
+        look-ahead point beyond the last gate).
 
     Returns
     -------

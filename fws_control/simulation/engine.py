@@ -211,8 +211,8 @@ def run_gains(gains: Any, *, name: str = "gains") -> SteeringGains:
         items = list(gains)
     except TypeError:
         raise TypeError(
-            f"{name} must be a SteeringGains or a sequence of SteeringGains, got "
-            f"{type(gains).__name__}"
+            f"{name} must be a SteeringGains, a sequence of SteeringGains or a "
+            f"lateral controller (e.g. fws.PurePursuit()), got {type(gains).__name__}"
         ) from None
     if not items or not all(isinstance(g, SteeringGains) for g in items):
         raise TypeError(
