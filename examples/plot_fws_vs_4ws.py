@@ -15,6 +15,9 @@ the front ones, ``a > 0`` with them. The runs of each scenario are integrated
 together by :func:`fws_control.simulate_batch`.
 """
 
+import sys
+
+import matplotlib
 import matplotlib.pyplot as plt
 import numpy as np
 
@@ -100,4 +103,25 @@ ax.grid(True, alpha=0.3)
 ax.legend()
 r = turning_radius(veh, ratio=[0.0, -1.0], max_steer_front=np.radians(35.0)).rear_axle
 print(f"turning radius of R at a 35° limit: a = 0: {r[0]:.2f} m, a = -1: {r[1]:.2f} m")
-plt.show()
+
+# %%
+# Run as a script without a display (a non-interactive backend such as Agg),
+# the figures go to files in the current directory instead of windows; the
+# documentation build (sphinx-gallery) collects them by itself.
+
+if "sphinx_gallery" not in sys.modules and matplotlib.get_backend().lower() in (
+    "agg",
+    "pdf",
+    "ps",
+    "svg",
+    "pgf",
+    "cairo",
+    "template",
+):
+    names = []
+    for k, num in enumerate(plt.get_fignums(), start=1):
+        names.append(f"fws_vs_4ws_{k}.png")
+        plt.figure(num).savefig(names[-1], dpi=110)
+    print("saved " + ", ".join(names))
+else:
+    plt.show()

@@ -21,6 +21,9 @@ circular path.
 # angle has states ``e`` (lateral error) and ``theta`` (heading error) and
 # inputs ``delta_f``, ``delta_r``.
 
+from sys import modules
+
+import matplotlib
 import matplotlib.pyplot as plt
 import numpy as np
 
@@ -74,4 +77,25 @@ print(f"peak lateral acceleration of G: {np.max(np.abs(res.lateral_accel)):.2f} 
 
 cplt = res.plot(labels=["a = -1, $\\lambda_0$ = -1"])
 cplt.figure.suptitle("4WS path tracking on a 10 m circle at 5 m/s")
-plt.show()
+
+# %%
+# Run as a script without a display (a non-interactive backend such as Agg),
+# the figures go to files in the current directory instead of windows; the
+# documentation build (sphinx-gallery) collects them by itself.
+
+if "sphinx_gallery" not in modules and matplotlib.get_backend().lower() in (
+    "agg",
+    "pdf",
+    "ps",
+    "svg",
+    "pgf",
+    "cairo",
+    "template",
+):
+    names = []
+    for k, num in enumerate(plt.get_fignums(), start=1):
+        names.append(f"quick_start_{k}.png")
+        plt.figure(num).savefig(names[-1], dpi=110)
+    print("saved " + ", ".join(names))
+else:
+    plt.show()

@@ -14,6 +14,9 @@ curvature 0.1 1/m) or 10 m (at 20 m/s, curvature 0.01 1/m) outside the
 circle. Every run uses the exact double-root gains for its ``a``.
 """
 
+import sys
+
+import matplotlib
 import matplotlib.pyplot as plt
 import numpy as np
 
@@ -107,4 +110,25 @@ for title, *_rest in scenarios:
             f"{title.replace('$', ''):<52} lambda0 = {pole:g}: lowest peak "
             f"{peak[j]:.2f} m/s^2 at a = {ratios[j]:.2f}"
         )
-plt.show()
+
+# %%
+# Run as a script without a display (a non-interactive backend such as Agg),
+# the figures go to files in the current directory instead of windows; the
+# documentation build (sphinx-gallery) collects them by itself.
+
+if "sphinx_gallery" not in sys.modules and matplotlib.get_backend().lower() in (
+    "agg",
+    "pdf",
+    "ps",
+    "svg",
+    "pgf",
+    "cairo",
+    "template",
+):
+    names = []
+    for k, num in enumerate(plt.get_fignums(), start=1):
+        names.append(f"ratio_sweep_{k}.png")
+        plt.figure(num).savefig(names[-1], dpi=110)
+    print("saved " + ", ".join(names))
+else:
+    plt.show()

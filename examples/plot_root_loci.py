@@ -11,7 +11,10 @@ closed-loop poles while a parameter of the loop -- the ratio ``a``, the
 speed, the curvature or one gain -- varies.
 """
 
+import sys
+
 import control as ct
+import matplotlib
 import matplotlib.pyplot as plt
 import numpy as np
 
@@ -120,4 +123,25 @@ print(
     "paper's gains at a = 0.5 put the true poles at",
     np.real_if_close(np.round(cases[3][2].loci[i], 3)),
 )
-plt.show()
+
+# %%
+# Run as a script without a display (a non-interactive backend such as Agg),
+# the figures go to files in the current directory instead of windows; the
+# documentation build (sphinx-gallery) collects them by itself.
+
+if "sphinx_gallery" not in sys.modules and matplotlib.get_backend().lower() in (
+    "agg",
+    "pdf",
+    "ps",
+    "svg",
+    "pgf",
+    "cairo",
+    "template",
+):
+    names = []
+    for k, num in enumerate(plt.get_fignums(), start=1):
+        names.append(f"root_loci_{k}.png")
+        plt.figure(num).savefig(names[-1], dpi=110)
+    print("saved " + ", ".join(names))
+else:
+    plt.show()

@@ -11,6 +11,9 @@ the bends. Without it, the feedback alone leaves a lateral error wherever the
 path curves.
 """
 
+import sys
+
+import matplotlib
 import matplotlib.pyplot as plt
 import numpy as np
 
@@ -105,4 +108,25 @@ for ax in (ax_xy, ax_e, ax_k):
 # steering angles and lateral acceleration over time):
 
 cplt = results["feedforward + feedback"].plot(labels="feedforward + feedback")
-plt.show()
+
+# %%
+# Run as a script without a display (a non-interactive backend such as Agg),
+# the figures go to files in the current directory instead of windows; the
+# documentation build (sphinx-gallery) collects them by itself.
+
+if "sphinx_gallery" not in sys.modules and matplotlib.get_backend().lower() in (
+    "agg",
+    "pdf",
+    "ps",
+    "svg",
+    "pgf",
+    "cairo",
+    "template",
+):
+    names = []
+    for k, num in enumerate(plt.get_fignums(), start=1):
+        names.append(f"spline_course_{k}.png")
+        plt.figure(num).savefig(names[-1], dpi=110)
+    print("saved " + ", ".join(names))
+else:
+    plt.show()

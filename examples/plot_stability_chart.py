@@ -10,6 +10,9 @@ both conditions on a whole gain grid at once and also carries the lines and
 the double-root design point.
 """
 
+import sys
+
+import matplotlib
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.patches import Patch
@@ -135,4 +138,25 @@ ax.legend(
     ],
     fontsize=8,
 )
-plt.show()
+
+# %%
+# Run as a script without a display (a non-interactive backend such as Agg),
+# the figures go to files in the current directory instead of windows; the
+# documentation build (sphinx-gallery) collects them by itself.
+
+if "sphinx_gallery" not in sys.modules and matplotlib.get_backend().lower() in (
+    "agg",
+    "pdf",
+    "ps",
+    "svg",
+    "pgf",
+    "cairo",
+    "template",
+):
+    names = []
+    for k, num in enumerate(plt.get_fignums(), start=1):
+        names.append(f"stability_chart_{k}.png")
+        plt.figure(num).savefig(names[-1], dpi=110)
+    print("saved " + ", ".join(names))
+else:
+    plt.show()

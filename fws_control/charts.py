@@ -21,13 +21,13 @@ from typing import Any
 import control as ct
 import numpy as np
 
-from ._repr import summary_repr
 from .delay import critical_delay, unstable_root_count
 from .design import double_root_gains
 from .exceptions import UncontrollableError
 from .gains import SteeringGains
 from .linear import AffinePolynomial, characteristic_coefficients
 from .plant import LateralPlant, as_plant, loop_matrices
+from .reprs import summary_repr
 from .stability import (
     BoundaryCurve,
     StabilityBoundaries,

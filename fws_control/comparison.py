@@ -28,12 +28,14 @@ from .linear import check_gains, closed_loop
 from .models import feedforward_steering
 from .paths import Arc, Straight
 from .plant import LateralPlant, as_plant
+from .reprs import summary_repr
 from .simulation import SimulationResult, simulate
 from .validation import check_finite, check_positive
 
 __all__ = ["LinearNonlinearComparison", "compare_linear_nonlinear"]
 
 
+@summary_repr
 @dataclass(frozen=True, eq=False)
 class LinearNonlinearComparison:
     """Linear and nonlinear responses of one closed loop.

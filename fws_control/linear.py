@@ -33,6 +33,7 @@ import numpy as np
 
 from .gains import SteeringGains
 from .plant import LateralPlant, LoopMatrices, as_plant, loop_matrices
+from .reprs import summary_repr
 from .validation import check_finite, check_type
 
 __all__ = [
@@ -195,6 +196,7 @@ def closed_loop(
     )
 
 
+@summary_repr
 @dataclass(frozen=True, eq=False)
 class AffinePolynomial:
     r"""Closed-loop characteristic polynomial as an affine map of (k1, k2).

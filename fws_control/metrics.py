@@ -8,10 +8,12 @@ or ``result[i]``, shape ``(time,)``) gives a scalar.
 
 Two kinds of metric:
 
-* **Peaks** (:func:`peak_abs` and the wrappers for the lateral acceleration,
-  steering angles and rates) use the samples that exist: a run that stopped
-  early (NaN tail in a batch) reports its peak up to the stop. A run with no
-  valid sample gives NaN.
+* **Peaks**: :func:`peak_abs` of an array uses the samples that exist (a
+  run that stopped early, NaN tail in a batch, reports its peak up to the
+  stop; a run with no valid sample gives NaN). Given a
+  :class:`~fws_control.SimulationResult` and a signal name it returns the
+  exact peak of the continuous solution (``result.peaks``), which does not
+  depend on the output grid; :func:`tracking_metrics` reports those.
 * **Horizon metrics** (:func:`settling_time`, :func:`overshoot`,
   :func:`rms`, :func:`steady_state`) describe the whole simulated horizon;
   a run with missing samples gives NaN, so an incomplete run is never
@@ -29,6 +31,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .reprs import summary_repr
 from .validation import check_positive
 
 if TYPE_CHECKING:  # for the annotation only: metrics need no simulation code
@@ -63,18 +66,31 @@ def _time_and_signal(t, signal):
     return t, x
 
 
-def peak_abs(signal) -> float | np.ndarray:
-    """Largest absolute value over time, ignoring NaN samples.
+def peak_abs(signal, *, name: str | None = None) -> float | np.ndarray:
+    """Largest absolute value over time: of samples, or exact for a result.
 
     Parameters
     ----------
-    signal : array_like
-        Shape ``(..., time)``.
+    signal : array_like or SimulationResult
+        Samples of shape ``(..., time)`` (NaN samples ignored), or a
+        simulation result, whose exact peak of the continuous solution
+        (``result.peaks[name].value``) is returned.
+    name : str, optional
+        With a result: the signal, one of
+        :data:`~fws_control.simulation.engine.PEAK_SIGNALS` (``"e"``,
+        ``"delta_f"``, ``"delta_r"``, ``"delta_f_rate"``, ``"delta_r_rate"``,
+        ``"lateral_accel"``).
 
     Returns
     -------
     float or ndarray
-        Shape ``(...)``; NaN where a run has no valid sample.
+        Shape ``(...)`` (per run for a result); NaN where a run has no valid
+        sample.
+
+    Raises
+    ------
+    ValueError
+        For a result without `name`, or a `name` with an array.
 
     Examples
     --------
@@ -83,7 +99,31 @@ def peak_abs(signal) -> float | np.ndarray:
     2.0
     >>> peak_abs([[1.0, -3.0], [0.2, float("nan")]]).tolist()
     [3.0, 0.2]
+
+    On a result the peak lies between the samples where the solution has it:
+
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> g = fws.SteeringGains(k1=0.1, k2=0.5, ratio=0.0)
+    >>> res = fws.simulate(veh, fws.Straight(), g, speed=5.0,
+    ...                    initial_state=(0.0, 1.0, 0.0), duration=10.0, dt=1.0)
+    >>> bool(peak_abs(res, name="delta_f_rate") > peak_abs(res.delta_f_rate))
+    True
     """
+    if hasattr(signal, "peaks") and hasattr(signal, "signals"):
+        if name is None:
+            raise ValueError(
+                "name must name a signal (e.g. 'lateral_accel') when peak_abs is "
+                "given a SimulationResult"
+            )
+        try:
+            return signal.peaks[name].value
+        except KeyError as exc:
+            raise ValueError(str(exc.args[0])) from None
+    if name is not None:
+        raise ValueError(
+            f"name={name!r} is only for a SimulationResult; got an array of samples"
+        )
     x = np.abs(np.asarray(signal, dtype=float))
     valid = np.isfinite(x)
     out = np.max(np.where(valid, x, -np.inf), axis=-1)
@@ -262,6 +302,7 @@ def _time_average(t, signal, t_start):
     return np.trapezoid(xs, ts, axis=-1) / (ts[-1] - ts[0])
 
 
+@summary_repr
 @dataclass(frozen=True)
 class TrackingMetrics:
     """Metrics of one run (floats) or of a batch (arrays of shape ``(runs,)``).
@@ -274,7 +315,10 @@ class TrackingMetrics:
     Attributes
     ----------
     peak_lateral_accel : float or ndarray
-        Peak absolute lateral acceleration of G [m/s^2] (up to the stop).
+        Peak absolute lateral acceleration of G [m/s^2] over ``[0, t_stop]``:
+        the exact maximum of the continuous solution (``result.peaks``), not
+        of the output samples; ``inf`` where a run stopped at a singular
+        state, where it diverges.
     settling_time : float or ndarray
         Settling time of the lateral error ``e`` [s] (see
         :func:`settling_time`); NaN for runs that stopped early.
@@ -287,9 +331,11 @@ class TrackingMetrics:
     steady_state_heading_error : float or ndarray
         Mean of ``theta`` over the final window [rad].
     peak_delta_f, peak_delta_r : float or ndarray
-        Peak absolute steering angle [rad] (up to the stop).
+        Peak absolute steering angle [rad] (exact, up to the stop).
     peak_delta_f_rate, peak_delta_r_rate : float or ndarray
-        Peak absolute steering rate [rad/s] (up to the stop).
+        Peak absolute steering rate [rad/s] (exact, up to the stop).
+    peak_error : float or ndarray
+        Peak absolute lateral error ``|e|`` [m] (exact, up to the stop).
     status : str or ndarray of str
         The run status; horizon metrics are NaN unless it is ``"ok"``.
 
@@ -316,6 +362,7 @@ class TrackingMetrics:
     peak_delta_f_rate: float | np.ndarray
     peak_delta_r_rate: float | np.ndarray
     status: str | np.ndarray
+    peak_error: float | np.ndarray = np.nan
 
 
 def tracking_metrics(
@@ -374,16 +421,18 @@ def tracking_metrics(
         ss_th = horizon(steady_state(t, theta, window=window))
     else:  # a run that stopped at t = 0
         settle = ovs = rms_e = ss_e = ss_th = np.nan
+    peaks = result.peaks
     return TrackingMetrics(
-        peak_lateral_accel=peak_abs(result.lateral_accel),
+        peak_lateral_accel=peaks.lateral_accel.value,
         settling_time=settle,
         overshoot=ovs,
         rms_error=rms_e,
         steady_state_error=ss_e,
         steady_state_heading_error=ss_th,
-        peak_delta_f=peak_abs(result.delta_f),
-        peak_delta_r=peak_abs(result.delta_r),
-        peak_delta_f_rate=peak_abs(result.delta_f_rate),
-        peak_delta_r_rate=peak_abs(result.delta_r_rate),
+        peak_delta_f=peaks.delta_f.value,
+        peak_delta_r=peaks.delta_r.value,
+        peak_delta_f_rate=peaks.delta_f_rate.value,
+        peak_delta_r_rate=peaks.delta_r_rate.value,
         status=status.item() if status.ndim == 0 else status,
+        peak_error=peaks.e.value,
     )

@@ -33,6 +33,7 @@ import control as ct
 import numpy as np
 
 from .models import STEERING_INPUTS, feedforward_steering
+from .reprs import summary_repr
 from .validation import (
     check_finite,
     check_model,
@@ -334,6 +335,7 @@ def as_plant(
     )
 
 
+@summary_repr
 @dataclass(frozen=True, eq=False)
 class LoopMatrices:
     r"""Matrices of the structured steering loop of a plant.

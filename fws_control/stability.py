@@ -33,6 +33,7 @@ from .delay import unstable_root_count
 from .gains import SteeringGains
 from .linear import AffinePolynomial, characteristic_coefficients, check_gains
 from .plant import LateralPlant, as_plant
+from .reprs import summary_repr
 from .validation import check_delay, check_finite
 
 __all__ = [
@@ -422,6 +423,7 @@ class StabilityBoundary:
         return np.array([pts[0], pts[-1]])
 
 
+@summary_repr
 @dataclass(frozen=True, eq=False)
 class BoundaryCurve:
     r"""The complex-root boundary: gains that put a root pair at ``±jω``.
@@ -460,6 +462,7 @@ class BoundaryCurve:
         return [pts[a:b] for a, b in zip(edges[::2], edges[1::2], strict=True)]
 
 
+@summary_repr
 @dataclass(frozen=True, eq=False)
 class StabilityBoundaries:
     r"""D-subdivision boundaries of the stable set in the ``(k1, k2)`` plane.

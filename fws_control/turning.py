@@ -35,8 +35,8 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
-from ._repr import summary_repr
 from .models import check_steering
+from .reprs import summary_repr
 from .validation import check_finite
 from .vehicle import Vehicle
 

@@ -99,13 +99,63 @@ def test_erratum_3_paper_gains_miss_the_double_root_on_a_curve(ratio):
     np.testing.assert_allclose(true_paper, predicted, atol=1e-5)
 
 
+def test_erratum_3_exact_gains_at_ratio_zero_carry_one_over_c():
+    """Eq. (44) has no (1 - a) to replace, yet the exact a = 0 gains are /c.
+
+    Reference: the double root solved by sympy from the exact characteristic
+    polynomial, and eq. (44) evaluated by hand.
+    """
+    V, f, kap, lam0 = 5.0, 2.7, 0.1, -1.0
+    c = 1 + f**2 * kap**2
+    k1s, k2s, lam = (S.SYMBOLS[n] for n in ("k1", "k2", "lam"))
+    subs = {
+        S.SYMBOLS["speed"]: V,
+        S.SYMBOLS["wheelbase"]: f,
+        S.SYMBOLS["curvature"]: kap,
+        S.SYMBOLS["ratio"]: 0,
+    }
+    D = S.characteristic_polynomial("exact").as_expr().subs(subs)
+    target = sp.expand((lam - lam0) ** 2)
+    sol = sp.solve(sp.Poly(sp.expand(D - target), lam).all_coeffs(), [k1s, k2s])
+    eq44 = (f * (lam0**2 / V**2 - kap**2), -2 * lam0 * f / V)
+    assert float(sol[k1s]) == pytest.approx(eq44[0] / c, rel=1e-12)
+    assert float(sol[k2s]) == pytest.approx(eq44[1] / c, rel=1e-12)
+    g = fws.double_root_gains(VEH, speed=V, curvature=kap, ratio=0.0, pole=lam0)
+    assert g.k1 == pytest.approx(float(sol[k1s]), rel=1e-12)
+    assert g.k2 == pytest.approx(float(sol[k2s]), rel=1e-12)
+    assert (round(g.k1, 4), round(g.k2, 4)) == (0.0755, 1.0066)
+    # the straight-road formulas (41)-(42) are the same in both models (c = 1)
+    for a in (-1.0, 0.0, 0.5):
+        exact = fws.double_root_gains(VEH, speed=V, curvature=0.0, ratio=a, pole=lam0)
+        paper = fws.double_root_gains(
+            fws.LateralPlant(VEH, speed=V, curvature=0.0, model="paper"),
+            ratio=a,
+            pole=lam0,
+        )
+        assert exact.k1 == paper.k1 and exact.k2 == paper.k2
+
+
 def test_erratum_4_ratio_one_on_curve_still_needs_k2_below_one():
-    """Paper model, a = 1, kappa != 0: p0 = V^2 kappa^2 (1 - k2), so k2 < 1."""
-    plant = fws.LateralPlant(VEH, speed=5.0, curvature=0.1, model="paper")
-    for k2, expected in ((0.9, True), (1.1, False)):
-        g = fws.SteeringGains(0.5, k2, 1.0)
+    """a = 1, kappa != 0: k2 < 1 (paper's model), k2 < 1 + f k1 (exact)."""
+    V, f, a, kap = (S.SYMBOLS[n] for n in ("speed", "wheelbase", "ratio", "curvature"))
+    k1, k2, lam = (S.SYMBOLS[n] for n in ("k1", "k2", "lam"))
+    D = sp.Poly(S.characteristic_polynomial("exact").as_expr().subs(a, 1), lam)
+    _, p1, p0 = D.all_coeffs()
+    assert sp.simplify(p1 - V * (k1 + f * kap**2 * k2)) == 0
+    assert sp.simplify(p0 - V**2 * kap**2 * (f * k1 + 1 - k2)) == 0
+    paper = fws.LateralPlant(VEH, speed=5.0, curvature=0.1, model="paper")
+    exact = fws.LateralPlant(VEH, speed=5.0, curvature=0.1, model="exact")
+    # bound of the exact model at k1 = 0.5: 1 + 2.7 * 0.5 = 2.35
+    for plant, k2_val, expected in (
+        (paper, 0.9, True),
+        (paper, 1.1, False),
+        (exact, 1.1, True),  # the paper's example point is stable here
+        (exact, 2.3, True),
+        (exact, 2.4, False),
+    ):
+        g = fws.SteeringGains(0.5, k2_val, 1.0)
         poles = fws.closed_loop(plant, g).poles()
-        assert (np.max(poles.real) < 0) == expected
+        assert (np.max(poles.real) < 0) == expected, (plant.model, k2_val)
         assert fws.is_stable(plant, g) == expected
 
 
@@ -147,7 +197,11 @@ def test_erratum_6_no_singularity_at_ratio_zero():
 
 
 def test_erratum_7_reversing_flips_condition_35_only():
-    """V < 0: p1 changes sign with V, p0 carries V^2 and does not."""
+    """V < 0: p1 changes sign with V, p0 carries V^2 and does not.
+
+    A clarification, not an error: the printed (35) has the signed factor
+    V/f, so it flips by itself (checked here with the paper's model).
+    """
     k, a, k1, k2 = 0.05, -0.5, 0.3, 0.6
     forward = fws.LateralPlant(VEH, speed=5.0, curvature=k)
     reverse = fws.LateralPlant(VEH, speed=-5.0, curvature=k)
@@ -169,3 +223,8 @@ def test_erratum_7_reversing_flips_condition_35_only():
     g_rev = fws.SteeringGains(k1r, k2r, a)
     assert np.max(fws.closed_loop(reverse, g_rev).poles().real) < 0
     assert fws.is_stable(reverse, g_rev)
+    # the paper's (35), p1 = (V/f)(f a k1 + (1 - a) k2), carries the signed V
+    for speed in (5.0, -5.0):
+        plant = fws.LateralPlant(VEH, speed=speed, curvature=k, model="paper")
+        _, p1, _ = fws.characteristic_coefficients(plant, ratio=a).coefficients(k1, k2)
+        assert p1 == pytest.approx(speed / 2.7 * (2.7 * a * k1 + (1 - a) * k2))

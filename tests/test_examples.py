@@ -1,7 +1,8 @@
 """The gallery examples and the documentation's code run as written.
 
 Each ``examples/plot_*.py`` is run as a script (``MPLBACKEND=Agg``) in a
-temporary directory; it must exit 0, and the numbers it prints are checked
+temporary directory; it must exit 0 and, having no display, save its
+figures to PNG files and print their names; the numbers it prints are checked
 against references computed here independently of the code under test
 (python-control's numerical linearisation of the nonlinear model, the
 paper's printed formulas in sympy, hand-derived values). The ```python``
@@ -42,6 +43,20 @@ def run_example(name: str, tmp_path: Path) -> str:
         timeout=300,
     )
     assert proc.returncode == 0, f"{name} failed:\n{proc.stdout}\n{proc.stderr}"
+    # Without a display (Agg) the example saves its figures and says where:
+    # every file it names exists, is a PNG image with content, and nothing
+    # else was written.
+    saved = [
+        f.strip()
+        for line in proc.stdout.splitlines()
+        if line.startswith("saved ")
+        for f in line[len("saved ") :].split(",")
+    ]
+    assert saved, f"{name} saved no figure on the Agg backend"
+    for f in saved:
+        data = (tmp_path / f).read_bytes()
+        assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000, (name, f)
+    assert {p.name for p in tmp_path.glob("*.png")} == set(saved), name
     return proc.stdout
 
 
@@ -67,6 +82,7 @@ def floats_after(label: str, text: str) -> list[float]:
 def test_every_example_is_covered():
     tested = {
         "plot_any_plant.py",
+        "plot_delay.py",
         "plot_fws_vs_4ws.py",
         "plot_quick_start.py",
         "plot_ratio_sweep.py",
@@ -232,6 +248,114 @@ def test_ratio_sweep(tmp_path):
             if line.startswith(label) and "lowest peak" in line:
                 peak = float(re.search(r"lowest peak ([\d.]+)", line)[1])
                 assert peak >= bound - 1e-3, line
+
+
+def _pade_loop_abscissa(A, b, K, tau, order=10):
+    """Largest real part of the poles of pade(tau) -> (A, b, K), unity feedback.
+
+    The loop x' = A x + b u, u = -K x(t - tau) with the delay replaced by
+    control.pade of the given order. A and b may carry leading grid axes
+    (vectorised over gain points through numpy eigenvalues).
+    """
+    if tau == 0.0:
+        M = A - b[..., :, None] * K[..., None, :]
+        return np.max(np.linalg.eigvals(M).real, axis=-1)
+    num, den = ct.pade(tau, order)
+    P = ct.ss(ct.tf(num, den))
+    Ap, Bp, Cp, Dp = (np.asarray(m, dtype=float) for m in (P.A, P.B, P.C, P.D))
+    n, m = A.shape[-1], Ap.shape[0]
+    shape = np.broadcast_shapes(A.shape[:-2], K.shape[:-1])
+    M = np.zeros(shape + (n + m, n + m))
+    # command v = -K x enters the Pade block; its output drives the plant
+    M[..., :n, :n] = A - Dp[0, 0] * b[..., :, None] * K[..., None, :]
+    M[..., :n, n:] = b[..., :, None] * Cp[0]
+    M[..., n:, :n] = -Bp[:, 0][:, None] * K[..., None, :]
+    M[..., n:, n:] = Ap
+    return np.max(np.linalg.eigvals(M).real, axis=-1)
+
+
+def _pade_critical_delay(A, b, K, step=0.01, tol=1e-8):
+    """First delay at which the Pade(10) loop loses stability (scan + bisection)."""
+    lo, hi = 0.0, step
+    while _pade_loop_abscissa(A, b, K, hi) < 0.0:
+        lo, hi = hi, hi + step
+        assert hi < 5.0
+    while hi - lo > tol:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if _pade_loop_abscissa(A, b, K, mid) < 0.0 else (lo, mid)
+    return 0.5 * (lo + hi)
+
+
+def _lagged_straight_loop(speed, pole, lag):
+    """Kinematic straight-road plant with a first-order lag T on both axles.
+
+    x = (e, theta, delta_f_act, delta_r_act), ratio a = 0, written out by hand;
+    the double-root gains of the lag-free plant with a = 0 solve
+    det(A - b K) = V^2 k1 / f = lambda0^2 and trace = -V k2 / f = 2 lambda0.
+    """
+    f = VEH.wheelbase
+    k1, k2 = f * pole**2 / speed**2, -2.0 * pole * f / speed
+    A = np.zeros((4, 4))
+    A[0, 1] = speed
+    A[0, 3] = speed  # e' = V theta + V delta_r
+    A[1, 2], A[1, 3] = speed / f, -speed / f  # theta' = V (delta_f - delta_r) / f
+    A[2, 2] = A[3, 3] = -1.0 / lag
+    b = np.array([0.0, 0.0, 1.0 / lag, 0.0])  # delta_r = a delta_f = 0
+    return A, b, np.array([k1, k2, 0.0, 0.0])
+
+
+def test_delay(tmp_path):
+    out = run_example("plot_delay.py", tmp_path)
+    # The printed design: a double root at -1 of the numerically linearised
+    # nonlinear model on the 5 m/s curve.
+    k1, k2 = floats_after("lambda0 = -1 design: k1 =", out)[:2]
+    A, B = numeric_jacobians(5.0, 0.1)
+    M = closed_loop_matrix(A, B, k1, k2, -1.0)
+    assert np.trace(M) == pytest.approx(-2.0, abs=2e-3)
+    assert np.linalg.det(M) == pytest.approx(1.0, abs=2e-3)
+    # Its critical delay in closed form: with the double root the loop is
+    # D(s) = s^2 + nu^2 + e^{-s tau}(-2 lam s + lam^2 - nu^2), nu = V kappa;
+    # |d(jw)| = |q(jw)| is a quadratic in w^2, and w tau = arg q(jw).
+    lam, nu = -1.0, 5.0 * 0.1
+    c = nu**2 + 2 * lam**2
+    w = math.sqrt(c + math.sqrt(c**2 - nu**4 + (lam**2 - nu**2) ** 2))
+    tau_c = math.atan2(-2 * lam * w, lam**2 - nu**2) / w
+    tau_p, w_p = floats_after("critical delay of the design:", out)[:2]
+    assert tau_p == pytest.approx(tau_c, abs=1e-4)
+    assert w_p == pytest.approx(w, abs=1e-4)
+    # Stable fractions of the three charts: the loop with a Pade(10) block
+    # in the numerically linearised plant, eigenvalues at every grid point.
+    g1, g2 = np.linspace(-0.1, 0.8, 301), np.linspace(-0.1, 1.5, 301)
+    K = np.stack(np.meshgrid(g1, g2), axis=-1)  # (k2 rows, k1 columns, 2)
+    b = B @ np.array([1.0, -1.0])
+    for line in (ln for ln in out.splitlines() if "stable fraction" in ln):
+        tau = float(re.search(r"delay ([\d.]+) s", line)[1])
+        frac = float(re.search(r"grid: ([\d.]+)", line)[1])
+        ref = np.mean(_pade_loop_abscissa(A, b, K, tau) < 0.0)
+        assert frac == pytest.approx(ref, abs=2e-3), (tau, frac, ref)
+    # Delay margins on the straight road: closed form without the lag,
+    # tau_c |lambda0| = atan(2 w)/w with w^2 = 2 + sqrt(5); a Pade(10)
+    # bisection on the hand-written 4-state lagged loop with it.
+    w0 = math.sqrt(2.0 + math.sqrt(5.0))
+    unit = math.atan(2.0 * w0) / w0
+    rows = re.findall(
+        r"lambda0 = (-\d+): critical delay ([\d.]+) s, with the 0.27 s lag ([\d.]+)",
+        out,
+    )
+    assert len(rows) == 3
+    for lam_s, ideal, lagged in rows:
+        lam = float(lam_s)
+        assert float(ideal) == pytest.approx(unit / abs(lam), abs=1e-4)
+        ref = _pade_critical_delay(*_lagged_straight_loop(20.0, lam, 0.27))
+        assert float(lagged) == pytest.approx(ref, abs=1e-4), (lam, lagged, ref)
+    # The largest surviving |lambda0|: 0.24 s is the closed-form margin
+    # there, and the Pade margin of the lagged loop crosses 0.24 s between
+    # the printed value -/+ 0.002.
+    free, with_lag = floats_after("largest |lambda0| surviving 0.24 s:", out)[-2:]
+    assert free == pytest.approx(unit / 0.24, abs=1e-4)
+    above = _pade_critical_delay(*_lagged_straight_loop(20.0, -(with_lag - 2e-3), 0.27))
+    below = _pade_critical_delay(*_lagged_straight_loop(20.0, -(with_lag + 2e-3), 0.27))
+    assert below < 0.24 < above
 
 
 # --------------------------------------------------------------------------

@@ -14,11 +14,11 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
-from .._repr import summary_repr
 from ..charts import StabilityChart, stability_chart
 from ..design import double_root_gains
 from ..exceptions import UncontrollableError
 from ..plant import LateralPlant
+from ..reprs import summary_repr
 from ..validation import check_model
 from ..vehicle import Vehicle
 from .data import PAPER_CURVATURES, PAPER_VEHICLE

@@ -297,14 +297,20 @@ def _fig6_to_9_data(model: str, quick: bool):
     return fig6_to_9_responses(model, dt=0.05 if quick else 0.01, progress=False)
 
 
+_G = 9.81  # m/s^2
+
+
 def plot_fig5(model: str = "exact", quick: bool = False):
     r"""Fig. 5: peak absolute lateral acceleration of G versus the ratio ``a``.
 
     One panel per scenario, one curve per double root :math:`\lambda_0`
-    (``-1, -2`` at 5 m/s; ``-1, -2, -3`` at 20 m/s), log scale. Runs that
-    stopped at a singular steering angle (:math:`|\delta_f| \to \pi/2`) are
-    marked with ``x`` on the lower edge; ``a = 1`` on a straight road has no
-    design and is marked with ``|``.
+    (``-1, -2`` at 5 m/s; ``-1, -2, -3`` at 20 m/s), log scale. Peaks above
+    1 g lie in a shaded band with a note why they are so large (the static
+    controller commands a full steering step at t = 0). Runs without a peak
+    are marked in a strip above each panel, outside the data area, one row
+    per :math:`\lambda_0`: ``x`` a run that stopped at a singular steering
+    angle (:math:`|\delta_f| \to \pi/2`), ``|`` ``a = 1`` on a straight
+    road (no design).
 
     Returns
     -------
@@ -313,8 +319,20 @@ def plot_fig5(model: str = "exact", quick: bool = False):
     import matplotlib.pyplot as plt
 
     data = _fig5_data(model, quick)
-    fig, axes = plt.subplots(2, 2, figsize=(13, 9), layout="constrained")
-    for ax, (panel, sweep) in zip(axes.flat, data.items(), strict=True):
+    fig, grid = plt.subplots(
+        4,
+        2,
+        figsize=(13, 10),
+        height_ratios=[0.16, 1.0, 0.16, 1.0],
+        sharex=True,
+        layout="constrained",
+    )
+    pairs = [(grid[r, c], grid[r + 1, c]) for r in (0, 2) for c in (0, 1)]
+    ratios_all = np.concatenate([sw.ratios for sw in data.values()])
+    xpad = 0.06 * float(np.ptp(ratios_all))
+    for (strip, ax), (panel, sweep) in zip(pairs, data.items(), strict=True):
+        npoles = len(sweep.poles)
+        finite = sweep.peak_lateral_accel[np.isfinite(sweep.peak_lateral_accel)]
         for i, lam in enumerate(sweep.poles):
             color = f"C{i}"
             ax.plot(
@@ -327,34 +345,71 @@ def plot_fig5(model: str = "exact", quick: bool = False):
             )
             stopped = np.isin(sweep.status[i], ("ok", "uncontrollable"), invert=True)
             unc = sweep.status[i] == "uncontrollable"
-            for mask, marker, mcolor, size in (
-                (stopped, "x", color, 7),
-                (unc, "|", "k", 14),
-            ):
-                if not mask.any():
-                    continue
-                # A rug on the lower edge (axes coordinates): these runs have
-                # no peak value to plot.
-                # One row per pole, so that the rugs do not hide each other.
-                (rug,) = ax.plot(
-                    sweep.ratios[mask],
-                    np.full(mask.sum(), 0.02 + 0.03 * i),
-                    marker,
-                    color=mcolor,
-                    ms=size,
-                    transform=ax.get_xaxis_transform(),
-                    clip_on=False,
-                    scalex=False,
-                    scaley=False,
-                )
-                rug.set_in_layout(False)
-        ax.plot([], [], "x", color="0.3", label="run stopped: singular steering")
+            strip.plot(
+                sweep.ratios[stopped],
+                np.full(stopped.sum(), i),
+                "x",
+                color=color,
+                ms=7,
+                mew=1.8,
+            )
+            strip.plot(
+                sweep.ratios[unc],
+                np.full(unc.sum(), i),
+                "|",
+                color=color,
+                ms=9,
+                mew=1.8,
+            )
+        strip.set_yticks(range(npoles))
+        strip.set_yticklabels([f"{lam:g}" for lam in sweep.poles], fontsize=7)
+        strip.set_ylim(npoles - 0.4, -0.6)
+        strip.set_ylabel(
+            r"$\lambda_0$", fontsize=8, rotation=0, labelpad=8, va="center"
+        )
+        strip.tick_params(axis="x", labelbottom=False)
+        strip.set_xlabel("ratio $a$ [-]")
+        strip.xaxis.label.set_visible(False)
+        strip.grid(alpha=0.3, axis="x")
+        strip.axvline(0.0, color="0.6", lw=0.8)
+        kinds = []
+        if np.any(np.isin(sweep.status, ("ok", "uncontrollable"), invert=True)):
+            kinds.append("x run stopped: singular steering (no peak)")
         if np.any(sweep.status == "uncontrollable"):
-            ax.plot([], [], "|", color="k", ms=10, label="a = 1: no design")
+            kinds.append("| a = 1: no design (uncontrollable)")
+        strip.text(
+            0.005,
+            0.5,
+            "\n".join(kinds) if kinds else "every run finished",
+            transform=strip.transAxes,
+            ha="left",
+            va="center",
+            fontsize=7.5,
+            color="0.25",
+            bbox={"fc": "white", "ec": "none", "alpha": 0.8, "pad": 1.0},
+        )
+        strip.set_title(_FIG5_TITLES[panel], fontsize=10)
         ax.set_yscale("log")
+        hi = max(float(finite.max()) if finite.size else _G, 2 * _G) * 2.0
+        lo = min(float(finite.min()) if finite.size else _G, _G) / 2.0
+        ax.set_ylim(lo, hi)
+        if hi > _G:
+            ax.axhspan(_G, hi, color="C3", alpha=0.07, lw=0)
+            ax.axhline(_G, color="C3", lw=0.8, ls="--")
+            ax.text(
+                0.99,
+                _G * 1.08,
+                "1 g",
+                transform=ax.get_yaxis_transform(),
+                ha="right",
+                va="bottom",
+                fontsize=8,
+                color="C3",
+            )
+        ax.set_xlim(float(ratios_all.min()) - xpad, float(ratios_all.max()) + xpad)
         ax.set_xlabel("ratio $a$ [-]")
+        ax.tick_params(axis="x", labelbottom=True)
         ax.set_ylabel(r"max $|a_G^{lat}|$ [m/s²]")
-        ax.set_title(_FIG5_TITLES[panel], fontsize=10)
         ax.grid(alpha=0.3, which="both")
         ax.axvline(0.0, color="0.6", lw=0.8)
         ax.legend(fontsize=8, loc="upper left")
@@ -362,6 +417,15 @@ def plot_fig5(model: str = "exact", quick: bool = False):
         f"Fig. 5: peak lateral acceleration of G, double-root gains ({model} "
         "model), nonlinear simulation",
         fontsize=13,
+    )
+    fig.supxlabel(
+        "Shaded: peaks above 1 g, physically implausible. They are this large "
+        "because the controller is static: at t = 0 it commands the full steering "
+        "step for the initial error at once,\nand the kinematic model (no tyre "
+        "limits, no actuator lag) follows it. Strips above the panels: runs "
+        "without a peak, one row per double root.",
+        fontsize=9,
+        color="C3",
     )
     return fig
 
@@ -390,6 +454,7 @@ def _responses_figure(n: int, model: str, quick: bool):
             (axs[1, 0], "delta_f", _DEG, "(c) front steering angle δf [deg]"),
             (axs[1, 1], "delta_r", _DEG, "(d) rear steering angle δr [deg]"),
         ]
+    undrawn = []
     for i, a in enumerate(sr.ratios):
         color = f"C{i}"
         status = res.status[i]
@@ -407,9 +472,10 @@ def _responses_figure(n: int, model: str, quick: bool):
             good = np.isfinite(y)
             if good.sum() <= 1:
                 # Not simulated, or stopped at t = 0 with only its invalid
-                # initial command: the legend says so; drawing the point would
-                # only stretch the axes.
-                ax.plot([], [], color=color, label=lab)
+                # initial command: a note says so (the legend lists only drawn
+                # curves); drawing the point would only stretch the axes.
+                if lab is not None:
+                    undrawn.append(label + ", not drawn")
                 continue
             ax.plot(x, y, color=color, label=lab)
             if status != "ok":
@@ -419,7 +485,9 @@ def _responses_figure(n: int, model: str, quick: bool):
     for ax, name, scale, title in panels:
         ax.set_title(title, fontsize=10)
         ax.grid(alpha=0.3)
-        if name is not None and ok.any() and not ok.all():
+        if name == "lateral_accel" and ok.any():
+            _clip_initial_spike(ax, res.t, getattr(res, name)[ok], sr.ratios[ok])
+        elif name is not None and ok.any() and not ok.all():
             # Scale to the runs that finished: a run that diverges towards a
             # singular steering angle would otherwise flatten every curve.
             vals = scale * getattr(res, name)[ok]
@@ -450,7 +518,23 @@ def _responses_figure(n: int, model: str, quick: bool):
         else:
             ax.set_xlabel("time t [s]")
             ax.set_ylabel(title.split(") ", 1)[1])
+    # Steering angles share one range: the panels are compared side by side.
+    steer = [ax for ax, name, _, _ in panels if name in ("delta_f", "delta_r")]
+    lims = [ax.get_ylim() for ax in steer]
+    for ax in steer:
+        ax.set_ylim(min(lo for lo, _ in lims), max(hi for _, hi in lims))
     panels[0][0].legend(fontsize=8, loc="best")
+    if undrawn:
+        panels[0][0].text(
+            0.99,
+            0.5,
+            "\n".join(undrawn),
+            transform=panels[0][0].transAxes,
+            ha="right",
+            va="center",
+            fontsize=8,
+            bbox={"fc": "white", "ec": "0.7", "alpha": 0.9},
+        )
     ctrl = "feedforward + feedback" if sr.feedforward else "feedback"
     road = f"curved road κ = {sc.curvature:g} 1/m" if curved else "straight road"
     x0, y0, _ = sc.initial_state
@@ -460,6 +544,52 @@ def _responses_figure(n: int, model: str, quick: bool):
         fontsize=13,
     )
     return fig
+
+
+def _clip_initial_spike(ax, t, values, ratios, frac: float = 0.03) -> None:
+    """Clip a t = 0 spike that would squash the rest of a panel; say so.
+
+    The limits follow the samples after ``frac`` of the duration; if the
+    first samples reach on one side more than twice as far as everything
+    else spans, that side is clipped and a note gives the extreme value, its
+    time and its run.
+    """
+    t = np.asarray(t, dtype=float)
+    v = np.asarray(values, dtype=float).reshape(-1, t.size)
+    late = t >= t[0] + frac * (t[-1] - t[0])
+    lo, hi = float(np.nanmin(v[:, late])), float(np.nanmax(v[:, late]))
+    all_lo, all_hi = float(np.nanmin(v)), float(np.nanmax(v))
+    below, above = lo - all_lo, all_hi - hi
+    # Clip only the side that holds the spike, and only if it dwarfs the rest.
+    if below >= above:
+        if below <= 2.0 * (hi - lo + above):
+            return
+        top = all_hi
+        bottom = lo - 0.15 * (top - lo)
+        k = np.unravel_index(np.nanargmin(v), v.shape)
+    else:
+        if above <= 2.0 * (hi - lo + below):
+            return
+        bottom = all_lo
+        top = hi + 0.15 * (hi - bottom)
+        k = np.unravel_index(np.nanargmax(v), v.shape)
+    pad = 0.05 * (top - bottom)
+    ax.set_ylim(
+        bottom - (pad if below < above else 0), top + (pad if below >= above else 0)
+    )
+    ax.text(
+        0.99,
+        0.04,
+        f"axis clipped {'below' if below >= above else 'above'}: a = "
+        f"{ratios[k[0]]:g} reaches {v[k]:.3g} at t = {t[k[1]]:.2f} s,\n"
+        "the response to the full steering step at t = 0",
+        transform=ax.transAxes,
+        ha="right",
+        va="bottom",
+        fontsize=7.5,
+        color="0.3",
+        bbox={"fc": "white", "ec": "0.7", "alpha": 0.9},
+    )
 
 
 def _response_maker(n):

@@ -38,6 +38,7 @@ from ..design import UncontrollableError, double_root_gains
 from ..gains import SteeringGains
 from ..paths import Arc, Straight
 from ..plant import LateralPlant
+from ..reprs import summary_repr
 from ..simulation import STATUS_UNCONTROLLABLE, SimulationResult, simulate_batch
 from ..simulation.engine import time_grid
 from ..simulation.result import expand_runs
@@ -239,6 +240,7 @@ def _simulate_designs(
     )
 
 
+@summary_repr
 @dataclass(frozen=True)
 class ScenarioResponses:
     """Time responses of one scenario for several ratios.
@@ -382,6 +384,7 @@ def fig6_to_9_responses(
     return dict(sorted(out.items()))
 
 
+@summary_repr
 @dataclass(frozen=True)
 class PeakSweep:
     """Peak lateral acceleration over a sweep of ratios and double roots.
@@ -397,7 +400,11 @@ class PeakSweep:
         Shape ``(p,)``.
     peak_lateral_accel : ndarray
         Peak absolute lateral acceleration of G [m/s^2], shape ``(p, n)``; NaN
-        where the status is not ``"ok"``.
+        where the status is not ``"ok"``. Exact maxima of the continuous
+        solution (:attr:`~fws_control.SimulationResult.peaks`), independent
+        of the output step ``dt``.
+    peak_time : ndarray
+        When that peak occurs [s], shape ``(p, n)``; NaN where not ``"ok"``.
     peak_delta_f, peak_delta_r : ndarray
         Peak absolute steering angles [rad], shape ``(p, n)``, NaN where not ``"ok"``.
     status : ndarray of str
@@ -414,6 +421,7 @@ class PeakSweep:
     ratios: np.ndarray
     poles: np.ndarray
     peak_lateral_accel: np.ndarray
+    peak_time: np.ndarray
     peak_delta_f: np.ndarray
     peak_delta_r: np.ndarray
     status: np.ndarray
@@ -495,10 +503,10 @@ def fig5_peak_lateral_accel(
             {"delay": delay, "actuator_time_constant": actuator_time_constant},
         )
         good = res.status == "ok"
+        exact = res.peaks  # maxima of the continuous solution
 
-        def peak(sig, good=good):
-            x = np.abs(sig)
-            return np.where(good, np.max(np.where(good[:, None], x, 0.0), 1), np.nan)
+        def peak(name, good=good, exact=exact):
+            return np.where(good, exact[name].value, np.nan)
 
         shape = A.shape
         out[panel] = PeakSweep(
@@ -506,9 +514,10 @@ def fig5_peak_lateral_accel(
             model=model,
             ratios=ratios,
             poles=lam,
-            peak_lateral_accel=peak(res.lateral_accel).reshape(shape),
-            peak_delta_f=peak(res.delta_f).reshape(shape),
-            peak_delta_r=peak(res.delta_r).reshape(shape),
+            peak_lateral_accel=peak("lateral_accel").reshape(shape),
+            peak_time=np.where(good, exact.lateral_accel.time, np.nan).reshape(shape),
+            peak_delta_f=peak("delta_f").reshape(shape),
+            peak_delta_r=peak("delta_r").reshape(shape),
             status=res.status.reshape(shape),
             t_stop=res.t_stop.reshape(shape),
             k1=k1,
@@ -517,6 +526,7 @@ def fig5_peak_lateral_accel(
     return out
 
 
+@summary_repr
 @dataclass(frozen=True)
 class SteadyState:
     r"""Equilibrium of the feedback-only loop on a circle (nonlinear model).
@@ -639,6 +649,7 @@ def feedback_only_steady_state(
     )
 
 
+@summary_repr
 @dataclass(frozen=True)
 class FeedbackOnlyResponses:
     """Feedback-only control on a curve, with the analytic steady state.

@@ -44,8 +44,10 @@ import numpy as np
 
 from ..gains import SteeringGains
 from ..paths import Path
+from ..reprs import brief, html_table
 from ..vehicle import Vehicle
 from .engine import (
+    PEAK_SIGNALS,
     SIGNALS,
     STATUS_OK,
     STATUS_SINGULAR_CURVATURE,
@@ -53,7 +55,7 @@ from .engine import (
     STATUS_UNCONTROLLABLE,
 )
 
-__all__ = ["SimulationResult", "expand_runs"]
+__all__ = ["Peak", "Peaks", "SimulationResult", "expand_runs"]
 
 _DEG = 180.0 / math.pi
 # A run has a state wherever its arclength is finite (the other signals may
@@ -76,6 +78,81 @@ class _Signal:
             return self
         values = obj.signals[:, self.index, :]
         return values[0] if obj.squeeze else values
+
+
+@dataclass(frozen=True)
+class Peak:
+    """Peak of ``|signal|`` of one signal: its value and when it occurs.
+
+    Floats for one run (a squeezed result), arrays ``(runs,)`` for a batch.
+    """
+
+    value: float | np.ndarray
+    time: float | np.ndarray
+
+
+@dataclass(frozen=True, repr=False)
+class Peaks:
+    r"""Peaks ``max |signal|`` of a result's runs, one :class:`Peak` per signal.
+
+    With ``exact=True`` (every result of the simulation runners) they are
+    the maxima of the continuous solution over each run's integrated
+    interval ``[0, t_stop]``, located on the solver's dense output (see
+    :func:`~fws_control.simulation.engine.exact_peaks`): they do not depend
+    on the output grid. ``exact=False`` (a result built from samples only)
+    marks the maxima of the output samples. A rate or the lateral
+    acceleration of a run stopped at a singular state diverges there: its
+    exact peak is ``inf``.
+
+    Attributes
+    ----------
+    e, delta_f, delta_r, delta_f_rate, delta_r_rate, lateral_accel : Peak
+        Value [m, rad, rad/s or m/s^2] and time [s] per run.
+    exact : bool
+        Maxima of the continuous solution (True) or of the samples (False).
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> g = fws.SteeringGains(k1=0.1, k2=0.5, ratio=0.0)
+    >>> res = fws.simulate(veh, fws.Straight(), g, speed=5.0,
+    ...                    initial_state=(0.0, 1.0, 0.0), duration=10.0, dt=1.0)
+    >>> p = res.peaks
+    >>> p.exact, round(p.e.value, 6), p.e.time     # |e| is largest at the start
+    (True, 1.0, 0.0)
+    >>> p["delta_f_rate"].time > 0.0               # between the 1 s samples
+    True
+    """
+
+    e: Peak
+    delta_f: Peak
+    delta_r: Peak
+    delta_f_rate: Peak
+    delta_r_rate: Peak
+    lateral_accel: Peak
+    exact: bool = True
+
+    def __getitem__(self, name: str) -> Peak:
+        if name not in PEAK_SIGNALS:
+            raise KeyError(f"no peak of {name!r}; peaks exist for {PEAK_SIGNALS}")
+        return getattr(self, name)
+
+    def __repr__(self) -> str:
+        parts = []
+        for name in PEAK_SIGNALS:
+            v = np.asarray(self[name].value)
+            parts.append(
+                f"{name}={float(v):.4g}" if v.ndim == 0 else f"{name}=<{v.size} runs>"
+            )
+        return f"Peaks({', '.join(parts)}, exact={self.exact})"
+
+    def _repr_html_(self) -> str:
+        rows = [
+            (name, f"{brief(self[name].value)} at t = {brief(self[name].time)} s")
+            for name in PEAK_SIGNALS
+        ]
+        return html_table(f"Peaks (exact={self.exact})", rows)
 
 
 def _import_pandas():
@@ -130,6 +207,13 @@ class SimulationResult:
         The simulated vehicle.
     path : Path, optional
         The reference path; :meth:`plot` draws it.
+    run_peak, run_peak_time : ndarray, optional
+        Per run and signal of
+        :data:`~fws_control.simulation.engine.PEAK_SIGNALS`, shape
+        ``(runs, len(PEAK_SIGNALS))``: the exact peaks ``max |signal|`` of
+        the continuous solution and their times (see :attr:`peaks`). None
+        (both): :attr:`peaks` falls back to the samples, marked
+        ``exact=False``.
 
     Attributes
     ----------
@@ -187,6 +271,8 @@ class SimulationResult:
     squeeze: bool = False
     vehicle: Vehicle | None = None
     path: Path | None = None
+    run_peak: np.ndarray | None = None
+    run_peak_time: np.ndarray | None = None
 
     x = _Signal("Global x of the rear-axle centre R [m].")
     y = _Signal("Global y of the rear-axle centre R [m].")
@@ -236,6 +322,17 @@ class SimulationResult:
             )
         if self.squeeze and n != 1:
             raise ValueError(f"squeeze=True needs exactly one run, got {n}")
+        if (self.run_peak is None) != (self.run_peak_time is None):
+            raise ValueError("run_peak and run_peak_time must be given together")
+        if self.run_peak is not None:
+            for name in ("run_peak", "run_peak_time"):
+                value = np.array(getattr(self, name), dtype=float)
+                if value.shape != (n, len(PEAK_SIGNALS)):
+                    raise ValueError(
+                        f"{name} must have shape ({n}, {len(PEAK_SIGNALS)}) "
+                        f"(runs, PEAK_SIGNALS), got {value.shape}"
+                    )
+                object.__setattr__(self, name, value)
         for name, value in (
             ("t", t),
             ("signals", sig),
@@ -301,7 +398,36 @@ class SimulationResult:
             squeeze=squeeze,
             vehicle=self.vehicle,
             path=self.path,
+            run_peak=None if self.run_peak is None else self.run_peak[idx],
+            run_peak_time=None if self.run_peak is None else self.run_peak_time[idx],
         )
+
+    @property
+    def peaks(self) -> Peaks:
+        """Peaks ``max |signal|`` per run, with their times (:class:`Peaks`).
+
+        Exact maxima of the continuous solution for every result of the
+        runners; a result built without them (``run_peak=None``) gives the
+        maxima of its samples, marked ``exact=False``.
+        """
+        if self.run_peak is not None:
+            values, times, exact = self.run_peak, self.run_peak_time, True
+        else:
+            rows = [SIGNALS.index(name) for name in PEAK_SIGNALS]
+            x = np.abs(self.signals[:, rows, :])
+            valid = np.isfinite(x)
+            filled = np.where(valid, x, -np.inf)
+            k = np.argmax(filled, axis=2)
+            values = np.where(np.any(valid, axis=2), np.max(filled, axis=2), np.nan)
+            times = np.where(np.any(valid, axis=2), self.t[k], np.nan)
+            exact = False
+        fields = {
+            name: Peak(
+                self._per_run(values[:, j], float), self._per_run(times[:, j], float)
+            )
+            for j, name in enumerate(PEAK_SIGNALS)
+        }
+        return Peaks(**fields, exact=exact)
 
     @property
     def runs(self) -> list[SimulationResult]:
@@ -317,6 +443,22 @@ class SimulationResult:
             f"SimulationResult(runs={len(self)}, samples={self.t.size} over {span}, "
             f"status={counts}, squeeze={self.squeeze})"
         )
+
+    def _repr_html_(self) -> str:
+        counts: dict[str, int] = {}
+        for s in self.run_status.tolist():
+            counts[s] = counts.get(s, 0) + 1
+        span = f"[{self.t[0]:g}, {self.t[-1]:g}] s" if self.t.size else "[]"
+        rows = [
+            ("runs", str(len(self))),
+            ("samples", f"{self.t.size} over {span}"),
+            ("status", ", ".join(f"{k}: {v}" for k, v in counts.items())),
+            ("speed [m/s]", brief(self.speed)),
+            ("ratio a", brief(self.ratio)),
+            ("feedforward", str(self.feedforward)),
+            ("signals", ", ".join(SIGNALS)),
+        ]
+        return html_table("SimulationResult", rows)
 
     # ------------------------------------------------------------------
     # Per-run attributes (squeezed)
@@ -790,6 +932,9 @@ def expand_runs(
     run_status = np.full(n, status, dtype=object)
     run_message = [str(message)] * n
     t_stop = np.full(n, np.nan)
+    # Runs that were not simulated have NaN peaks.
+    peak = np.full((n, len(PEAK_SIGNALS)), np.nan)
+    peak_time = np.full((n, len(PEAK_SIGNALS)), np.nan)
     if result is not None:
         if len(result) != positions.size or result.t.shape != t.shape:
             raise ValueError(
@@ -802,6 +947,11 @@ def expand_runs(
         for p, m in zip(positions, result.run_message, strict=True):
             run_message[p] = m
         t_stop[positions] = result.run_t_stop
+        if result.run_peak is None:
+            peak = peak_time = None
+        else:
+            peak[positions] = result.run_peak
+            peak_time[positions] = result.run_peak_time
     elif positions.size:
         raise ValueError(f"positions must be empty without a result, got {positions}")
     return SimulationResult(
@@ -821,4 +971,6 @@ def expand_runs(
         squeeze=False,
         vehicle=vehicle,
         path=path,
+        run_peak=peak,
+        run_peak_time=peak_time,
     )

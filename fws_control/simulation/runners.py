@@ -33,6 +33,7 @@ from .engine import (
     check_initial_state,
     check_method,
     compute_outputs,
+    exact_peaks,
     initial_path_state,
     integrate,
     resolve_time_constant,
@@ -57,7 +58,9 @@ def _stderr_is_tty() -> bool:
 def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl):
     """Simulate one chunk; module-level so that Dask can pickle it.
 
-    Returns ``(signals (n, len(SIGNALS), T), status, message, t_stop)``.
+    Returns ``(signals (n, len(SIGNALS), T), status, message, t_stop,
+    peaks (n, len(PEAK_SIGNALS)), peak_times)``: the peaks are those of the
+    continuous solution (:func:`~fws_control.simulation.engine.exact_peaks`).
     """
     g = SteeringGains(k1, k2, a) if ctrl is None else ctrl
     z0 = initial_path_state(path, x0)
@@ -70,6 +73,7 @@ def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, c
         path_state=z0,
         t_eval=t,
         time_constant=tau,
+        solution=(solution := []),
         **opts,
     )
     signals = compute_outputs(
@@ -83,7 +87,19 @@ def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, c
         initial_heading=x0[:, 2],
         delay=opts["delay"],
     )
-    return signals, status, message, t_stop
+    peaks, peak_times = exact_peaks(
+        vehicle,
+        path,
+        g,
+        speed=speed,
+        feedforward=feedforward,
+        time_constant=tau,
+        solution=solution[0],
+        t_eval=t,
+        signals=signals,
+        t_stop=t_stop,
+    )
+    return signals, status, message, t_stop, peaks, peak_times
 
 
 def _chunk_controller(ctrl, lo: int, hi: int):
@@ -458,6 +474,8 @@ def simulate_batch(
         run_status=np.concatenate([c[1] for c in chunks]).astype(str),
         run_message=tuple(str(m) for c in chunks for m in c[2]),
         run_t_stop=np.concatenate([c[3] for c in chunks]),
+        run_peak=np.concatenate([c[4] for c in chunks]),
+        run_peak_time=np.concatenate([c[5] for c in chunks]),
         run_speed=V,
         run_k1=k1,
         run_k2=k2,

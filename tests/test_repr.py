@@ -1,0 +1,82 @@
+"""Results print a one-line summary, not their arrays (issue 12, item 14).
+
+Each repr must name the class, stay short (no array of a 5 s simulation
+printed), and describe an array field by its true shape; the HTML repr is a
+small table.
+"""
+
+import numpy as np
+import pytest
+
+import fws_control as fws
+from fws_control.paper import PAPER_VEHICLE as VEH
+from fws_control.paper.scenarios import (
+    feedback_only_curve,
+    fig5_peak_lateral_accel,
+    scenario_responses,
+)
+
+K = np.linspace(-1.0, 1.0, 201)
+
+
+def _objects():
+    plant = fws.LateralPlant(VEH, speed=5.0, curvature=0.1)
+    g = fws.double_root_gains(plant, ratio=-1.0, pole=-1.0)
+    chart = fws.stability_chart(plant, ratio=-1.0, k1=K, k2=K, pole=-1.0)
+    res = fws.simulate(
+        VEH, fws.Arc(0.1), g, speed=5.0, initial_state=(0, -5, 0), duration=5.0
+    )
+    batch = fws.simulate_batch(
+        VEH, fws.Arc(0.1), fws.SteeringGains([g.k1, g.k1], g.k2, -1.0), speed=5.0,
+        initial_state=(0, -5, 0), duration=5.0,
+    )  # fmt: skip
+    return {
+        "SimulationResult": (res, "samples=501"),
+        "Peaks": (res.peaks, "exact=True"),
+        "TrackingMetrics": (fws.tracking_metrics(batch), "status=['ok', 'ok']"),
+        "StabilityChart": (chart, "stable=<array (201, 201) bool>"),
+        "StabilityBoundaries": (chart.boundaries, "lines=<tuple of 2>"),
+        "BoundaryCurve": (chart.curve, "omega=<array ("),
+        "DelayMarginChart": (
+            fws.delay_margin_chart(
+                fws.LateralPlant(VEH, speed=20.0), ratio=[-1.0, 0.5], pole=[-1.0, -2.0]
+            ),
+            "<array (2, 2) float64>",
+        ),
+        "LinearNonlinearComparison": (
+            fws.compare_linear_nonlinear(plant, g, duration=5.0),
+            "linear=<TimeResponseData>",
+        ),
+        "AffinePolynomial": (
+            fws.characteristic_coefficients(plant, ratio=0.0),
+            "AffinePolynomial(",
+        ),
+        "LoopMatrices": (fws.loop_matrices(plant), "LoopMatrices("),
+        "ScenarioResponses": (
+            scenario_responses("curve_5", duration=5.0),
+            "ratios=<array (5,) float64>",
+        ),
+        "PeakSweep": (
+            fig5_peak_lateral_accel(ratios=[-1.0, 0.0], duration=2.0)["a"],
+            "peak_lateral_accel=<array (2, 2) float64>",
+        ),
+        "FeedbackOnlyResponses": (
+            feedback_only_curve("curve_5", duration=5.0),
+            "FeedbackOnlyResponses(",
+        ),
+    }
+
+
+OBJECTS = _objects()
+
+
+@pytest.mark.parametrize("name", sorted(OBJECTS))
+def test_short_repr_and_small_html(name):
+    obj, expected = OBJECTS[name]
+    text = repr(obj)
+    assert text.startswith(name) and "\n" not in text
+    assert len(text) < 600, (name, len(text))
+    assert expected in text, (name, text)
+    html = obj._repr_html_()
+    assert html.startswith("<table>") and name in html
+    assert len(html) < 4000, (name, len(html))
