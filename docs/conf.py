@@ -198,6 +198,7 @@ _EXAMPLE_RANK = collections.defaultdict(
                 "plot_stability_chart.py",
                 "plot_root_loci.py",
                 "plot_any_plant.py",
+                "plot_delay.py",
                 "plot_fws_vs_4ws.py",
                 "plot_spline_course.py",
                 "plot_ratio_sweep.py",
