@@ -50,8 +50,8 @@ from .charts import (
     delay_margin_chart,
     stability_chart,
 )
-from .compare import ControllerComparison, compare, default_controllers
 from .comparison import LinearNonlinearComparison, compare_linear_nonlinear
+from .controller_comparison import ControllerComparison, compare, default_controllers
 from .controllers import (
     feedback_controller,
     feedforward_feedback_controller,

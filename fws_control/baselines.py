@@ -34,7 +34,7 @@ delta_f`` unless said otherwise):
 :class:`RearWheelFeedback`
     Samson (1995), *Control of chained systems...*, IEEE TAC 40(1), as in
     PythonRobotics' ``rear_wheel_feedback``: a yaw-rate law at R,
-    ``omega = V kappa cos(theta)/(1 - kappa e) - K_theta |V| theta -
+    ``omega = V kappa cos(theta)/(1 - kappa e) - K_theta abs(V) theta -
     K_e V e sin(theta)/theta``, ``delta_f = atan(f omega / V)``.
 
 Signs follow the library: ``e`` positive left of the path, ``theta = psi -

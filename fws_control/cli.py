@@ -721,7 +721,7 @@ def _write_csv(res, path: Path) -> None:
 def _cmd_compare(args) -> int:
     import matplotlib.pyplot as plt
 
-    from .compare import compare, default_controllers
+    from .controller_comparison import compare, default_controllers
     from .manoeuvres import (
         constant_radius,
         double_lane_change,

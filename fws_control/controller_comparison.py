@@ -6,9 +6,10 @@ input delay and steering lag, and returns a :class:`ControllerComparison`: a
 table of metrics per controller and a figure.
 
 Metrics (per controller, while R is between the first gate's entry and the
-last gate's exit): peak |lateral acceleration of G| [m/s²], peak |lateral
-jerk| [m/s³] (central differences of the lateral acceleration on the output
-grid), RMS and max |e| [m], max |delta_f|, |delta_r| [deg] and their rates
+last gate's exit), all of absolute values: peak lateral acceleration of G
+[m/s²], peak lateral jerk [m/s³] (central differences of the lateral
+acceleration on the output grid), RMS and max lateral error ``e`` [m], max
+``delta_f`` and ``delta_r`` [deg] and their rates
 [deg/s]; cones hit (:meth:`Manoeuvre.cones_hit`, over the whole run) and
 completion (the run reached the end of the last gate without stopping).
 
