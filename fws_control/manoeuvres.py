@@ -286,7 +286,16 @@ class Manoeuvre:
         return out
 
 
-def _course(name, sections, b, approach, exit_length, offsets) -> Manoeuvre:
+def _course(name, sections, offsets, vehicle_width, approach, exit_length):
+    """Gates and centre line of an ISO course.
+
+    `offsets[k](w, w1)` gives the right cone line of the k-th gate of width
+    ``w`` (``w1``: the entry gate's width).
+    """
+    b = float(check_positive("vehicle_width", vehicle_width))
+    approach = float(check_positive("approach", approach))
+    exit_length = float(check_positive("exit_length", exit_length))
+    w1 = sections[0][1][0] * b + sections[0][1][1]
     gates = []
     # lay out the gates first
     x = approach
@@ -298,7 +307,7 @@ def _course(name, sections, b, approach, exit_length, offsets) -> Manoeuvre:
             continue
         fac, add = width_rule
         w = fac * b + add
-        y_right = offsets[k](w)
+        y_right = offsets[k](w, w1)
         gates.append(Gate(x, x + length, y_right, y_right + w, f"section {i + 1}"))
         centres.append(y_right + 0.5 * w)
         x += length
@@ -346,17 +355,18 @@ def double_lane_change(
     >>> m.gates[1].y_right, round(m.gates[2].y_right, 3) == round(m.gates[0].y_right, 3)
     (3.5, True)
     """
-    b = float(check_positive("vehicle_width", vehicle_width))
-    a = float(check_positive("approach", approach))
-    ex = float(check_positive("exit_length", exit_length))
-    w1 = 1.1 * b + 0.25
     offsets = (
-        lambda w: -w / 2,
-        lambda w: 3.5,
-        lambda w: -w1 / 2,  # right lines of sections 1 and 5 aligned
+        lambda w, w1: -w / 2,
+        lambda w, w1: 3.5,
+        lambda w, w1: -w1 / 2,  # right lines of sections 1 and 5 aligned
     )
     return _course(
-        "ISO 3888-1 double lane change", ISO3888_1_SECTIONS, b, a, ex, offsets
+        "ISO 3888-1 double lane change",
+        ISO3888_1_SECTIONS,
+        offsets,
+        vehicle_width,
+        approach,
+        exit_length,
     )
 
 
@@ -388,17 +398,18 @@ def obstacle_avoidance(
     >>> round(m.gates[1].y_right - m.gates[0].y_left, 9)   # 1 m offset
     1.0
     """
-    b = float(check_positive("vehicle_width", vehicle_width))
-    a = float(check_positive("approach", approach))
-    ex = float(check_positive("exit_length", exit_length))
-    w1 = 1.1 * b + 0.25
     offsets = (
-        lambda w: -w / 2,
-        lambda w: w1 / 2 + 1.0,
-        lambda w: -w1 / 2,
+        lambda w, w1: -w / 2,
+        lambda w, w1: w1 / 2 + 1.0,  # 1 m left of the entry's left line
+        lambda w, w1: -w1 / 2,
     )
     return _course(
-        "ISO 3888-2 obstacle avoidance", ISO3888_2_SECTIONS, b, a, ex, offsets
+        "ISO 3888-2 obstacle avoidance",
+        ISO3888_2_SECTIONS,
+        offsets,
+        vehicle_width,
+        approach,
+        exit_length,
     )
 
 
