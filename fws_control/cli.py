@@ -300,9 +300,10 @@ def build_parser() -> argparse.ArgumentParser:
         description="Run the paper's double-root law (front steering and a rear "
         "ratio), rear-wheel feedback, pure pursuit, Stanley and LQR (paper "
         "structure and independent rear) on the same vehicle, course, speed, "
-        "delay and steering lag; print a table of peak lateral acceleration and "
-        "jerk, RMS and max lateral error, steering angles and rates, cones hit "
-        "and completion, and write a figure.",
+        "delay and steering lag, from the first gate to past the last; print a "
+        "table of peak lateral acceleration, RMS and max lateral error, steering "
+        "angles and rates (exact peaks), cones hit and completion, and write a "
+        "figure.",
     )
     p.add_argument(
         "--manoeuvre",
@@ -332,7 +333,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--offset",
         type=_finite,
         default=0.0,
-        help="initial lateral offset of R from the centre line [m] (0)",
+        help="lateral offset of R from the centre line at the first gate [m] (0)",
     )
     p.add_argument(
         "--vehicle-width", type=_finite, default=1.8, help="b for the gates [m] (1.8)"
@@ -745,7 +746,7 @@ def _cmd_compare(args) -> int:
         course,
         ctrls,
         speed=args.speed,
-        initial_state=(0.0, args.offset, 0.0),
+        offset=args.offset,
         delay=args.delay,
         actuator_time_constant=args.steering_lag,
     )

@@ -5,13 +5,18 @@ angle and rate limits), the same course, speed, initial pose and optional
 input delay and steering lag, and returns a :class:`ControllerComparison`: a
 table of metrics per controller and a figure.
 
-Metrics (per controller, while R is between the first gate's entry and the
-last gate's exit), all of absolute values: peak lateral acceleration of G
-[m/s²], peak lateral jerk [m/s³] (central differences of the lateral
-acceleration on the output grid), RMS and max lateral error ``e`` [m], max
-``delta_f`` and ``delta_r`` [deg] and their rates
-[deg/s]; cones hit (:meth:`Manoeuvre.cones_hit`, over the whole run) and
-completion (the run reached the end of the last gate without stopping).
+Every run starts at the entry of the first gate (on the centre line, or
+with a lateral offset) and ends when R has passed the last gate. Metrics
+(per controller, over the run): peak |lateral acceleration of G| [m/s²],
+max |e| [m], max |delta_f|, |delta_r| [deg] and their rates [deg/s] — all
+exact maxima of the continuous solution (``result.peaks``), independent of
+the output grid — the RMS of ``e`` [m] (trapezoidal on the output grid),
+cones hit (:meth:`Manoeuvre.cones_hit`) and completion (the run passed the
+last gate without stopping). There is no jerk column: on a course of
+straight lines and clothoids the curvature rate jumps at every joint, the
+feedforward steering rate with it, and the kinematic model's lateral
+acceleration (eq. 13, which contains the steering rate) jumps there too, so
+its time derivative is unbounded.
 
 :func:`default_controllers` gives a fair starting set at a speed: the
 paper's double-root law (front steering and a rear ratio), rear-wheel
@@ -43,7 +48,7 @@ from .gains import SteeringGains
 from .manoeuvres import Manoeuvre
 from .plant import LateralPlant
 from .simulation import SimulationResult, simulate
-from .validation import check_nonzero, check_type
+from .validation import check_finite, check_nonzero, check_type
 from .vehicle import Vehicle
 
 __all__ = [
@@ -54,10 +59,9 @@ __all__ = [
 ]
 
 #: Column names of :attr:`ControllerComparison.table` (units in the names).
-#: Peaks and maxima are of absolute values.
+#: Peaks and maxima are of absolute values, exact (see the module docstring).
 COMPARISON_METRICS = (
     "peak a_lat [m/s^2]",
-    "peak jerk [m/s^3]",
     "RMS e [m]",
     "max e [m]",
     "max delta_f [deg]",
@@ -141,7 +145,8 @@ class ControllerComparison:
     >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     >>> m = fws.double_lane_change()
-    >>> cmp = fws.compare(veh, m, {"Stanley": fws.Stanley(gain=1.0)}, speed=10.0)
+    >>> cmp = fws.compare(veh, m, {"Stanley": fws.Stanley(gain=1.0)}, speed=10.0,
+    ...                   offset=0.3)
     >>> cmp.labels, bool(cmp.table["completed"][0])
     (('Stanley',), True)
     """
@@ -251,39 +256,25 @@ class ControllerComparison:
 
 
 def _metrics(result: SimulationResult, manoeuvre: Manoeuvre, wheelbase: float):
-    t = np.asarray(result.t)
-    ok = np.isfinite(result.lateral_accel)
-    acc = np.asarray(result.lateral_accel)
-    jerk = np.full_like(acc, np.nan)
-    if np.count_nonzero(ok) > 2:
-        jerk[ok] = np.gradient(acc[ok], t[ok])
-    # Every metric is taken while R is on the course (first gate's entry to
-    # the last gate's exit): the approach and the exit straight (where a
-    # look-ahead point can reach the path's end) do not count.
-    x = np.asarray(result.x)
-    on_course = (x >= manoeuvre.start_x) & (x <= manoeuvre.end_x)
-    if not manoeuvre.gates:
-        on_course = np.isfinite(x)
-    e = np.asarray(result.e)[on_course]
+    pk = result.peaks
     deg = 180.0 / math.pi
-
-    def peak(v):
-        v = np.abs(np.asarray(v, dtype=float)[on_course])
-        return float(np.nanmax(v)) if np.any(np.isfinite(v)) else math.nan
-
-    finished = bool(np.nanmax(result.x) >= manoeuvre.end_x) and result.status in (
-        "ok",
-        "end_of_path",
+    e = np.asarray(result.e, dtype=float)
+    t = np.asarray(result.t, dtype=float)
+    ok = np.isfinite(e)
+    rms = (
+        float(np.sqrt(np.trapezoid(e[ok] ** 2, t[ok]) / (t[ok][-1] - t[ok][0])))
+        if np.count_nonzero(ok) > 1
+        else math.nan
     )
+    finished = bool(result.ok) and bool(np.nanmax(result.x) >= manoeuvre.end_x)
     return (
-        peak(acc),
-        peak(jerk),
-        float(np.sqrt(np.mean(e**2))) if e.size else math.nan,
-        float(np.max(np.abs(e))) if e.size else math.nan,
-        deg * peak(result.delta_f),
-        deg * peak(result.delta_r),
-        deg * peak(result.delta_f_rate),
-        deg * peak(result.delta_r_rate),
+        float(pk.lateral_accel.value),
+        rms,
+        float(pk.e.value),
+        deg * float(pk.delta_f.value),
+        deg * float(pk.delta_r.value),
+        deg * float(pk.delta_f_rate.value),
+        deg * float(pk.delta_r_rate.value),
         manoeuvre.cones_hit(result.x, result.y, result.psi, wheelbase=wheelbase),
         finished,
     )
@@ -295,8 +286,7 @@ def compare(
     controllers: dict[str, Any],
     *,
     speed: float,
-    initial_state=(0.0, 0.0, 0.0),
-    duration: float | None = None,
+    offset: float = 0.0,
     delay: float = 0.0,
     actuator_time_constant: float | None = None,
     dt: float = 0.01,
@@ -314,10 +304,9 @@ def compare(
         a :class:`~fws_control.LateralController`.
     speed : float
         Speed [m/s], > 0.
-    initial_state : array_like, optional
-        ``(x_R, y_R, psi)`` [m, m, rad]; default on the path start.
-    duration : float, optional
-        Simulated time [s]; default the time to drive the course's length.
+    offset : float, optional
+        Lateral offset [m] of R from the centre line at the start (the entry
+        of the first gate, heading along the course); positive left.
     delay : float, optional
         Input delay on the steering command [s] (all runs).
     actuator_time_constant : float, optional
@@ -348,9 +337,14 @@ def compare(
     if V <= 0:
         raise ValueError(f"speed must be > 0 m/s for a manoeuvre, got {speed!r}")
     path = manoeuvre.path
-    if duration is None:
-        # stop just before the end of the open course
-        duration = 0.995 * float(path.length) / V
+    offset = float(check_finite("offset", offset))
+    # Start at the first gate's entry (the approach is straight, so a delay's
+    # held initial history is the straight-road command) and stop once R has
+    # passed the last gate: the run covers the course and nothing else.
+    x0 = manoeuvre.start_x if manoeuvre.gates else 0.0
+    initial_state = (x0, offset, 0.0)
+    span = (manoeuvre.end_x - x0) if manoeuvre.gates else float(path.length)
+    duration = 1.02 * span / V + 0.1
     labels, results = [], []
     for label, c in controllers.items():
         if not isinstance(c, (SteeringGains, LateralController)):

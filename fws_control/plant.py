@@ -26,7 +26,7 @@ with :math:`\delta_f = -k_1 e - k_2\theta`, :math:`\delta_r = a\,\delta_f`.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import KW_ONLY, dataclass
 from typing import Any
 
 import control as ct
@@ -131,6 +131,9 @@ class LateralPlant:
 
     vehicle: Vehicle
     speed: float | np.ndarray
+    # after the speed every field is keyword-only: LateralPlant(veh, 5.0, 0.1)
+    # must not silently mean a curvature
+    _: KW_ONLY
     curvature: float | np.ndarray = 0.0
     model: str = "exact"
     steering_lag: float | tuple[float, float] | None = None

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import KW_ONLY, dataclass
 
 from .validation import check_angle_limit, check_rate_limit
 
@@ -60,6 +60,7 @@ class Vehicle:
 
     wheelbase: float
     rear_to_cg: float
+    _: KW_ONLY  # the limits are options, named at the call
     max_steer_front: float | None = None
     max_steer_rear: float | None = None
     max_steer_rate_front: float | None = None

@@ -769,8 +769,7 @@ def test_compare_table_recomputed_from_results():
             k_e=float(g0.k1) / F, k_theta=float(g0.k2) / F
         ),
     }
-    x0 = (0.0, 0.5, 0.0)
-    cmp = fws.compare(VEH, m, controllers, speed=V, initial_state=x0)
+    cmp = fws.compare(VEH, m, controllers, speed=V, offset=0.5)
     assert cmp.labels == tuple(controllers)
     tab = cmp.table
 
@@ -781,37 +780,35 @@ def test_compare_table_recomputed_from_results():
 
     deg = 180 / math.pi
     for i, r in enumerate(cmp.results):
-        on = (r.x >= m.start_x) & (r.x <= m.end_x)
-        assert on.sum() > 100
-        # every metric is taken on the course (first gate to last gate)
-        assert col("a_lat")[i] == pytest.approx(
-            np.nanmax(np.abs(r.lateral_accel[on])), rel=1e-12
+        # the run starts at the first gate, 0.5 m left of the centre line
+        assert r.x[0] == pytest.approx(m.start_x) and r.e[0] == pytest.approx(0.5)
+        assert r.x[-1] >= m.end_x
+        # peaks: exact maxima of the continuous solution, at or above every
+        # sample and within the sampling error of the largest (10 ms grid)
+        for words, sig, scale in (
+            (("a_lat",), r.lateral_accel, 1.0),
+            (("max", "e [m]"), r.e, 1.0),
+            (("delta_f", "[deg]"), r.delta_f, deg),
+        ):
+            sampled = scale * np.nanmax(np.abs(sig))
+            assert col(*words)[i] >= sampled * (1 - 1e-12)
+            # (the 10 ms samples miss up to 1.5 % of the peak right after the
+            # start, where the offset makes the steering move fastest)
+            assert col(*words)[i] == pytest.approx(sampled, rel=3e-2)
+        ok = np.isfinite(r.e)
+        rms = math.sqrt(
+            np.trapezoid(r.e[ok] ** 2, r.t[ok]) / (r.t[ok][-1] - r.t[ok][0])
         )
-        assert col("RMS", "e")[i] == pytest.approx(
-            math.sqrt(np.mean(r.e[on] ** 2)), rel=1e-12
-        )
-        assert col("max", "e [m]")[i] == pytest.approx(np.abs(r.e[on]).max(), 1e-12)
-        assert col("delta_f", "[deg]")[i] == pytest.approx(
-            deg * np.nanmax(np.abs(r.delta_f[on])), rel=1e-12
-        )
-        assert col("delta_r", "[deg]")[i] == pytest.approx(
-            deg * np.nanmax(np.abs(r.delta_r[on])), rel=1e-12, abs=1e-15
-        )
-        jerk = np.gradient(r.lateral_accel, r.t)
-        assert col("jerk")[i] == pytest.approx(np.nanmax(np.abs(jerk[on])), rel=1e-12)
-        for w, rate in (("delta_f", r.delta_f_rate), ("delta_r", r.delta_r_rate)):
-            (key,) = [k for k in tab if w in k and "rate" in k]
-            assert tab[key][i] == pytest.approx(
-                deg * np.nanmax(np.abs(rate[on])), rel=1e-12, abs=1e-15
-            )
-        completed = bool(np.nanmax(r.x) >= m.end_x) and r.status in (
-            "ok",
-            "end_of_path",
-        )
-        assert bool(col("completed")[i]) is completed is True
+        assert col("RMS", "e")[i] == pytest.approx(rms, rel=1e-12)
+        assert bool(col("completed")[i]) is True
         assert col("cones")[i] == cones_hit_brute(m, r.x, r.y, r.psi, F)
-        # the run is the one asked for
-        assert r.initial_state.tolist() == list(x0) and r.e[0] == pytest.approx(0.5)
+    # the peaks do not depend on the output grid (exact peaks)
+    fine = fws.compare(VEH, m, {"rwf": controllers["rear-wheel feedback"]},
+                       speed=V, offset=0.5, dt=0.001)  # fmt: skip
+    for name in tab:
+        if "RMS" in name:
+            continue
+        assert fine.table[name][0] == pytest.approx(tab[name][2], rel=1e-9), name
     # four-wheel steering shows in the rear column, not for a = 0
     assert col("delta_r", "[deg]")[0] > 1e-3 and col("delta_r", "[deg]")[2] == 0
     # the same law as SteeringGains and as StateFeedback.from_gains: same row
@@ -820,15 +817,17 @@ def test_compare_table_recomputed_from_results():
     # ... and the engine's own SteeringGains path (not StateFeedback) agrees
     # to integration accuracy
     direct = fws.simulate(
-        VEH, m.path, g, speed=V, initial_state=x0, duration=cmp.results[0].t[-1]
+        VEH,
+        m.path,
+        g,
+        speed=V,
+        initial_state=(m.start_x, 0.5, 0.0),
+        duration=cmp.results[0].t[-1],
     )
     r0 = cmp.results[0]
     np.testing.assert_allclose(direct.e, r0.e, atol=1e-8)
-    on0 = (direct.x >= m.start_x) & (direct.x <= m.end_x)
-    assert np.nanmax(np.abs(direct.lateral_accel[on0])) == pytest.approx(
-        col("a_lat")[0], rel=1e-7
-    )
-    assert deg * np.nanmax(np.abs(direct.delta_f[on0])) == pytest.approx(
+    assert direct.peaks.lateral_accel.value == pytest.approx(col("a_lat")[0], rel=1e-7)
+    assert deg * direct.peaks.delta_f.value == pytest.approx(
         col("delta_f", "[deg]")[0], rel=1e-7
     )
 

@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 import fws_control as fws
+from fws_control.controller_comparison import COMPARISON_METRICS
 
 PAGE = pathlib.Path(__file__).resolve().parents[1] / "docs" / "comparison.md"
 
@@ -41,20 +42,24 @@ def test_row_matches_a_fresh_run(speed, condition, label):
     course = fws.double_lane_change()
     ctrl = fws.default_controllers(veh, speed=speed)[label]
     kw = (
-        {"initial_state": (0.0, 0.5, 0.0)}
+        {"offset": 0.5}
         if condition == "ideal"
         else {"delay": 0.24, "actuator_time_constant": 0.27}
     )
     cmp = fws.compare(veh, course, {label: ctrl}, speed=speed, **kw)
     row = _page_row(f"{speed:g}", condition, label)
     r = cmp.results[0]
-    # independent recomputation from the run's signals
-    on = (r.x >= course.gates[0].x_start) & (r.x <= course.gates[-1].x_end)
+    # independent recomputation from the run's signals: the exact peaks lie
+    # at or above every output sample, and within the sampling error of them
     peak_acc = float(np.nanmax(np.abs(r.lateral_accel)))
-    max_e = float(np.max(np.abs(r.e[on])))
+    max_e = float(np.max(np.abs(r.e)))
     max_df = math.degrees(float(np.nanmax(np.abs(r.delta_f))))
-    for value, cell in ((peak_acc, row[0]), (max_e, row[3]), (max_df, row[4])):
-        assert value == pytest.approx(float(cell), rel=5e-3), (label, cell)
-    assert int(row[8]) == int(cmp.table["cones hit"][0])
-    assert (row[9] == "yes") == bool(cmp.table["completed"][0])
-    assert re.fullmatch(r"\d+", row[8])
+    for value, cell in ((peak_acc, row[0]), (max_e, row[2]), (max_df, row[3])):
+        assert float(cell) == pytest.approx(value, rel=2e-2), (label, cell)
+        assert float(cell) >= value * (1 - 5e-3), (label, cell)
+    # and the page prints the table of this run
+    for j, name in enumerate(COMPARISON_METRICS[:7]):
+        assert float(row[j]) == pytest.approx(cmp.table[name][0], rel=5e-3), name
+    assert int(row[7]) == int(cmp.table["cones hit"][0])
+    assert (row[8] == "yes") == bool(cmp.table["completed"][0])
+    assert re.fullmatch(r"\d+", row[7])

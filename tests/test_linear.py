@@ -65,10 +65,13 @@ def test_exact_front_entry_hand_value(veh):
     assert lin.B[1, 0] == pytest.approx(5 * 1.0729 / 2.7, rel=1e-14)
     paper = fws.linearize(veh, speed=5.0, curvature=0.1, model="paper")
     assert paper.B[1, 0] == pytest.approx(5 / 2.7)
-    assert fws.LateralPlant(veh, 5.0, 0.1).input_gain_factor == pytest.approx(
+    assert fws.LateralPlant(veh, 5.0, curvature=0.1).input_gain_factor == pytest.approx(
         1.0729, rel=1e-14
     )
-    assert fws.LateralPlant(veh, 5.0, 0.1, model="paper").input_gain_factor == 1.0
+    assert (
+        fws.LateralPlant(veh, 5.0, curvature=0.1, model="paper").input_gain_factor
+        == 1.0
+    )
 
 
 def test_names(veh):

@@ -168,7 +168,7 @@ def three_paths(speed, curvature, model):
     Vehicle keywords (the last as a (plant, keywords) pair)."""
     return (
         (hand_plant(speed, curvature, model), {}),
-        (fws.LateralPlant(VEH, speed, curvature, model=model), {}),
+        (fws.LateralPlant(VEH, speed, curvature=curvature, model=model), {}),
         (VEH, {"speed": speed, "curvature": curvature, "model": model}),
     )
 
@@ -182,7 +182,7 @@ def three_paths(speed, curvature, model):
 def test_linearize_paths_equal_the_hand_matrices(op):
     V, kap, model = op
     A, B = kinematic_matrices(V, kap, model)
-    plant = fws.LateralPlant(VEH, V, kap, model=model)
+    plant = fws.LateralPlant(VEH, V, curvature=kap, model=model)
     assert float(plant.input_gain_factor) == pytest.approx(
         gain_factor(kap, model), rel=1e-15
     )
@@ -391,7 +391,7 @@ def test_double_root_gains_statespace_equals_plant_anywhere(
         return
     g_ss = fws.double_root_gains(hand_plant(speed, curvature), ratio=ratio, pole=pole)
     g_lp = fws.double_root_gains(
-        fws.LateralPlant(VEH, speed, curvature), ratio=ratio, pole=pole
+        fws.LateralPlant(VEH, speed, curvature=curvature), ratio=ratio, pole=pole
     )
     assert_close(gains_of(g_ss), gains_of(g_lp), 1e-12)
     A, B = kinematic_matrices(speed, curvature)
@@ -626,7 +626,7 @@ def test_lateral_plant_steering_lag_is_the_interconnected_plant(case):
     """
     V, kap, a, (lo, hi) = case
     ref_plant = lagged_plant(V, kap)
-    plant = fws.LateralPlant(VEH, V, kap, steering_lag=(TAU_F, TAU_R))
+    plant = fws.LateralPlant(VEH, V, curvature=kap, steering_lag=(TAU_F, TAU_R))
     rng = np.random.default_rng(909)
     k1, k2 = rng.uniform(lo, hi, (2, 5000))
     gains = fws.SteeringGains(k1, k2, a)
@@ -643,7 +643,7 @@ def test_lateral_plant_steering_lag_is_the_interconnected_plant(case):
     # Arrays of operating points broadcast with the gains.
     speeds = np.array([V, 2.0 * V, -V])
     curv = np.array([kap, 0.0, 0.2])
-    sweep = fws.LateralPlant(VEH, speeds, curv, steering_lag=(TAU_F, TAU_R))
+    sweep = fws.LateralPlant(VEH, speeds, curvature=curv, steering_lag=(TAU_F, TAU_R))
     got = fws.characteristic_polynomial(sweep, fws.SteeringGains(k1[:3], k2[:3], a))
     for i in range(3):
         M = closed_loop_matrix(lagged_plant(speeds[i], curv[i]), k1[i], k2[i], a)
@@ -760,13 +760,13 @@ def test_points_on_a_boundary_are_not_stable():
     zero = fws.SteeringGains(0.0, 0.0, -1.0)
     for plant in (
         hand_plant(5.0, 0.0),
-        fws.LateralPlant(VEH, 5.0, 0.0),
+        fws.LateralPlant(VEH, 5.0, curvature=0.0),
         lagged_plant(5.0, 0.0),
     ):
         assert fws.is_stable(plant, zero) is False
     # k1 = 0 on a straight path: p0 = 0 exactly, an eigenvalue at 0.
     g = fws.SteeringGains(0.0, np.array([0.3, 0.6, 0.9]), -1.0)
-    for plant in (hand_plant(5.0, 0.0), fws.LateralPlant(VEH, 5.0, 0.0)):
+    for plant in (hand_plant(5.0, 0.0), fws.LateralPlant(VEH, 5.0, curvature=0.0)):
         assert not np.any(fws.is_stable(plant, g))
     # The same for the lagged plant, where the zero is the last entry of the
     # Routh column: the other three poles are stable, one sits at 0.
@@ -849,7 +849,10 @@ def test_two_state_engine_equals_closed_forms_on_random_points():
         k1, k2, a = rng.uniform(-2.0, 2.0, (3, n))
         gains = fws.SteeringGains(k1, k2, a)
         p1, p0, s1, s0 = closed_form_p(V, kap, k1, k2, a, model)
-        for plant in (hand_plant(V, kap, model), fws.LateralPlant(VEH, V, kap, model)):
+        for plant in (
+            hand_plant(V, kap, model),
+            fws.LateralPlant(VEH, V, curvature=kap, model=model),
+        ):
             got = fws.characteristic_polynomial(plant, gains)
             assert got.shape == (n, 3)
             assert np.all(got[:, 0] == 1.0)
@@ -994,7 +997,7 @@ def test_K_broadcasts_and_from_K_rejects_other_shapes():
 
 def test_positional_operating_point_is_a_type_error():
     veh = VEH
-    plant = fws.LateralPlant(veh, 5.0, 0.1)
+    plant = fws.LateralPlant(veh, 5.0, curvature=0.1)
     g = fws.SteeringGains(0.1, 0.5, -1.0)
     k1, k2 = 0.1, 0.5
     calls = [
@@ -1019,7 +1022,7 @@ def test_vehicle_keywords_with_a_plant_are_a_type_error(keyword, kind):
     kw = {keyword: {"speed": 5.0, "curvature": 0.1, "model": "exact"}[keyword]}
     g = fws.SteeringGains(0.1, 0.5, -1.0)
     plant = {
-        "LateralPlant": fws.LateralPlant(VEH, 5.0, 0.1),
+        "LateralPlant": fws.LateralPlant(VEH, 5.0, curvature=0.1),
         "StateSpace": hand_plant(5.0, 0.1),
     }[kind]
     calls = [
