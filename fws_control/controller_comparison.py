@@ -344,7 +344,7 @@ def compare(
     x0 = manoeuvre.start_x if manoeuvre.gates else 0.0
     initial_state = (x0, offset, 0.0)
     span = (manoeuvre.end_x - x0) if manoeuvre.gates else float(path.length)
-    duration = 1.02 * span / V + 0.1
+    duration = 1.1 * span / V + 0.5  # the path is longer than its x-span
     labels, results = [], []
     for label, c in controllers.items():
         if not isinstance(c, (SteeringGains, LateralController)):
