@@ -7,9 +7,10 @@ table of metrics per controller and a figure.
 
 Every run starts at the entry of the first gate (on the centre line, or
 with a lateral offset) and ends when R has passed the last gate. Metrics
-(per controller, over the run): peak |lateral acceleration of G| [m/s²],
-max |e| [m], max |delta_f|, |delta_r| [deg] and their rates [deg/s] — all
-exact maxima of the continuous solution (``result.peaks``), independent of
+(per controller, over the run, of absolute values): peak lateral
+acceleration of G [m/s²], max lateral error ``e`` [m], max ``delta_f`` and
+``delta_r`` [deg] and their rates [deg/s] — all exact maxima of the
+continuous solution (``result.peaks``), independent of
 the output grid — the RMS of ``e`` [m] (trapezoidal on the output grid),
 cones hit (:meth:`Manoeuvre.cones_hit`) and completion (the run passed the
 last gate without stopping). There is no jerk column: on a course of
