@@ -59,6 +59,9 @@ __all__ = [
     "STATUSES",
     "SOLVERS",
     "check_method",
+    "check_tolerances",
+    "RTOL_RANGE",
+    "ATOL_RANGE",
     "check_initial_state",
     "run_gains",
     "resolve_time_constant",
@@ -151,6 +154,58 @@ def check_method(method: Any) -> type[OdeSolver]:
             f"method must be one of {sorted(SOLVERS)} or an OdeSolver class, "
             f"got {method!r}"
         ) from None
+
+
+#: Accepted ``rtol``: from scipy's own floor ``100 * eps`` (below it scipy
+#: raises rtol silently, with a warning) to 0.1 (a 10 % error per step: any
+#: looser setting no longer controls the error, and with ``rtol = 10`` the
+#: solver strides across singular states).
+RTOL_RANGE = (100 * float(np.finfo(float).eps), 0.1)
+#: Accepted ``atol`` (the states are metres and radians): from 1e-20, far
+#: below the rounding error of any state of the loop (an absolute tolerance
+#: of 1e-300 overflows scipy's error norm of a state at 0: the solver then
+#: fails at t = 0), to 0.1 m or rad for the reason of the upper bound of
+#: ``rtol``.
+ATOL_RANGE = (1e-20, 0.1)
+
+
+def check_tolerances(rtol: Any, atol: Any) -> tuple[float, float]:
+    """``(rtol, atol)`` as floats if they lie in :data:`RTOL_RANGE`, :data:`ATOL_RANGE`.
+
+    The solver never returns for ``atol = 0`` with a state that starts at
+    exactly 0, nor for a NaN or infinite tolerance (its error norm is NaN,
+    so every step is rejected and retried): these are refused here, before
+    any integration.
+
+    Raises
+    ------
+    ValueError
+        Naming the argument, its value and the valid range.
+
+    Examples
+    --------
+    >>> from fws_control.simulation.engine import check_tolerances
+    >>> check_tolerances(1e-10, 1e-12)
+    (1e-10, 1e-12)
+    >>> check_tolerances(1e-10, 0.0)
+    Traceback (most recent call last):
+    ...
+    ValueError: atol must be a finite number in [1e-20, 0.1], got 0.0
+    """
+    lo, hi = RTOL_RANGE
+    out = []
+    for name, value, ok, span in (
+        ("rtol", rtol, lambda v: lo <= v <= hi, f"[{lo:.3g}, {hi:g}]"),
+        ("atol", atol, lambda v: ATOL_RANGE[0] <= v <= ATOL_RANGE[1], "[1e-20, 0.1]"),
+    ):
+        try:
+            v = float(value) if not isinstance(value, (bool, str, bytes)) else math.nan
+        except (TypeError, ValueError):
+            v = math.nan
+        if not (math.isfinite(v) and ok(v)):
+            raise ValueError(f"{name} must be a finite number in {span}, got {value!r}")
+        out.append(v)
+    return out[0], out[1]
 
 
 def check_initial_state(initial_state: Any) -> np.ndarray:

@@ -27,11 +27,12 @@ import numpy as np
 from ..baselines import LateralController
 from ..gains import SteeringGains
 from ..paths import Path
-from ..validation import check_delay, check_nonzero, check_positive, check_type
+from ..validation import check_delay, check_nonzero, check_type
 from ..vehicle import Vehicle
 from .engine import (
     check_initial_state,
     check_method,
+    check_tolerances,
     compute_outputs,
     exact_peaks,
     initial_path_state,
@@ -139,8 +140,7 @@ def _prepare(
     t = time_grid(duration, dt=dt, t_eval=t_eval)
     tau = resolve_time_constant(vehicle, tau)
     check_method(opts["method"])
-    for name in ("rtol", "atol"):
-        opts[name] = float(check_positive(name, opts[name]))
+    opts["rtol"], opts["atol"] = check_tolerances(opts["rtol"], opts["atol"])
     return k1, k2, a, V, x0, t, tau, ctrl
 
 
@@ -220,7 +220,10 @@ def simulate(
         itself, as :func:`scipy.integrate.solve_ivp` would, so that it can
         stop a run at a singular state.
     rtol, atol : float, optional
-        Relative and absolute tolerances of the solver, > 0.
+        Relative and absolute tolerances of the solver: rtol in
+        ``[100 eps, 0.1]`` (scipy's own floor to a 10 % error per step),
+        atol in ``[1e-20, 0.1]`` [m, rad]; see
+        :func:`~fws_control.simulation.engine.check_tolerances`.
 
     Returns
     -------
