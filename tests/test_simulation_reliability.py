@@ -10,7 +10,7 @@ import pytest
 
 import fws_control as fws
 from fws_control.paths import Arc, Straight
-from fws_control.simulation import SIGNALS, simulate_reference
+from fws_control.simulation import simulate_reference
 
 VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
 EPS = np.finfo(float).eps
@@ -90,3 +90,47 @@ def test_tolerances_at_the_ends_of_their_ranges_are_accepted():
     np.testing.assert_allclose(tight.e, e_ref, rtol=0, atol=1e-9)
     # a 10 % tolerance still follows the solution to within its tolerance
     assert np.max(np.abs(loose.e - e_ref)) < 0.1 * np.max(np.abs(e_ref))
+
+
+# --------------------------------------------------------------------------
+# Item 6 (simulation): a loose tolerance must not cross a singular state
+
+
+@pytest.mark.parametrize(("rtol", "atol"), [(0.1, 1e-12), (0.1, 0.1), (1e-3, 0.1)])
+def test_loose_tolerances_still_stop_at_the_singular_steering_angle(rtol, atol):
+    # k2 < 0 feeds the heading back positively: delta_f runs to pi/2 near
+    # t = 4.62 s (at the default tolerances). Before the margins were checked
+    # inside every step, rtol = atol = 0.1 sampled |delta_f| = 1.997 > pi/2
+    # before the stop.
+    g = fws.SteeringGains(k1=0.1, k2=-0.5, ratio=0.0)
+    kw = {"speed": 5.0, "initial_state": (0.0, 1.0, 0.0), "duration": 10.0}
+    kw.update(feedforward=False, dt=0.01)
+    tight = fws.simulate(VEH, Straight(), g, **kw)
+    res = fws.simulate(VEH, Straight(), g, **kw, rtol=rtol, atol=atol)
+    assert tight.status == res.status == "singular_steering"
+    # every sample before the stop is regular: the controller's own formula
+    # delta_f = -k1 e - k2 theta, evaluated here, stays below pi/2
+    df = -0.1 * res.e + 0.5 * res.theta
+    np.testing.assert_allclose(res.delta_f, df, rtol=0, atol=1e-12)
+    assert np.all(np.abs(df) < math.pi / 2)
+    assert res.t[-1] <= res.t_stop < res.t[-1] + 0.01 + 1e-12
+    # the stop is where |delta_f| = pi/2 on the solver's continuous solution
+    assert abs(res.peaks.delta_f.value - math.pi / 2) < 1e-6
+    assert abs(res.peaks.delta_f.time - res.t_stop) < 1e-6
+    assert abs(res.t_stop - tight.t_stop) < 0.5
+
+
+def test_identical_runs_stop_together_and_none_runs_on_past_the_singularity():
+    g = fws.SteeringGains(k1=[0.1, 0.1, 0.1], k2=[-0.5, -0.5, 0.5], ratio=0.0)
+    res = fws.simulate_batch(
+        VEH,
+        Straight(),
+        g,
+        speed=5.0,
+        initial_state=(0.0, 1.0, 0.0),
+        duration=10.0,
+        feedforward=False,
+    )
+    assert res.status.tolist() == ["singular_steering"] * 2 + ["ok"]
+    assert res.t_stop[0] == res.t_stop[1] < 10.0
+    assert np.all(np.abs(res.delta_f[np.isfinite(res.delta_f)]) < math.pi / 2)

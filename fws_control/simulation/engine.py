@@ -60,6 +60,7 @@ __all__ = [
     "SOLVERS",
     "check_method",
     "check_tolerances",
+    "MAX_STEPS",
     "RTOL_RANGE",
     "ATOL_RANGE",
     "check_initial_state",
@@ -649,25 +650,58 @@ _COLLAPSE_MARGIN = 1e-3
 
 @dataclass
 class _Segment:
-    y_eval: np.ndarray  # states at the requested output times reached
     outcome: str  # "done", "event" or "failed"
     t_last: float
     y_last: np.ndarray
     message: str = ""
 
 
+#: Points of each accepted step (fractions of it) where the stop margins are
+#: checked: a loose tolerance lets a step cross a singular state and come
+#: back, or end where the state is NaN, and the end of the step alone would
+#: miss it.
+_MARGIN_NODES = (0.25, 0.5, 0.75, 1.0)
+
+#: Most solver steps of one integration segment: beyond it the run is marked
+#: failed instead of running on (a speed of 1e20 m/s asks for ~1e20 steps).
+MAX_STEPS = 100_000
+
+
+def _locate_stop(event, dense, lo: float, hi: float) -> float:
+    """First time in ``(lo, hi]`` where the margin is no longer > 0.
+
+    The margin is > 0 at `lo` and not at `hi`. A NaN margin (a state beyond
+    a singularity) counts as a stop, so the root is that of a function that
+    is -1 wherever the margin is NaN: brentq keeps a sign-changing bracket.
+    """
+
+    def f(tt):
+        g = event(tt, dense(tt))
+        return -1.0 if math.isnan(g) else max(g, -1.0)
+
+    if f(hi) == 0.0:
+        return hi
+    return brentq(f, lo, hi, xtol=4 * np.finfo(float).eps * max(1.0, abs(hi)))
+
+
 def _solve_segment(
-    eng, solver_cls, t0, y0, t_end, t_eval, rtol, atol, record=None, runs=None
+    eng, solver_cls, t0, y0, t_end, t_eval, rtol, atol, store, record=None, runs=None
 ) -> _Segment:
-    """Step `solver_cls` from `t0`; stop at the first sign change of the margin.
+    """Step `solver_cls` from `t0`; stop where a margin first reaches 0.
 
     Same stepping, dense output and event location as
     :func:`scipy.integrate.solve_ivp` with a terminal event, but the last
     accepted state is kept when the solver fails, so that a collapse of the
-    step size at a singular state can be attributed to the run that caused it.
-    With a `record` (:class:`_History`), the dense output of every accepted
-    step is added to it with the global indices `runs` of the stacked runs
-    (the delay's history, and the continuous solution for exact peaks).
+    step size at a singular state can be attributed to the run that caused it,
+    and the margins are checked at the nodes :data:`_MARGIN_NODES` of every
+    accepted step (a NaN margin counts as a stop), so that no tolerance lets
+    a run cross a singular state unnoticed. The states at the output times
+    `t_eval` are passed to ``store(k, y)`` (``y`` of shape ``(y0.size,
+    K)`` for the output times ``k:k+K``) as they are reached, so that no
+    copy of them builds up here. With a `record` (:class:`_History`), the
+    dense output of every accepted step is added to it with the global
+    indices `runs` of the stacked runs (the delay's history, and the
+    continuous solution for exact peaks).
     """
     extra = {}
     if eng.delay > 0.0:
@@ -675,45 +709,42 @@ def _solve_segment(
         # which is known (accepted) only if h <= delay.
         extra["max_step"] = eng.delay
     solver = solver_cls(eng.rhs, t0, y0, t_end, rtol=rtol, atol=atol, **extra)
-    g_old = eng.event(t0, y0)
-    recorded: list[np.ndarray] = []
     k = 0  # next output time
+    steps = 0
     while True:
         msg = solver.step()
-        if solver.status == "failed":
-            y_eval = np.stack(recorded, axis=1) if recorded else np.empty((y0.size, 0))
-            return _Segment(y_eval, "failed", float(solver.t), solver.y.copy(), msg)
-        t_old, t_new = solver.t_old, solver.t
-        dense = None
-        if record is not None:
-            dense = solver.dense_output()
-            record.add(t_old, t_new, dense, runs)
-        g_new = eng.event(t_new, solver.y)
-        t_hit = None
-        if g_old > 0.0 and g_new <= 0.0:
-            dense = solver.dense_output()
-            t_hit = brentq(
-                lambda tt, d=dense: eng.event(tt, d(tt)),
-                t_old,
-                t_new,
-                xtol=4 * np.finfo(float).eps * max(1.0, abs(t_new)),
+        steps += 1
+        if solver.status != "failed" and steps > MAX_STEPS:
+            msg = (
+                f"more than {MAX_STEPS} solver steps (MAX_STEPS) from t={t0:.6g} s: "
+                "dynamics too fast for the output interval, or stiff (try "
+                "method='Radau')"
             )
+            return _Segment("failed", float(solver.t), solver.y.copy(), msg)
+        if solver.status == "failed":
+            return _Segment("failed", float(solver.t), solver.y.copy(), msg)
+        t_old, t_new = solver.t_old, solver.t
+        dense = solver.dense_output()
+        if record is not None:
+            record.add(t_old, t_new, dense, runs)
+        t_hit = None
+        prev = t_old
+        for frac in _MARGIN_NODES:
+            tt = t_new if frac == 1.0 else t_old + frac * (t_new - t_old)
+            y_tt = solver.y if frac == 1.0 else dense(tt)
+            if not eng.event(tt, y_tt) > 0.0:  # also NaN
+                t_hit = _locate_stop(eng.event, dense, prev, tt)
+                break
+            prev = tt
         upto = t_new if t_hit is None else t_hit
         k_end = int(np.searchsorted(t_eval, upto, side="right"))
         if k_end > k:
-            if dense is None:
-                dense = solver.dense_output()
-            y_k = dense(t_eval[k:k_end])
-            recorded.extend(y_k.T)
+            store(k, dense(t_eval[k:k_end]))
             k = k_end
-        y_eval = None
         if t_hit is not None:
-            y_eval = np.stack(recorded, axis=1) if recorded else np.empty((y0.size, 0))
-            return _Segment(y_eval, "event", float(t_hit), dense(t_hit))
+            return _Segment("event", float(t_hit), dense(t_hit))
         if solver.status == "finished":
-            y_eval = np.stack(recorded, axis=1) if recorded else np.empty((y0.size, 0))
-            return _Segment(y_eval, "done", float(t_new), solver.y.copy())
-        g_old = g_new
+            return _Segment("done", float(t_new), solver.y.copy())
 
 
 def integrate(
@@ -854,6 +885,13 @@ def integrate(
         eng = engine_for(active)
         first = int(np.searchsorted(t_eval, t0, side="right"))
         seg_end = next(b for b in breaks if b > t0)
+
+        def store(k, y, first=first, active=active):
+            # straight into the output: no per-segment copy of the samples
+            out[:, active, first + k : first + k + y.shape[1]] = y.reshape(
+                m, active.size, -1
+            )
+
         seg = _solve_segment(
             eng,
             solver_cls,
@@ -863,12 +901,10 @@ def integrate(
             t_eval[first:],
             rtol,
             atol,
+            store,
             record=history,
             runs=active,
         )
-        nt = seg.y_eval.shape[1]
-        if nt:
-            out[:, active, first : first + nt] = seg.y_eval.reshape(m, active.size, nt)
         if seg.outcome == "done":
             if seg_end >= t_end:
                 break
@@ -895,10 +931,18 @@ def integrate(
                     f"at t={seg.t_last:.6g} s the ODE solver failed: {seg.message}"
                 )
             break
-        i = active[j]
-        status[i], t_stop[i] = kind, seg.t_last
-        message[i] = f"at t={seg.t_last:.6g} s: {note}"
-        keep = np.arange(active.size) != j
+        # The run that set the stop, and any other at its margin there too
+        # (e.g. identical runs): one left in would start the next segment
+        # past its stop, where no sign change can be seen.
+        stops = np.union1d([j], np.flatnonzero(~(np.min(marg, axis=0) > 0.0)))
+        for jj in stops:
+            kind_jj = _STOP_KINDS[int(np.argmin(marg[:, jj]))]
+            i = active[jj]
+            status[i], t_stop[i] = kind_jj, seg.t_last
+            message[i] = f"at t={seg.t_last:.6g} s: " + (
+                note if jj == j else _STOP_MESSAGES[kind_jj]
+            )
+        keep = ~np.isin(np.arange(active.size), stops)
         active, Y, t0 = active[keep], Y_last[:, keep], seg.t_last
     if delay > 0.0:
         out = np.concatenate(
