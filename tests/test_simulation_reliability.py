@@ -134,3 +134,107 @@ def test_identical_runs_stop_together_and_none_runs_on_past_the_singularity():
     assert res.status.tolist() == ["singular_steering"] * 2 + ["ok"]
     assert res.t_stop[0] == res.t_stop[1] < 10.0
     assert np.all(np.abs(res.delta_f[np.isfinite(res.delta_f)]) < math.pi / 2)
+
+
+# --------------------------------------------------------------------------
+# Item 9: a run whose solver fails takes only itself out, locally and on Dask
+
+SPEEDS = np.array([5.0, 1e300, 6.0, 7.0, 8.0])  # run 1: the solver fails at t = 0
+BATCH = {"initial_state": (0.0, 1.0, 0.0), "duration": 3.0, "dt": 0.1}
+GAIN = fws.SteeringGains(0.1, 0.5, 0.0)
+
+
+def _good_runs_alone():
+    """The reference: the four good runs, without the failing one."""
+    good = np.array([0, 2, 3, 4])
+    return good, fws.simulate_batch(VEH, Straight(), GAIN, speed=SPEEDS[good], **BATCH)
+
+
+def _check_isolated(res, good, ref):
+    assert res.status.tolist() == ["ok", "failed", "ok", "ok", "ok"]
+    assert "ODE solver failed" in res.message[1]
+    assert res.message[0] == ""
+    np.testing.assert_allclose(res.e[good], ref.e, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(res.t_stop[good], 3.0)
+
+
+@pytest.mark.parametrize("chunk_size", [None, 2])
+def test_a_failing_run_takes_only_itself_out(chunk_size):
+    good, ref = _good_runs_alone()
+    with time_limit(30), np.errstate(all="ignore"):
+        res = fws.simulate_batch(
+            VEH, Straight(), GAIN, speed=SPEEDS, chunk_size=chunk_size, **BATCH
+        )
+    _check_isolated(res, good, ref)
+
+
+def _dask():
+    try:
+        from dask import distributed
+    except ImportError:  # pragma: no cover - depends on the environment
+        print("dask.distributed is not installed: Dask reliability tests skipped")
+        pytest.skip("the extra 'distributed' (dask.distributed) is not installed")
+    return distributed
+
+
+@pytest.fixture(scope="module")
+def dask_client():
+    distributed = _dask()
+    with (
+        distributed.LocalCluster(
+            processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        yield client
+
+
+def test_a_failing_run_takes_only_itself_out_on_dask(dask_client):
+    good, ref = _good_runs_alone()
+    with time_limit(60), np.errstate(all="ignore"):
+        res = fws.simulate_batch(
+            VEH, Straight(), GAIN, speed=SPEEDS, chunk_size=2, client=dask_client,
+            **BATCH,
+        )  # fmt: skip
+    _check_isolated(res, good, ref)
+
+
+class _LosingClient:
+    """A client whose tasks after the first are lost (cancelled) by the cluster."""
+
+    def __init__(self, client):
+        self.client = client
+        self.count = 0
+
+    def submit(self, *args, **kwargs):
+        fut = self.client.submit(*args, **kwargs)
+        self.count += 1
+        if self.count > 1:
+            fut.cancel()
+        return fut
+
+
+def test_lost_dask_tasks_are_marked_and_finished_chunks_kept(dask_client):
+    speeds = np.array([5.0, 6.0, 7.0, 8.0, 9.0])
+    local = fws.simulate_batch(VEH, Straight(), GAIN, speed=speeds, **BATCH)
+    with time_limit(60), pytest.warns(RuntimeWarning, match="3 runs of 2 lost"):
+        res = fws.simulate_batch(
+            VEH, Straight(), GAIN, speed=speeds, chunk_size=2,
+            client=_LosingClient(dask_client), **BATCH,
+        )  # fmt: skip
+    assert res.status.tolist() == ["ok", "ok", "failed", "failed", "failed"]
+    np.testing.assert_allclose(res.e[:2], local.e[:2], rtol=0, atol=1e-9)
+    assert np.all(np.isnan(res.signals[2:])) and np.all(np.isnan(res.t_stop[2:]))
+    assert all("Dask task of runs" in m for m in res.message[2:])
+    assert "runs 2..3" in res.message[2] and "runs 4..4" in res.message[4]
+
+
+def test_a_closed_dask_client_raises_before_any_work():
+    distributed = _dask()
+    with distributed.LocalCluster(
+        processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None
+    ) as cluster:
+        client = distributed.Client(cluster)
+        client.close()
+    with time_limit(30), pytest.raises(RuntimeError, match="closed"):
+        fws.simulate_batch(VEH, Straight(), GAIN, speed=5.0, client=client, **BATCH)

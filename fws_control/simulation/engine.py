@@ -664,7 +664,7 @@ _MARGIN_NODES = (0.25, 0.5, 0.75, 1.0)
 
 #: Most solver steps of one integration segment: beyond it the run is marked
 #: failed instead of running on (a speed of 1e20 m/s asks for ~1e20 steps).
-MAX_STEPS = 100_000
+MAX_STEPS = 20_000
 
 
 def _locate_stop(event, dense, lo: float, hi: float) -> float:

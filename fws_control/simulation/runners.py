@@ -20,6 +20,7 @@ interactive terminals.
 from __future__ import annotations
 
 import sys
+import warnings
 from typing import Any
 
 import numpy as np
@@ -30,6 +31,9 @@ from ..paths import Path
 from ..validation import check_delay, check_nonzero, check_type
 from ..vehicle import Vehicle
 from .engine import (
+    PEAK_SIGNALS,
+    SIGNALS,
+    STATUS_FAILED,
     check_initial_state,
     check_method,
     check_tolerances,
@@ -103,11 +107,123 @@ def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, c
     return signals, status, message, t_stop, peaks, peak_times
 
 
+def _run_isolated(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl):
+    """:func:`_run_chunk`, where a solver failure takes only its own run out.
+
+    The runs of a chunk share one solver, so one run whose solver fails
+    (e.g. a speed of 1e300 m/s) fails every run still active in the chunk.
+    Those runs are split in halves and integrated again, recursively, until
+    a run that fails alone is found: only it keeps the status ``"failed"``
+    (and its message); every other run keeps its own result. The cost is at
+    most about twice the chunk's (one half of each split finishes normally).
+    Module-level so that Dask can pickle it: on a cluster the retries run on
+    the worker.
+    """
+    out = _run_chunk(
+        vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl
+    )  # fmt: skip
+    failed = np.flatnonzero(out[1] == STATUS_FAILED)
+    if speed.size == 1 or failed.size == 0:
+        return out
+    for idx in np.array_split(failed, 2):
+        sub_ctrl = ctrl.subset(idx) if ctrl is not None and ctrl.runs() else ctrl
+        sub = _run_isolated(
+            vehicle, path, k1[idx], k2[idx], a[idx], speed[idx], feedforward,
+            x0[idx], t, tau, opts, sub_ctrl,
+        )  # fmt: skip
+        for whole, part in zip(out, sub, strict=True):
+            whole[idx] = part
+    return out
+
+
+def _lost_chunk(n: int, t_size: int, note: str):
+    """The outputs of :func:`_run_chunk` for runs whose Dask task was lost."""
+    nan = np.full((n, len(PEAK_SIGNALS)), np.nan)
+    return (
+        np.full((n, len(SIGNALS), t_size), np.nan),
+        np.full(n, STATUS_FAILED, dtype=object),
+        np.full(n, note, dtype=object),
+        np.full(n, np.nan),
+        nan,
+        nan.copy(),
+    )
+
+
 def _chunk_controller(ctrl, lo: int, hi: int):
     """The controller of runs ``lo:hi`` (per-run parameters indexed)."""
     if ctrl is None or not ctrl.runs():
         return ctrl
     return ctrl.subset(np.arange(lo, hi))
+
+
+def _run_on_dask(client, bounds, args, keep, t_size, bar) -> None:
+    """Run the chunks on a Dask cluster; keep every chunk that finishes.
+
+    A client that cannot take the tasks (closed) raises at once, before any
+    work. A task the cluster loses afterwards (cancelled, worker or
+    scheduler gone) does not discard the chunks that finished: its runs are
+    marked ``"failed"`` with NaN data and a message naming Dask's error, and
+    a :class:`RuntimeWarning` says how many runs were lost. An exception
+    raised by the simulation itself (e.g. an ambiguous initial projection)
+    propagates, as it would locally.
+    """
+    try:
+        from dask.distributed import as_completed
+    except ImportError as exc:  # pragma: no cover - optional extra
+        raise ImportError(
+            "client= needs dask.distributed; install the extra "
+            "`pip install fws-control[distributed]`"
+        ) from exc
+    if getattr(client, "status", "running") in ("closed", "closing"):
+        raise RuntimeError(
+            f"client={client!r} is closed: no chunk was submitted; start a "
+            "new dask.distributed.Client or pass client=None to run here"
+        )
+    futures = {}
+    try:
+        for j, (lo, hi) in enumerate(bounds):
+            fut = client.submit(_run_isolated, *args(lo, hi), pure=False)
+            futures[fut] = j
+    except Exception as exc:
+        for fut in futures:
+            fut.cancel()
+        raise RuntimeError(
+            f"the Dask client could not take the chunks ({type(exc).__name__}: "
+            f"{exc}); no chunk was kept"
+        ) from exc
+    pending = dict(futures)
+    lost = []
+    try:
+        for fut in as_completed(list(futures)):
+            j = pending.pop(fut)
+            try:
+                chunk = fut.result()
+            except Exception as exc:
+                if fut.status == "error":
+                    raise  # the simulation itself raised, as it would here
+                lost.append((j, exc))
+                continue
+            keep(j, chunk)
+            bar.update(1)
+    except Exception as exc:
+        if not pending or any(f.status == "error" for f in pending):
+            raise
+        lost.extend((j, exc) for j in pending.values())
+    for j, exc in lost:
+        lo, hi = bounds[j]
+        note = (
+            f"not simulated: the Dask task of runs {lo}..{hi - 1} was lost "
+            f"({type(exc).__name__}: {exc}); the other chunks were kept"
+        )
+        keep(j, _lost_chunk(hi - lo, t_size, note))
+    if lost:
+        runs = sum(bounds[j][1] - bounds[j][0] for j, _ in lost)
+        warnings.warn(
+            f"simulate_batch: {runs} runs of {len(lost)} lost Dask tasks are "
+            "marked 'failed' (NaN data); the finished chunks were kept",
+            RuntimeWarning,
+            stacklevel=3,
+        )
 
 
 def _prepare(
@@ -447,38 +563,47 @@ def simulate_batch(
     bar = tqdm(
         total=len(bounds), desc="simulate_batch", unit="chunk", disable=not progress
     )
-    chunks: list[Any] = [None] * len(bounds)
+    # The chunks are written into the batch's arrays as they arrive (a
+    # single chunk is kept as it is), so no second copy of the signals
+    # builds up.
+    single = len(bounds) == 1
+    signals = None if single else np.empty((n, len(SIGNALS), t.size))
+    status = np.empty(n, dtype=object)
+    message = np.empty(n, dtype=object)
+    t_stop = np.empty(n)
+    peak = np.empty((n, len(PEAK_SIGNALS)))
+    peak_time = np.empty((n, len(PEAK_SIGNALS)))
+
+    def keep(j, chunk):
+        nonlocal signals
+        lo, hi = bounds[j]
+        if single:
+            signals = chunk[0]
+        else:
+            signals[lo:hi] = chunk[0]
+        for whole, part in zip(
+            (status, message, t_stop, peak, peak_time), chunk[1:], strict=True
+        ):
+            whole[lo:hi] = part
+
     try:
         if client is None:
             for j, (lo, hi) in enumerate(bounds):
-                chunks[j] = _run_chunk(*args(lo, hi))
+                keep(j, _run_isolated(*args(lo, hi)))
                 bar.update(1)
         else:
-            try:
-                from dask.distributed import as_completed
-            except ImportError as exc:  # pragma: no cover - optional extra
-                raise ImportError(
-                    "client= needs dask.distributed; install the extra "
-                    "`pip install fws-control[distributed]`"
-                ) from exc
-            futures = {
-                client.submit(_run_chunk, *args(lo, hi), pure=False): j
-                for j, (lo, hi) in enumerate(bounds)
-            }
-            for fut in as_completed(list(futures)):
-                chunks[futures[fut]] = fut.result()
-                bar.update(1)
+            _run_on_dask(client, bounds, args, keep, t.size, bar)
     finally:
         bar.close()
 
     return SimulationResult(
         t=t,
-        signals=np.concatenate([c[0] for c in chunks]),
-        run_status=np.concatenate([c[1] for c in chunks]).astype(str),
-        run_message=tuple(str(m) for c in chunks for m in c[2]),
-        run_t_stop=np.concatenate([c[3] for c in chunks]),
-        run_peak=np.concatenate([c[4] for c in chunks]),
-        run_peak_time=np.concatenate([c[5] for c in chunks]),
+        signals=signals,
+        run_status=status.astype(str),
+        run_message=tuple(str(m) for m in message),
+        run_t_stop=t_stop,
+        run_peak=peak,
+        run_peak_time=peak_time,
         run_speed=V,
         run_k1=k1,
         run_k2=k2,
