@@ -10,7 +10,7 @@ import pytest
 
 import fws_control as fws
 from fws_control.paths import Arc, Straight
-from fws_control.simulation import simulate_reference
+from fws_control.simulation import SIGNALS, simulate_reference
 
 VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
 EPS = np.finfo(float).eps
@@ -238,3 +238,117 @@ def test_a_closed_dask_client_raises_before_any_work():
         client.close()
     with time_limit(30), pytest.raises(RuntimeError, match="closed"):
         fws.simulate_batch(VEH, Straight(), GAIN, speed=5.0, client=client, **BATCH)
+
+
+# --------------------------------------------------------------------------
+# Item 2: output bounded by a documented budget; memory scales with the output
+
+BYTES_PER_SAMPLE = len(SIGNALS) * 8  # one float64 per signal
+
+
+@pytest.mark.parametrize(
+    ("kw", "runs", "samples"),
+    [
+        ({"dt": 1e-9}, 1, 15e9 + 1),  # the 112 GiB
+        ({"dt": 1e-320}, 1, math.inf),  # duration / dt overflows
+        ({"dt": 1e-6}, 200, 15e6 + 1),  # 200 runs of the 1.3 GB run
+    ],
+)
+def test_oversized_output_is_refused_at_once_with_the_way_out(kw, runs, samples):
+    g = fws.SteeringGains(np.full(runs, 0.1), 0.5, 0.0)
+    with time_limit(10), pytest.raises(ValueError) as info:
+        fws.simulate_batch(
+            VEH, Straight(), g, speed=5.0, initial_state=(0, 1, 0), duration=15.0,
+            **kw,
+        )  # fmt: skip
+    msg = str(info.value)
+    gib = runs * samples * BYTES_PER_SAMPLE / 2**30
+    assert f"dt={kw['dt']!r} over duration=15.0" in msg
+    assert f"{samples:.4g} output samples for each of {runs} runs" in msg
+    assert f"{gib:.4g} GiB" in msg and "budget of 2 GiB" in msg
+    for way_out in ("larger dt", "t_eval", "shorter duration", "fewer runs"):
+        assert way_out in msg
+    if runs == 1:  # simulate and the reference refuse it the same way
+        with time_limit(10), pytest.raises(ValueError, match="budget of 2 GiB"):
+            fws.simulate(
+                VEH, Straight(), GAIN, speed=5.0, initial_state=(0, 1, 0),
+                duration=15.0, **kw,
+            )  # fmt: skip
+        with time_limit(10), pytest.raises(ValueError, match="budget of 2 GiB"):
+            simulate_reference(
+                VEH, Straight(), GAIN, speed=5.0, initial_state=(0, 1, 0),
+                duration=15.0, **kw,
+            )  # fmt: skip
+
+
+def test_the_budget_is_2_gib_of_returned_signals():
+    from fws_control.simulation.engine import (
+        MAX_OUTPUT_BYTES,
+        check_output_budget,
+        output_samples,
+    )
+
+    assert MAX_OUTPUT_BYTES == 2 * 2**30
+    # the largest number of run-samples that fits, from the definition
+    limit = 2 * 2**30 // BYTES_PER_SAMPLE
+    kw = {"duration": 15.0, "dt": 0.01}
+    check_output_budget(1, limit, **kw)  # exactly at the budget: accepted
+    check_output_budget(limit // 1501, 1501, **kw)  # 16,268 paper-sized runs
+    with pytest.raises(ValueError, match="budget"):
+        check_output_budget(1, limit + 1, **kw)
+    with pytest.raises(ValueError, match="budget"):
+        check_output_budget(limit // 1501 + 1, 1501, **kw)
+    # samples as time_grid counts them: round(duration / dt) + 1
+    assert output_samples(15.0, dt=0.01) == 1501
+    assert output_samples(15.0, dt=0.4) == 39  # 37.5 rounds to 38 intervals
+    assert output_samples(1.0, dt=5.0) == 2  # at least one interval
+    assert output_samples(15.0, t_eval=[0.0, 1.0, 2.0]) == 3
+
+
+def test_peak_memory_scales_with_the_output_not_more():
+    import tracemalloc
+
+    g = _paper_gains()
+    kw = {**PAPER, "dt": 1e-4}  # 150,001 samples: 13.2 MB of signals
+    fws.simulate(VEH, Arc(0.1), g, **{**kw, "duration": 0.1})  # warm caches
+    tracemalloc.start()
+    try:
+        res = fws.simulate(VEH, Arc(0.1), g, **kw)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    out = res.signals.nbytes
+    assert out == 150_001 * BYTES_PER_SAMPLE
+    # the output, the states (3 of 11 rows) and a bounded block of
+    # temporaries (2**15 samples x ~45 arrays = 12 MB): 1.5 x + 16 MB.
+    # Before the fix: 4.4 x the output (58 MB), 5.8 GB at dt = 1e-6.
+    assert peak < 1.5 * out + 16e6, (peak / 1e6, out / 1e6)
+
+
+def test_signals_computed_in_blocks_equal_one_pass(monkeypatch):
+    from fws_control.simulation import runners
+
+    g = fws.double_root_gains(
+        VEH, speed=5.0, curvature=0.1, ratio=np.array([-1.0, 0.5]), pole=-1.0
+    )
+    # a full turn and more: psi must stay continuous across the blocks
+    kw = {"speed": 5.0, "initial_state": (0.0, -5.0, 6.0), "duration": 20.0}
+    one = fws.simulate_batch(VEH, Arc(0.1), g, **kw)
+    monkeypatch.setattr(runners, "_OUTPUT_BLOCK", 2 * 37)  # blocks of 37 samples
+    blocks = fws.simulate_batch(VEH, Arc(0.1), g, **kw)
+    # equal up to rounding (numpy's SIMD loops round by array length)
+    np.testing.assert_allclose(blocks.signals, one.signals, rtol=1e-14, atol=1e-14)
+    assert np.all(np.abs(np.diff(one.psi, axis=1)) < 0.5)  # no 2 pi jump
+    assert one.psi[0, 0] == 6.0 and one.psi[0, -1] > 6.0 + 2 * math.pi
+
+
+def test_max_steps_marks_a_run_failed_instead_of_running_on(monkeypatch):
+    from fws_control.simulation import engine
+
+    monkeypatch.setattr(engine, "MAX_STEPS", 30)
+    # the 5 m/s run needs about a dozen steps; the 1e6 m/s run ~1e6 times more
+    res = fws.simulate_batch(
+        VEH, Straight(), GAIN, speed=np.array([5.0, 1e6]), chunk_size=2, **BATCH
+    )
+    assert res.status.tolist() == ["ok", "failed"]
+    assert "more than 30 solver steps (MAX_STEPS)" in res.message[1]

@@ -67,6 +67,9 @@ __all__ = [
     "run_gains",
     "resolve_time_constant",
     "time_grid",
+    "MAX_OUTPUT_BYTES",
+    "output_samples",
+    "check_output_budget",
     "initial_path_state",
     "integrate",
     "compute_outputs",
@@ -325,14 +328,92 @@ def resolve_time_constant(vehicle: Vehicle, value: float | None) -> float | None
     return DEFAULT_ACTUATOR_TIME_CONSTANT if has_rate else None
 
 
+#: Budget of the output of one call [bytes]: the returned signals, ``runs x
+#: len(SIGNALS) x samples x 8`` bytes (float64), may not exceed it. 2 GiB is
+#: 24 million run-samples: 16,000 runs of the paper's 15 s scenario at the
+#: default output step, or one run with dt = 6e-7 s; the peak memory of a
+#: call is about 1.3 times its output plus a bounded block (the states,
+#: 3/11 of the output, and about 12 MB of temporaries). Larger requests are
+#: refused with the way to ask for less (see :func:`check_output_budget`).
+MAX_OUTPUT_BYTES = 2 * 2**30
+
+
+def output_samples(duration: float, *, dt: float = 0.01, t_eval: Any = None) -> float:
+    """Number of output times :func:`time_grid` would give, without building them.
+
+    A float, so that an absurd request (``dt = 1e-320``) is a large number
+    (or ``inf``) instead of an overflow.
+
+    Examples
+    --------
+    >>> from fws_control.simulation.engine import output_samples
+    >>> output_samples(15.0, dt=0.01), output_samples(15.0, dt=1e-320)
+    (1501.0, inf)
+    """
+    if t_eval is not None:
+        return float(np.size(t_eval))
+    duration = float(check_positive("duration", duration))
+    dt = float(check_positive("dt", dt))
+    with np.errstate(over="ignore"):
+        ratio = duration / dt
+    return max(float(round(ratio)) if math.isfinite(ratio) else math.inf, 1.0) + 1.0
+
+
+def check_output_budget(
+    runs: int, samples: float, *, duration: float, dt: float, t_eval: Any = None
+) -> None:
+    """Refuse a call whose signals would exceed :data:`MAX_OUTPUT_BYTES`.
+
+    The solver chooses its own steps: the output grid (`dt` or `t_eval`)
+    only sets where the solution is sampled, not its accuracy, so a request
+    for more samples than fit in memory is almost always meant as a finer
+    solution, which the tolerances give.
+
+    Raises
+    ------
+    ValueError
+        Naming the arguments, the size asked for and the budget, and saying
+        how to get what was meant: a larger `dt`, a `t_eval` with the times
+        needed, a shorter `duration` or fewer runs per call.
+
+    Examples
+    --------
+    >>> from fws_control.simulation.engine import check_output_budget
+    >>> check_output_budget(1, 1501.0, duration=15.0, dt=0.01)   # 0.13 MB: fine
+    >>> check_output_budget(1, 1.5e10 + 1, duration=15.0, dt=1e-9)
+    Traceback (most recent call last):
+    ...
+    ValueError: dt=1e-09 over duration=15.0 asks for 1.5e+10 output samples ...
+    """
+    nbytes = float(runs) * float(samples) * len(SIGNALS) * 8.0
+    if nbytes <= MAX_OUTPUT_BYTES:
+        return
+    limit = MAX_OUTPUT_BYTES / (len(SIGNALS) * 8.0)
+    what = (
+        f"t_eval of {int(samples)} times"
+        if t_eval is not None
+        else f"dt={dt!r} over duration={duration!r}"
+    )
+    raise ValueError(
+        f"{what} asks for {samples:.4g} output samples for each of {runs} runs: "
+        f"{nbytes / 2**30:.4g} GiB of signals (runs x {len(SIGNALS)} signals x "
+        f"samples x 8 bytes), more than the budget of "
+        f"{MAX_OUTPUT_BYTES / 2**30:g} GiB (runs x samples <= {limit:.4g}). The "
+        "solver chooses its own steps: dt only sets the output grid, not the "
+        "accuracy (use rtol, atol). Ask for less output: a larger dt, t_eval "
+        "with only the times you need, a shorter duration, or fewer runs per call"
+    )
+
+
 def time_grid(duration: float, *, dt: float = 0.01, t_eval: Any = None) -> np.ndarray:
     """Output times: ``linspace(0, duration, round(duration/dt) + 1)`` or `t_eval`.
 
     Raises
     ------
     ValueError
-        For a non-positive `duration` or `dt`, or a `t_eval` that is not
-        strictly increasing from 0 to at most `duration`.
+        For a non-positive `duration` or `dt`, a `t_eval` that is not
+        strictly increasing from 0 to at most `duration`, or a grid whose
+        signals for one run would exceed :data:`MAX_OUTPUT_BYTES`.
 
     Examples
     --------
@@ -343,13 +424,15 @@ def time_grid(duration: float, *, dt: float = 0.01, t_eval: Any = None) -> np.nd
     duration = float(check_positive("duration", duration))
     if t_eval is None:
         dt = float(check_positive("dt", dt))
-        n = max(int(round(duration / dt)), 1)
-        return np.linspace(0.0, duration, n + 1)
+        samples = output_samples(duration, dt=dt)
+        check_output_budget(1, samples, duration=duration, dt=dt)
+        return np.linspace(0.0, duration, int(samples))
     t = np.asarray(check_finite("t_eval", t_eval), dtype=float).ravel()
     if t.size < 1 or t[0] != 0.0 or np.any(np.diff(t) <= 0) or t[-1] > duration:
+        got = f"{t.size} values" + (f" from {t[0]:g} to {t[-1]:g}" if t.size else "")
         raise ValueError(
             "t_eval must be strictly increasing, start at 0 and end at or before "
-            f"duration={duration}, got {t_eval!r}"
+            f"duration={duration}, got {got}"
         )
     return t
 
@@ -1160,6 +1243,29 @@ class DenseSolution:
         return np.concatenate([Y, rows])
 
 
+def _sample_peaks(signals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Index and value of the largest output sample of each peak signal.
+
+    ``|signal|`` per run and signal of :data:`PEAK_SIGNALS`, ``inf`` where a
+    signal is not finite at a sample where the state is, ``-inf`` after the
+    stop. One signal at a time, so that the temporaries are a fraction of
+    the signals (``1 / len(SIGNALS)`` each), not a copy of them.
+    """
+    n, T = signals.shape[0], signals.shape[2]
+    have = np.isfinite(signals[:, SIGNALS.index("s"), :])
+    k = np.zeros((n, len(_PEAK_ROWS)), dtype=int)
+    v = np.full((n, len(_PEAK_ROWS)), -np.inf)
+    if T == 0:
+        return k, v
+    for j, row in enumerate(_PEAK_ROWS):
+        a = np.abs(signals[:, row, :])
+        a[~np.isfinite(a)] = np.inf
+        a[~have] = -np.inf
+        k[:, j] = np.argmax(a, axis=1)
+        v[:, j] = a[np.arange(n), k[:, j]]
+    return k, v
+
+
 def exact_peaks(
     vehicle: Vehicle,
     path: Path,
@@ -1277,15 +1383,10 @@ def exact_peaks(
     K = times.shape[1]
 
     # Best so far: the nodes and the output samples (all on the solution).
-    samp = np.abs(np.asarray(signals, dtype=float)[:, _PEAK_ROWS, :])
-    have = np.isfinite(np.asarray(signals)[:, SIGNALS.index("s"), :])
-    samp = np.where(np.isfinite(samp), samp, np.inf)
-    samp = np.where(have[:, None, :], samp, -np.inf)
+    k_samp, samp_v = _sample_peaks(np.asarray(signals, dtype=float))
     j_node = np.argmax(node_v, axis=2)
     best_v = np.take_along_axis(node_v, j_node[..., None], 2)[..., 0]
     best_t = times[all_runs[:, None], j_node]
-    k_samp = np.argmax(samp, axis=2)
-    samp_v = np.take_along_axis(samp, k_samp[..., None], 2)[..., 0]
     better = samp_v > best_v
     best_v = np.where(better, samp_v, best_v)
     best_t = np.where(better, t_eval[k_samp], best_t)

@@ -19,6 +19,7 @@ interactive terminals.
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 import warnings
 from typing import Any
@@ -36,11 +37,13 @@ from .engine import (
     STATUS_FAILED,
     check_initial_state,
     check_method,
+    check_output_budget,
     check_tolerances,
     compute_outputs,
     exact_peaks,
     initial_path_state,
     integrate,
+    output_samples,
     resolve_time_constant,
     run_gains,
     time_grid,
@@ -58,6 +61,39 @@ def _stderr_is_tty() -> bool:
         return sys.stderr.isatty()
     except (AttributeError, ValueError):
         return False
+
+
+#: Samples (runs x output times) whose signals are computed at once: the
+#: temporaries of :func:`~fws_control.simulation.engine.compute_outputs`
+#: (about forty-five arrays of this size, 12 MB) stay bounded, whatever the
+#: size of the output.
+_OUTPUT_BLOCK = 1 << 15
+_PSI = SIGNALS.index("psi")
+
+
+def _outputs_in_blocks(vehicle, path, g, *, states, initial_heading, **kw):
+    """:func:`compute_outputs` over blocks of output times, into one array.
+
+    ``psi`` is unwrapped in time within a block; each block starts on the
+    branch of the previous block's last value (consecutive samples differ
+    by less than pi), so the result equals one call over all times.
+    """
+    n, T = states.shape[1], states.shape[2]
+    step = max(1, _OUTPUT_BLOCK // max(n, 1))
+    if step >= T:
+        return compute_outputs(
+            vehicle, path, g, states=states, initial_heading=initial_heading, **kw
+        )
+    out = np.empty((n, len(SIGNALS), T))
+    heading = np.asarray(initial_heading, dtype=float)
+    for k0 in range(0, T, step):
+        part = out[:, :, k0 : k0 + step]
+        part[...] = compute_outputs(
+            vehicle, path, g, states=states[:, :, k0 : k0 + step],
+            initial_heading=heading, **kw,
+        )  # fmt: skip
+        heading = part[:, _PSI, -1]
+    return out
 
 
 def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl):
@@ -81,7 +117,7 @@ def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, c
         solution=(solution := []),
         **opts,
     )
-    signals = compute_outputs(
+    signals = _outputs_in_blocks(
         vehicle,
         path,
         g,
@@ -92,6 +128,7 @@ def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, c
         initial_heading=x0[:, 2],
         delay=opts["delay"],
     )
+    del states  # (the outputs hold everything the peaks need)
     peaks, peak_times = exact_peaks(
         vehicle,
         path,
@@ -253,6 +290,9 @@ def _prepare(
     n = sizes.pop() if sizes else 1
     k1, k2, a, V = (np.broadcast_to(v, (n,)).copy() for v in (*fields, speed_arr))
     x0 = np.broadcast_to(x0, (n, 3)).copy()
+    # (before building the grid: dt = 1e-9 must not allocate 112 GiB first)
+    samples = output_samples(duration, dt=dt, t_eval=t_eval)
+    check_output_budget(n, samples, duration=duration, dt=dt, t_eval=t_eval)
     t = time_grid(duration, dt=dt, t_eval=t_eval)
     tau = resolve_time_constant(vehicle, tau)
     check_method(opts["method"])
@@ -312,7 +352,10 @@ def simulate(
         Nominal spacing of the output times [s] (the solver chooses its own
         steps). The grid is ``linspace(0, duration, round(duration/dt) + 1)``,
         so the actual spacing is ``duration/round(duration/dt)`` (at least
-        one interval): pass `t_eval` for exact times.
+        one interval): pass `t_eval` for exact times. It sets the output
+        only, not the accuracy (`rtol`, `atol`); the signals of one call may
+        not exceed
+        :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES` (2 GiB).
     t_eval : array_like, optional
         Output times instead of `dt`; increasing, from 0 to at most
         `duration`.
@@ -353,8 +396,9 @@ def simulate(
     ------
     ValueError
         For non-scalar gains, speed or initial state (use
-        :func:`simulate_batch`), a zero speed, a non-positive duration, or an
-        unknown method.
+        :func:`simulate_batch`), a zero speed, a non-positive duration, an
+        unknown method, tolerances out of range, or an output larger than
+        :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES`.
     AmbiguousProjectionError
         If the initial position has no unique closest point on the path.
 
@@ -409,7 +453,12 @@ def simulate(
         chunk_size=1,
         progress=False,
     )
-    return batch[0]
+    # batch[0] without copying the signals: the squeezed run's grid ends at
+    # its last sample (a view of the batch's arrays).
+    count = int(np.count_nonzero(np.isfinite(batch.signals[0, SIGNALS.index("s")])))
+    return dataclasses.replace(
+        batch, t=batch.t[:count], signals=batch.signals[:, :, :count], squeeze=True
+    )
 
 
 def simulate_batch(
