@@ -352,3 +352,64 @@ def test_max_steps_marks_a_run_failed_instead_of_running_on(monkeypatch):
     )
     assert res.status.tolist() == ["ok", "failed"]
     assert "more than 30 solver steps (MAX_STEPS)" in res.message[1]
+
+
+# --------------------------------------------------------------------------
+# Item 3: a fast actuator (stiff loop) is integrated by an implicit method
+
+
+def test_stiff_actuator_chooses_radau_runs_fast_and_agrees_to_order_tau():
+    import time
+
+    g = _paper_gains()
+    kw = {**PAPER, "duration": 5.0}
+    plain = fws.simulate(VEH, Arc(0.1), g, **kw)  # no actuator: the reference
+    assert plain.method == "DOP853"
+    runs = {}
+    for tau in (1e-4, 2e-4):
+        start = time.process_time()
+        with time_limit(60):
+            runs[tau] = fws.simulate(VEH, Arc(0.1), g, **kw, actuator_time_constant=tau)
+        cpu = time.process_time() - start
+        assert runs[tau].method == "Radau" and runs[tau].ok
+        # 0.4 s measured; explicit DOP853 needs ~7,800 steps (~6 s) at 1e-4
+        # and took 90 s at 1e-5
+        assert cpu < 5.0, cpu
+    rate = np.max(np.abs(plain.delta_f_rate))
+    for tau, res in runs.items():
+        # the lag T d' = cmd - d started at the command lags by at most
+        # T max|d cmd/dt| (+ O(T^2)): the applied angle differs from the
+        # loop without actuator by that much, and the error by O(T)
+        ddf = np.max(np.abs(res.delta_f - plain.delta_f))
+        assert ddf <= 1.01 * tau * rate, (ddf, tau * rate)
+        assert np.max(np.abs(res.e - plain.e)) < 20 * tau * np.max(np.abs(plain.e))
+    # O(T): twice the lag, twice the difference (to 1 %)
+    d1, d2 = (np.max(np.abs(runs[tau].e - plain.e)) for tau in (1e-4, 2e-4))
+    assert d2 / d1 == pytest.approx(2.0, rel=0.01)
+
+
+def test_auto_keeps_dop853_for_a_slow_actuator_and_warns_for_explicit_stiff(
+    monkeypatch,
+):
+    from fws_control.simulation import engine
+    from fws_control.simulation.engine import choose_method
+
+    g = _paper_gains()
+    kw = {**PAPER, "duration": 2.0}
+    slow = fws.simulate(VEH, Arc(0.1), g, **kw, actuator_time_constant=0.05)
+    assert slow.method == "DOP853"  # the default actuator is not stiff
+    # the documented rule: T < 0.004 s * (rtol / 1e-10) ** (1/6)
+    for tau, rtol in ((0.0039, 1e-10), (0.0041, 1e-10), (0.0085, 1e-8)):
+        expect = "Radau" if tau < 0.004 * (rtol / 1e-10) ** (1 / 6) else "DOP853"
+        assert choose_method(tau, rtol) == expect
+    assert choose_method(None, 1e-10) == "DOP853"
+    # an explicit method chosen for a stiff loop: told, not silently slow
+    # (~7,800 steps; cut short here by a small step budget)
+    monkeypatch.setattr(engine, "MAX_STEPS", 50)
+    with pytest.warns(RuntimeWarning, match="stiff.*'Radau'"):
+        res = fws.simulate(
+            VEH, Arc(0.1), g, **{**kw, "duration": 0.5},
+            actuator_time_constant=1e-5, method="DOP853",
+        )  # fmt: skip
+    assert res.method == "DOP853" and res.status == "failed"
+    assert "MAX_STEPS" in res.message and "Radau" in res.message

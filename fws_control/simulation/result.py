@@ -214,6 +214,9 @@ class SimulationResult:
         the continuous solution and their times (see :attr:`peaks`). None
         (both): :attr:`peaks` falls back to the samples, marked
         ``exact=False``.
+    method : str, optional
+        The solver that integrated the runs (what ``method="auto"`` chose:
+        ``"DOP853"`` or, for a stiff actuator, ``"Radau"``); None if unknown.
 
     Attributes
     ----------
@@ -273,6 +276,7 @@ class SimulationResult:
     path: Path | None = None
     run_peak: np.ndarray | None = None
     run_peak_time: np.ndarray | None = None
+    method: str | None = None
 
     x = _Signal("Global x of the rear-axle centre R [m].")
     y = _Signal("Global y of the rear-axle centre R [m].")
@@ -340,6 +344,7 @@ class SimulationResult:
             ("run_message", message),
             ("feedforward", bool(self.feedforward)),
             ("squeeze", bool(self.squeeze)),
+            ("method", None if self.method is None else str(self.method)),
             *per_run.items(),
         ):
             object.__setattr__(self, name, value)
@@ -400,6 +405,7 @@ class SimulationResult:
             path=self.path,
             run_peak=None if self.run_peak is None else self.run_peak[idx],
             run_peak_time=None if self.run_peak is None else self.run_peak_time[idx],
+            method=self.method,
         )
 
     @property
@@ -708,6 +714,7 @@ class SimulationResult:
             data[name] = per_run[run]
         df = pd.DataFrame(data)
         df.attrs["feedforward"] = self.feedforward
+        df.attrs["method"] = self.method
         return df
 
     # ------------------------------------------------------------------
@@ -973,4 +980,5 @@ def expand_runs(
         path=path,
         run_peak=peak,
         run_peak_time=peak_time,
+        method=None if result is None else result.method,
     )

@@ -25,6 +25,7 @@ import warnings
 from typing import Any
 
 import numpy as np
+from scipy.integrate import DOP853, RK23, RK45
 
 from ..baselines import LateralController
 from ..gains import SteeringGains
@@ -39,6 +40,7 @@ from .engine import (
     check_method,
     check_output_budget,
     check_tolerances,
+    choose_method,
     compute_outputs,
     exact_peaks,
     initial_path_state,
@@ -295,9 +297,34 @@ def _prepare(
     check_output_budget(n, samples, duration=duration, dt=dt, t_eval=t_eval)
     t = time_grid(duration, dt=dt, t_eval=t_eval)
     tau = resolve_time_constant(vehicle, tau)
-    check_method(opts["method"])
     opts["rtol"], opts["atol"] = check_tolerances(opts["rtol"], opts["atol"])
+    if isinstance(opts["method"], str) and opts["method"] == "auto":
+        opts["method"] = choose_method(tau, opts["rtol"])
+    else:
+        _warn_if_stiff(check_method(opts["method"]), tau, float(t[-1]))
     return k1, k2, a, V, x0, t, tau, ctrl
+
+
+#: Steps an explicit method may be forced to take by the actuator's
+#: stability bound (about 6.4 T for DOP853) before a warning.
+_STIFF_STEPS = 5000
+
+
+def _warn_if_stiff(solver, tau, duration) -> None:
+    """Warn when an explicitly chosen explicit method meets a stiff actuator."""
+    if tau is None or not issubclass(solver, (DOP853, RK23, RK45)):
+        return
+    steps = duration / (6.4 * tau)
+    if steps > _STIFF_STEPS:
+        warnings.warn(
+            f"method={solver.__name__!r} with actuator_time_constant={tau!r} over "
+            f"duration={duration!r}: the actuator makes the loop stiff, so this "
+            f"explicit method needs about {steps:.2g} steps (its step is bounded "
+            "near 6.4 times the time constant); method='auto' or 'Radau' steps "
+            "by accuracy instead",
+            RuntimeWarning,
+            stacklevel=4,
+        )
 
 
 def simulate(
@@ -313,7 +340,7 @@ def simulate(
     t_eval: Any = None,
     actuator_time_constant: float | None = None,
     delay: float = 0.0,
-    method: str = "DOP853",
+    method: str = "auto",
     rtol: float = 1e-10,
     atol: float = 1e-12,
 ) -> SimulationResult:
@@ -374,10 +401,15 @@ def simulate(
         initial state until ``t = delay``. Integrated by the method of steps
         (see :func:`~fws_control.simulation.engine.integrate`). Default 0.
     method : str or scipy.integrate.OdeSolver, optional
-        Integration method: a name in ``"DOP853", "RK45", "RK23", "Radau",
-        "BDF", "LSODA"`` or an OdeSolver class. The engine steps that solver
-        itself, as :func:`scipy.integrate.solve_ivp` would, so that it can
-        stop a run at a singular state.
+        Integration method: ``"auto"`` (default), a name in ``"DOP853",
+        "RK45", "RK23", "Radau", "BDF", "LSODA"`` or an OdeSolver class. The
+        engine steps that solver itself, as :func:`scipy.integrate.solve_ivp`
+        would, so that it can stop a run at a singular state. ``"auto"`` is
+        DOP853, or Radau when a fast actuator makes the loop stiff (rule and
+        measurements in
+        :func:`~fws_control.simulation.engine.choose_method`); the result's
+        ``method`` says which. An explicit method chosen for a stiff loop
+        gives a :class:`RuntimeWarning`.
     rtol, atol : float, optional
         Relative and absolute tolerances of the solver: rtol in
         ``[100 eps, 0.1]`` (scipy's own floor to a 10 % error per step),
@@ -474,7 +506,7 @@ def simulate_batch(
     t_eval: Any = None,
     actuator_time_constant: float | None = None,
     delay: float = 0.0,
-    method: str = "DOP853",
+    method: str = "auto",
     rtol: float = 1e-10,
     atol: float = 1e-12,
     chunk_size: int | None = None,
@@ -662,4 +694,7 @@ def simulate_batch(
         squeeze=False,
         vehicle=vehicle,
         path=path,
+        method=opts["method"]
+        if isinstance(opts["method"], str)
+        else opts["method"].__name__,
     )
