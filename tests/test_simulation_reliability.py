@@ -413,3 +413,57 @@ def test_auto_keeps_dop853_for_a_slow_actuator_and_warns_for_explicit_stiff(
         )  # fmt: skip
     assert res.method == "DOP853" and res.status == "failed"
     assert "MAX_STEPS" in res.message and "Radau" in res.message
+
+
+# --------------------------------------------------------------------------
+# Item 10: to_pandas keeps every run and its data through a CSV file
+
+
+def test_to_pandas_csv_round_trip_keeps_every_run_and_its_status(tmp_path):
+    import pandas as pd
+
+    from fws_control.simulation.result import expand_runs
+
+    # runs: ok, solver failed (V = 1e300), singular steering, and (by
+    # expand_runs) one that was never simulated
+    g = fws.SteeringGains([0.1, 0.1, 0.1], [0.5, 0.5, -0.5], 0.0)
+    speeds = np.array([5.0, 1e300, 5.0])
+    kw = {"initial_state": (0.0, 1.0, 0.0), "duration": 6.0, "dt": 0.5}
+    with np.errstate(all="ignore"):
+        sub = fws.simulate_batch(
+            VEH, Straight(), g, speed=speeds, feedforward=False, **kw
+        )
+    res = expand_runs(
+        sub, positions=[0, 1, 3], k1=[0.1, 0.1, np.nan, 0.1],
+        k2=[0.5, 0.5, np.nan, -0.5], ratio=[0.0] * 4,
+        speed=[5.0, 1e300, 5.0, 5.0], initial_state=[(0.0, 1.0, 0.0)] * 4,
+        t=sub.t, feedforward=False, vehicle=VEH, path=Straight(),
+        message="no design",
+    )  # fmt: skip
+    status = ["ok", "failed", "uncontrollable", "singular_steering"]
+    assert res.status.tolist() == status
+    path = tmp_path / "batch.csv"
+    res.to_pandas().to_csv(path, index=False)
+    df = pd.read_csv(path, keep_default_na=False, na_values=["NaN", "nan", ""])
+    per_run = df.groupby("run").first()
+    assert per_run.index.tolist() == [0, 1, 2, 3]  # no run dropped
+    assert per_run["status"].tolist() == status
+    assert per_run["message"].tolist()[2] == "no design"
+    assert "ODE solver failed" in per_run["message"].tolist()[1]
+    assert "pi/2" in per_run["message"].tolist()[3]
+    np.testing.assert_array_equal(per_run["speed"], [5.0, 1e300, 5.0, 5.0])
+    np.testing.assert_array_equal(per_run["k1"], [0.1, 0.1, np.nan, 0.1])
+    np.testing.assert_array_equal(per_run["k2"], [0.5, 0.5, np.nan, -0.5])
+    np.testing.assert_array_equal(per_run["t_stop"], res.t_stop)
+    assert set(df["feedforward"]) == {False} and set(df["method"]) == {"DOP853"}
+    # rows: every sample up to the stop, one NaN row for the empty runs
+    for i in range(4):
+        rows = df[df["run"] == i]
+        have = np.isfinite(res.signals[i, SIGNALS.index("s")])
+        if have.any():
+            np.testing.assert_array_equal(rows["t"], res.t[have])
+            np.testing.assert_allclose(rows["e"], res.e[i, have], rtol=1e-15)
+        else:
+            assert len(rows) == 1 and rows[list(SIGNALS)].isna().all(axis=None)
+    # the failed and the singular runs stopped, with their times kept
+    assert res.t_stop[1] == 0.0 and 0.0 < res.t_stop[3] < 6.0

@@ -654,11 +654,12 @@ class SimulationResult:
 
         Columns ``run, t``, the signals of
         :data:`~fws_control.simulation.SIGNALS`, then the per-run ``status,
-        t_stop, speed, k1, k2, ratio`` (repeated on each of the run's rows).
-        A run's rows are its samples up to its stop; a run without any
-        sample (e.g. ``"uncontrollable"``, not simulated) keeps one row with
-        NaN ``t`` and signals, so that no run is dropped. ``attrs`` holds
-        ``feedforward``.
+        t_stop, speed, k1, k2, ratio, message`` and the batch's
+        ``feedforward, method`` (repeated on each of the run's rows, so that
+        a CSV file keeps them). A run's rows are its samples up to its stop;
+        a run without any sample (e.g. ``"uncontrollable"``, not simulated)
+        keeps one row with NaN ``t`` and signals, so that no run is dropped.
+        ``attrs`` holds ``feedforward`` and ``method`` too.
 
         Returns
         -------
@@ -710,8 +711,12 @@ class SimulationResult:
             ("k1", self.run_k1),
             ("k2", self.run_k2),
             ("ratio", self.run_ratio),
+            ("message", np.array(self.run_message, dtype=object)),
         ):
             data[name] = per_run[run]
+        # (as columns, not only in attrs: a CSV file keeps no attrs)
+        data["feedforward"] = np.full(run.size, self.feedforward)
+        data["method"] = np.full(run.size, self.method or "", dtype=object)
         df = pd.DataFrame(data)
         df.attrs["feedforward"] = self.feedforward
         df.attrs["method"] = self.method
