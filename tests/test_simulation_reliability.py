@@ -467,3 +467,12 @@ def test_to_pandas_csv_round_trip_keeps_every_run_and_its_status(tmp_path):
             assert len(rows) == 1 and rows[list(SIGNALS)].isna().all(axis=None)
     # the failed and the singular runs stopped, with their times kept
     assert res.t_stop[1] == 0.0 and 0.0 < res.t_stop[3] < 6.0
+
+
+def test_an_error_of_the_simulation_itself_still_raises_on_dask(dask_client):
+    # the centre of the arc has no unique projection: raised as it is locally
+    with time_limit(60), pytest.raises(fws.AmbiguousProjectionError):
+        fws.simulate_batch(
+            VEH, Arc(0.1), GAIN, speed=5.0, chunk_size=1, client=dask_client,
+            initial_state=[(0.0, 1.0, 0.0), (0.0, 10.0, 0.0)], duration=1.0,
+        )  # fmt: skip

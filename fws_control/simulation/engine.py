@@ -791,8 +791,9 @@ class _Segment:
 #: miss it.
 _MARGIN_NODES = (0.25, 0.5, 0.75, 1.0)
 
-#: Most solver steps of one integration segment: beyond it the run is marked
-#: failed instead of running on (a speed of 1e20 m/s asks for ~1e20 steps).
+#: Most solver steps of one integration segment (beyond those a delay's
+#: maximum step forces): beyond it the runs still active are marked failed
+#: instead of running on (a speed of 1e20 m/s asks for ~1e20 steps).
 MAX_STEPS = 20_000
 
 
@@ -810,6 +811,8 @@ def _locate_stop(event, dense, lo: float, hi: float) -> float:
 
     if f(hi) == 0.0:
         return hi
+    if not f(lo) > 0.0:  # (the segment starts regular; kept safe here)
+        return lo
     return brentq(f, lo, hi, xtol=4 * np.finfo(float).eps * max(1.0, abs(hi)))
 
 
@@ -856,10 +859,12 @@ def _solve_segment(
     solver = solver_cls(eng.rhs, t0, y0, t_end, rtol=rtol, atol=atol, **extra)
     k = 0  # next output time
     steps = 0
+    # (the steps a delay's max_step forces come on top of the budget)
+    budget = MAX_STEPS + (int((t_end - t0) / eng.delay) if eng.delay > 0.0 else 0)
     while True:
         msg = solver.step()
         steps += 1
-        if solver.status != "failed" and steps > MAX_STEPS:
+        if solver.status != "failed" and steps > budget:
             msg = (
                 f"more than {MAX_STEPS} solver steps (MAX_STEPS) from t={t0:.6g} s: "
                 "dynamics too fast for the output interval, or stiff (try "

@@ -232,22 +232,27 @@ def _run_on_dask(client, bounds, args, keep, t_size, bar) -> None:
         ) from exc
     pending = dict(futures)
     lost = []
+    task_error = None
     try:
         for fut in as_completed(list(futures)):
             j = pending.pop(fut)
             try:
                 chunk = fut.result()
             except Exception as exc:
-                if fut.status == "error":
-                    raise  # the simulation itself raised, as it would here
+                if fut.status == "error":  # the simulation itself raised
+                    task_error = exc
+                    break
                 lost.append((j, exc))
                 continue
             keep(j, chunk)
             bar.update(1)
-    except Exception as exc:
-        if not pending or any(f.status == "error" for f in pending):
-            raise
+    except Exception as exc:  # the cluster went away while we waited
         lost.extend((j, exc) for j in pending.values())
+        pending.clear()
+    if task_error is not None:
+        for fut in pending:
+            fut.cancel()
+        raise task_error  # as it would be raised here
     for j, exc in lost:
         lo, hi = bounds[j]
         note = (
