@@ -7,6 +7,8 @@ import signal
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import fws_control as fws
 from fws_control.paths import Arc, Straight
@@ -476,3 +478,35 @@ def test_an_error_of_the_simulation_itself_still_raises_on_dask(dask_client):
             VEH, Arc(0.1), GAIN, speed=5.0, chunk_size=1, client=dask_client,
             initial_state=[(0.0, 1.0, 0.0), (0.0, 10.0, 0.0)], duration=1.0,
         )  # fmt: skip
+
+
+# --------------------------------------------------------------------------
+# Property: any tolerance pair is either in range or refused, naming it
+
+_ANY_TOL = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.sampled_from([0.0, -0.0, 1e-300, 1e-21, 1e-20, 0.1, 0.10000000000000002]),
+    st.sampled_from([100 * EPS, np.nextafter(100 * EPS, 0.0), True, None, "1e-9"]),
+)
+
+
+@settings(derandomize=True, max_examples=200, deadline=None)
+@given(rtol=_ANY_TOL, atol=_ANY_TOL)
+def test_check_tolerances_accepts_exactly_the_documented_ranges(rtol, atol):
+    from fws_control.simulation.engine import check_tolerances
+
+    def number(v):
+        return isinstance(v, float) and math.isfinite(v)
+
+    # the documented ranges, written out here
+    rtol_ok = number(rtol) and 100 * EPS <= rtol <= 0.1
+    atol_ok = number(atol) and 1e-20 <= atol <= 0.1
+    if rtol_ok and atol_ok:
+        assert check_tolerances(rtol, atol) == (rtol, atol)
+        return
+    with pytest.raises(ValueError) as info:
+        check_tolerances(rtol, atol)
+    bad = "rtol" if not rtol_ok else "atol"
+    msg = str(info.value)
+    assert msg.startswith(f"{bad} must be a finite number in [")
+    assert msg.endswith(f"got {rtol if bad == 'rtol' else atol!r}")
