@@ -30,14 +30,15 @@ from ..paths import Path
 from ..validation import check_delay, check_nonzero, check_positive, check_type
 from ..vehicle import Vehicle
 from .engine import (
-    check_initial_state,
     check_method,
+    check_model,
     compute_outputs,
     exact_peaks,
     initial_path_state,
     integrate,
     resolve_time_constant,
     run_gains,
+    split_initial_state,
     time_grid,
 )
 from .result import SimulationResult
@@ -63,7 +64,9 @@ def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, c
     continuous solution (:func:`~fws_control.simulation.engine.exact_peaks`).
     """
     g = SteeringGains(k1, k2, a) if ctrl is None else ctrl
-    z0 = initial_path_state(path, x0)
+    # x0: pose and (v_y, r) of the dynamic model (NaN: the default)
+    z0 = initial_path_state(path, x0[:, :3])
+    body = x0[:, 3:] if opts["model"] == "dynamic" else None
     states, status, message, t_stop = integrate(
         vehicle,
         path,
@@ -74,6 +77,7 @@ def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, c
         t_eval=t,
         time_constant=tau,
         solution=(solution := []),
+        body_state=body,
         **opts,
     )
     signals = compute_outputs(
@@ -86,6 +90,8 @@ def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, c
         states=states,
         initial_heading=x0[:, 2],
         delay=opts["delay"],
+        model=opts["model"],
+        tyre=opts["tyre"],
     )
     peaks, peak_times = exact_peaks(
         vehicle,
@@ -98,6 +104,8 @@ def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, c
         t_eval=t,
         signals=signals,
         t_stop=t_stop,
+        model=opts["model"],
+        tyre=opts["tyre"],
     )
     return signals, status, message, t_stop, peaks, peak_times
 
@@ -126,7 +134,15 @@ def _prepare(
     speed_arr = np.atleast_1d(np.asarray(check_nonzero("speed", speed), dtype=float))
     if speed_arr.ndim != 1:
         raise ValueError(f"speed must be a scalar or 1-D, got shape {speed_arr.shape}")
-    x0 = check_initial_state(initial_state)
+    opts["model"], opts["tyre"] = check_model(vehicle, opts["model"], opts["tyre"])
+    if opts["model"] == "dynamic" and np.any(speed_arr <= 0.0):
+        # the slip angles atan2(., u) and the 1/u of the tyre model assume
+        # forward motion
+        raise ValueError(
+            "speed must be > 0 for model='dynamic' (forward longitudinal speed "
+            f"u of the single-track model), got {speed!r}"
+        )
+    x0 = split_initial_state(initial_state, model=opts["model"])
     sizes = {n_gains, speed_arr.size, x0.shape[0]} - {1}
     if len(sizes) > 1:
         raise ValueError(
@@ -135,7 +151,7 @@ def _prepare(
         )
     n = sizes.pop() if sizes else 1
     k1, k2, a, V = (np.broadcast_to(v, (n,)).copy() for v in (*fields, speed_arr))
-    x0 = np.broadcast_to(x0, (n, 3)).copy()
+    x0 = np.broadcast_to(x0, (n, 5)).copy()
     t = time_grid(duration, dt=dt, t_eval=t_eval)
     tau = resolve_time_constant(vehicle, tau)
     check_method(opts["method"])
@@ -160,6 +176,8 @@ def simulate(
     method: str = "DOP853",
     rtol: float = 1e-10,
     atol: float = 1e-12,
+    model: str = "kinematic",
+    tyre: str = "linear",
 ) -> SimulationResult:
     r"""Simulate the closed loop (one run) with the fast path-frame engine.
 
@@ -221,6 +239,20 @@ def simulate(
         stop a run at a singular state.
     rtol, atol : float, optional
         Relative and absolute tolerances of the solver, > 0.
+    model : {"kinematic", "dynamic"}, optional
+        Vehicle model. ``"kinematic"`` (default): the paper's model, no tyre
+        slip. ``"dynamic"``: the single-track model of
+        :mod:`fws_control.dynamics` (tyre slip; lateral velocity and yaw rate
+        as states; needs the vehicle's mass, yaw inertia and cornering
+        stiffnesses), with `speed` its constant longitudinal speed
+        :math:`u > 0`. The path errors are those of the rear-axle centre R
+        in both models, so every controller applies unchanged; delay and
+        actuator combine with either model. `initial_state` may then carry
+        ``(x_R, y_R, psi, v_y, r)``; with three values the vehicle starts
+        rolling without tyre slip at the initial steering angles.
+    tyre : {"linear", "magic"}, optional
+        Tyre model of ``model="dynamic"``: linear (default) or the
+        saturating simplified magic formula (needs ``vehicle.friction``).
 
     Returns
     -------
@@ -287,6 +319,8 @@ def simulate(
         method=method,
         rtol=rtol,
         atol=atol,
+        model=model,
+        tyre=tyre,
         chunk_size=1,
         progress=False,
     )
@@ -309,6 +343,8 @@ def simulate_batch(
     method: str = "DOP853",
     rtol: float = 1e-10,
     atol: float = 1e-12,
+    model: str = "kinematic",
+    tyre: str = "linear",
     chunk_size: int | None = None,
     client: Any = None,
     progress: bool | None = None,
@@ -330,7 +366,9 @@ def simulate_batch(
     speed : float or array_like
         Speed [m/s], scalar or one per run; nonzero.
     initial_state : array_like
-        ``(x_R, y_R, psi)`` for all runs, or shape ``(runs, 3)``.
+        ``(x_R, y_R, psi)`` for all runs, or shape ``(runs, 3)``; with
+        ``model="dynamic"`` also ``(x_R, y_R, psi, v_y, r)`` or ``(runs,
+        5)``, as in :func:`simulate`.
     duration : float
         Final time [s], > 0.
     feedforward : bool, optional
@@ -347,6 +385,8 @@ def simulate_batch(
         Integration method, as in :func:`simulate`.
     rtol, atol : float, optional
         Solver tolerances, as in :func:`simulate`.
+    model, tyre : str, optional
+        Vehicle and tyre model, as in :func:`simulate`.
     chunk_size : int, optional
         Runs per chunk (one solver; one Dask task); default
         :data:`DEFAULT_CHUNK_SIZE`. Smaller chunks decouple the step sizes of
@@ -394,7 +434,14 @@ def simulate_batch(
     >>> fws.tracking_metrics(res).peak_lateral_accel.round(2).tolist()
     [2.0, 1.91, 1.73, 1.19]
     """
-    opts = {"method": method, "rtol": rtol, "atol": atol, "delay": check_delay(delay)}
+    opts = {
+        "method": method,
+        "rtol": rtol,
+        "atol": atol,
+        "delay": check_delay(delay),
+        "model": model,
+        "tyre": tyre,
+    }
     k1, k2, a, V, x0, t, tau, ctrl = _prepare(
         vehicle,
         path,
@@ -480,9 +527,11 @@ def simulate_batch(
         run_k1=k1,
         run_k2=k2,
         run_ratio=a,
-        run_initial_state=x0,
+        run_initial_state=x0[:, :3],
         feedforward=feedforward,
         squeeze=False,
         vehicle=vehicle,
         path=path,
+        model=opts["model"],
+        tyre=opts["tyre"],
     )
