@@ -44,9 +44,12 @@ speeds coincide; with rear steering they differ by a factor
 
 from __future__ import annotations
 
+import control as ct
 import numpy as np
 
-from .validation import check_type
+from .exceptions import SingularStateError
+from .models import STEERING_INPUTS
+from .validation import check_nonzero, check_scalar, check_type
 from .vehicle import Vehicle
 
 __all__ = [
@@ -58,8 +61,21 @@ __all__ = [
     "axle_loads",
     "body_derivatives",
     "dynamic_path_derivatives",
+    "dynamic_global_derivatives",
+    "dynamic_global_model",
+    "dynamic_path_model",
     "require_dynamics",
+    "DYNAMIC_GLOBAL_STATES",
+    "DYNAMIC_PATH_STATES",
 ]
+
+#: States of :func:`dynamic_global_model`: position of the rear-axle point R,
+#: yaw angle, lateral velocity of G and yaw rate.
+DYNAMIC_GLOBAL_STATES = ("x", "y", "psi", "v_y", "r")
+
+#: States of :func:`dynamic_path_model`: arc length, lateral and heading
+#: error at R, lateral velocity of G and yaw rate.
+DYNAMIC_PATH_STATES = ("s", "e", "theta", "v_y", "r")
 
 #: Gravitational acceleration [m/s^2] for the static axle loads.
 GRAVITY = 9.81
@@ -242,3 +258,234 @@ def dynamic_path_derivatives(
     e_dot = speed * sin_t + v_r * cos_t
     theta_dot = yaw_rate - curvature * s_dot
     return s_dot, e_dot, theta_dot, vy_dot, r_dot
+
+
+def dynamic_global_derivatives(
+    vehicle: Vehicle,
+    psi,
+    v_y,
+    yaw_rate,
+    delta_f,
+    delta_r,
+    *,
+    speed,
+    tyre: str = "linear",
+):
+    r"""Global-frame right-hand side ``(x_dot, y_dot, psi_dot, v_y_dot, r_dot)``.
+
+    ``x, y`` is the rear-axle point R, which moves with the body-frame
+    velocity :math:`(u, v_y - l_r r)`:
+
+    .. math::
+        \dot x = u\cos\psi - (v_y - l_r r)\sin\psi,\quad
+        \dot y = u\sin\psi + (v_y - l_r r)\cos\psi,\quad
+        \dot\psi = r .
+
+    Broadcasts.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35, mass=1500.0,
+    ...                   yaw_inertia=2500.0, cornering_front=8e4,
+    ...                   cornering_rear=8e4)
+    >>> out = fws.dynamics.dynamic_global_derivatives(
+    ...     veh, 0.0, 0.0, 0.0, 0.0, 0.0, speed=10.0)
+    >>> [float(x) for x in out]
+    [10.0, 0.0, 0.0, 0.0, 0.0]
+    """
+    vy_dot, r_dot = body_derivatives(
+        vehicle, v_y, yaw_rate, delta_f, delta_r, speed=speed, tyre=tyre
+    )
+    v_r = v_y - vehicle.rear_to_cg * yaw_rate  # lateral velocity of R
+    sin_p, cos_p = np.sin(psi), np.cos(psi)
+    x_dot = speed * cos_p - v_r * sin_p
+    y_dot = speed * sin_p + v_r * cos_p
+    # psi_dot = r, broadcast to the shape of the other rates
+    return x_dot, y_dot, yaw_rate + 0.0 * x_dot, vy_dot, r_dot
+
+
+def _check_model_args(vehicle, speed, tyre):
+    require_dynamics(vehicle, tyre=tyre)
+    speed = check_scalar("speed", check_nonzero("speed", speed))
+    if speed <= 0.0:
+        # the slip angles atan2(., u) assume forward driving: reversing would
+        # flip every slip angle by pi
+        raise ValueError(
+            f"speed must be > 0 m/s for the dynamic model (forward driving), "
+            f"got {speed!r}"
+        )
+    return speed
+
+
+def dynamic_global_model(
+    vehicle: Vehicle,
+    *,
+    speed: float,
+    tyre: str = "linear",
+    name: str = "vehicle_dynamic",
+) -> ct.NonlinearIOSystem:
+    r"""Dynamic single-track 4WS model in the global frame.
+
+    States ``x, y`` (position of the rear-axle point R, as in
+    :func:`fws_control.global_frame_model`), ``psi`` (yaw angle), ``v_y``
+    (lateral velocity of the centre of gravity, body frame) and ``r`` (yaw
+    rate); equations in :func:`dynamic_global_derivatives` and the module
+    docstring.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Geometry and the dynamic data (mass, yaw inertia, cornering
+        stiffnesses; friction for ``tyre="magic"``).
+    speed : float
+        Constant longitudinal speed :math:`u` [m/s], finite and > 0. Stored
+        as the system parameter ``speed``.
+    tyre : {"linear", "magic"}, optional
+        Tyre model (see :func:`tyre_force`), default ``"linear"``.
+    name : str, optional
+        System name used by :func:`control.interconnect`.
+
+    Returns
+    -------
+    control.NonlinearIOSystem
+        States ``x, y, psi, v_y, r``; inputs ``delta_f, delta_r``; outputs
+        equal to the states. Parameter ``speed`` (the vehicle data are fixed
+        at construction: build a new system for another vehicle).
+
+    Raises
+    ------
+    TypeError
+        If `vehicle` is not a :class:`Vehicle`.
+    ValueError
+        If the vehicle lacks the dynamic data, `tyre` is unknown or `speed`
+        is not finite and > 0.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35, mass=1500.0,
+    ...                   yaw_inertia=2500.0, cornering_front=8e4,
+    ...                   cornering_rear=8e4)
+    >>> sys = fws.dynamics.dynamic_global_model(veh, speed=10.0)
+    >>> sys.state_labels, sys.input_labels
+    (['x', 'y', 'psi', 'v_y', 'r'], ['delta_f', 'delta_r'])
+    >>> sys.dynamics(0.0, [0, 0, 0, 0, 0], [0.01, 0.0]).round(4)
+    array([10.    ,  0.    ,  0.    ,  0.5333,  0.432 ])
+    """
+    speed = _check_model_args(vehicle, speed, tyre)
+
+    def update(t, x, u, params):
+        return np.array(
+            dynamic_global_derivatives(
+                vehicle, x[2], x[3], x[4], u[0], u[1], speed=params["speed"], tyre=tyre
+            ),
+            dtype=float,
+        )
+
+    return ct.nlsys(
+        update,
+        None,
+        states=list(DYNAMIC_GLOBAL_STATES),
+        inputs=list(STEERING_INPUTS),
+        outputs=list(DYNAMIC_GLOBAL_STATES),
+        params={"speed": speed},
+        name=name,
+    )
+
+
+def dynamic_path_model(
+    vehicle: Vehicle,
+    *,
+    speed: float,
+    curvature: float = 0.0,
+    tyre: str = "linear",
+    name: str = "vehicle_dynamic_path",
+) -> ct.NonlinearIOSystem:
+    r"""Dynamic single-track 4WS model relative to a path of constant curvature.
+
+    States ``s, e, theta`` (arc length, lateral and heading error of the
+    rear-axle point R, as in :func:`fws_control.path_frame_model`), ``v_y``
+    and ``r``; equations in :func:`dynamic_path_derivatives` and the module
+    docstring.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Geometry and the dynamic data.
+    speed : float
+        Constant longitudinal speed :math:`u` [m/s], finite and > 0.
+    curvature : float, optional
+        Path curvature :math:`\kappa_C` [1/m], finite; positive turns left.
+    tyre : {"linear", "magic"}, optional
+        Tyre model, default ``"linear"``.
+    name : str, optional
+        System name.
+
+    Returns
+    -------
+    control.NonlinearIOSystem
+        States ``s, e, theta, v_y, r``; inputs ``delta_f, delta_r``; outputs
+        equal to the states. Parameters ``speed`` and ``curvature``.
+
+    Raises
+    ------
+    TypeError
+        If `vehicle` is not a :class:`Vehicle`.
+    ValueError
+        If the vehicle lacks the dynamic data, `tyre` is unknown, `speed` is
+        not finite and > 0 or `curvature` is not finite.
+    SingularStateError
+        At evaluation, if ``1 - curvature*e <= 0``.
+
+    Examples
+    --------
+    Straight ahead on a straight path every error stays zero:
+
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35, mass=1500.0,
+    ...                   yaw_inertia=2500.0, cornering_front=8e4,
+    ...                   cornering_rear=8e4)
+    >>> sys = fws.dynamics.dynamic_path_model(veh, speed=10.0)
+    >>> sys.state_labels
+    ['s', 'e', 'theta', 'v_y', 'r']
+    >>> sys.dynamics(0.0, [0, 0, 0, 0, 0], [0.0, 0.0]).tolist()
+    [10.0, 0.0, 0.0, 0.0, 0.0]
+    """
+    speed = _check_model_args(vehicle, speed, tyre)
+    curvature = check_scalar("curvature", curvature)
+
+    def update(t, x, u, params):
+        kappa = params["curvature"]
+        e = x[1]
+        gap = 1.0 - kappa * e
+        if gap <= 0.0:
+            raise SingularStateError(
+                f"1 - curvature*e = {gap!r} <= 0 (curvature={kappa!r}, e={e!r}): "
+                "the vehicle is at or beyond the path's centre of curvature"
+            )
+        return np.array(
+            dynamic_path_derivatives(
+                vehicle,
+                kappa,
+                e,
+                x[2],
+                x[3],
+                x[4],
+                u[0],
+                u[1],
+                speed=params["speed"],
+                tyre=tyre,
+            ),
+            dtype=float,
+        )
+
+    return ct.nlsys(
+        update,
+        None,
+        states=list(DYNAMIC_PATH_STATES),
+        inputs=list(STEERING_INPUTS),
+        outputs=list(DYNAMIC_PATH_STATES),
+        params={"speed": speed, "curvature": curvature},
+        name=name,
+    )
