@@ -117,6 +117,12 @@ def double_root_gains(
             "other poles. Choose (k1, k2) from stability_chart or parameter_locus; "
             "control.place on (A, B[:, delta_f] + a*B[:, delta_r]) gives a full "
             "state feedback, a different controller"
+            + (
+                "; for model='dynamic', design on the kinematic plant "
+                "(replace(plant, model='exact')) and check the design here"
+                if isinstance(p, LateralPlant) and p.model == "dynamic"
+                else ""
+            )
         )
     a1, b1, g1 = cp.n1[..., 1], cp.n2[..., 1], cp.open_loop[..., 1]
     a0, b0, g0 = cp.n1[..., 2], cp.n2[..., 2], cp.open_loop[..., 2]

@@ -447,7 +447,7 @@ def characteristic_coefficients(
     """
     p = as_plant(plant, speed=speed, curvature=curvature, model=model)
     ratio = check_finite("ratio", ratio)
-    if isinstance(p, LateralPlant) and p.steering_lag is None:
+    if isinstance(p, LateralPlant) and p.model != "dynamic" and p.steering_lag is None:
         return _lateral_coefficients(p, ratio)
     return _statespace_coefficients(loop_matrices(p), ratio)
 
