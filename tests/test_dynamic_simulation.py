@@ -396,3 +396,58 @@ def test_invalid_model_arguments():
         fws.simulate(
             VEH, Straight(), g, model="dynamic", **{**kw, "initial_state": (0, 1, 0, 0)}
         )
+
+
+# --------------------------------------------------------------------------
+# The python-control reference
+
+
+@pytest.mark.parametrize(
+    "tyre, tau, delay, ratio",
+    [
+        ("linear", None, 0.0, 0.5),
+        ("magic", 0.08, 0.0, -0.5),
+        ("linear", 0.08, 0.1, 0.0),
+    ],
+)
+def test_engine_matches_the_python_control_reference(tyre, tau, delay, ratio):
+    path = Arc(curvature=0.02)
+    g = fws.double_root_gains(VEH, speed=15.0, curvature=0.02, ratio=ratio, pole=-1.0)
+    kw = dict(
+        speed=15.0, initial_state=(0.0, -1.0, 0.05), duration=4.0, dt=0.1,
+        actuator_time_constant=tau, delay=delay, model="dynamic", tyre=tyre,
+    )  # fmt: skip
+    # (a Pade block of order 6 for the delay, stiff: looser solver tolerances)
+    opts = {"pade_order": 6, "rtol": 1e-8, "atol": 1e-10} if delay else {}
+    ref = fws.simulation.simulate_reference(VEH, path, g, **kw, **opts)
+    res = fws.simulate(VEH, path, g, **kw)
+    out = dict(zip(ref.output_labels, ref.outputs, strict=True))
+    atol = 1e-6 if delay == 0.0 else 1e-5
+    for name in (
+        "x",
+        "y",
+        "psi",
+        "e",
+        "theta",
+        "delta_f",
+        "delta_r",
+        "v_y",
+        "yaw_rate",
+    ):
+        np.testing.assert_allclose(getattr(res, name), out[name], rtol=0, atol=atol)
+
+
+def test_reference_initial_state_of_the_dynamic_model():
+    g = fws.SteeringGains(0.1, 0.5, 0.0)
+    x0 = fws.simulation.reference_initial_state(
+        VEH, Straight(), g, initial_state=(0.0, 1.0, 0.0), speed=10.0,
+        model="dynamic", actuator_time_constant=0.1,
+    )  # fmt: skip
+    # pose, no-slip (v_y, r) at delta_f = -k1 e = -0.1, then the actuator
+    r0 = 10.0 * math.tan(-0.1) / 2.7
+    np.testing.assert_allclose(x0, [0.0, 1.0, 0.0, 1.2 * r0, r0, -0.1, 0.0], atol=1e-15)
+    given = fws.simulation.reference_initial_state(
+        VEH, Straight(), g, initial_state=(0.0, 1.0, 0.0, 0.2, 0.1), speed=10.0,
+        model="dynamic",
+    )  # fmt: skip
+    np.testing.assert_array_equal(given, [0.0, 1.0, 0.0, 0.2, 0.1])
