@@ -292,7 +292,9 @@ def path_tracking_controller(
     vehicle: Vehicle,
     gains: SteeringGains,
     *,
-    feedforward: bool = True,
+    feedforward: bool | str = True,
+    speed: float | None = None,
+    tyre: str = "linear",
     name: str = "controller",
 ) -> ct.NonlinearIOSystem:
     r"""Static path-tracking controller block, paper eqs. (24)-(29).
@@ -303,9 +305,16 @@ def path_tracking_controller(
         Geometry; its steering-angle limits, if set, clip the outputs.
     gains : SteeringGains
         Scalar ``k1, k2, ratio``.
-    feedforward : bool, optional
+    feedforward : bool or {"kinematic", "dynamic"}, optional
         Add the curvature feedforward :math:`\arctan(\kappa f)` of eq. (26)
-        to the front angle (default). ``False`` gives the feedback-only law.
+        to the front angle (default, also ``"kinematic"``). ``False`` gives
+        the feedback-only law; ``"dynamic"`` the front and rear feedforward
+        of :func:`~fws_control.dynamics.dynamic_feedforward` (needs `speed`).
+    speed : float, optional
+        Longitudinal speed [m/s] for ``feedforward="dynamic"``; stored as the
+        block parameter ``speed``.
+    tyre : {"linear", "magic"}, optional
+        Tyre model of the dynamic feedforward.
     name : str, optional
         System name for :func:`control.interconnect`.
 
@@ -341,12 +350,20 @@ def path_tracking_controller(
             f"shapes {np.shape(gains.k1)}, {np.shape(gains.k2)}, "
             f"{np.shape(gains.ratio)}"
         )
-    feedforward = bool(feedforward)
+    feedforward = check_feedforward(feedforward, speed=speed)
+    extra = {} if speed is None else {"speed": float(speed)}
 
     def output(t, x, u, params):
         g = SteeringGains(params["k1"], params["k2"], params["ratio"])
         df, dr = steering_command(
-            vehicle, g, u[0], u[1], curvature=u[2], feedforward=feedforward
+            vehicle,
+            g,
+            u[0],
+            u[1],
+            curvature=u[2],
+            feedforward=feedforward,
+            speed=params.get("speed"),
+            tyre=tyre,
         )
         return np.array([float(df), float(dr)])
 
@@ -359,6 +376,7 @@ def path_tracking_controller(
             "k1": float(gains.k1),
             "k2": float(gains.k2),
             "ratio": float(gains.ratio),
+            **extra,
         },
         name=name,
     )

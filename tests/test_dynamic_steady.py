@@ -244,3 +244,21 @@ def test_feedforward_option_errors():
         fws.steady_state_offset(VEH, g, speed=0.0, curvature=0.01)
     with pytest.raises(TypeError, match="gains must be"):
         fws.steady_state_offset(VEH, (0.1, 0.2), speed=10.0, curvature=0.01)
+
+
+def test_controller_block_with_dynamic_feedforward():
+    g = fws.SteeringGains(k1=0.02, k2=0.3, ratio=-0.5)
+    block = fws.path_tracking_controller(VEH, g, feedforward="dynamic", speed=20.0)
+    out = block.output(0.0, [], [0.1, 0.02, 0.01])
+    ref = fws.steering_command(
+        VEH, g, 0.1, 0.02, curvature=0.01, feedforward="dynamic", speed=20.0
+    )
+    np.testing.assert_allclose(out, np.ravel(ref), rtol=1e-15)
+    # the speed is a block parameter: overriding it changes the feedforward
+    out30 = block.output(0.0, [], [0.1, 0.02, 0.01], params={"speed": 30.0})
+    ref30 = fws.steering_command(
+        VEH, g, 0.1, 0.02, curvature=0.01, feedforward="dynamic", speed=30.0
+    )
+    np.testing.assert_allclose(out30, np.ravel(ref30), rtol=1e-15)
+    with pytest.raises(ValueError, match="needs the keyword speed="):
+        fws.path_tracking_controller(VEH, g, feedforward="dynamic")
