@@ -67,6 +67,11 @@ from .delay import (
     unstable_root_count,
 )
 from .design import double_root_gains
+from .dynamic_design import (
+    steady_state_offset,
+    understeer_gradient,
+    zero_sideslip_ratio,
+)
 from .exceptions import (
     AmbiguousProjectionError,
     SingularStateError,
@@ -228,5 +233,11 @@ __all__ += [
     "PathChain",
     "Projection",
     "AmbiguousProjectionError",
+]
+# the dynamic single-track model (issue 10)
+__all__ += [
+    "steady_state_offset",
+    "understeer_gradient",
+    "zero_sideslip_ratio",
 ]
 __version__ = "0.2.0.dev0"

@@ -67,6 +67,7 @@ __all__ = [
     "require_dynamics",
     "slip_for_force",
     "dynamic_feedforward",
+    "dynamic_feedforward_derivative",
     "path_jacobians",
     "DYNAMIC_GLOBAL_STATES",
     "DYNAMIC_PATH_STATES",
@@ -649,6 +650,69 @@ def dynamic_feedforward(
     if np.ndim(delta_f) == 0:
         return float(delta_f), float(delta_r)
     return delta_f, delta_r
+
+
+def dynamic_feedforward_derivative(
+    vehicle: Vehicle, *, speed, curvature, tyre: str = "linear"
+) -> tuple[np.ndarray, np.ndarray]:
+    r"""Derivatives ``(d delta_f/d kappa, d delta_r/d kappa)`` [rad m].
+
+    Of :func:`dynamic_feedforward`, by implicit differentiation of each
+    axle's equation :math:`F(\delta - \beta(\kappa))\cos\delta = q\kappa`
+    (:math:`\beta = \arctan(f\kappa)` at the front, 0 at the rear;
+    :math:`q = m u^2 l_{r|f}/f`):
+
+    .. math::
+        \frac{d\delta}{d\kappa} = \frac{q + F'(\alpha)\cos\delta\,
+        \beta'(\kappa)}{F'(\alpha)\cos\delta - F(\alpha)\sin\delta}.
+
+    The rate of the feedforward is this times :math:`\dot\kappa`.
+    Arguments as in :func:`dynamic_feedforward`.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35, mass=1500.0,
+    ...                   yaw_inertia=2500.0, cornering_front=8e4,
+    ...                   cornering_rear=8e4)
+    >>> d = fws.dynamics.dynamic_feedforward_derivative(veh, speed=20.0,
+    ...                                                 curvature=0.0)
+    >>> [round(float(x), 4) for x in d]      # f + m u^2 l_r/(f C_f), m u^2 l_f/(f C_r)
+    [6.45, 3.75]
+    """
+    delta_f, delta_r = dynamic_feedforward(
+        vehicle, speed=speed, curvature=curvature, tyre=tyre
+    )
+    u, kappa = _check_point(speed, curvature)
+    f = vehicle.wheelbase
+    peak_f, peak_r = _axle_peaks(vehicle, tyre)
+    out = []
+    for delta, base, base_rate, q, stiff, peak in (
+        (
+            delta_f,
+            np.arctan(f * kappa),
+            f / (1.0 + (f * kappa) ** 2),
+            vehicle.mass * u**2 * vehicle.rear_to_cg / f,
+            vehicle.cornering_front,
+            peak_f,
+        ),
+        (
+            delta_r,
+            0.0,
+            0.0,
+            vehicle.mass * u**2 * vehicle.front_to_cg / f,
+            vehicle.cornering_rear,
+            peak_r,
+        ),
+    ):
+        alpha = delta - base
+        slope = _slope(alpha, stiff, peak)
+        force = tyre_force(alpha, stiffness=stiff, peak=peak)
+        cos_d = np.cos(delta)
+        out.append(
+            (q + slope * cos_d * base_rate) / (slope * cos_d - force * np.sin(delta))
+        )
+    return out[0], out[1]
 
 
 def _slope(alpha, stiffness, peak):
