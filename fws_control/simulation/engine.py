@@ -596,7 +596,15 @@ class _Engine:
             )
             return saturate(self.vehicle, df, dr)
         return steering_command(
-            self.vehicle, self.gains, Y[1], Y[2], curvature=kappa, feedforward=self.ff
+            self.vehicle,
+            self.gains,
+            Y[1],
+            Y[2],
+            curvature=kappa,
+            feedforward=self.ff,
+            # (used by feedforward="dynamic" only)
+            speed=self.speed,
+            tyre=self.tyre,
         )
 
     def command_rate(self, Y, Ydot, kappa):
@@ -615,6 +623,8 @@ class _Engine:
                 curvature=kappa,
                 curvature_rate=kappa_rate,
                 feedforward=self.ff,
+                speed=self.speed,
+                tyre=self.tyre,
             )
         ctrl = self.gains
         kw = dict(

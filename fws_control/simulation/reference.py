@@ -111,8 +111,8 @@ def closed_loop_system(
         Scalar ``k1, k2, ratio``.
     speed : float
         Speed :math:`V` [m/s], nonzero.
-    feedforward : bool, optional
-        Include the curvature feedforward (default), as in
+    feedforward : bool or {"kinematic", "dynamic"}, optional
+        Curvature feedforward (default ``True``), as in
         :func:`~fws_control.simulation.simulate`.
     actuator_time_constant : float, optional
         Steering actuator time constant [s], as in
@@ -173,7 +173,12 @@ def closed_loop_system(
         ctrl = gains.system(vehicle, path, speed=speed, name="controller")
     else:
         ctrl = path_tracking_controller(
-            vehicle, gains, feedforward=bool(feedforward), name="controller"
+            vehicle,
+            gains,
+            feedforward=feedforward,
+            speed=speed,
+            tyre=tyre,
+            name="controller",
         )
     delay = check_delay(delay)
     syslist = [veh_sys, proj, ctrl]
@@ -254,6 +259,7 @@ def reference_initial_state(
     delay: float = 0.0,
     pade_order: int = DEFAULT_PADE_ORDER,
     model: str = "kinematic",
+    tyre: str = "linear",
 ) -> np.ndarray:
     """Initial state of :func:`closed_loop_system` matching the fast engine's.
 
@@ -274,7 +280,7 @@ def reference_initial_state(
     speed : float, optional
         Speed [m/s]; needed when `gains` is a controller (its law may
         depend on the speed) and for the dynamic model.
-    feedforward, actuator_time_constant, delay, pade_order, model : optional
+    feedforward, actuator_time_constant, delay, pade_order, model, tyre : optional
         As in :func:`closed_loop_system`.
 
     Returns
@@ -331,7 +337,9 @@ def reference_initial_state(
                 float(e),
                 float(theta),
                 curvature=float(kappa),
-                feedforward=bool(feedforward),
+                feedforward=feedforward,
+                speed=speed,
+                tyre=tyre,
             ),
             dtype=float,
         )
@@ -440,6 +448,7 @@ def simulate_reference(
         delay=delay,
         pade_order=pade_order,
         model=model,
+        tyre=tyre,
     )
     t = time_grid(duration, dt=dt)
     return ct.input_output_response(

@@ -200,8 +200,9 @@ class SimulationResult:
         Per run gains; ``k1, k2`` are NaN for a design that does not exist.
     run_initial_state : ndarray
         Per run ``(x_R, y_R, psi)``, shape ``(runs, 3)``.
-    feedforward : bool, optional
-        Whether the curvature feedforward was used (all runs).
+    feedforward : bool or "dynamic", optional
+        Whether the curvature feedforward was used (all runs): True (eq. 26),
+        False, or ``"dynamic"`` (:func:`~fws_control.dynamics.dynamic_feedforward`).
     squeeze : bool, optional
         Drop the run axis from every per-run attribute; only for one run.
     vehicle : Vehicle, optional
@@ -367,7 +368,10 @@ class SimulationResult:
             ("signals", sig),
             ("run_initial_state", x0),
             ("run_message", message),
-            ("feedforward", bool(self.feedforward)),
+            (
+                "feedforward",
+                "dynamic" if self.feedforward == "dynamic" else bool(self.feedforward),
+            ),
             ("squeeze", bool(self.squeeze)),
             *per_run.items(),
         ):

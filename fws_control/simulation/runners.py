@@ -25,6 +25,8 @@ from typing import Any
 import numpy as np
 
 from ..baselines import LateralController
+from ..controllers import check_feedforward
+from ..dynamics import require_dynamics
 from ..gains import SteeringGains
 from ..paths import Path
 from ..validation import check_delay, check_nonzero, check_positive, check_type
@@ -207,9 +209,12 @@ def simulate(
         ``(x_R, y_R, psi)`` of the rear-axle centre [m, m, rad].
     duration : float
         Final time [s], > 0.
-    feedforward : bool, optional
-        Include the curvature feedforward (default ``True``); ``False`` is
-        the feedback-only controller.
+    feedforward : bool or {"kinematic", "dynamic"}, optional
+        Include the curvature feedforward (default ``True``, the same as
+        ``"kinematic"``: eq. 26); ``False`` is the feedback-only controller;
+        ``"dynamic"`` the front and rear angles of
+        :func:`~fws_control.dynamics.dynamic_feedforward` (for the tyre model
+        `tyre`), which hold the dynamic model on a curve without offset.
     dt : float, optional
         Nominal spacing of the output times [s] (the solver chooses its own
         steps). The grid is ``linspace(0, duration, round(duration/dt) + 1)``,
@@ -266,8 +271,10 @@ def simulate(
     ------
     ValueError
         For non-scalar gains, speed or initial state (use
-        :func:`simulate_batch`), a zero speed, a non-positive duration, or an
-        unknown method.
+        :func:`simulate_batch`), a zero speed, a non-positive duration, an
+        unknown method, model, tyre or feedforward, or (``model="dynamic"``
+        or ``feedforward="dynamic"``) a vehicle without the dynamic data or a
+        negative speed.
     AmbiguousProjectionError
         If the initial position has no unique closest point on the path.
 
@@ -371,8 +378,8 @@ def simulate_batch(
         5)``, as in :func:`simulate`.
     duration : float
         Final time [s], > 0.
-    feedforward : bool, optional
-        Include the curvature feedforward (default), as in :func:`simulate`.
+    feedforward : bool or {"kinematic", "dynamic"}, optional
+        Curvature feedforward (default ``True``), as in :func:`simulate`.
     dt : float, optional
         Nominal output spacing [s], as in :func:`simulate`.
     t_eval : array_like, optional
@@ -455,7 +462,16 @@ def simulate_batch(
         opts,
     )
     n = k1.size
-    feedforward = bool(feedforward)
+    # False, True (eq. 26) or "dynamic" (dynamics.dynamic_feedforward)
+    feedforward = check_feedforward(feedforward, speed=V)
+    if feedforward == "dynamic":
+        require_dynamics(vehicle, tyre=opts["tyre"])
+        if np.any(V <= 0.0):
+            raise ValueError(
+                f"speed must be > 0 for feedforward='dynamic', got {speed!r}"
+            )
+    else:
+        feedforward = bool(feedforward)
     if chunk_size is None:
         chunk_size = DEFAULT_CHUNK_SIZE
     if (
