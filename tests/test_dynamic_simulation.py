@@ -451,3 +451,55 @@ def test_reference_initial_state_of_the_dynamic_model():
         model="dynamic",
     )  # fmt: skip
     np.testing.assert_array_equal(given, [0.0, 1.0, 0.0, 0.2, 0.1])
+
+
+@pytest.mark.parametrize("ratio, speed", [(0.0, 20.0), (0.5, 30.0), (-0.5, 10.0)])
+def test_closed_form_offset_matches_simulation_to_order_kappa_squared(ratio, speed):
+    # fws.steady_state_offset is the small-angle steady state: relative
+    # difference to the nonlinear loop of order kappa^2 (higher orders show
+    # above kappa ~ 0.005 at 30 m/s). Halving kappa must quarter it (to 15 %
+    # at the smallest pair); at kappa = 0.004 it is below 1 %.
+    rel = []
+    for kappa in (0.004, 0.002, 0.001):
+        g = fws.double_root_gains(
+            VEH, speed=speed, curvature=kappa, ratio=ratio, pole=-1.0
+        )
+        e_cf, th_cf = fws.steady_state_offset(VEH, g, speed=speed, curvature=kappa)
+        res = fws.simulate(
+            VEH, Arc(curvature=kappa), g, speed=speed, initial_state=(0.0, -1.0, 0.0),
+            duration=40.0, dt=0.5, model="dynamic",
+        )  # fmt: skip
+        e_sim = res.e[-1]
+        assert abs(res.e[-1] - res.e[-11]) < 1e-9  # settled
+        assert e_sim == pytest.approx(_steady_state(VEH, g, speed, kappa)[0], abs=1e-7)
+        rel.append(abs(e_sim - e_cf) / abs(e_cf))
+        assert res.theta[-1] == pytest.approx(th_cf, rel=0.01, abs=1e-6)
+    assert rel[0] < 0.01
+    assert rel[1] / rel[2] == pytest.approx(4.0, rel=0.15)
+
+
+@pytest.mark.parametrize("tyre", ["linear", "magic"])
+def test_dynamic_feedforward_removes_the_offset(tyre):
+    kappa, speed = 0.01, 20.0
+    g = fws.double_root_gains(VEH, speed=speed, curvature=kappa, ratio=0.3, pole=-1.0)
+    kw = dict(
+        speed=speed, initial_state=(0.0, -1.0, 0.0), duration=30.0, dt=0.5,
+        model="dynamic", tyre=tyre,
+    )  # fmt: skip
+    kin_ff = fws.simulate(VEH, Arc(curvature=kappa), g, **kw)
+    dyn_ff = fws.simulate(VEH, Arc(curvature=kappa), g, feedforward="dynamic", **kw)
+    assert abs(kin_ff.e[-1]) > 0.5
+    assert abs(dyn_ff.e[-1]) < 1e-9 and abs(dyn_ff.theta[-1]) < 1e-9
+    assert dyn_ff.feedforward == "dynamic"
+    # at e = theta = 0 the vehicle turns with r = kappa u and no slip at R
+    assert dyn_ff.yaw_rate[-1] == pytest.approx(kappa * speed, rel=1e-9)
+    assert dyn_ff.v_y[-1] == pytest.approx(VEH.rear_to_cg * kappa * speed, rel=1e-8)
+    # the same loop as a python-control interconnection
+    ref = fws.simulation.simulate_reference(
+        VEH, Arc(curvature=kappa), g, feedforward="dynamic",
+        **{**kw, "duration": 4.0},
+    )  # fmt: skip
+    out = dict(zip(ref.output_labels, ref.outputs, strict=True))
+    np.testing.assert_allclose(dyn_ff.e[:9], out["e"], rtol=0, atol=1e-6)
+    with pytest.raises(ValueError, match="feedforward must be True, False or one of"):
+        fws.simulate(VEH, Arc(curvature=kappa), g, feedforward="static", **kw)
