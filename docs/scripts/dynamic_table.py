@@ -98,10 +98,11 @@ def rows(speeds=SPEEDS, schedules=SCHEDULES) -> list[dict]:
         for j, schedule in enumerate(schedules):
             gj = fws.SteeringGains(float(g.k1[j]), float(g.k2[j]), float(ratios[j]))
             poles = closed_loop_eigenvalues(veh, gj, speed)
-            stable = bool(fws.is_stable(
-                fws.LateralPlant(veh, speed=speed, curvature=CURVATURE, model="dynamic"),
-                gj,
-            ))  # fmt: skip
+            plant = fws.LateralPlant(
+                veh, speed=speed, curvature=CURVATURE, model="dynamic"
+            )
+            stable = bool(fws.is_stable(plant, gj))
+            e_cf, _ = fws.steady_state_offset(veh, gj, speed=speed, curvature=CURVATURE)
             e = dyn.e[j]
             settled = dyn.status[j] == "ok" and abs(e[-1] - e[-21]) < 1e-6
             out.append(
@@ -112,27 +113,42 @@ def rows(speeds=SPEEDS, schedules=SCHEDULES) -> list[dict]:
                     "peak_dynamic": float(dyn.peaks.lateral_accel.value[j]),
                     "peak_kinematic": float(kin.peaks.lateral_accel.value[j]),
                     "offset": float(e[-1]) if settled else math.nan,
+                    "offset_closed_form": float(e_cf),
                     "max_real": float(np.max(poles.real)),
+                    "poles": poles,
                     "stable": stable,
                 }
             )
     return out
 
 
+def _poles(poles: np.ndarray) -> str:
+    """Poles as ``re ± im j`` pairs (one per conjugate pair), slowest first."""
+    upper = sorted((p for p in poles if p.imag >= 0.0), key=lambda p: -p.real)
+    parts = []
+    for p in upper:
+        if p.imag > 0.0:
+            parts.append(f"{p.real:.3f} ± {p.imag:.3f}j")
+        else:
+            parts.append(f"{p.real:.3f}")
+    return ", ".join(parts)
+
+
 def markdown(table: list[dict]) -> str:
     """The rows as a Markdown table."""
     lines = [
         "| V [m/s] | schedule | a | peak a_y dynamic [m/s²] "
-        "| peak a_y kinematic [m/s²] | offset e_ss [m] | max Re(pole) [1/s] "
-        "| verdict |",
-        "|---:|:---|---:|---:|---:|---:|---:|:---|",
+        "| peak a_y kinematic [m/s²] | e_ss simulated [m] | e_ss closed form [m] "
+        "| poles of the linearised loop [1/s] | verdict |",
+        "|---:|:---|---:|---:|---:|---:|---:|:---|:---|",
     ]
     for r in table:
         offset = "—" if math.isnan(r["offset"]) else f"{r['offset']:.4f}"
         lines.append(
             f"| {r['speed']:g} | {r['schedule']} | {r['ratio']:.3f} "
             f"| {r['peak_dynamic']:.3f} | {r['peak_kinematic']:.3f} | {offset} "
-            f"| {r['max_real']:.3f} | {'stable' if r['stable'] else 'unstable'} |"
+            f"| {r['offset_closed_form']:.4f} "
+            f"| {_poles(r['poles'])} | {'stable' if r['stable'] else 'unstable'} |"
         )
     return "\n".join(lines)
 
