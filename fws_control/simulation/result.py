@@ -650,7 +650,7 @@ class SimulationResult:
         ...                    initial_state=(0.0, 1.0, 0.0), duration=2.0)
         >>> resp = res.to_time_response()
         >>> resp.output_labels[4], resp.outputs.shape, resp.ntraces
-        ('e', (11, 201), 0)
+        ('e', (15, 201), 0)
         """
         params = {
             "speed": self.speed,
