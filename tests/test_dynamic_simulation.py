@@ -503,3 +503,25 @@ def test_dynamic_feedforward_removes_the_offset(tyre):
     np.testing.assert_allclose(dyn_ff.e[:9], out["e"], rtol=0, atol=1e-6)
     with pytest.raises(ValueError, match="feedforward must be True, False or one of"):
         fws.simulate(VEH, Arc(curvature=kappa), g, feedforward="static", **kw)
+
+
+def test_metrics_and_plot_of_a_dynamic_result():
+    import matplotlib.pyplot as plt
+
+    g = fws.double_root_gains(VEH, speed=20.0, curvature=0.01, ratio=0.0, pole=-1.0)
+    res = fws.simulate(
+        VEH, Arc(curvature=0.01), g, speed=20.0, initial_state=(0.0, -1.0, 0.0),
+        duration=10.0, dt=0.01, model="dynamic",
+    )  # fmt: skip
+    m = fws.tracking_metrics(res)
+    # the metric is the exact peak; the samples lie at or below it
+    samples = np.max(np.abs(res.lateral_accel))
+    assert samples <= m.peak_lateral_accel + 1e-12
+    assert m.peak_lateral_accel == pytest.approx(samples, rel=1e-3)
+    cplt = res.plot()
+    try:
+        lines = [ln for ax in cplt.axes.ravel() for ln in ax.get_lines()]
+        assert any(np.array_equal(ln.get_ydata(), res.lateral_accel) for ln in lines)
+    finally:
+        plt.close("all")
+    assert "dynamic (linear tyres)" in res._repr_html_()
