@@ -9,7 +9,7 @@ closed loop. Run from the repository root::
     python docs/scripts/dynamic_table.py
 
 It rewrites the table between the markers of the page (atomically) and
-prints it. ``tests/test_dynamic_doc.py`` recomputes entries independently
+prints it. ``tests/test_dynamic_simulation_doc.py`` recomputes entries independently
 and checks the page.
 """
 
