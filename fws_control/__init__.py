@@ -68,6 +68,8 @@ from .delay import (
 )
 from .design import double_root_gains
 from .dynamic_design import (
+    KinematicDesignLimit,
+    kinematic_design_limit,
     steady_state_offset,
     understeer_gradient,
     zero_sideslip_ratio,
@@ -237,6 +239,8 @@ __all__ += [
 # the dynamic single-track model (issue 10)
 __all__ += [
     "vehicles",
+    "KinematicDesignLimit",
+    "kinematic_design_limit",
     "steady_state_offset",
     "understeer_gradient",
     "zero_sideslip_ratio",
