@@ -32,7 +32,7 @@ Modules: :mod:`~fws_control.vehicle`, :mod:`~fws_control.exceptions`,
 :mod:`~fws_control.paper` (imported only by the CLI).
 """
 
-from . import dynamics, symbolic
+from . import dynamics, symbolic, vehicles
 from .acceleration import lateral_acceleration, yaw_acceleration
 from .baselines import (
     LateralController,
@@ -68,6 +68,8 @@ from .delay import (
 )
 from .design import double_root_gains
 from .dynamic_design import (
+    KinematicDesignLimit,
+    kinematic_design_limit,
     steady_state_offset,
     understeer_gradient,
     zero_sideslip_ratio,
@@ -236,6 +238,9 @@ __all__ += [
 ]
 # the dynamic single-track model (issue 10)
 __all__ += [
+    "vehicles",
+    "KinematicDesignLimit",
+    "kinematic_design_limit",
     "steady_state_offset",
     "understeer_gradient",
     "zero_sideslip_ratio",

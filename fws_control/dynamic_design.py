@@ -5,7 +5,10 @@ r"""Design questions of the dynamic single-track model.
   the tyres slip (closed form, linear tyres);
 * :func:`zero_sideslip_ratio`: the classic speed-dependent rear-to-front
   ratio :math:`a(V)` with zero steady sideslip at the centre of gravity;
-* :func:`understeer_gradient`.
+* :func:`understeer_gradient`;
+* :func:`kinematic_design_limit`: the speed above which a double-root
+  design made on the kinematic plant leaves the stable region of the
+  dynamic plant, or its dominant poles move far from the design.
 
 Small-angle model of the closed forms: first order in the steering angles,
 the lateral velocity, the yaw rate, the errors and the curvature (the
@@ -17,20 +20,38 @@ and to the nonlinear steady state (``scipy.optimize.fsolve``).
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable
+from dataclasses import KW_ONLY, dataclass
 from typing import Any
 
+import control as ct
 import numpy as np
+from scipy.optimize import brentq
 
-from .dynamics import require_dynamics
+from .design import double_root_gains
+from .dynamics import TYRES, require_dynamics
 from .gains import SteeringGains
-from .validation import check_finite, check_type
+from .plant import LateralPlant, resolve_ratio
+from .reprs import summary_repr
+from .validation import check_finite, check_scalar, check_type
 from .vehicle import Vehicle
 
 __all__ = [
     "understeer_gradient",
     "zero_sideslip_ratio",
     "steady_state_offset",
+    "KinematicDesignLimit",
+    "kinematic_design_limit",
+    "DEFAULT_DESIGN_SPEEDS",
+    "DEFAULT_POLE_TOLERANCE",
 ]
+
+#: Default speed grid of :func:`kinematic_design_limit` [m/s].
+DEFAULT_DESIGN_SPEEDS = np.arange(1.0, 60.01, 0.5)
+
+#: Default tolerance of the dominant-pole drift, relative to the design pole.
+DEFAULT_POLE_TOLERANCE = 0.25
 
 
 def _check_speed(speed) -> np.ndarray | float:
@@ -235,3 +256,288 @@ def steady_state_offset(
     if np.ndim(e) == 0:
         return float(e), float(theta)
     return e, theta
+
+
+def _design_poles(vehicle, ratio, pole, curvature, tyre, speeds):
+    """Kinematic double-root designs and the poles they give the dynamic plant."""
+    dyn = LateralPlant(
+        vehicle, speed=speeds, curvature=curvature, model="dynamic", tyre=tyre
+    )
+    kin = LateralPlant(vehicle, speed=speeds, curvature=curvature, model="exact")
+    a = np.broadcast_to(
+        np.asarray(resolve_ratio(dyn, ratio), dtype=float), speeds.shape
+    )
+    gains = double_root_gains(kin, ratio=a, pole=pole)
+    A, B = dyn.matrices()
+    # closed loop of the structured law [delta_f, delta_r] = [1, a] (-k1 e - k2 theta)
+    b = B[..., 0] + a[..., np.newaxis] * B[..., 1]
+    k = np.zeros(speeds.shape + (A.shape[-1],))
+    k[..., 0], k[..., 1] = gains.k1, gains.k2
+    poles = np.linalg.eigvals(A - b[..., :, np.newaxis] * k[..., np.newaxis, :])
+    order = np.argsort(-poles.real, axis=-1, kind="stable")
+    poles = np.take_along_axis(poles, order, axis=-1)
+    # the two rightmost poles are the ones the design placed at lambda_0
+    drift = np.max(np.abs(poles[..., :2] - pole), axis=-1) / abs(pole)
+    return a, gains, poles, drift
+
+
+def _first_crossing(speeds, values, fun):
+    """First speed where `values` turns > 0, refined by bisection on `fun`."""
+    above = values > 0.0
+    if not np.any(above):
+        return math.inf
+    i = int(np.argmax(above))
+    if i == 0:
+        return float(speeds[0])
+    return float(brentq(fun, speeds[i - 1], speeds[i], xtol=1e-9, rtol=1e-12))
+
+
+@summary_repr
+@dataclass(frozen=True, eq=False)
+class KinematicDesignLimit:
+    r"""Where a kinematic double-root design stops describing the dynamic plant.
+
+    Result of :func:`kinematic_design_limit`.
+
+    Attributes
+    ----------
+    vehicle : Vehicle
+        The vehicle.
+    pole : float
+        Design double root :math:`\lambda_0` [1/s].
+    curvature : float
+        Path curvature [1/m] of the operating points.
+    tyre : str
+        Tyre model of the dynamic plant.
+    tolerance : float
+        Allowed drift of the dominant poles, relative to :math:`|\lambda_0|`.
+    speeds : ndarray
+        Speed grid [m/s], shape ``(n,)``.
+    ratio : ndarray
+        Ratio :math:`a` at each speed (a schedule evaluated), shape ``(n,)``.
+    gains : SteeringGains
+        The kinematic designs, arrays of shape ``(n,)``.
+    poles : ndarray
+        Closed-loop poles of the dynamic plant, shape ``(n, 4)``, rightmost
+        first.
+    drift : ndarray
+        :math:`\max |p_i - \lambda_0|/|\lambda_0|` over the two rightmost
+        poles, shape ``(n,)``.
+    unstable_speed : float
+        Lowest speed at which the closed loop is unstable (bisection between
+        grid points); ``inf`` if stable on the whole grid.
+    drift_speed : float
+        Lowest speed at which `drift` exceeds `tolerance`; ``inf`` if never.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> lim = fws.kinematic_design_limit(fws.vehicles.BMW_320I, ratio=0.5,
+    ...                                  pole=-1.0, speeds=[10.0, 30.0, 50.0])
+    >>> lim.poles.shape, bool(lim.stable.all()), round(lim.limit_speed, 1)
+    ((3, 4), True, 34.3)
+    """
+
+    vehicle: Vehicle
+    _: KW_ONLY  # a result record: every field named at construction
+    pole: float
+    curvature: float
+    tyre: str
+    tolerance: float
+    speeds: np.ndarray
+    ratio: np.ndarray
+    gains: SteeringGains
+    poles: np.ndarray
+    drift: np.ndarray
+    unstable_speed: float
+    drift_speed: float
+
+    @property
+    def stable(self) -> np.ndarray:
+        """Boolean mask of the grid speeds at which the closed loop is stable."""
+        return np.all(self.poles.real < 0.0, axis=-1)
+
+    @property
+    def limit_speed(self) -> float:
+        """The lower of :attr:`unstable_speed` and :attr:`drift_speed` [m/s]."""
+        return min(self.unstable_speed, self.drift_speed)
+
+    def plot(self, ax=None) -> ct.ControlPlot:
+        """Dominant-pole drift against speed, with the limit speeds marked.
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw on; a new figure if None.
+
+        Returns
+        -------
+        control.ControlPlot
+
+        Examples
+        --------
+        >>> import matplotlib; matplotlib.use("Agg")
+        >>> import matplotlib.pyplot as plt, fws_control as fws
+        >>> lim = fws.kinematic_design_limit(fws.vehicles.BMW_320I, ratio=0.0,
+        ...                                  pole=-2.0, speeds=[5.0, 20.0, 40.0])
+        >>> cplt = lim.plot()
+        >>> cplt.axes[0, 0].get_xlabel()
+        'speed V [m/s]'
+        >>> plt.close(cplt.figure)
+        """
+        import matplotlib.pyplot as plt
+
+        if ax is None:
+            _, ax = plt.subplots(figsize=(6.5, 4.2), layout="constrained")
+        lines = []
+        (ln,) = ax.plot(self.speeds, self.drift, "-", color="C0", label="pole drift")
+        lines.append(ln)
+        lines.append(
+            ax.axhline(
+                self.tolerance,
+                color="k",
+                ls="--",
+                lw=1.0,
+                label=f"tolerance {self.tolerance:g}",
+            )  # fmt: skip
+        )
+        unstable = ~self.stable
+        if np.any(unstable):
+            (m,) = ax.plot(
+                self.speeds[unstable], self.drift[unstable], "x", color="C3",
+                label="unstable",
+            )  # fmt: skip
+            lines.append(m)
+        for speed, what, color in (
+            (self.drift_speed, "drift limit", "C1"),
+            (self.unstable_speed, "stability limit", "C3"),
+        ):
+            if math.isfinite(speed):
+                lines.append(
+                    ax.axvline(
+                        speed,
+                        color=color,
+                        lw=1.0,
+                        label=f"{what} {speed:.1f} m/s",
+                    )  # fmt: skip
+                )
+        ax.set_xlabel("speed V [m/s]")
+        ax.set_ylabel(r"max $|p - \lambda_0| / |\lambda_0|$ (two dominant poles)")
+        ax.grid(alpha=0.3)
+        ax.set_title(
+            rf"kinematic design $\lambda_0$ = {self.pole:g} 1/s on the dynamic "
+            rf"plant, $\kappa$ = {self.curvature:g} 1/m ({self.tyre} tyres)",
+            fontsize=10,
+        )
+        leg = ax.legend(fontsize=8)
+        arr = np.empty((1, 1), dtype=object)
+        arr[0, 0] = lines
+        return ct.ControlPlot(arr, np.array([[ax]]), ax.figure, legend=leg)
+
+
+def kinematic_design_limit(
+    vehicle: Vehicle,
+    *,
+    ratio: float | Callable[..., Any],
+    pole: float,
+    curvature: float = 0.0,
+    speeds: Any = None,
+    tolerance: float = DEFAULT_POLE_TOLERANCE,
+    tyre: str = "linear",
+) -> KinematicDesignLimit:
+    r"""Speed above which a kinematic double-root design fails on the dynamic plant.
+
+    At every speed of the grid the gains are designed on the kinematic
+    plant (``LateralPlant(..., model="exact")``, :func:`double_root_gains`,
+    both poles at :math:`\lambda_0`) and applied to the dynamic plant
+    (``model="dynamic"``, 4 states). The result records where the closed
+    loop becomes unstable and where its two dominant poles drift more than
+    ``tolerance * |pole|`` from :math:`\lambda_0`; both speeds are refined
+    between grid points by bisection (:func:`scipy.optimize.brentq`).
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Geometry and dynamic data.
+    ratio : float or callable
+        Rear-to-front ratio :math:`a`, or a schedule ``ratio(vehicle,
+        speed=...)`` such as :func:`zero_sideslip_ratio`.
+    pole : float
+        Design double root :math:`\lambda_0` [1/s], finite and < 0.
+    curvature : float, optional
+        Path curvature [1/m] of the operating points (default 0, straight).
+    speeds : array_like, optional
+        Increasing 1-D grid of speeds [m/s], > 0; default
+        :data:`DEFAULT_DESIGN_SPEEDS` (1 to 60 m/s in steps of 0.5).
+    tolerance : float, optional
+        Allowed relative drift of the dominant poles, > 0 (default 0.25).
+    tyre : {"linear", "magic"}, optional
+        Tyre model of the dynamic plant.
+
+    Returns
+    -------
+    KinematicDesignLimit
+
+    Raises
+    ------
+    ValueError
+        For missing vehicle data, a non-negative `pole`, a bad speed grid
+        or tolerance, or an uncontrollable kinematic design.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> lim = fws.kinematic_design_limit(fws.vehicles.BMW_320I, ratio=0.0,
+    ...                                  pole=-2.0)
+    >>> round(lim.drift_speed, 1), lim.unstable_speed
+    (17.2, inf)
+    """
+    require_dynamics(vehicle, tyre=tyre)
+    if tyre not in TYRES:
+        raise ValueError(f"tyre must be one of {TYRES}, got {tyre!r}")
+    pole = check_scalar("pole", pole)
+    if pole >= 0.0:
+        raise ValueError(f"pole must be finite and < 0, got {pole!r}")
+    curvature = check_scalar("curvature", curvature)
+    tolerance = check_scalar("tolerance", tolerance)
+    if tolerance <= 0.0:
+        raise ValueError(f"tolerance must be > 0, got {tolerance!r}")
+    grid = DEFAULT_DESIGN_SPEEDS if speeds is None else speeds
+    grid = np.atleast_1d(np.asarray(check_finite("speeds", grid), dtype=float))
+    if (
+        grid.ndim != 1
+        or grid.size == 0
+        or np.any(grid <= 0)
+        or np.any(np.diff(grid) <= 0)
+    ):
+        raise ValueError(
+            "speeds must be a non-empty, increasing 1-D grid of speeds > 0 m/s, "
+            f"got {speeds!r}"
+        )
+    if not callable(ratio):
+        ratio = check_scalar("ratio", ratio)
+    a, gains, poles, drift = _design_poles(vehicle, ratio, pole, curvature, tyre, grid)
+
+    def at(speed):
+        return _design_poles(vehicle, ratio, pole, curvature, tyre, np.array([speed]))
+
+    unstable = _first_crossing(
+        grid, np.max(poles.real, axis=-1), lambda v: float(np.max(at(v)[2].real))
+    )
+    drifted = _first_crossing(
+        grid, drift - tolerance, lambda v: float(at(v)[3][0]) - tolerance
+    )
+    return KinematicDesignLimit(
+        vehicle=vehicle,
+        pole=pole,
+        curvature=curvature,
+        tyre=tyre,
+        tolerance=tolerance,
+        speeds=grid,
+        ratio=a,
+        gains=gains,
+        poles=poles,
+        drift=drift,
+        unstable_speed=unstable,
+        drift_speed=drifted,
+    )

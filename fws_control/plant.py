@@ -49,6 +49,7 @@ __all__ = [
     "LoopMatrices",
     "as_plant",
     "loop_matrices",
+    "resolve_ratio",
     "LINEAR_STATES",
     "DYNAMIC_LINEAR_STATES",
     "PLANT_KEYWORDS",
@@ -604,3 +605,49 @@ def loop_matrices(plant: LateralPlant | ct.StateSpace) -> LoopMatrices:
         f"plant must be a LateralPlant or a control.StateSpace, got "
         f"{type(plant).__name__}"
     )
+
+
+def resolve_ratio(plant: Any, ratio: Any) -> Any:
+    """A ratio, or a ratio schedule evaluated at the plant's speed.
+
+    A callable `ratio` is a schedule :math:`a(V)`, called as
+    ``ratio(vehicle, speed=speed)`` with the vehicle and the speed of a
+    :class:`LateralPlant` (e.g. :func:`fws_control.zero_sideslip_ratio`);
+    anything else is returned unchanged (the caller checks it).
+
+    Parameters
+    ----------
+    plant : LateralPlant, control.StateSpace or Vehicle
+        A resolved plant (:func:`as_plant`).
+    ratio : float, array_like or callable
+        Ratio or schedule.
+
+    Returns
+    -------
+    float or ndarray or the given `ratio`
+
+    Raises
+    ------
+    TypeError
+        For a schedule with a plant that has no vehicle and speed.
+    ValueError
+        If the schedule returns a value that is not finite.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> from fws_control.plant import resolve_ratio
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> plant = fws.LateralPlant(veh, speed=[5.0, 20.0])
+    >>> resolve_ratio(plant, lambda vehicle, speed: 0.01 * speed - 0.1)
+    array([-0.05,  0.1 ])
+    """
+    if not callable(ratio):
+        return ratio
+    if not isinstance(plant, LateralPlant):
+        raise TypeError(
+            "a ratio schedule ratio(vehicle, speed=...) needs a fws.LateralPlant "
+            f"(or a Vehicle with speed=), got a {type(plant).__name__}"
+        )
+    value = ratio(plant.vehicle, speed=plant.speed)
+    return check_finite(f"ratio (returned by the schedule {ratio!r})", value)
