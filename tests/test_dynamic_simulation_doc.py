@@ -223,3 +223,21 @@ def test_statements_of_the_page():
     v0 = math.sqrt(f * veh.cornering_rear * lr / (veh.mass * (f - lr)))
     assert f"below {v0:.1f} m/s" in text
     assert _zero_sideslip(veh, v0) == pytest.approx(0.0, abs=1e-12)
+
+
+def test_scenario_numbers_of_the_page():
+    text = " ".join(PAGE.read_text().split())
+    veh = D.vehicle()
+    lf = veh.wheelbase - veh.rear_to_cg
+    for quoted in (
+        f"$m$ = {veh.mass:.1f} kg",
+        f"$I_z$ = {veh.yaw_inertia:.1f} kg m²",
+        f"$l_f$ = {lf:.3f} m, $l_r$ = {veh.rear_to_cg:.3f} m",
+        f"$C_f$ = {veh.cornering_front / 1e3:.1f} kN/rad",
+        f"$C_r$ = {veh.cornering_rear / 1e3:.1f} kN/rad",
+        f"radius {1 / D.CURVATURE:.0f} m",
+        f"$u^2\\kappa$ = {40.0**2 * D.CURVATURE:.0f} m/s² at 40 m/s",
+        f"starting {-D.INITIAL_STATE[1]:.0f} m to the right",
+        f"{D.DURATION:.0f} s.",
+    ):
+        assert quoted in text, quoted

@@ -38,31 +38,17 @@ CURVATURE = 0.0025
 INITIAL_STATE = (0.0, -1.0, 0.0)
 #: Long enough for the offset to settle (the slowest pole is near -1/s).
 DURATION = 60.0
-#: Gravitational acceleration used by CommonRoad for the axle loads.
-GRAVITY = 9.81
 
 
 def vehicle() -> fws.Vehicle:
-    """BMW 320i of CommonRoad's ``parameters_vehicle2`` (vehicle ID 2).
+    """BMW 320i of CommonRoad's ``parameters_vehicle2``: :data:`fws.vehicles.BMW_320I`.
 
-    Transcribed from commonroad-vehicle-models 3.0.2 (BSD-3-Clause):
-    ``a = 1.1561957064`` m (G to front axle), ``b = 1.4227170936`` m (G to
-    rear axle), ``m = 1093.2952334674046`` kg, ``I_z =
-    1791.5995300122856`` kg m^2; tyre ``p_ky1 = -21.92``: CommonRoad's
-    single-track model uses the cornering stiffness ``-p_ky1`` per unit
-    normal load, so per axle ``C = 21.92 * static axle load``.
+    ``a = 1.156`` m (G to front axle), ``b = 1.423`` m, ``m = 1093.3`` kg,
+    ``I_z = 1791.6`` kg m^2; CommonRoad's single-track model uses the
+    cornering stiffness ``-p_ky1 = 21.92`` per unit normal load, so per axle
+    ``C = 21.92 * static axle load``. Linear tyres (its friction is unused).
     """
-    a, b = 1.1561957064, 1.4227170936
-    m = 1093.2952334674046
-    load_f, load_r = m * GRAVITY * b / (a + b), m * GRAVITY * a / (a + b)
-    return fws.Vehicle(
-        wheelbase=a + b,
-        rear_to_cg=b,
-        mass=m,
-        yaw_inertia=1791.5995300122856,
-        cornering_front=21.92 * load_f,
-        cornering_rear=21.92 * load_r,
-    )
+    return fws.vehicles.BMW_320I
 
 
 def ratio(veh: fws.Vehicle, schedule: str, speed: float) -> float:
