@@ -11,6 +11,8 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 from scipy.optimize import fsolve
 
@@ -525,3 +527,28 @@ def test_metrics_and_plot_of_a_dynamic_result():
     finally:
         plt.close("all")
     assert "dynamic (linear tyres)" in res._repr_html_()
+
+
+@settings(derandomize=True, max_examples=20, deadline=None)
+@given(
+    speed=st.floats(3.0, 40.0),
+    ratio=st.floats(-1.0, 0.9),
+    e0=st.floats(-2.0, 2.0),
+    theta0=st.floats(-0.2, 0.2),
+)
+def test_default_start_rolls_without_slip(speed, ratio, e0, theta0):
+    # three initial values: no tyre slip, so no tyre force and no lateral
+    # acceleration at t = 0, and the kinematic yaw rate of the initial angles
+    g = fws.SteeringGains(0.05, 0.4, ratio)
+    res = fws.simulate(
+        VEH, Arc(curvature=0.01), g, speed=speed,
+        initial_state=(0.0, e0, theta0), duration=0.1, dt=0.05, model="dynamic",
+    )  # fmt: skip
+    df, dr = res.delta_f[0], res.delta_r[0]
+    assert abs(res.slip_front[0]) < 1e-14 and abs(res.slip_rear[0]) < 1e-14
+    assert abs(res.lateral_accel[0]) < 1e-9
+    r0 = speed * (math.tan(df) - math.tan(dr)) / VEH.wheelbase
+    assert res.yaw_rate[0] == pytest.approx(r0, rel=1e-13, abs=1e-15)
+    assert res.v_y[0] == pytest.approx(
+        speed * math.tan(dr) + VEH.rear_to_cg * r0, rel=1e-13, abs=1e-15
+    )
