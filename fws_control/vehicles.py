@@ -200,8 +200,7 @@ def from_commonroad(vehicle_id: int) -> Vehicle:
     """
     if isinstance(vehicle_id, bool) or vehicle_id not in (1, 2, 3):
         raise ValueError(
-            f"vehicle_id must be 1, 2 or 3 (the cars of CommonRoad), got "
-            f"{vehicle_id!r}"
+            f"vehicle_id must be 1, 2 or 3 (the cars of CommonRoad), got {vehicle_id!r}"
         )
     try:
         from vehiclemodels.vehicle_parameters import setup_vehicle_parameters
