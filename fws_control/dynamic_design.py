@@ -426,7 +426,8 @@ class KinematicDesignLimit:
         ax.grid(alpha=0.3)
         ax.set_title(
             rf"kinematic design $\lambda_0$ = {self.pole:g} 1/s on the dynamic "
-            rf"plant, $\kappa$ = {self.curvature:g} 1/m ({self.tyre} tyres)",
+            "plant,\n"
+            rf"$\kappa$ = {self.curvature:g} 1/m, {self.tyre} tyres",
             fontsize=10,
         )
         leg = ax.legend(fontsize=8)

@@ -7,13 +7,13 @@ https://gitlab.lrz.de/tum-cps/commonroad-vehicle-models), files
 ``vehiclemodels/parameters/parameters_vehicle{1,2,3}.yaml`` and
 ``parameters_tire.yaml``:
 
-=================  =====  =======  ==========  ============  =====  ========
-constant           id     a [m]    b [m]       m [kg]        I_z    source
-=================  =====  =======  ==========  ============  =====  ========
-``FORD_ESCORT``    1      0.88392  1.50876     1225.888      1538.9 vehicle1
-``BMW_320I``       2      1.15620  1.42272     1093.295      1791.6 vehicle2
-``VW_VANAGON``     3      1.15079  1.32114     1478.898      2473.1 vehicle3
-=================  =====  =======  ==========  ============  =====  ========
+=================  ==  =======  =======  ========  ======  =============
+constant           id  a [m]    b [m]    m [kg]    I_z     CommonRoad set
+=================  ==  =======  =======  ========  ======  =============
+``FORD_ESCORT``    1   0.88392  1.50876  1225.888  1538.9  vehicle1
+``BMW_320I``       2   1.15620  1.42272  1093.295  1791.6  vehicle2
+``VW_VANAGON``     3   1.15079  1.32114  1478.898  2473.1  vehicle3
+=================  ==  =======  =======  ========  ======  =============
 
 (``a`` = centre of gravity to front axle, ``b`` = to rear axle; the
 constants carry the package's full digits.)
@@ -200,8 +200,7 @@ def from_commonroad(vehicle_id: int) -> Vehicle:
     """
     if isinstance(vehicle_id, bool) or vehicle_id not in (1, 2, 3):
         raise ValueError(
-            f"vehicle_id must be 1, 2 or 3 (the cars of CommonRoad), got "
-            f"{vehicle_id!r}"
+            f"vehicle_id must be 1, 2 or 3 (the cars of CommonRoad), got {vehicle_id!r}"
         )
     try:
         from vehiclemodels.vehicle_parameters import setup_vehicle_parameters

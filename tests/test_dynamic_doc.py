@@ -238,6 +238,16 @@ def test_chart_reference(speed):
         assert np.mean(stable) == pytest.approx(fd, abs=0.5 / stable.size)
 
 
+def test_limit_spread_over_ratios():
+    # the page: "The ratio moves these speeds by less than 0.1 m/s"
+    for pole in (-1.0, -2.0):
+        v = [
+            fws.kinematic_design_limit(VEH, ratio=_ratio(r), pole=pole).drift_speed
+            for r in RATIOS
+        ]
+        assert max(v) - min(v) < 0.1
+
+
 @pytest.mark.parametrize("r", RATIOS)
 def test_limit_reference(r):
     for pole in (-1.0, -2.0):

@@ -174,3 +174,10 @@ def test_operating_point_and_errors():
     # 40 m/s on a 50 m radius needs 3.2 g: beyond the magic tyre's peak
     with pytest.raises(ValueError, match="saturates"):
         fws.LateralPlant(VEH, speed=40.0, curvature=0.02, model="dynamic", tyre="magic")
+
+
+def test_linear_nonlinear_comparison_refuses_the_dynamic_plant():
+    plant = fws.LateralPlant(VEH, speed=10.0, model="dynamic")
+    g = fws.double_root_gains(replace(plant, model="exact"), ratio=0.0, pole=-1.0)
+    with pytest.raises(ValueError, match="compares the kinematic models"):
+        fws.compare_linear_nonlinear(plant, g, duration=1.0)
