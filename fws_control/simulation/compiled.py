@@ -97,6 +97,9 @@ __all__ = [
     "integrate_compiled",
     "shared_parameters",
     "closed_loop_rhs",
+    "dop853_step",
+    "dense_output",
+    "locate_event",
     "solve_run",
     "STATUS_CODES",
     "STAT_FIELDS",
@@ -426,8 +429,179 @@ def _brentq(j, xa, xb, t_old, t_new, y_old, F, p, q, br, co, ytmp, g):
 
 
 @_jit
+def dop853_step(
+    t, y, f, h_abs, t_bound, rtol, atol, p, q, breaks, coefs, K, y_new, ystage
+):
+    """One accepted step of scipy's ``RungeKutta._step_impl`` for DOP853.
+
+    From ``(t, y)`` with ``f = f(t, y)`` and the proposed step `h_abs`, try
+    steps (shrinking after a rejection) until the error norm is below 1.
+    Fills `K` ``(16, m)`` (stage 13 is ``f(t_new, y_new)``), `y_new` and
+    `ystage` (the argument of the last stage, for the stiffness test).
+
+    Returns ``(ok, t_new, h, h_abs_next, rejected)``; ``ok`` is False when
+    the step fell below 10 ulp of ``t`` (scipy's TOO_SMALL_STEP).
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> from fws_control.simulation.compiled import (
+    ...     closed_loop_rhs, curvature_table, dop853_step, shared_parameters)
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> tab = curvature_table(fws.Straight())
+    >>> q = shared_parameters(veh, tab, feedforward=False, time_constant=None)
+    >>> p, y = np.array([5.0, 0.1, 0.5, 0.0]), np.array([0.0, 1.0, 0.0])
+    >>> f = np.empty(3)
+    >>> closed_loop_rhs(0.0, y, p, q, tab.breaks, tab.coefs, f)
+    >>> K, y_new = np.empty((16, 3)), np.empty(3)
+    >>> ok, t_new, h, h_next, rej = dop853_step(0.0, y, f, 0.01, 1.0, 1e-10,
+    ...     1e-12, p, q, tab.breaks, tab.coefs, K, y_new, np.empty(3))
+    >>> ok, t_new, rej, round(float(y_new[0]), 6)
+    (True, 0.01, 0, 0.05)
+    """
+    m = y.size
+    min_step = 10 * abs(np.nextafter(t, np.inf) - t)
+    if h_abs < min_step:
+        h_abs = min_step
+    step_rejected = False
+    rejected = 0
+    while True:
+        if h_abs < min_step:
+            return False, t, 0.0, h_abs, rejected
+        h = h_abs
+        t_new = t + h
+        if t_new - t_bound > 0:
+            t_new = t_bound
+        h = t_new - t
+        h_abs = abs(h)
+        # rk_step (sums in the order of the stages)
+        for i in range(m):
+            K[0, i] = f[i]
+        for s in range(1, _NS):
+            a = _A[s]
+            for i in range(m):
+                acc = 0.0
+                for j in range(s):
+                    acc += K[j, i] * a[j]
+                ystage[i] = y[i] + acc * h
+            closed_loop_rhs(t + _C[s] * h, ystage, p, q, breaks, coefs, K[s])
+        for i in range(m):
+            acc = 0.0
+            for j in range(_NS):
+                acc += K[j, i] * _B[j]
+            y_new[i] = y[i] + h * acc
+        closed_loop_rhs(t + h, y_new, p, q, breaks, coefs, K[_NS])
+        # DOP853._estimate_error_norm, scale = atol + max(|y|, |y_new|) rtol
+        e5 = 0.0
+        e3 = 0.0
+        for i in range(m):
+            sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
+            a5 = 0.0
+            a3 = 0.0
+            for j in range(_NS + 1):
+                a5 += K[j, i] * _E5[j]
+                a3 += K[j, i] * _E3[j]
+            a5 /= sc
+            a3 /= sc
+            e5 += a5 * a5
+            e3 += a3 * a3
+        e5 = math.sqrt(e5) ** 2
+        e3 = math.sqrt(e3) ** 2
+        if e5 == 0 and e3 == 0:
+            error_norm = 0.0
+        else:
+            denom = e5 + 0.01 * e3
+            error_norm = abs(h) * e5 / math.sqrt(denom * m)
+        if error_norm < 1:
+            if error_norm == 0:
+                factor = _MAX_FACTOR
+            else:
+                factor = min(_MAX_FACTOR, _SAFETY * error_norm**_ERROR_EXPONENT)
+            if step_rejected:
+                factor = min(1.0, factor)
+            return True, t_new, h, h_abs * factor, rejected
+        h_abs *= max(_MIN_FACTOR, _SAFETY * error_norm**_ERROR_EXPONENT)
+        step_rejected = True
+        rejected += 1
+
+
+@_jit
+def dense_output(tt, t_old, t_new, y_old, y_new, f_new, K, p, q, breaks, coefs, out):
+    """Value at `tt` of the dense output of the step ``t_old -> t_new``.
+
+    `K` holds the stages of :func:`dop853_step` (its three extra rows are
+    overwritten), as ``DOP853.dense_output()(tt)`` (scipy).
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> from fws_control.simulation.compiled import (closed_loop_rhs,
+    ...     curvature_table, dense_output, dop853_step, shared_parameters)
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> tab = curvature_table(fws.Straight())
+    >>> q = shared_parameters(veh, tab, feedforward=False, time_constant=None)
+    >>> p, y = np.array([5.0, 0.1, 0.5, 0.0]), np.array([0.0, 1.0, 0.0])
+    >>> f = np.empty(3)
+    >>> closed_loop_rhs(0.0, y, p, q, tab.breaks, tab.coefs, f)
+    >>> K, y_new = np.empty((16, 3)), np.empty(3)
+    >>> ok, t_new, *_ = dop853_step(0.0, y, f, 0.01, 1.0, 1e-10, 1e-12, p, q,
+    ...     tab.breaks, tab.coefs, K, y_new, np.empty(3))
+    >>> out = np.empty(3)
+    >>> dense_output(0.005, 0.0, t_new, y, y_new, K[12].copy(), K, p, q,
+    ...              tab.breaks, tab.coefs, out)
+    >>> round(float(out[0]), 6)
+    0.025
+    """
+    m = y_old.size
+    F = np.empty((_NPOW, m))
+    _dense_coefficients(
+        t_old, t_new - t_old, y_old, y_new, f_new, K, p, q, breaks, coefs, F, out
+    )
+    _dense_eval(tt, t_old, t_new, y_old, F, out)
+
+
+@_jit
+def locate_event(j, t_old, t_new, y_old, y_new, f_new, K, p, q, breaks, coefs):
+    """Root of stop event `j` on the dense output of one step (brentq).
+
+    As scipy's ``solve_event_equation``: ``brentq`` with ``xtol = rtol =
+    4 eps`` on ``event(t, sol(t))`` over ``[t_old, t_new]``. Events: 0
+    steering, 1 curvature, 2 end and 3 start of an open path.
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> from fws_control.simulation.compiled import (closed_loop_rhs,
+    ...     curvature_table, dop853_step, locate_event, shared_parameters)
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> tab = curvature_table(fws.Straight(length=0.1))   # ends after 0.02 s
+    >>> q = shared_parameters(veh, tab, feedforward=False, time_constant=None)
+    >>> p, y = np.array([5.0, 0.0, 0.0, 0.0]), np.array([0.0, 0.0, 0.0])
+    >>> f = np.empty(3)
+    >>> closed_loop_rhs(0.0, y, p, q, tab.breaks, tab.coefs, f)
+    >>> K, y_new = np.empty((16, 3)), np.empty(3)
+    >>> ok, t_new, *_ = dop853_step(0.0, y, f, 0.05, 1.0, 1e-10, 1e-12, p, q,
+    ...     tab.breaks, tab.coefs, K, y_new, np.empty(3))
+    >>> t = locate_event(2, 0.0, t_new, y, y_new, K[12].copy(), K, p, q,
+    ...                  tab.breaks, tab.coefs)
+    >>> round(t, 12)          # s = L (1 + 1e-9) at V = 5 m/s
+    0.02
+    """
+    m = y_old.size
+    F = np.empty((_NPOW, m))
+    ytmp = np.empty(m)
+    g = np.empty(_N_EVENTS)
+    _dense_coefficients(
+        t_old, t_new - t_old, y_old, y_new, f_new, K, p, q, breaks, coefs, F, ytmp
+    )
+    return _brentq(
+        j, t_old, t_new, t_old, t_new, y_old, F, p, q, breaks, coefs, ytmp, g
+    )
+
+
+@_jit
 def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):
-    """Integrate one run from ``t_eval[0]`` to ``t_eval[-1]`` (compiled).
+    r"""Integrate one run from ``t_eval[0]`` to ``t_eval[-1]`` (compiled).
 
     `out` ``(m, T)`` receives the states at `t_eval` (columns after a stop
     are left untouched); `trace` ``(N,)`` receives the times of the first
@@ -500,72 +674,13 @@ def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):
     k_out = 0
     while True:
         # ---- RungeKutta._step_impl (direction +1, max_step inf)
-        min_step = 10 * abs(np.nextafter(t, np.inf) - t)
-        if h_abs < min_step:
-            h_abs = min_step
-        step_rejected = False
-        h = 0.0
-        t_new = t
-        while True:
-            if h_abs < min_step:
-                return 4, t, steps, rejected_total, nfev, stiff
-            h = h_abs
-            t_new = t + h
-            if t_new - t_bound > 0:
-                t_new = t_bound
-            h = t_new - t
-            h_abs = abs(h)
-            # rk_step
-            for i in range(m):
-                K[0, i] = f[i]
-            for s in range(1, _NS):
-                a = _A[s]
-                for i in range(m):
-                    acc = 0.0
-                    for j in range(s):
-                        acc += K[j, i] * a[j]
-                    ystage[i] = y[i] + acc * h
-                closed_loop_rhs(t + _C[s] * h, ystage, p, q, breaks, coefs, K[s])
-            for i in range(m):
-                acc = 0.0
-                for j in range(_NS):
-                    acc += K[j, i] * _B[j]
-                y_new[i] = y[i] + h * acc
-            closed_loop_rhs(t + h, y_new, p, q, breaks, coefs, K[_NS])
-            nfev += _NS
-            # DOP853._estimate_error_norm with scale = atol + max(|y|, |y_new|) rtol
-            e5 = 0.0
-            e3 = 0.0
-            for i in range(m):
-                sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
-                a5 = 0.0
-                a3 = 0.0
-                for j in range(_NS + 1):
-                    a5 += K[j, i] * _E5[j]
-                    a3 += K[j, i] * _E3[j]
-                a5 /= sc
-                a3 /= sc
-                e5 += a5 * a5
-                e3 += a3 * a3
-            e5 = math.sqrt(e5) ** 2
-            e3 = math.sqrt(e3) ** 2
-            if e5 == 0 and e3 == 0:
-                error_norm = 0.0
-            else:
-                denom = e5 + 0.01 * e3
-                error_norm = abs(h) * e5 / math.sqrt(denom * m)
-            if error_norm < 1:
-                if error_norm == 0:
-                    factor = _MAX_FACTOR
-                else:
-                    factor = min(_MAX_FACTOR, _SAFETY * error_norm**_ERROR_EXPONENT)
-                if step_rejected:
-                    factor = min(1.0, factor)
-                h_abs *= factor
-                break
-            h_abs *= max(_MIN_FACTOR, _SAFETY * error_norm**_ERROR_EXPONENT)
-            step_rejected = True
-            rejected_total += 1
+        ok, t_new, h, h_abs, n_rej = dop853_step(
+            t, y, f, h_abs, t_bound, rtol, atol, p, q, breaks, coefs, K, y_new, ystage
+        )
+        nfev += _NS * (n_rej + 1)
+        rejected_total += n_rej
+        if not ok:
+            return 4, t, steps, rejected_total, nfev, stiff
         # Hairer's stiffness detection (dop853.f): |h lambda| from the last
         # stage and f(y_new), both at t + h
         num = 0.0
@@ -793,29 +908,41 @@ def curvature_table(
         return CurvatureTable(breaks, coefs, period=period, open_length=open_length)
     if not math.isfinite(L):
         raise ValueError(f"path must have a finite length for a table, got {path!r}")
-    n = 64
-    while n <= max_pieces:
-        s = np.linspace(0.0, L, n + 1)
-        k = np.asarray(path.curvature(s), dtype=float)
-        dk = np.asarray(path.curvature_rate(s), dtype=float)
+    # Adaptive bisection: a piece is halved while the interpolant misses the
+    # curvature by more than tol at its quarter points. Kinks of the
+    # curvature (a spline's curvature rate jumps at its waypoints) end up in
+    # tiny pieces; smooth stretches keep long ones.
+    s = np.linspace(0.0, L, 65)
+    err = math.inf
+    while s.size - 1 <= max_pieces:
+        table = _hermite_table(path, s, period, open_length)
         h = np.diff(s)
-        # cubic Hermite on each piece, coefficients in d = s - s_k
-        slope = np.diff(k) / h
-        c2 = (3 * slope - 2 * dk[:-1] - dk[1:]) / h
-        c3 = (dk[:-1] + dk[1:] - 2 * slope) / h**2
-        coefs = np.stack([k[:-1], dk[:-1], c2, c3], axis=1)
-        table = CurvatureTable(s, coefs, period=period, open_length=open_length)
-        probe = (s[:-1, None] + h[:, None] * np.array([0.25, 0.5, 0.75])).ravel()
-        err = float(np.max(np.abs(table(probe) - path.curvature(probe))))
+        probe = s[:-1, None] + h[:, None] * np.array([0.25, 0.5, 0.75])
+        miss = np.abs(table(probe) - path.curvature(probe))
+        err = float(np.max(miss))
         if err <= tol:
             table.max_error = err
             return table
-        n *= 2
+        bad = np.flatnonzero(np.max(miss, axis=1) > tol)
+        s = np.sort(np.concatenate([s, s[bad] + 0.5 * h[bad]]))
     raise ValueError(
         f"curvature of {type(path).__name__} not within tol={tol} with "
         f"max_pieces={max_pieces} cubic pieces (last error {err:.3g}); use the "
         "numpy engine for this path"
     )
+
+
+def _hermite_table(path, s, period, open_length) -> CurvatureTable:
+    """Cubic Hermite interpolant of the curvature on the nodes `s`."""
+    k = np.asarray(path.curvature(s), dtype=float)
+    dk = np.asarray(path.curvature_rate(s), dtype=float)
+    h = np.diff(s)
+    # one-sided rates at a kink: the right piece uses the rate just after it
+    slope = np.diff(k) / h
+    c2 = (3 * slope - 2 * dk[:-1] - dk[1:]) / h
+    c3 = (dk[:-1] + dk[1:] - 2 * slope) / h**2
+    coefs = np.stack([k[:-1], dk[:-1], c2, c3], axis=1)
+    return CurvatureTable(s, coefs, period=period, open_length=open_length)
 
 
 def _limit(value) -> float:
