@@ -301,8 +301,10 @@ def test_event_root_as_scipy_on_the_same_step():
     dense = solver.dense_output()
     t_ref = brentq(lambda x: steer(x, dense(x)), t, solver.t, xtol=4 * eps,
                    rtol=4 * eps)  # fmt: skip
-    ok, t_new, *_ = dop853_step(t, y, f, h_abs, 20.0, TOL["rtol"], TOL["atol"],
-                                p, q, tab.breaks, tab.coefs, K, y_new, ystage)  # fmt: skip
+    ok, t_new, *_ = dop853_step(
+        t, y, f, h_abs, 20.0, TOL["rtol"], TOL["atol"], p, q, tab.breaks,
+        tab.coefs, K, y_new, ystage,
+    )  # fmt: skip
     assert ok and t_new == solver.t
     root = locate_event(0, t, t_new, y, y_new, K[12].copy(), K, p, q,
                         tab.breaks, tab.coefs)  # fmt: skip

@@ -239,8 +239,8 @@ def closed_loop_rhs(t, y, p, q, breaks, coefs, out):
     >>> out = np.empty(3)
     >>> closed_loop_rhs(0.0, np.array([0.0, 1.0, 0.0]), p, q, tab.breaks,
     ...                 tab.coefs, out)
-    >>> out.round(6).tolist()                        # delta_f = -0.1
-    [5.0, 0.0, -0.186579]
+    >>> out.round(6).tolist()            # theta_dot = V tan(-0.1) / f
+    [5.0, 0.0, -0.185805]
     """
     s, e, th = y[0], y[1], y[2]
     kappa = _curvature(s, q, breaks, coefs)
@@ -584,8 +584,8 @@ def locate_event(j, t_old, t_new, y_old, y_new, f_new, K, p, q, breaks, coefs):
     ...     tab.breaks, tab.coefs, K, y_new, np.empty(3))
     >>> t = locate_event(2, 0.0, t_new, y, y_new, K[12].copy(), K, p, q,
     ...                  tab.breaks, tab.coefs)
-    >>> round(t, 12)          # s = L (1 + 1e-9) at V = 5 m/s
-    0.02
+    >>> round(t, 14)          # s = L (1 + 1e-9) at V = 5 m/s
+    0.02000000002
     """
     m = y_old.size
     F = np.empty((_NPOW, m))
