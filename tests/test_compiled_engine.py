@@ -461,3 +461,57 @@ def test_out_array_and_validation():
     assert compiled_support(fws.Straight(), g) is None
     assert "controller" in compiled_support(fws.Straight(), fws.PurePursuit())
     assert "DOP853" in compiled_support(fws.Straight(), g, method="RK45")
+
+
+# --------------------------------------------------------------------------
+# Output signals
+
+
+@pytest.mark.parametrize(
+    ("path", "tau", "ff"),
+    [
+        (fws.Arc(0.1, start=(1.0, 2.0), start_heading=3.0), None, True),
+        (fws.Clothoid(0.0, 0.05, length=100.0), None, True),
+        (fws.Arc(-0.1), 0.1, True),
+        (fws.Straight(start=(1.0, 1.0), start_heading=-2.0), None, False),
+        (fws.Straight(length=40.0), None, False),  # half the runs reach the end
+    ],
+    ids=["arc-placed", "clothoid", "actuator", "straight", "open-line"],
+)
+def test_outputs_as_numpy_engine_and_finite_differences(path, tau, ff):
+    """compiled_outputs == compute_outputs (the numpy engine's output stage),
+    and the steering rates are the derivatives of the steering angles."""
+    from fws_control.simulation.compiled import compiled_outputs
+    from fws_control.simulation.engine import SIGNALS, compute_outputs
+
+    veh = fws.Vehicle(2.7, 1.35, max_steer_front=0.5)
+    n = 6
+    g = fws.double_root_gains(
+        VEH, speed=5.0, curvature=0.1, ratio=np.linspace(-1.5, 0.6, n), pole=-1.0
+    )
+    t = np.linspace(0.0, 15.0, 3001)
+    z0 = np.tile([0.0, -5.0, 0.0], (n, 1))
+    z0[:, 0] = np.linspace(0.0, 30.0, n)
+    V = np.full(n, 5.0)
+    states, status, *_ = integrate_compiled(
+        veh, path, g, speed=V, feedforward=ff, path_state=z0, t_eval=t,
+        time_constant=tau, **TOL,
+    )  # fmt: skip
+    kw = dict(speed=V, feedforward=ff, time_constant=tau, states=states,
+              initial_heading=np.full(n, 9.0))  # fmt: skip
+    ref = compute_outputs(veh, path, g, **kw)
+    got = compiled_outputs(veh, path, g, **kw)
+    assert np.array_equal(np.isnan(got), np.isnan(ref))
+    np.testing.assert_allclose(got, ref, rtol=1e-13, atol=1e-13)
+    # psi starts on the branch of the initial heading 9 rad
+    assert np.all(np.abs(got[:, 2, 0] - 9.0) <= math.pi)
+    # rates against central differences of the angles (smooth stretches)
+    for name in ("delta_f", "delta_r"):
+        ang = got[:, SIGNALS.index(name)]
+        rate = got[:, SIGNALS.index(name + "_rate")]
+        fd = (ang[:, 2:] - ang[:, :-2]) / (t[2] - t[0])
+        mid = rate[:, 1:-1]
+        smooth = np.isfinite(fd) & (np.abs(ang[:, 1:-1]) < 0.49)  # not clipped
+        assert np.all(np.abs(fd - mid)[smooth] <= 1e-3 * (1 + np.abs(mid[smooth])))
+    if path == fws.Straight(length=40.0):
+        assert "end_of_path" in set(status)

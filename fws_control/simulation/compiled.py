@@ -95,6 +95,7 @@ __all__ = [
     "curvature_table",
     "compiled_support",
     "integrate_compiled",
+    "compiled_outputs",
     "shared_parameters",
     "closed_loop_rhs",
     "dop853_step",
@@ -763,6 +764,130 @@ def _solve_batch(
         stats[i, 1] = r[3]
         stats[i, 2] = r[4]
         stats[i, 3] = r[5]
+        # NaN after the stop (the columns up to it are written by solve_run)
+        for k in range(t_eval.size):
+            if t_eval[k] > r[1]:
+                out[i, :, k] = np.nan
+
+
+@_jit
+def _curvature_rate(s, q, breaks, coefs):
+    # d kappa / ds of the table, at s clipped or wrapped as in _curvature
+    period = q[_Q_PERIOD]
+    if period > 0.0:
+        s = s % period
+        if s >= period:
+            s = 0.0
+    else:
+        s = min(max(s, q[_Q_S_LO]), q[_Q_S_HI])
+    k = np.searchsorted(breaks, s, side="right") - 1
+    k = min(max(k, 0), coefs.shape[0] - 1)
+    d = s - breaks[k]
+    return coefs[k, 1] + d * (2.0 * coefs[k, 2] + d * 3.0 * coefs[k, 3])
+
+
+@_jit
+def _signals_batch(states, P, q, breaks, coefs, d_cg, pose, sig):
+    # sig (n, 11, T) in the order of engine.SIGNALS. Rows 3-10 -- s, e,
+    # theta, delta_f, delta_r, their rates, the lateral acceleration of
+    # eq. (13) -- are computed here with the operations of compute_outputs;
+    # rows 0-2 (x, y, psi) too when pose[0] is 1 (Straight) or 2 (Arc):
+    # pose = (kind, x0, y0, psi0, kappa). psi = theta + psi0 + kappa * s is
+    # continuous in time by construction (no unwrapping needed).
+    n, m, T = states.shape
+    f = q[_Q_WHEELBASE]
+    mf, mr = q[_Q_MAX_F], q[_Q_MAX_R]
+    tau = q[_Q_TAU]
+    ff = q[_Q_FF] != 0.0
+    kind = int(pose[0])
+    x0, y0, psi0, kp = pose[1], pose[2], pose[3], pose[4]
+    c0, s0 = math.cos(psi0), math.sin(psi0)
+    period = q[_Q_PERIOD]
+    for i in range(n):
+        V = P[i, _P_SPEED]
+        k1, k2, a = P[i, _P_K1], P[i, _P_K2], P[i, _P_RATIO]
+        for k in range(T):
+            s = states[i, 0, k]
+            if not np.isfinite(s):
+                for r in range(11):
+                    sig[i, r, k] = np.nan
+                continue
+            e = states[i, 1, k]
+            th = states[i, 2, k]
+            kappa = _curvature(s, q, breaks, coefs)
+            fb = -k1 * e - k2 * th
+            raw_f = fb
+            fk_atan = 0.0
+            if ff:
+                fk_atan = math.atan(f * kappa)
+                raw_f = fb + fk_atan
+            raw_r = a * fb
+            cf = min(max(raw_f, -mf), mf)
+            cr = min(max(raw_r, -mr), mr)
+            if tau > 0.0:
+                df = states[i, 3, k]
+                dr = states[i, 4, k]
+            else:
+                df, dr = cf, cr
+            s_dot = V * math.cos(th + dr) / (1.0 - kappa * e)
+            e_dot = V * math.sin(th + dr)
+            sin_fr = math.sin(df - dr)
+            cos_f = math.cos(df)
+            psi_dot = V * sin_fr / (f * cos_f)
+            th_dot = -kappa * s_dot + psi_dot
+            if tau > 0.0:
+                rf = min(max((cf - df) / tau, -q[_Q_RATE_F]), q[_Q_RATE_F])
+                rr = min(max((cr - dr) / tau, -q[_Q_RATE_R]), q[_Q_RATE_R])
+            else:
+                # steering_command_rate: chain rule, 0 where an angle is clipped
+                fb_rate = -k1 * e_dot - k2 * th_dot
+                rf = fb_rate
+                if ff:
+                    k_rate = _curvature_rate(s, q, breaks, coefs) * s_dot
+                    rf = fb_rate + f * k_rate / (1.0 + (f * kappa) ** 2)
+                rr = a * fb_rate
+                if abs(raw_f) > mf:
+                    rf = 0.0
+                if abs(raw_r) > mr:
+                    rr = 0.0
+            sig[i, 3, k] = s
+            sig[i, 4, k] = e
+            sig[i, 5, k] = th
+            sig[i, 6, k] = df
+            sig[i, 7, k] = dr
+            if abs(df) < 0.5 * math.pi:
+                psi_ddot = (V / f) * (
+                    math.cos(dr) / cos_f**2 * rf - math.cos(df - dr) / cos_f * rr
+                )
+                sig[i, 8, k] = rf
+                sig[i, 9, k] = rr
+                sig[i, 10, k] = V * (psi_dot + rr) * math.cos(dr) + d_cg * psi_ddot
+            else:
+                sig[i, 8, k] = np.nan
+                sig[i, 9, k] = np.nan
+                sig[i, 10, k] = np.nan
+            if kind == 0:
+                continue
+            sp = s
+            if period > 0.0:
+                sp = s % period
+                if sp >= period:
+                    sp = 0.0
+            else:
+                sp = min(max(sp, q[_Q_S_LO]), q[_Q_S_HI])
+            if kind == 1:
+                lx, ly = sp, 0.0
+            else:  # Arc._frame
+                ks = kp * sp
+                lx = math.sin(ks) / kp
+                ly = 2.0 * math.sin(0.5 * ks) ** 2 / kp
+            px = x0 + c0 * lx - s0 * ly
+            py = y0 + s0 * lx + c0 * ly
+            h = psi0 + kp * s  # unwrapped heading of the path at s
+            sh, ch = math.sin(h), math.cos(h)
+            sig[i, 0, k] = px - e * sh
+            sig[i, 1, k] = py + e * ch
+            sig[i, 2, k] = th + h
 
 
 # --------------------------------------------------------------------------
@@ -1107,7 +1232,7 @@ def integrate_compiled(
     out : ndarray, optional
         Preallocated ``(n, m, T)`` float array for the states (``m = 3``, or
         5 with an actuator), e.g. a slice of a larger result or a
-        memory-mapped file; filled with NaN first.
+        memory-mapped file; NaN after each run's stop.
 
     Returns
     -------
@@ -1159,10 +1284,7 @@ def integrate_compiled(
     )
     speed = np.ascontiguousarray(speed, dtype=float).ravel()
     n = speed.size
-    P = np.empty((n, _NP))
-    P[:, _P_SPEED] = speed
-    for col, v in ((_P_K1, gains.k1), (_P_K2, gains.k2), (_P_RATIO, gains.ratio)):
-        P[:, col] = np.broadcast_to(np.asarray(v, dtype=float).ravel(), (n,))
+    P = _run_parameters(gains, speed)
     z0 = np.asarray(path_state, dtype=float)
     if z0.shape != (n, 3):
         raise ValueError(f"path_state must have shape ({n}, 3), got {z0.shape}")
@@ -1192,7 +1314,6 @@ def integrate_compiled(
             f"out must be a float64 array of shape {(n, m, T)}, got "
             f"{out.dtype} {out.shape}"
         )
-    out.fill(np.nan)
     codes = np.empty(n, dtype=np.int64)
     t_stop = np.empty(n)
     stats = np.empty((n, len(STAT_FIELDS)), dtype=np.int64)
@@ -1209,3 +1330,123 @@ def integrate_compiled(
         dtype=object,
     )
     return np.moveaxis(out, 1, 0), status, message, t_stop, stats
+
+
+def _run_parameters(gains: SteeringGains, speed: np.ndarray) -> np.ndarray:
+    n = speed.size
+    P = np.empty((n, _NP))
+    P[:, _P_SPEED] = speed
+    for col, v in ((_P_K1, gains.k1), (_P_K2, gains.k2), (_P_RATIO, gains.ratio)):
+        P[:, col] = np.broadcast_to(np.asarray(v, dtype=float).ravel(), (n,))
+    return P
+
+
+def compiled_outputs(
+    vehicle: Vehicle,
+    path: Path,
+    gains: SteeringGains,
+    *,
+    speed: np.ndarray,
+    feedforward: bool,
+    time_constant: float | None,
+    states: np.ndarray,
+    initial_heading: np.ndarray,
+    table: CurvatureTable | None = None,
+    out: np.ndarray | None = None,
+) -> np.ndarray:
+    """All signals of :data:`~fws_control.simulation.engine.SIGNALS`, compiled.
+
+    The compiled counterpart of
+    :func:`~fws_control.simulation.engine.compute_outputs` for the paper's
+    law: ``s, e, theta``, the steering angles, their exact rates (chain rule
+    through the law and the curvature table's derivative, zero where an
+    angle is clipped; the actuator's rates with an actuator) and the lateral
+    acceleration of eq. (13) are computed per output time in compiled code;
+    the global pose ``x, y, psi`` from the path's position and heading at
+    ``s`` (numpy), with ``psi`` unwrapped in time on the branch of the
+    initial heading.
+
+    Parameters
+    ----------
+    vehicle, path, gains, speed, feedforward, time_constant
+        As given to :func:`integrate_compiled`.
+    states : ndarray
+        Its states, shape ``(m, n, T)``, NaN after a run's stop.
+    initial_heading : ndarray
+        Per run initial ``psi`` [rad], shape ``(n,)``.
+    table : CurvatureTable, optional
+        The path's table, if already built.
+    out : ndarray, optional
+        Preallocated ``(n, 11, T)`` float array for the result.
+
+    Returns
+    -------
+    ndarray
+        Shape ``(n, len(SIGNALS), T)``, NaN where `states` is NaN.
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> from fws_control.simulation.compiled import compiled_outputs
+    >>> from fws_control.simulation.engine import SIGNALS
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> g = fws.SteeringGains(0.1, 0.5, 0.0)
+    >>> states = np.array([0.0, 2.0, 0.0]).reshape(3, 1, 1)   # s, e, theta
+    >>> sig = compiled_outputs(veh, fws.Straight(), g, speed=np.array([5.0]),
+    ...                        feedforward=False, time_constant=None,
+    ...                        states=states, initial_heading=np.array([0.0]))
+    >>> float(sig[0, SIGNALS.index("delta_f"), 0])   # -k1 * e
+    -0.2
+    """
+    if numba is None:
+        raise ImportError("compiled_outputs needs numba: pip install fws-control[fast]")
+    table = curvature_table(path) if table is None else table
+    q = shared_parameters(
+        vehicle, table, feedforward=feedforward, time_constant=time_constant
+    )
+    speed = np.ascontiguousarray(speed, dtype=float).ravel()
+    P = _run_parameters(gains, speed)
+    st = np.moveaxis(np.asarray(states, dtype=float), 0, 1)  # (n, m, T)
+    n, m, T = st.shape
+    if n != speed.size:
+        raise ValueError(f"states must hold {speed.size} runs, got {n}")
+    if out is None:
+        out = np.empty((n, 11, T))
+    elif out.shape != (n, 11, T) or out.dtype != np.float64:
+        raise ValueError(
+            f"out must be a float64 array of shape {(n, 11, T)}, got "
+            f"{out.dtype} {out.shape}"
+        )
+    if isinstance(path, Straight):
+        pose = np.array([1.0, *path.start, path.start_heading, 0.0])
+    elif isinstance(path, Arc):
+        pose = np.array([2.0, *path.start, path.start_heading, path.kappa])
+    else:
+        pose = np.zeros(5)
+    _signals_batch(
+        st, P, q, table.breaks, table.coefs, float(vehicle.rear_to_cg), pose, out
+    )
+    S = out[:, 3]
+    valid = np.isfinite(S)
+    if pose[0] == 0.0:
+        # other paths: position and heading from the path (numpy), psi
+        # unwrapped in time (a stopped run's NaN tail held at its last value)
+        s_path = S[valid]
+        if table.period == 0.0 and math.isfinite(table.open_length):
+            s_path = np.clip(s_path, 0.0, table.open_length)
+        heading = np.asarray(path.heading(s_path), dtype=float)
+        px, py = path.position(s_path)
+        e = out[:, 4][valid]
+        out[:, 0][valid] = px - e * np.sin(heading)
+        out[:, 1][valid] = py + e * np.cos(heading)
+        psi = np.full((n, T), np.nan)
+        psi[valid] = out[:, 5][valid] + heading
+        idx = np.where(valid, np.arange(T), 0)
+        np.maximum.accumulate(idx, axis=1, out=idx)
+        filled = np.nan_to_num(np.take_along_axis(psi, idx, axis=1))
+        out[:, 2] = np.where(valid, np.unwrap(filled, axis=1), np.nan)
+    # psi on the branch of the given initial heading
+    psi0 = np.asarray(initial_heading, dtype=float)
+    shift = 2 * math.pi * np.round((psi0 - out[:, 2, 0]) / (2 * math.pi))
+    out[:, 2] += np.nan_to_num(shift)[:, None]
+    return out
