@@ -36,7 +36,6 @@ import os
 import subprocess
 import sys
 import tempfile
-import time
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -57,8 +56,10 @@ try:
         integrate_compiled,
         shared_parameters,
     )
-except ImportError:  # pragma: no cover
-    raise SystemExit("this benchmark needs numba: pip install fws-control[fast]")
+except ImportError as exc:  # pragma: no cover
+    raise SystemExit(
+        "this benchmark needs numba: pip install fws-control[fast]"
+    ) from exc
 
 TOL = {"rtol": 1e-10, "atol": 1e-12}
 
@@ -66,22 +67,22 @@ _FIRST_CALL = """
 import time, numpy as np
 t0 = time.process_time()
 import fws_control as fws
-from fws_control.simulation.compiled import integrate_compiled
+from fws_control.simulation.compiled import integrate_compiled, compiled_outputs
 t1 = time.process_time()
-integrate_compiled(fws.Vehicle(2.7, 1.35), fws.Arc(0.1), fws.SteeringGains(0.2, 0.9, -1.0),
-    speed=np.array([5.0]), feedforward=True, path_state=np.array([[0.0, -5.0, 0.0]]),
-    t_eval=np.linspace(0.0, 15.0, 1501), time_constant=None)
+veh, path, g = fws.Vehicle(2.7, 1.35), fws.Arc(0.1), fws.SteeringGains(0.2, 0.9, -1.0)
+kw = dict(speed=np.array([5.0]), feedforward=True, t_eval=np.linspace(0, 15, 1501),
+          path_state=np.array([[0.0, -5.0, 0.0]]))
+st = integrate_compiled(veh, path, g, time_constant=None, **kw)[0]
 t2 = time.process_time()
-integrate_compiled(fws.Vehicle(2.7, 1.35), fws.Arc(0.1), fws.SteeringGains(0.2, 0.9, -1.0),
-    speed=np.array([5.0]), feedforward=True, path_state=np.array([[0.0, -5.0, 0.0]]),
-    t_eval=np.linspace(0.0, 15.0, 1501), time_constant=0.05)
+compiled_outputs(veh, path, g, speed=kw["speed"], feedforward=True,
+                 time_constant=None, states=st, initial_heading=np.zeros(1))
 t3 = time.process_time()
 print(t1 - t0, t2 - t1, t3 - t2)
 """
 
 
 def first_call(cache_dir: str) -> tuple[float, float, float]:
-    """CPU seconds of (import, first call, first call with actuator) in a new process."""
+    """CPU s of (import, first integration, first outputs) in a new process."""
     env = dict(os.environ, NUMBA_CACHE_DIR=cache_dir)
     out = subprocess.run(
         [sys.executable, "-c", _FIRST_CALL],
@@ -140,12 +141,12 @@ def main() -> None:
 
     if not args.skip_compile:
         with tempfile.TemporaryDirectory() as tmp:
-            imp, cold, cold_act = first_call(tmp)
-            _, warm, warm_act = first_call(tmp)
+            imp, cold, cold_out = first_call(tmp)
+            _, warm, warm_out = first_call(tmp)
         print(
-            f"compile latency (CPU s, fresh process): empty cache {cold:.2f} "
-            f"(+{cold_act:.2f} with actuator), cached {warm:.3f} "
-            f"(+{warm_act:.3f}); import of the module {imp:.2f}"
+            f"first call (CPU s, fresh process): integration {cold:.2f} + outputs "
+            f"{cold_out:.2f} with an empty numba cache (compilation), "
+            f"{warm:.3f} + {warm_out:.3f} from the cache; import {imp:.2f}"
         )
 
     veh = PAPER_VEHICLE
@@ -197,10 +198,13 @@ def main() -> None:
     q = shared_parameters(veh, table, feedforward=True, time_constant=None)
     m_eval = 1_000_000
     _rhs_loop(10, z0[0], p, q, table.breaks, table.coefs)
-    t_rhs = best_of(
-        lambda: _rhs_loop(m_eval, z0[0], p, q, table.breaks, table.coefs),
-        repeat=args.repeat,
-    ) / m_eval
+    t_rhs = (
+        best_of(
+            lambda: _rhs_loop(m_eval, z0[0], p, q, table.breaks, table.coefs),
+            repeat=args.repeat,
+        )
+        / m_eval
+    )
     nfev = float(np.mean(stats[:, 2]))
     t_floor = nfev * t_rhs
 

@@ -515,3 +515,18 @@ def test_outputs_as_numpy_engine_and_finite_differences(path, tau, ff):
         assert np.all(np.abs(fd - mid)[smooth] <= 1e-3 * (1 + np.abs(mid[smooth])))
     if path == fws.Straight(length=40.0):
         assert "end_of_path" in set(status)
+
+
+def test_stiff_actuator_is_detected_and_step_bounded_by_stability():
+    """A lag T adds the eigenvalue -1/T: DOP853's steps are bounded near 6 T
+    (its stability interval on the negative real axis) and Hairer's test
+    flags the run; without the actuator the same 15 s run is not stiff."""
+    g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
+    t = np.linspace(0.0, 15.0, 151)
+    args = (fws.Arc(0.1), float(g.k1), float(g.k2), -1.0, 5.0, (0.0, -5.0, 0.0), t)
+    *_, plain = _run_alone(*args)
+    *_, stiff = _run_alone(*args, time_constant=0.005)
+    assert plain[0, 3] == 0 and stiff[0, 3] == 1
+    # mean accepted step within [3 T, 7 T] (stability, not accuracy)
+    mean_step = 15.0 / stiff[0, 0]
+    assert 3 * 0.005 <= mean_step <= 7 * 0.005
