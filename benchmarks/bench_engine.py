@@ -258,6 +258,25 @@ def main() -> None:
                                          initial_state=x0, duration=sc.duration),
                     repeat=args.repeat, number=3)  # fmt: skip
 
+    # 6. stops: half the runs diverge (k2 < 0) and stop at |delta_f| = pi/2 - m;
+    # the others must cost what they cost alone (per-run integration)
+    nb = min(n, 1000)
+    gs = fws.SteeringGains(g.k1[:nb], np.where(np.arange(nb) % 2 == 0, -2.0, g.k2[:nb]),
+                           g.ratio[:nb])  # fmt: skip
+    kws = dict(speed=V[:nb], feedforward=True, path_state=z0[:nb], t_eval=t,
+               time_constant=None)  # fmt: skip
+    gk = fws.SteeringGains(g.k1[1:nb:2], g.k2[1:nb:2], g.ratio[1:nb:2])
+    kwk = dict(kws, speed=V[1:nb:2], path_state=z0[1:nb:2])
+    res_s = {}
+
+    def with_stops():
+        res_s["s"] = integrate_compiled(veh, table, gs, **kws, **TOL)
+
+    t_stops = best_of(with_stops, repeat=args.repeat)
+    t_kept = best_of(lambda: integrate_compiled(veh, table, gk, **kwk, **TOL),
+                     repeat=args.repeat)  # fmt: skip
+    n_stop = int(np.sum(res_s["s"][1] != "ok"))
+
     us = 1e6
     print(f"\nper run (best of {args.repeat}), {n} runs:")
     print(f"  compiled engine, states           {t_comp * us:9.1f} us")
@@ -276,6 +295,8 @@ def main() -> None:
           "(both with all 11 signals)")  # fmt: skip
     print(f"  accepted steps per run: mean {np.mean(stats[:, 0]):.0f}, "
           f"max {np.max(stats[:, 0])}")  # fmt: skip
+    print(f"stops: {nb} runs of which {n_stop} stop early, against the {nb // 2} "
+          f"others alone: {t_stops / t_kept:.2f}x the time (target < 1.5)")  # fmt: skip
     print("single run:")
     print(f"  compiled engine, states           {t_one * 1e3:9.3f} ms  (target <= 2)")
     print(f"  compiled + compiled_outputs (11)  {t_one_full * 1e3:9.3f} ms")

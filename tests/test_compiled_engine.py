@@ -262,7 +262,7 @@ def test_same_steps_dense_output_as_scipy(name):
     t_eval = np.linspace(0.0, 15.0, 1501)
     out = np.full((m, t_eval.size), np.nan)
     trace = np.empty(len(ref_times) + 5)
-    code, t_stop, steps, _, _, _ = solve_run(
+    code, t_stop, steps, *_ = solve_run(
         y0, p, q, tab.breaks, tab.coefs, t_eval, TOL["rtol"], TOL["atol"], out, trace
     )
     assert (code, t_stop) == (0, 15.0)
@@ -530,3 +530,44 @@ def test_stiff_actuator_is_detected_and_step_bounded_by_stability():
     # mean accepted step within [3 T, 7 T] (stability, not accuracy)
     mean_step = 15.0 / stiff[0, 0]
     assert 3 * 0.005 <= mean_step <= 7 * 0.005
+
+
+def test_located_clip_switches_rate_limited_actuator():
+    """Angle and rate limits that bind: with the switches located (default)
+    the run agrees with a 1000x tighter solve_ivp reference (clips with
+    min/max, written here) to 1e-8 and needs fewer right-hand-side
+    evaluations than with the clips' kinks inside the steps."""
+    veh = fws.Vehicle(
+        2.7, 1.35, max_steer_front=0.3, max_steer_rear=0.2,
+        max_steer_rate_front=0.3, max_steer_rate_rear=0.2,
+    )  # fmt: skip
+    g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=-1.0, pole=-2.0)
+    k1, k2, tau = float(g.k1), float(g.k2), 0.05
+    rhs, command, _ = reference_rhs(veh, _const(0.1), k1, k2, -1.0, 5.0, tau=tau)
+    y0 = np.array([0.0, -1.0, 0.0, *command(-1.0, 0.0, 0.1)])
+    t = np.linspace(0.0, 15.0, 1501)
+    ref = solve_ivp(rhs, (0.0, 15.0), y0, method="DOP853", t_eval=t,
+                    rtol=1e-13, atol=1e-15)  # fmt: skip
+    runs = {
+        sw: _run_alone(
+            fws.Arc(0.1),
+            k1,
+            k2,
+            -1.0,
+            5.0,
+            (0.0, -1.0, 0.0),
+            t,
+            vehicle=veh,
+            time_constant=tau,
+            switching=sw,
+        )  # fmt: skip
+        for sw in (True, False)
+    }
+    states, status, _, _, stats = runs[True]
+    assert status[0] == "ok"
+    assert stats[0, 4] >= 2  # the limits bind, and are released
+    assert np.max(np.abs(states[:, 0, :] - ref.y)) <= 1e-8
+    assert stats[0, 2] < 0.8 * runs[False][4][0, 2]
+    # held at the limits between the switches: the angles never exceed them
+    assert np.max(np.abs(states[3, 0, :])) <= 0.3 + 1e-12
+    assert np.max(np.abs(states[4, 0, :])) <= 0.2 + 1e-12

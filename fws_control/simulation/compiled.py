@@ -117,7 +117,7 @@ STATUS_CODES = (
 )
 
 #: Per run statistics returned by :func:`integrate_compiled` (columns).
-STAT_FIELDS = ("steps", "rejected", "rhs_evaluations", "stiff")
+STAT_FIELDS = ("steps", "rejected", "rhs_evaluations", "stiff", "switches")
 
 #: Default stop margins ``steer_margin`` [rad] and ``curvature_margin`` [-].
 DEFAULT_MARGIN = 1e-3
@@ -178,11 +178,17 @@ _SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
 _Q_WHEELBASE, _Q_FF, _Q_MAX_F, _Q_MAX_R, _Q_TAU = 0, 1, 2, 3, 4
 _Q_RATE_F, _Q_RATE_R, _Q_STEER_MARGIN, _Q_CURV_MARGIN = 5, 6, 7, 8
 _Q_PERIOD, _Q_S_LO, _Q_S_HI, _Q_OPEN_LENGTH = 9, 10, 11, 12
-_NQ = 13
+_Q_SWITCH = 13  # 1: clips as modes switched at located events; 0: min/max
+_NQ = 14
 # Layout of the per run parameter vector.
 _P_SPEED, _P_K1, _P_K2, _P_RATIO = 0, 1, 2, 3
-_NP = 4
-_N_EVENTS = 4
+# modes of the four clips (front/rear angle, front/rear rate): -1, 0 or +1
+_P_MODE = 4
+_NP = 8
+_N_STOPS = 4
+_N_EVENTS = 8
+#: Most clip switches per run (a guard against chattering).
+_MAX_SWITCHES = 100_000
 
 
 # --------------------------------------------------------------------------
@@ -206,17 +212,51 @@ def _curvature(s, q, breaks, coefs):
 
 
 @_jit
-def _command(e, theta, kappa, p, q):
-    """The paper's law, as controllers.steering_command (same operations)."""
+def _raw_command(e, theta, kappa, p, q):
     fb = -p[_P_K1] * e - p[_P_K2] * theta
     cf = fb
     if q[_Q_FF] != 0.0:
         cf = fb + math.atan(q[_Q_WHEELBASE] * kappa)
-    cr = p[_P_RATIO] * fb
+    return cf, p[_P_RATIO] * fb
+
+
+@_jit
+def _command(e, theta, kappa, p, q):
+    """The paper's law, as controllers.steering_command (same operations).
+
+    With switching (``q[13] = 1``) a clipped channel is held at its limit
+    by its mode (``p[4:6]``) rather than by min/max, so that the right-hand
+    side is smooth between the located switches.
+    """
+    cf, cr = _raw_command(e, theta, kappa, p, q)
     mf, mr = q[_Q_MAX_F], q[_Q_MAX_R]
+    if q[_Q_SWITCH] != 0.0:
+        if p[_P_MODE] != 0.0:
+            cf = p[_P_MODE] * mf
+        if p[_P_MODE + 1] != 0.0:
+            cr = p[_P_MODE + 1] * mr
+        return cf, cr
     cf = min(max(cf, -mf), mf)
     cr = min(max(cr, -mr), mr)
     return cf, cr
+
+
+@_jit
+def _clip_values(y, p, q, breaks, coefs, out):
+    """Unclipped front/rear commands and actuator rates, and their limits."""
+    kappa = _curvature(y[0], q, breaks, coefs)
+    raw_f, raw_r = _raw_command(y[1], y[2], kappa, p, q)
+    out[0], out[1] = raw_f, raw_r
+    out[4], out[5] = q[_Q_MAX_F], q[_Q_MAX_R]
+    out[6], out[7] = q[_Q_RATE_F], q[_Q_RATE_R]
+    tau = q[_Q_TAU]
+    if tau > 0.0:
+        cf, cr = _command(y[1], y[2], kappa, p, q)
+        out[2] = (cf - y[3]) / tau
+        out[3] = (cr - y[4]) / tau
+    else:
+        out[2], out[3] = 0.0, 0.0
+        out[6], out[7] = np.inf, np.inf
 
 
 @_jit
@@ -260,13 +300,21 @@ def closed_loop_rhs(t, y, p, q, breaks, coefs, out):
         rf = (cf - df) / tau
         rr = (cr - dr) / tau
         mf, mr = q[_Q_RATE_F], q[_Q_RATE_R]
-        out[3] = min(max(rf, -mf), mf)
-        out[4] = min(max(rr, -mr), mr)
+        if q[_Q_SWITCH] != 0.0:
+            if p[_P_MODE + 2] != 0.0:
+                rf = p[_P_MODE + 2] * mf
+            if p[_P_MODE + 3] != 0.0:
+                rr = p[_P_MODE + 3] * mr
+            out[3] = rf
+            out[4] = rr
+        else:
+            out[3] = min(max(rf, -mf), mf)
+            out[4] = min(max(rr, -mr), mr)
 
 
 @_jit
 def _events(y, p, q, breaks, coefs, g):
-    """Stop-event functions (a run stops where one falls to <= 0)."""
+    """Event functions: 0-3 stop a run, 4-7 switch a clip's mode (at <= 0)."""
     s, e = y[0], y[1]
     kappa = _curvature(s, q, breaks, coefs)
     if q[_Q_TAU] > 0.0:
@@ -283,6 +331,19 @@ def _events(y, p, q, breaks, coefs, g):
     else:
         g[2] = np.inf
         g[3] = np.inf
+    if q[_Q_SWITCH] == 0.0:
+        for j in range(_N_STOPS, _N_EVENTS):
+            g[j] = np.inf
+        return
+    # clip j: free (mode 0) while |raw| < limit, held while mode * raw > limit
+    v = np.empty(8)
+    _clip_values(y, p, q, breaks, coefs, v)
+    for j in range(4):
+        mode = p[_P_MODE + j]
+        if mode == 0.0:
+            g[_N_STOPS + j] = v[4 + j] - abs(v[j])
+        else:
+            g[_N_STOPS + j] = mode * v[j] - v[4 + j]
 
 
 # --------------------------------------------------------------------------
@@ -609,9 +670,12 @@ def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):
     ``N`` accepted steps (pass an empty array for none).
 
     Returns ``(status_code, t_stop, steps, rejected, rhs_evaluations,
-    stiff)``: the code indexes :data:`STATUS_CODES`; ``stiff`` is 1 if
-    Hairer's stiffness test fired (15 steps with :math:`|h\lambda| > 6.1`
-    without 6 non-stiff steps in between).
+    stiff, switches)``: the code indexes :data:`STATUS_CODES`; ``stiff`` is
+    1 if Hairer's stiffness test fired (15 steps with
+    :math:`|h\lambda| > 6.1` without 6 non-stiff steps in between);
+    ``switches`` counts the located switches of the clips (with
+    ``q[13] = 1``; `p` then has 8 entries, the last four the clips' modes,
+    which are overwritten).
 
     Examples
     --------
@@ -645,6 +709,17 @@ def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):
     y = y0.copy()
     y_new = np.empty(m)
     f = np.empty(m)
+    switches = 0
+    if q[_Q_SWITCH] != 0.0:
+        # initial modes: a channel beyond its limit starts held (angles
+        # first: the actuator's rate depends on the held command)
+        v = np.empty(8)
+        for j in range(4):
+            p[_P_MODE + j] = 0.0
+        for j in range(4):
+            _clip_values(y, p, q, breaks, coefs, v)
+            if abs(v[j]) > v[4 + j]:
+                p[_P_MODE + j] = 1.0 if v[j] > 0 else -1.0
     closed_loop_rhs(t, y, p, q, breaks, coefs, f)
     nfev = 1
     steps = 0
@@ -656,17 +731,17 @@ def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):
     # a run that starts at or beyond a stop condition stops at once
     _events(y, p, q, breaks, coefs, g_old)
     worst = 0
-    for j in range(_N_EVENTS):
+    for j in range(_N_STOPS):
         if g_old[j] < g_old[worst]:
             worst = j
     if g_old[worst] <= 0.0:
         for i in range(m):
             out[i, 0] = y[i]
-        return min(worst, 2) + 1, t, 0, 0, nfev, 0
+        return min(worst, 2) + 1, t, 0, 0, nfev, 0, 0
     if T == 1 or t_bound == t:
         for i in range(m):
             out[i, 0] = y[i]
-        return 0, t, 0, 0, nfev, 0
+        return 0, t, 0, 0, nfev, 0, 0
 
     h_abs = _select_initial_step(
         t, y, t_bound, f, rtol, atol, p, q, breaks, coefs, work
@@ -681,7 +756,7 @@ def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):
         nfev += _NS * (n_rej + 1)
         rejected_total += n_rej
         if not ok:
-            return 4, t, steps, rejected_total, nfev, stiff
+            return 4, t, steps, rejected_total, nfev, stiff, switches
         # Hairer's stiffness detection (dop853.f): |h lambda| from the last
         # stage and f(y_new), both at t + h
         num = 0.0
@@ -716,8 +791,20 @@ def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):
         _events(y, p, q, breaks, coefs, g_new)
         code = 0
         t_hit = np.inf
+        j_hit = -1
         for j in range(_N_EVENTS):
-            if g_old[j] >= 0 and g_new[j] <= 0:
+            if j < _N_STOPS:
+                hit = g_old[j] >= 0 and g_new[j] <= 0  # solve_ivp, direction -1
+            else:
+                # a clip's mode is wrong at the step's end: it switched in the
+                # step (g from > 0), or it was ~0 on the wrong side already at
+                # a restart (then the switch is at the step's start)
+                hit = g_new[j] < 0 or (g_new[j] == 0 and g_old[j] > 0)
+            if not hit:
+                continue
+            if j >= _N_STOPS and not g_old[j] > 0:
+                root = t_old
+            else:
                 if not dense_ready:
                     _dense_coefficients(
                         t_old, h, y_old, y, f, K, p, q, breaks, coefs, F, ytmp
@@ -727,10 +814,12 @@ def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):
                 root = _brentq(
                     j, t_old, t, t_old, t, y_old, F, p, q, breaks, coefs, ytmp, g_tmp
                 )
-                if root < t_hit:
-                    t_hit = root
-                    code = min(j, 2) + 1
-        upto = t if code == 0 else t_hit
+            if root < t_hit:
+                t_hit = root
+                j_hit = j
+        if 0 <= j_hit < _N_STOPS:
+            code = min(j_hit, 2) + 1
+        upto = t if j_hit < 0 else t_hit
         # ---- solve_ivp: outputs at t_eval <= upto from this step's dense output
         while k_out < T and t_eval[k_out] <= upto:
             if not dense_ready:
@@ -744,9 +833,40 @@ def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):
                 out[i, k_out] = ytmp[i]
             k_out += 1
         if code != 0:
-            return code, t_hit, steps, rejected_total, nfev, stiff
+            return code, t_hit, steps, rejected_total, nfev, stiff, switches
+        if j_hit >= _N_STOPS:
+            # a clip switches: restart at the switch with the new mode (the
+            # rest of the step, integrated in the old mode, is discarded)
+            if not dense_ready:
+                _dense_coefficients(
+                    t_old, h, y_old, y, f, K, p, q, breaks, coefs, F, ytmp
+                )
+                nfev += 3
+            _dense_eval(t_hit, t_old, t, y_old, F, ytmp)
+            for i in range(m):
+                y[i] = ytmp[i]
+            t = t_hit
+            site = j_hit - _N_STOPS
+            if p[_P_MODE + site] != 0.0:
+                p[_P_MODE + site] = 0.0
+            else:
+                v = np.empty(8)
+                _clip_values(y, p, q, breaks, coefs, v)
+                p[_P_MODE + site] = 1.0 if v[site] > 0 else -1.0
+            switches += 1
+            if switches > _MAX_SWITCHES:
+                return 4, t, steps, rejected_total, nfev, stiff, switches
+            if t >= t_bound:
+                return 0, t_bound, steps, rejected_total, nfev, stiff, switches
+            closed_loop_rhs(t, y, p, q, breaks, coefs, f)
+            h_abs = _select_initial_step(
+                t, y, t_bound, f, rtol, atol, p, q, breaks, coefs, work
+            )
+            nfev += 2
+            _events(y, p, q, breaks, coefs, g_old)
+            continue
         if t == t_bound:
-            return 0, t, steps, rejected_total, nfev, stiff
+            return 0, t, steps, rejected_total, nfev, stiff, switches
         for j in range(_N_EVENTS):
             g_old[j] = g_new[j]
 
@@ -764,6 +884,7 @@ def _solve_batch(
         stats[i, 1] = r[3]
         stats[i, 2] = r[4]
         stats[i, 3] = r[5]
+        stats[i, 4] = r[6]
         # NaN after the stop (the columns up to it are written by solve_run)
         for k in range(t_eval.size):
             if t_eval[k] > r[1]:
@@ -1082,6 +1203,7 @@ def shared_parameters(
     time_constant: float | None,
     steer_margin: float = DEFAULT_MARGIN,
     curvature_margin: float = DEFAULT_MARGIN,
+    switching: bool = False,
 ) -> np.ndarray:
     """The parameter vector shared by all runs of a call (for the kernels).
 
@@ -1097,11 +1219,15 @@ def shared_parameters(
         Actuator lag [s]; None: no actuator (the angles are the commands).
     steer_margin, curvature_margin : float, optional
         Stop margins (see the module notes), >= 0.
+    switching : bool, optional
+        Locate the switches of the angle and rate clips as events and hold a
+        clipped channel by its mode (then the per run parameter vectors have
+        8 entries); default False: min/max in the right-hand side.
 
     Returns
     -------
     ndarray
-        Shape ``(13,)``.
+        Shape ``(14,)``.
 
     Examples
     --------
@@ -1136,6 +1262,7 @@ def shared_parameters(
     else:
         q[_Q_S_LO], q[_Q_S_HI] = -math.inf, math.inf
     q[_Q_OPEN_LENGTH] = table.open_length
+    q[_Q_SWITCH] = 1.0 if switching else 0.0
     return q
 
 
@@ -1196,6 +1323,7 @@ def integrate_compiled(
     atol: float = 1e-12,
     steer_margin: float = DEFAULT_MARGIN,
     curvature_margin: float = DEFAULT_MARGIN,
+    switching: bool = True,
     out: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate ``n`` runs, each with its own DOP853 steps and events.
@@ -1229,6 +1357,12 @@ def integrate_compiled(
         Tolerances of DOP853 (scipy's meaning), > 0.
     steer_margin, curvature_margin : float, optional
         Stop margins, in [0, 1) (see the module notes).
+    switching : bool, optional
+        Locate where the steering-angle and steering-rate limits start and
+        stop clipping as events and restart the step there (default), so
+        that the right-hand side is smooth within every step; False: clip
+        with min/max inside the right-hand side, as the numpy engine does
+        (its kinks then fall inside steps).
     out : ndarray, optional
         Preallocated ``(n, m, T)`` float array for the states (``m = 3``, or
         5 with an actuator), e.g. a slice of a larger result or a
@@ -1244,7 +1378,7 @@ def integrate_compiled(
     t_stop : ndarray
         Per run end time [s].
     stats : ndarray
-        Shape ``(n, 4)``, columns :data:`STAT_FIELDS`.
+        Shape ``(n, 5)``, columns :data:`STAT_FIELDS`.
 
     Raises
     ------
@@ -1281,6 +1415,7 @@ def integrate_compiled(
         time_constant=time_constant,
         steer_margin=steer_margin,
         curvature_margin=curvature_margin,
+        switching=switching,
     )
     speed = np.ascontiguousarray(speed, dtype=float).ravel()
     n = speed.size
@@ -1334,7 +1469,7 @@ def integrate_compiled(
 
 def _run_parameters(gains: SteeringGains, speed: np.ndarray) -> np.ndarray:
     n = speed.size
-    P = np.empty((n, _NP))
+    P = np.zeros((n, _NP))  # clip modes 0
     P[:, _P_SPEED] = speed
     for col, v in ((_P_K1, gains.k1), (_P_K2, gains.k2), (_P_RATIO, gains.ratio)):
         P[:, col] = np.broadcast_to(np.asarray(v, dtype=float).ravel(), (n,))
