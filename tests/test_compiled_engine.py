@@ -571,3 +571,36 @@ def test_located_clip_switches_rate_limited_actuator():
     # held at the limits between the switches: the angles never exceed them
     assert np.max(np.abs(states[3, 0, :])) <= 0.3 + 1e-12
     assert np.max(np.abs(states[4, 0, :])) <= 0.2 + 1e-12
+
+
+@pytest.mark.parametrize(
+    ("path", "speed", "x0"),
+    [
+        (fws.Straight(), -3.0, (0.0, 1.0, 0.3)),  # reversing
+        (fws.Arc(0.2), 5.0, (0.0, -1.0, 0.0)),  # a closed path: s wraps
+        (
+            fws.PathChain([fws.Straight(length=20.0), fws.Clothoid(0.0, 0.1, 10.0),
+                           fws.Arc(0.1, length=20.0)]),
+            5.0,
+            (0.0, 0.5, 0.0),
+        ),  # ends: end_of_path
+    ],
+    ids=["reversing", "closed-arc", "chain"],
+)  # fmt: skip
+def test_agrees_with_numpy_engine(path, speed, x0):
+    from fws_control.simulation.engine import initial_path_state, integrate
+
+    g = fws.double_root_gains(
+        VEH, speed=speed, curvature=0.05, ratio=np.array([-0.5, 0.3]), pole=-1.0
+    )
+    z0 = initial_path_state(path, np.array([x0, x0], float))
+    t = np.linspace(0.0, 20.0, 2001)
+    kw = dict(speed=np.full(2, speed), feedforward=True, path_state=z0, t_eval=t,
+              time_constant=None, **TOL)  # fmt: skip
+    ref = integrate(VEH, path, g, **kw)
+    got = integrate_compiled(VEH, path, g, **kw)
+    assert got[1].tolist() == ref[1].tolist()
+    np.testing.assert_allclose(got[3], ref[3], rtol=1e-9)
+    assert np.array_equal(np.isnan(got[0]), np.isnan(ref[0]))
+    # the numpy engine's error norm is over both runs: agreement at ~10 rtol
+    assert np.nanmax(np.abs(got[0] - ref[0])) <= 1e-8

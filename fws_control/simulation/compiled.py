@@ -47,6 +47,13 @@ piecewise cubic table in ``s`` (:func:`curvature_table`): exact for
 :class:`~fws_control.Clothoid` and :class:`~fws_control.PathChain` of them;
 a cubic Hermite fit to a stated tolerance for other paths.
 
+The steering-angle and steering-rate limits are switched, not clipped:
+where a channel reaches its limit (or leaves it) is located as an event on
+the dense output, the step is cut there and the integration restarts with
+that channel held at the limit (or free), so that the right-hand side is
+smooth within every step (``switching=False`` clips with min/max inside the
+right-hand side instead, as the numpy engine does).
+
 Not supported here (the numpy engine remains the general path and the
 fallback): :class:`~fws_control.LateralController` baselines, an input
 delay, other solvers than DOP853, the dense solution for exact peaks, and
