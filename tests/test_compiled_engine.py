@@ -461,6 +461,7 @@ def test_out_array_and_validation():
     assert compiled_support(fws.Straight(), g) is None
     assert "controller" in compiled_support(fws.Straight(), fws.PurePursuit())
     assert "DOP853" in compiled_support(fws.Straight(), g, method="RK45")
+    assert compiled_support(fws.Straight(), g, method=DOP853) is None
 
 
 # --------------------------------------------------------------------------

@@ -60,7 +60,7 @@ delay, other solvers than DOP853, the dense solution for exact peaks, and
 any model other than the kinematic one. A stiff actuator (small time
 constant) is detected with Hairer's test (``stiff`` in the statistics) but
 still integrated explicitly: the explicit step is then limited by stability
-to about :math:`3.3\,T` (see ``docs/performance.md``).
+to about :math:`6\,T` (see ``docs/performance.md``).
 
 numba is an optional dependency (extra ``fast``). Without it the module
 still imports; :func:`integrate_compiled` raises :class:`ImportError`.
@@ -76,6 +76,7 @@ import numpy as np
 # The tableau of scipy's DOP853 itself, so that the port takes exactly the
 # same steps (a private scipy module: the test suite checks the port step by
 # step against scipy.integrate.DOP853, so a change there cannot go unseen).
+from scipy.integrate import DOP853
 from scipy.integrate._ivp import dop853_coefficients as _dop
 
 from ..controllers import steering_command
@@ -1287,8 +1288,8 @@ def compiled_support(
         compiled.
     delay : float, optional
         Input delay [s]: only 0 is compiled.
-    method : str, optional
-        Only ``"DOP853"`` is compiled.
+    method : str or scipy.integrate.OdeSolver, optional
+        Only ``"DOP853"`` (or the class) is compiled.
 
     Returns
     -------
@@ -1309,7 +1310,7 @@ def compiled_support(
         return "only the paper's law (SteeringGains) is compiled, not controllers"
     if delay != 0.0:
         return "an input delay (method of steps) is not compiled"
-    if method != "DOP853":
+    if method != "DOP853" and method is not DOP853:
         return f"only method='DOP853' is compiled, got {method!r}"
     if _exact_pieces(path) is None and not math.isfinite(float(path.length)):
         return "an unbounded path other than Straight has no curvature table"
