@@ -283,13 +283,15 @@ def main() -> None:
     # 6. stops: half the runs diverge (k2 < 0) and stop near |delta_f| = pi/2;
     # per-run integration: the batch costs what its two halves cost apart
     nb = min(n, 1000)
-    k2s = np.where(np.arange(nb) % 2 == 0, -2.0, g.k2[:nb])
-    gs = fws.SteeringGains(g.k1[:nb], k2s, g.ratio[:nb])
+    even = np.arange(nb) % 2 == 0  # front steering only, k2 < 0: diverge
+    k2s = np.where(even, -2.0, g.k2[:nb])
+    a_s = np.where(even, 0.0, g.ratio[:nb])
+    gs = fws.SteeringGains(g.k1[:nb], k2s, a_s)
     kws = dict(speed=V[:nb], feedforward=True, path_state=z0[:nb], t_eval=t,
                time_constant=None)  # fmt: skip
     halves = [np.arange(0, nb, 2), np.arange(1, nb, 2)]
     parts = [
-        (fws.SteeringGains(g.k1[h], k2s[h], g.ratio[h]),
+        (fws.SteeringGains(g.k1[h], k2s[h], a_s[h]),
          dict(kws, speed=V[h], path_state=z0[h]))
         for h in halves
     ]  # fmt: skip
