@@ -1302,6 +1302,29 @@ class Spline(Path):
                 "waypoints give a spline with a cusp (zero speed) near waypoint "
                 f"{i} at {pts[min(i, len(pts) - 1)].tolist()}; move or add waypoints"
             )
+        # A cusp where the spline doubles back (both components of the
+        # derivative vanish at the same t, e.g. collinear waypoints that turn
+        # back) need not be sampled at zero speed: detect it as a reversal of
+        # the tangent between neighbouring samples (16 per waypoint interval
+        # plus the Gauss nodes), which no trackable bend makes.
+        t_all = np.concatenate([t_tab, nodes.ravel()])
+        order = np.argsort(t_all, kind="stable")
+        t_all = t_all[order]
+        tan = cs(t_all, 1)
+        tan = tan / np.hypot(tan[:, 0], tan[:, 1])[:, None]
+        dots = np.sum(tan[:-1] * tan[1:], axis=1)
+        if closed:
+            dots = np.append(dots, float(tan[-1] @ tan[0]))
+        back = dots <= 0.0
+        if np.any(back):
+            j = int(np.flatnonzero(back)[0])
+            tj = 0.5 * (t_all[j] + t_all[min(j + 1, t_all.size - 1)])
+            i = int(np.argmin(np.abs(t - tj))) % (len(pts) - 1 if closed else len(pts))
+            raise ValueError(
+                "waypoints give a spline with a cusp (it doubles back on itself) "
+                f"near waypoint {i} at {pts[i].tolist()}; move or add waypoints "
+                "so that the path turns instead of reversing"
+            )
         s_tab = np.concatenate([[0.0], np.cumsum(half * (speed_nodes @ _GL8_W))])
         inv = CubicHermiteSpline(s_tab, t_tab, 1.0 / speed_tab)
 

@@ -760,3 +760,38 @@ def test_invalid_evaluation_and_projection_inputs():
         PATHS["spline_open"].project([1.0, 2.0], [1.0, 1.0], s_guess=[1.0, 2.0, 3.0])
     with pytest.raises(ValueError, match="psi must be finite"):
         seg.errors(1.0, 1.0, math.nan)
+
+
+# -- cusps (issue 13 item 5) --------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "wp, index",
+    [
+        ([[0, 0], [0, 2], [0, 1]], 1),
+        ([[0, 0], [10, 0], [5, 0]], 1),
+        ([[0, 0], [10, 0], [20, 0], [15, 0]], 2),
+    ],
+)
+def test_spline_refuses_waypoints_that_double_back(wp, index):
+    # Reference: the chord-length natural spline written with scipy directly;
+    # its tangent reverses (dot product of the unit tangents at two nearby
+    # parameters < 0) between the samples, so the path has a cusp.
+    w = np.asarray(wp, dtype=float)
+    t = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(w, axis=0).T))])
+    cs = CubicSpline(t, w, axis=0, bc_type="natural")
+    tt = np.linspace(0.0, t[-1], 20001)
+    d = cs(tt, 1)
+    u = d / np.hypot(d[:, 0], d[:, 1])[:, None]
+    assert np.min(np.sum(u[:-1] * u[1:], axis=1)) < 0.0
+    with pytest.raises(ValueError, match=rf"cusp .*near waypoint {index}\b"):
+        Spline(wp)
+
+
+def test_spline_hairpin_is_not_a_cusp():
+    # a tight U-turn turns by pi over a finite length: accepted, and its
+    # heading changes continuously (no jump of pi between close samples)
+    sp = Spline([[0, 0], [5, 0], [5, 0.5], [0, 0.5]])
+    s = np.linspace(0.0, sp.length, 4001)
+    jump = np.abs(np.diff(np.unwrap(sp.heading(s))))
+    assert jump.max() < 0.1
