@@ -240,29 +240,30 @@ def double_root_gains(
     predicted = np.sqrt(np.finfo(float).eps * cond)
     bad = ~(predicted <= _PREDICTED_RTOL)
     if np.any(bad):
-        i = np.unravel_index(int(np.argmax(np.where(bad, cond, -1.0))), np.shape(bad))
-        pick = (
-            (lambda v: np.broadcast_to(v, np.shape(bad))[i].item())
-            if np.ndim(bad)
-            else float
+        shape = np.shape(cond)
+        i = np.unravel_index(int(np.argmax(np.where(bad, cond, -1.0))), shape)
+
+        def at(v):
+            return np.broadcast_to(np.asarray(v, dtype=float), shape)[i].item()
+
+        where = f"ratio={at(a_b)!r}, pole={at(lam)!r}"
+        hint = (
+            "Choose a pole not far slower or faster than the plant (|pole| "
+            "comparable to speed*curvature and speed/wheelbase)"
         )
-        a_i, lam_i = (
-            pick(np.asarray(a_b, dtype=float)),
-            pick(np.asarray(lam) + 0 * cond),
-        )
-        where = f"ratio={a_i!r}, pole={lam_i!r}"
         if isinstance(p, LateralPlant):
-            k_i = pick(np.asarray(p.curvature, dtype=float) + 0 * cond)
-            v_i = pick(np.asarray(p.speed, dtype=float) + 0 * cond)
-            where += f", curvature={k_i!r}, speed={v_i!r}"
+            where += f", curvature={at(p.curvature)!r}, speed={at(p.speed)!r}"
+            if at(distance) < 1e-2:
+                hint = (
+                    f"The design is nearly uncontrollable (relative distance "
+                    f"{at(distance):.3g} from delta_r = delta_f on a straight "
+                    "path, ratio = 1): move the ratio away from it"
+                )
         raise UncontrollableError(
-            f"{where}: the double root cannot be placed to working precision. "
-            f"The closed loop's terms (gains k1={pick(k1 + 0 * cond):.3g}, "
-            f"k2={pick(k2 + 0 * cond):.3g}) cancel so that round-off alone moves "
-            f"the poles by about {pick(predicted):.2g}*|pole| (condition "
-            f"{pick(cond):.3g}; accepted: <= {_PREDICTED_RTOL:g}*|pole|). Move the "
-            "ratio away from the uncontrollable design (ratio = 1 on a straight "
-            "path) or choose a pole not far slower or faster than the plant "
-            "(|pole| comparable to speed*curvature and speed/wheelbase)"
+            f"{where}: the double root cannot be placed to working precision: "
+            f"the closed loop's terms (gains k1={at(k1):.3g}, k2={at(k2):.3g}) "
+            f"cancel so that round-off alone moves the poles by about "
+            f"{at(predicted):.2g}*|pole| (condition {at(cond):.3g}; accepted: "
+            f"<= {_PREDICTED_RTOL:g}*|pole|). {hint}"
         )
     return SteeringGains(k1=k1, k2=k2, ratio=a_b)

@@ -145,8 +145,9 @@ def settling_time(
     signal : array_like
         Shape ``(..., time)``, converging to 0 (e.g. the lateral error).
     band : float or array_like, optional
-        Half-width of the band, in the signal's units; broadcasts with
-        ``signal[..., 0]``. Default: ``fraction * |signal[..., 0]|``.
+        Half-width of the band, in the signal's units, finite and > 0;
+        broadcasts with ``signal[..., 0]``. Default: ``fraction *
+        |signal[..., 0]|``.
     fraction : float, optional
         Relative band used when `band` is not given (default 2 %).
 
@@ -155,6 +156,13 @@ def settling_time(
     float or ndarray
         Settling time [s]: 0 if the signal never leaves the band, ``inf`` if it
         is outside the band at the last sample, NaN if any sample is NaN.
+
+    Raises
+    ------
+    ValueError
+        If `band` is not finite and > 0 (NaN would read as "settled at
+        once"), `fraction` is not finite and > 0, or `t` and `signal` do not
+        fit.
 
     Examples
     --------
@@ -168,7 +176,17 @@ def settling_time(
     mag = np.abs(x)
     if band is None:
         band = check_positive("fraction", fraction) * mag[..., 0]
-    band = np.broadcast_to(np.asarray(band, dtype=float), mag.shape[:-1])
+    else:
+        # NaN would compare False everywhere ("settled at once") and a
+        # negative band can never be entered: both are refused, by name.
+        band = check_positive("band", band)
+    try:
+        band = np.broadcast_to(np.asarray(band, dtype=float), mag.shape[:-1])
+    except ValueError:
+        raise ValueError(
+            f"band must broadcast with signal[..., 0] of shape {mag.shape[:-1]}, "
+            f"got shape {np.shape(band)}"
+        ) from None
     outside = mag > band[..., None]
     T = t.size
     # index of the last sample outside the band (-1: never outside)
@@ -404,6 +422,15 @@ def tracking_metrics(
     >>> m.status, round(m.peak_lateral_accel, 2), round(m.settling_time, 2)
     ('ok', 5.37, 6.23)
     """
+    if not all(hasattr(result, n) for n in ("t", "e", "theta", "status", "peaks")):
+        raise TypeError(
+            "result must be a fws_control.SimulationResult, got "
+            f"{type(result).__name__}"
+        )
+    if band is not None:
+        band = check_positive("band", band)
+    check_positive("fraction", fraction)
+    check_positive("window", window)
     t = np.asarray(result.t, dtype=float)
     status = np.asarray(result.status)
     ok = status == "ok"
