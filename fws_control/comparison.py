@@ -304,6 +304,11 @@ def compare_linear_nonlinear(
     duration = check_scalar("duration", check_positive("duration", duration))
     feedforward = check_bool("feedforward", feedforward)
     dt = check_scalar("dt", check_positive("dt", dt))
+    if dt > duration:
+        raise ValueError(
+            f"dt must be <= duration = {duration:g} s (at least two output "
+            f"samples), got dt={dt:g}"
+        )
     if duration / dt > _MAX_SAMPLES:
         raise ValueError(
             f"duration/dt = {duration:g}/{dt:g} asks for more than {_MAX_SAMPLES:.0e} "

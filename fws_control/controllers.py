@@ -39,8 +39,8 @@ import control as ct
 import numpy as np
 
 from .gains import SteeringGains
-from .models import STEERING_INPUTS
-from .validation import check_positive
+from .models import STEERING_INPUTS, check_inputs, check_result
+from .validation import check_bool, check_positive, check_scalar, check_type
 from .vehicle import Vehicle
 
 __all__ = [
@@ -126,14 +126,18 @@ def steering_command(
     >>> float(fws.steering_command(lim, g, 1.0, 0.0, curvature=0.1)[0])
     0.1
     """
+    check_type("vehicle", vehicle, Vehicle)
     gains = _check_gains(gains)
-    fb = -gains.k1 * np.asarray(e, dtype=float) - gains.k2 * np.asarray(
-        theta, dtype=float
-    )
-    delta_f = fb
-    if feedforward:
-        delta_f = fb + np.arctan(vehicle.wheelbase * np.asarray(curvature, dtype=float))
-    delta_r = gains.ratio * fb
+    feedforward = check_bool("feedforward", feedforward)
+    e_, th_, k_ = check_inputs(e=e, theta=theta, curvature=curvature)
+    with np.errstate(over="ignore", invalid="ignore"):
+        fb = -gains.k1 * e_ - gains.k2 * th_
+        delta_f = fb
+        if feedforward:
+            delta_f = fb + np.arctan(vehicle.wheelbase * k_)
+        delta_r = gains.ratio * fb
+    check_result("steering command", delta_f, e=e, theta=theta)
+    check_result("steering command", delta_r, e=e, theta=theta)
     max_f = _limit(vehicle.max_steer_front)
     max_r = _limit(vehicle.max_steer_rear)
     if math.isfinite(max_f):
@@ -192,17 +196,33 @@ def steering_command_rate(
     >>> [round(float(v), 6) for v in r]
     [0.1, -0.1]
     """
+    check_type("vehicle", vehicle, Vehicle)
     gains = _check_gains(gains)
-    fb_rate = -gains.k1 * np.asarray(e_rate, dtype=float) - gains.k2 * np.asarray(
-        theta_rate, dtype=float
+    feedforward = check_bool("feedforward", feedforward)
+    _, _, er, thr, k_, kr = check_inputs(
+        e=e,
+        theta=theta,
+        e_rate=e_rate,
+        theta_rate=theta_rate,
+        curvature=curvature,
+        curvature_rate=curvature_rate,
     )
-    rate_f = fb_rate
-    if feedforward:
-        fk = vehicle.wheelbase * np.asarray(curvature, dtype=float)
-        rate_f = fb_rate + vehicle.wheelbase * np.asarray(curvature_rate) / (
-            1.0 + fk**2
+    with np.errstate(over="ignore", invalid="ignore"):
+        fb_rate = -gains.k1 * er - gains.k2 * thr
+        rate_f = fb_rate
+        if feedforward:
+            fk = vehicle.wheelbase * k_
+            # 1 + fk^2 overflows to inf for a huge curvature: the term -> 0
+            rate_f = fb_rate + vehicle.wheelbase * kr / (1.0 + fk**2)
+        rate_r = gains.ratio * fb_rate
+    for out in (rate_f, rate_r):
+        check_result(
+            "steering rate",
+            out,
+            e_rate=e_rate,
+            theta_rate=theta_rate,
+            curvature_rate=curvature_rate,
         )
-    rate_r = gains.ratio * fb_rate
     max_f = _limit(vehicle.max_steer_front)
     max_r = _limit(vehicle.max_steer_rear)
     if math.isfinite(max_f) or math.isfinite(max_r):
@@ -266,6 +286,7 @@ def path_tracking_controller(
     >>> ctrl.output(0.0, [], [1.0, 0.0, 0.1]).round(6)
     array([0.163712, 0.1     ])
     """
+    check_type("vehicle", vehicle, Vehicle)
     gains = _check_gains(gains)
     if any(np.ndim(v) != 0 for v in (gains.k1, gains.k2, gains.ratio)):
         raise ValueError(
@@ -273,7 +294,7 @@ def path_tracking_controller(
             f"shapes {np.shape(gains.k1)}, {np.shape(gains.k2)}, "
             f"{np.shape(gains.ratio)}"
         )
-    feedforward = bool(feedforward)
+    feedforward = check_bool("feedforward", feedforward)
 
     def output(t, x, u, params):
         g = SteeringGains(params["k1"], params["k2"], params["ratio"])
@@ -437,7 +458,8 @@ def steering_actuator(
     >>> act.dynamics(0.0, [0.0, 0.0], [0.2, 0.01]).round(6)
     array([0.5, 0.1])
     """
-    tau = float(check_positive("time_constant", time_constant))
+    check_type("vehicle", vehicle, Vehicle)
+    tau = check_scalar("time_constant", check_positive("time_constant", time_constant))
 
     def update(t, x, u, params):
         rf, rr = actuator_rate(vehicle, u, x, time_constant=tau)

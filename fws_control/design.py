@@ -59,6 +59,19 @@ _PREDICTED_RTOL = 1e-5
 _POLE_RTOL = 1e-4
 
 
+def _achieved_error(lm, a, k1, k2, lam) -> np.ndarray:
+    """max |eig(A - b k) - pole| / |pole| of the closed loop (inf on overflow)."""
+    with np.errstate(all="ignore"):
+        b = lm.input_vector(a)
+        kc = np.asarray(k1)[..., None] * lm.c_e + np.asarray(k2)[..., None] * lm.c_theta
+        A_cl = lm.A - b[..., :, None] * kc[..., None, :]
+        finite = np.all(np.isfinite(A_cl), axis=(-2, -1))
+        ev = np.linalg.eigvals(np.where(finite[..., None, None], A_cl, 0.0))
+        lam = np.asarray(lam, dtype=float)
+        err = np.max(np.abs(ev - lam[..., None]), axis=-1) / np.abs(lam)
+    return np.where(finite & np.isfinite(err), err, np.inf)
+
+
 def _condition(lm, a, k1, k2, lam) -> np.ndarray:
     r"""Relative condition number of the placed double root (2-state loop).
 
@@ -191,7 +204,8 @@ def double_root_gains(
         )
     a1, b1, g1 = cp.n1[..., 1], cp.n2[..., 1], cp.open_loop[..., 1]
     a0, b0, g0 = cp.n1[..., 2], cp.n2[..., 2], cp.open_loop[..., 2]
-    det = a1 * b0 - b1 * a0
+    with np.errstate(all="ignore"):  # an overflow is refused below
+        det = a1 * b0 - b1 * a0
     if isinstance(p, LateralPlant):
         # det = -(V^3/f^2) * distance, distance = a^2 f^2 kappa^2 + (c - a)^2:
         # dimensionless, zero exactly at the uncontrollable design.
@@ -236,12 +250,17 @@ def double_root_gains(
     # (which report the requested double root even when the terms behind
     # them cancel in round-off): refuse a design whose double root is not
     # defined to working precision.
-    cond = _condition(loop_matrices(p), a_b, k1, k2, lam)
+    lm = loop_matrices(p)
+    cond = _condition(lm, a_b, k1, k2, lam)
     predicted = np.sqrt(np.finfo(float).eps * cond)
-    bad = ~(predicted <= _PREDICTED_RTOL)
+    # ... and check the achieved poles themselves (eigenvalues of the
+    # closed-loop matrix), which also catches an overflow in the solve
+    # (e.g. ratio = 1e300 makes det = inf and the gains 0).
+    achieved = _achieved_error(lm, a_b, k1, k2, lam)
+    bad = ~(predicted <= _PREDICTED_RTOL) | ~(achieved <= _POLE_RTOL)
     if np.any(bad):
-        shape = np.shape(cond)
-        i = np.unravel_index(int(np.argmax(np.where(bad, cond, -1.0))), shape)
+        shape = np.shape(bad)
+        i = np.unravel_index(int(np.argmax(bad)), shape)
 
         def at(v):
             return np.broadcast_to(np.asarray(v, dtype=float), shape)[i].item()
@@ -264,6 +283,7 @@ def double_root_gains(
             f"the closed loop's terms (gains k1={at(k1):.3g}, k2={at(k2):.3g}) "
             f"cancel so that round-off alone moves the poles by about "
             f"{at(predicted):.2g}*|pole| (condition {at(cond):.3g}; accepted: "
-            f"<= {_PREDICTED_RTOL:g}*|pole|). {hint}"
+            f"<= {_PREDICTED_RTOL:g}*|pole|); the poles of A - b*k miss it by "
+            f"{at(achieved):.2g}*|pole| (accepted: <= {_POLE_RTOL:g}*|pole|). {hint}"
         )
     return SteeringGains(k1=k1, k2=k2, ratio=a_b)

@@ -32,7 +32,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .reprs import summary_repr
-from .validation import check_positive
+from .validation import (
+    check_bool,
+    check_finite,
+    check_positive,
+    check_real,
+    check_scalar,
+)
 
 if TYPE_CHECKING:  # for the annotation only: metrics need no simulation code
     from .simulation import SimulationResult
@@ -53,9 +59,37 @@ def _scalar(out):
     return float(out) if out.ndim == 0 else out
 
 
+def _signal(signal) -> np.ndarray:
+    """`signal` as a float array ``(..., time)``: real, NaN allowed, no inf.
+
+    NaN samples are data (a stopped run is padded with NaN); an infinite
+    sample is not.
+    """
+    x = check_real("signal", signal)
+    if x.ndim == 0 or x.shape[-1] == 0:
+        raise ValueError(
+            f"signal must have at least one sample on its last (time) axis, got "
+            f"shape {x.shape}"
+        )
+    if np.any(np.isinf(x)):
+        raise ValueError("signal must hold finite samples or NaN, got +-inf")
+    return x
+
+
+def _overflow(out, x, what: str) -> None:
+    # finite, NaN-free samples that give a non-finite metric: extreme values
+    bad = ~np.isfinite(out) & ~np.any(np.isnan(x), axis=-1)
+    if np.any(bad):
+        raise ValueError(
+            f"signal's magnitude (up to {np.nanmax(np.abs(x)):.3g}) overflows the "
+            f"{what}: rescale the signal"
+        )
+
+
 def _time_and_signal(t, signal):
+    t = check_finite("t", t)
     t = np.asarray(t, dtype=float)
-    x = np.asarray(signal, dtype=float)
+    x = _signal(signal)
     if t.ndim != 1 or x.shape[-1:] != t.shape:
         raise ValueError(
             f"signal must have time on its last axis matching t (length {t.size}), "
@@ -124,7 +158,7 @@ def peak_abs(signal, *, name: str | None = None) -> float | np.ndarray:
         raise ValueError(
             f"name={name!r} is only for a SimulationResult; got an array of samples"
         )
-    x = np.abs(np.asarray(signal, dtype=float))
+    x = np.abs(_signal(signal))
     valid = np.isfinite(x)
     out = np.max(np.where(valid, x, -np.inf), axis=-1)
     return _scalar(np.where(np.any(valid, axis=-1), out, np.nan))
@@ -234,13 +268,15 @@ def overshoot(signal, *, relative: bool = False) -> float | np.ndarray:
     >>> round(overshoot((1 - t) * np.exp(-t)), 6), round(math.exp(-2.0), 6)
     (0.135335, 0.135335)
     """
-    x = np.asarray(signal, dtype=float)
+    x = _signal(signal)
+    relative = check_bool("relative", relative)
     x0 = x[..., 0]
     sign = np.sign(x0)
     out = np.maximum(np.max(-sign[..., None] * x, axis=-1), 0.0)
     if relative:
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             out = out / np.abs(x0)
+        _overflow(np.where(sign == 0, 0.0, out), x, "relative overshoot")
     out = np.where((sign == 0) | np.any(np.isnan(x), axis=-1), np.nan, out)
     return _scalar(out)
 
@@ -272,8 +308,12 @@ def rms(t, signal, *, t_start: float = 0.0) -> float | np.ndarray:
     >>> round(rms(t, np.sin(t)), 6), round(1 / math.sqrt(2), 6)
     (0.707107, 0.707107)
     """
-    x = np.asarray(signal, dtype=float)
-    return _scalar(np.sqrt(_time_average(t, x**2, t_start)))
+    t, x = _time_and_signal(t, signal)
+    t_start = check_scalar("t_start", t_start)
+    with np.errstate(over="ignore"):
+        out = np.sqrt(_time_average(t, x**2, t_start, "t_start"))
+    _overflow(out, x, "rms")
+    return _scalar(out)
 
 
 def steady_state(t, signal, *, window: float = 1.0) -> float | np.ndarray:
@@ -301,20 +341,22 @@ def steady_state(t, signal, *, window: float = 1.0) -> float | np.ndarray:
     >>> round(steady_state(t, 0.3 + np.exp(-5 * t)), 9)
     0.3
     """
-    t, _ = _time_and_signal(t, signal)
-    window = float(check_positive("window", window))
-    return _scalar(_time_average(t, signal, t[-1] - window))
-
-
-def _time_average(t, signal, t_start):
-    """Trapezoidal time average of `signal` over ``t >= t_start``."""
     t, x = _time_and_signal(t, signal)
+    window = check_scalar("window", check_positive("window", window))
+    with np.errstate(over="ignore", invalid="ignore"):
+        out = _time_average(t, x, t[-1] - window, "window")
+    _overflow(out, x, "time average")
+    return _scalar(out)
+
+
+def _time_average(t, x, t_start, name):
+    """Trapezoidal time average of `x` over ``t >= t_start`` (checked arrays)."""
     # tolerate rounding in t[-1] - window
     sel = t >= t_start - 1e-9 * max(1.0, abs(t_start))
     if np.count_nonzero(sel) < 2:
         raise ValueError(
-            f"the averaging window from t={t_start!r} s must hold at least 2 samples "
-            f"of t in [{t[0]}, {t[-1]}] s"
+            f"{name}: the averaging window from t={t_start!r} s must hold at least "
+            f"2 samples of t in [{t[0]}, {t[-1]}] s"
         )
     ts, xs = t[sel], x[..., sel]
     return np.trapezoid(xs, ts, axis=-1) / (ts[-1] - ts[0])

@@ -32,6 +32,8 @@ __all__ = [
     "yaw_rate",
     "feedforward_steering",
     "check_steering",
+    "check_inputs",
+    "check_result",
     "GLOBAL_STATES",
     "PATH_STATES",
     "STEERING_INPUTS",
@@ -62,6 +64,46 @@ def check_steering(delta_f) -> None:
         raise SingularStateError(
             f"front steering angle delta_f={delta_f!r} rad has |delta_f| >= pi/2: "
             "the yaw rate V*sin(delta_f - delta_r)/(f*cos(delta_f)) is singular"
+        )
+
+
+def check_inputs(**values) -> list[np.ndarray]:
+    """Each keyword as a float array if it is finite real numbers.
+
+    Raises :class:`ValueError` or :class:`TypeError` naming the keyword
+    (NaN, inf, None, bool, complex, strings); the shapes must broadcast.
+
+    Examples
+    --------
+    >>> from fws_control.models import check_inputs
+    >>> [a.tolist() for a in check_inputs(e=1.0, theta=[0.0, 0.1])]
+    [1.0, [0.0, 0.1]]
+    """
+    out = [np.asarray(check_finite(k, v), dtype=float) for k, v in values.items()]
+    try:
+        np.broadcast_shapes(*(a.shape for a in out))
+    except ValueError:
+        shapes = ", ".join(f"{k} {a.shape}" for k, a in zip(values, out, strict=True))
+        raise ValueError(f"the arguments must broadcast, got shapes {shapes}") from None
+    return out
+
+
+def check_result(what: str, value, **inputs) -> None:
+    """Raise ValueError naming the inputs if `value` overflowed to inf/NaN.
+
+    Only called on results of finite inputs, so a non-finite value means an
+    input of extreme magnitude; the message names them.
+
+    Examples
+    --------
+    >>> from fws_control.models import check_result
+    >>> check_result("yaw rate", 0.5, speed=5.0)  # fine: nothing raised
+    """
+    if not np.all(np.isfinite(value)):
+        names = ", ".join(f"{k}={v!r}" for k, v in inputs.items())
+        raise ValueError(
+            f"the {what} overflows for these magnitudes ({names}): "
+            "use physical values (speed in m/s, angles in rad)"
         )
 
 
@@ -113,6 +155,9 @@ def yaw_rate(
     ------
     SingularStateError
         If any ``|delta_f| >= pi/2``.
+    ValueError, TypeError
+        If an argument is not finite real numbers (naming it), or the
+        magnitudes are so extreme that the yaw rate overflows.
 
     Examples
     --------
@@ -121,10 +166,12 @@ def yaw_rate(
     >>> round(fws.yaw_rate(veh, 0.1, -0.1, speed=5.0), 6)
     0.369753
     """
-    df = np.asarray(delta_f, dtype=float)
-    dr = np.asarray(delta_r, dtype=float)
+    check_type("vehicle", vehicle, Vehicle)
+    df, dr, V = check_inputs(delta_f=delta_f, delta_r=delta_r, speed=speed)
     check_steering(df)
-    out = _yaw_rate(speed, vehicle.wheelbase, df, dr)
+    with np.errstate(over="ignore", invalid="ignore"):
+        out = _yaw_rate(V, vehicle.wheelbase, df, dr)
+    check_result("yaw rate", out, speed=speed)
     return float(out) if np.ndim(out) == 0 else out
 
 
@@ -161,8 +208,10 @@ def feedforward_steering(vehicle: Vehicle, *, curvature) -> float | np.ndarray:
     >>> round(fws.feedforward_steering(veh, curvature=0.1), 6)
     0.263712
     """
+    check_type("vehicle", vehicle, Vehicle)
     k = check_finite("curvature", curvature)
-    out = np.arctan(np.asarray(k) * vehicle.wheelbase)
+    with np.errstate(over="ignore"):  # arctan(inf) = pi/2 is the right limit
+        out = np.arctan(np.asarray(k) * vehicle.wheelbase)
     return float(out) if np.ndim(out) == 0 else out
 
 

@@ -60,6 +60,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import CubicHermiteSpline, CubicSpline
 
 from .exceptions import AmbiguousProjectionError
+from .validation import check_real
 
 __all__ = [
     "Arc",
@@ -142,12 +143,7 @@ def _wrap_angle(a: ArrayLike) -> Array:
 
 
 def _finite_array(name: str, value: Any) -> Array:
-    try:
-        arr = np.array(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(
-            f"{name} must be a real number or array, got {value!r}"
-        ) from exc
+    arr = np.array(check_real(name, value), dtype=float)
     bad = ~np.isfinite(arr)
     if np.any(bad):
         if arr.ndim == 0:
@@ -161,40 +157,42 @@ def _finite_array(name: str, value: Any) -> Array:
 
 
 def _check_real(name: str, value: Any) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a finite real number, got {value!r}") from exc
-    if not math.isfinite(v):
+    arr = check_real(name, value)
+    if arr.ndim != 0 or not math.isfinite(float(arr)):
         raise ValueError(f"{name} must be a finite real number, got {value!r}")
-    return v
+    return float(arr)
 
 
 def _check_start(start: Any) -> tuple[float, float]:
     try:
-        x0, y0 = start
-        pt = (float(x0), float(y0))
-    except (TypeError, ValueError) as exc:
-        raise ValueError(
-            f"start must be a pair of finite numbers (x0, y0) in m, got {start!r}"
-        ) from exc
-    if not all(math.isfinite(v) for v in pt):
+        arr = check_real("start", start)
+    except ValueError:
+        arr = np.zeros(0)
+    if arr.shape != (2,) or not np.all(np.isfinite(arr)):
         raise ValueError(
             f"start must be a pair of finite numbers (x0, y0) in m, got {start!r}"
         )
-    return pt
+    return float(arr[0]), float(arr[1])
 
 
-def _check_length(value: Any, upper: float = math.inf) -> float:
+def _check_length(value: Any, upper: float = math.inf, why: str = "") -> float:
     try:
-        v = float(value)
-    except (TypeError, ValueError) as exc:
+        v = _check_real("length", value)
+    except ValueError as exc:
         raise ValueError(
-            f"length must be a number in (0, {upper}] m, got {value!r}"
+            f"length must be a number in (0, {upper}] m{why}, got {value!r}"
         ) from exc
-    if not (v > 0.0 and v <= upper and math.isfinite(v)):
-        raise ValueError(f"length must be finite and in (0, {upper}] m, got {value!r}")
+    if not (v > 0.0 and v <= upper):
+        raise ValueError(
+            f"length must be finite and in (0, {upper}] m{why}, got {value!r}"
+        )
     return v
+
+
+def _check_closed(closed: Any) -> bool | None:
+    if closed is None or isinstance(closed, (bool, np.bool_)):
+        return None if closed is None else bool(closed)
+    raise TypeError(f"closed must be None, True or False, got {closed!r}")
 
 
 def _to_global(
@@ -917,13 +915,8 @@ class Arc(Path):
         start: Sequence[float] = (0.0, 0.0),
         start_heading: float = 0.0,
     ) -> None:
-        try:
-            k = float(curvature)
-        except (TypeError, ValueError) as exc:
-            raise ValueError(
-                f"curvature must be a finite nonzero number in 1/m, got {curvature!r}"
-            ) from exc
-        if not math.isfinite(k) or k == 0.0:
+        k = _check_real("curvature", curvature)
+        if k == 0.0:
             raise ValueError(
                 "curvature must be finite and nonzero (use Straight for zero "
                 f"curvature), got {curvature!r}"
@@ -931,7 +924,13 @@ class Arc(Path):
         full = 2.0 * math.pi / abs(k)
         object.__setattr__(self, "kappa", k)
         object.__setattr__(self, "closed", length is None)
-        L = full if length is None else _check_length(length, upper=full)
+        L = (
+            full
+            if length is None
+            else _check_length(
+                length, upper=full, why=f" (one full turn at curvature={k!r})"
+            )
+        )
         object.__setattr__(self, "length", L)
         object.__setattr__(self, "start", _check_start(start))
         object.__setattr__(
@@ -1247,12 +1246,7 @@ class Spline(Path):
     )
 
     def __post_init__(self) -> None:
-        try:
-            w = np.array(self.waypoints, dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise ValueError(
-                f"waypoints must be an (N, 2) array of numbers, got {self.waypoints!r}"
-            ) from exc
+        w = np.array(check_real("waypoints", self.waypoints), dtype=float)
         if w.ndim != 2 or w.shape[1] != 2:
             raise ValueError(f"waypoints must have shape (N, 2), got shape {w.shape}")
         bad = ~np.isfinite(w).all(axis=1)
@@ -1273,7 +1267,8 @@ class Spline(Path):
                 f"{i}] == waypoints[{i + 1}] == {w[i].tolist()}"
             )
         coincide = math.hypot(*(w[-1] - w[0])) <= 1e-9 * scale
-        closed = coincide if self.closed is None else bool(self.closed)
+        flag = _check_closed(self.closed)
+        closed = coincide if flag is None else flag
         if closed:
             pts = np.vstack([w[:-1] if coincide else w, w[:1]])
             if pts.shape[0] - 1 < 3:
@@ -1489,6 +1484,7 @@ class PathChain(Path):
     offsets: Array = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
+        _check_closed(self.closed)
         try:
             segs = list(self.segments)
         except TypeError as exc:

@@ -188,8 +188,8 @@ def check_type(name: str, value: Any, cls: type, what: str | None = None) -> Any
 
 def check_model(model: Any) -> str:
     """Return `model` if it names a known linearisation."""
-    if model not in MODELS:
-        raise ValueError(f"model must be one of {MODELS}, got {model!r}")
+    if not isinstance(model, str) or model not in MODELS:
+        raise ValueError(f"model must be one of {MODELS}, got {_short(model)}")
     return model
 
 
