@@ -58,6 +58,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import CubicHermiteSpline, CubicSpline
+from scipy.spatial import cKDTree
 
 from .exceptions import AmbiguousProjectionError
 from .validation import check_real
@@ -84,6 +85,10 @@ _TIE_RTOL = 1e-9
 _NEWTON_MAXITER = 40
 # Points per path sample chunk in the global search: bounds the (n, m) array.
 _CHUNK = 2_000_000
+# First pass of the global search: "kdtree" (scipy.spatial.cKDTree over the
+# path samples, then a ball query) or "dense" (all point-sample distances,
+# the method before 0.2; kept as the reference of tests and benchmarks).
+_FIRST_PASS = "kdtree"
 
 Array = NDArray[np.float64]
 
@@ -643,49 +648,118 @@ class Path(ABC):
 
     def _global(self, px: Array, py: Array) -> tuple[Array, Array, NDArray[np.bool_]]:
         """Globally nearest points by sampling and refinement: (s, distance, unique)."""
-        # Paths are immutable, so the samples are computed once per path.
+        # Paths are immutable, so the samples (and their KD-tree) are computed
+        # once per path.
         cache = getattr(self, "_search_cache", None)
-        if cache:
+        if cache and "samples" in cache:
             S, X, Y = cache["samples"]
         else:
             S = self._search_samples()
             X, Y, _, _ = self._frame(S)
             if cache is not None:
                 cache["samples"] = (S, X, Y)
+        tree = None
+        if _FIRST_PASS == "kdtree":
+            tree = cache.get("tree") if cache else None
+            if tree is None:
+                tree = cKDTree(np.column_stack([X, Y]))
+                if cache is not None:
+                    cache["tree"] = tree
         n = px.size
         s_out, d_out = np.empty(n), np.empty(n)
         u_out = np.empty(n, dtype=bool)
+        # bounds the (points, samples) arrays of the dense pass, and the
+        # candidate lists of the tree pass (all samples in the worst case)
         chunk = max(1, _CHUNK // S.size)
         for i0 in range(0, n, chunk):
             sl = slice(i0, i0 + chunk)
-            res = self._global_chunk(px[sl], py[sl], S, X, Y)
+            res = self._global_chunk(px[sl], py[sl], S, X, Y, tree)
             s_out[sl], d_out[sl], u_out[sl] = res
         return s_out, d_out, u_out
 
-    def _global_chunk(
-        self, px: Array, py: Array, S: Array, X: Array, Y: Array
-    ) -> tuple[Array, Array, NDArray[np.bool_]]:
+    def _candidates(
+        self, px: Array, py: Array, S: Array, X: Array, Y: Array, tree: Any
+    ) -> tuple[Array, NDArray[np.bool_], Array, Array, float]:
+        """Up to K local minima of the sampled distance per point (first pass).
+
+        Returns sample indices ``j`` (n, K), their validity, their distances,
+        the extended arc lengths ``S_ext`` and the largest sample gap ``h``.
+        The path is 1-Lipschitz in s, so the true minimiser lies within h/2
+        of a sample no farther than dmin + h/2: only local minima of the
+        sampled distance within dmin + h can hold it. With a KD-tree only the
+        samples within that radius are looked at (``scipy.spatial.cKDTree``:
+        the nearest sample, then a ball query); the dense pass computes all
+        distances. Both select the same candidates.
+        """
         L = self.length
         m = S.size
-        d = np.hypot(px[:, None] - X, py[:, None] - Y)
+        n = px.size
         if self.closed:
-            left, right = np.roll(d, 1, axis=1), np.roll(d, -1, axis=1)
             S_ext = np.concatenate([[S[-1] - L], S, [S[0] + L]])
         else:
-            inf = np.full((d.shape[0], 1), np.inf)
-            left = np.concatenate([inf, d[:, :-1]], axis=1)
-            right = np.concatenate([d[:, 1:], inf], axis=1)
             S_ext = np.concatenate([[S[0]], S, [S[-1]]])
         h = float(np.max(np.diff(S_ext)))
-        dmin = d.min(axis=1)
-        # The path is 1-Lipschitz in s, so the true minimiser lies within h/2
-        # of a sample no farther than dmin + h/2: only such local minima of
-        # the sampled distance can hold it.
-        cand = (d <= left) & (d <= right) & (d <= dmin[:, None] + h)
-        key = np.where(cand, d, np.inf)
         K = min(8, m)
-        j = np.argsort(key, axis=1)[:, :K]
-        valid = np.isfinite(np.take_along_axis(key, j, axis=1))
+        if tree is None:
+            d = np.hypot(px[:, None] - X, py[:, None] - Y)
+            if self.closed:
+                left, right = np.roll(d, 1, axis=1), np.roll(d, -1, axis=1)
+            else:
+                inf = np.full((n, 1), np.inf)
+                left = np.concatenate([inf, d[:, :-1]], axis=1)
+                right = np.concatenate([d[:, 1:], inf], axis=1)
+            dmin = d.min(axis=1)
+            cand = (d <= left) & (d <= right) & (d <= dmin[:, None] + h)
+            key = np.where(cand, d, np.inf)
+            j = np.argsort(key, axis=1, kind="stable")[:, :K]
+            dj = np.take_along_axis(key, j, axis=1)
+            return j, np.isfinite(dj), dj, S_ext, h
+        pts = np.column_stack([px, py])
+        _, jmin = tree.query(pts)
+        dmin = np.hypot(px - X[jmin], py - Y[jmin])
+        # a little wider than dmin + h, then the exact test on hypot
+        radius = (dmin + h) * (1.0 + 1e-9) + 1e-300
+        lists = tree.query_ball_point(pts, radius)
+        count = np.fromiter((len(q) for q in lists), dtype=np.intp, count=n)
+        jj = np.fromiter(
+            (j for q in lists for j in q), dtype=np.intp, count=int(count.sum())
+        )
+        row = np.repeat(np.arange(n), count)
+        qx, qy = px[row], py[row]
+
+        def dist(idx):
+            return np.hypot(qx - X[idx], qy - Y[idx])
+
+        d = dist(jj)
+        if self.closed:
+            left, right = dist((jj - 1) % m), dist((jj + 1) % m)
+        else:
+            left = np.where(jj > 0, dist(np.maximum(jj - 1, 0)), np.inf)
+            right = np.where(jj < m - 1, dist(np.minimum(jj + 1, m - 1)), np.inf)
+        # dmin exactly as the dense pass has it: the least hypot in the ball
+        dmin = np.full(n, np.inf)
+        np.minimum.at(dmin, row, d)
+        cand = (d <= left) & (d <= right) & (d <= dmin[row] + h)
+        row, jj, d = row[cand], jj[cand], d[cand]
+        # the K nearest candidates of each point, in order of distance (ties
+        # by sample index, as a stable sort of the dense rows would)
+        order = np.lexsort((jj, d, row))
+        row, jj, d = row[order], jj[order], d[order]
+        first = np.searchsorted(row, np.arange(n))
+        rank = np.arange(row.size) - first[row]
+        keep = rank < K
+        j = np.zeros((n, K), dtype=np.intp)
+        dj = np.full((n, K), np.inf)
+        j[row[keep], rank[keep]] = jj[keep]
+        dj[row[keep], rank[keep]] = d[keep]
+        return j, np.isfinite(dj), dj, S_ext, h
+
+    def _global_chunk(
+        self, px: Array, py: Array, S: Array, X: Array, Y: Array, tree: Any = None
+    ) -> tuple[Array, Array, NDArray[np.bool_]]:
+        L = self.length
+        j, valid, d_cand, S_ext, h = self._candidates(px, py, S, X, Y, tree)
+        K = j.shape[1]
         jj = j.ravel()
         a, b, s = S_ext[jj].copy(), S_ext[jj + 2].copy(), S[jj].copy()
         qx, qy = np.repeat(px, K), np.repeat(py, K)
@@ -706,7 +780,7 @@ class Path(ABC):
             s[idx] = np.where(g == 0.0, si, new)
             active[idx[done]] = False
         d_ref = self._distance(s, qx, qy)
-        d_smp = d[np.repeat(np.arange(px.size), K), jj]
+        d_smp = d_cand.ravel()
         # Never worse than the sample the refinement started from.
         worse = d_ref > d_smp
         s = np.where(worse, S[jj], s)
@@ -1149,15 +1223,41 @@ class Clothoid(Path):
     def _local_heading(self, s: Array) -> Array:
         return s * (self.curvature_start + 0.5 * self.sharpness * s)
 
+    def _panels(self) -> tuple[float, Array, Array]:
+        """Panel width and the local position at every panel start (cached).
+
+        ``P = 1 + int(kmax * L)`` panels of equal length, so the heading turns
+        by less than 1 rad in each; the positions at their starts are sums of
+        16-point Gauss-Legendre integrals, computed once per clothoid.
+        """
+        cache = self._search_cache
+        if "panels" not in cache:
+            kmax = max(abs(self.curvature_start), abs(self.curvature_end))
+            P = 1 + int(kmax * self.length)
+            width = self.length / P
+            a = np.arange(P) * width
+            u = a[:, None] + 0.5 * width * (_GL16_X + 1.0)
+            lpsi = self._local_heading(u)
+            dx = 0.5 * width * (np.cos(lpsi) @ _GL16_W)
+            dy = 0.5 * width * (np.sin(lpsi) @ _GL16_W)
+            X0 = np.concatenate([[0.0], np.cumsum(dx)])
+            Y0 = np.concatenate([[0.0], np.cumsum(dy)])
+            cache["panels"] = (width, X0, Y0)
+        return cache["panels"]
+
     def _frame(self, s: Array) -> tuple[Array, Array, Array, Array]:
-        kmax = max(abs(self.curvature_start), abs(self.curvature_end))
-        P = 1 + int(kmax * self.length)
-        frac = ((np.arange(P)[:, None] + 0.5 * (_GL16_X[None, :] + 1.0)) / P).ravel()
-        w = np.tile(_GL16_W, P) / (2.0 * P)
-        u = s[..., None] * frac
+        # Position = position at the start of s's panel + one 16-point Gauss
+        # integral over less than 1 rad of turning: memory and time O(1) per
+        # point, whatever the total turning (integrating from 0 for each
+        # point cost O(kmax L) per point: 6 GB at 1000 rad for the search).
+        width, X0, Y0 = self._panels()
+        k = np.clip(np.floor(s / width), 0, X0.size - 2).astype(np.intp)
+        a = k * width
+        half = 0.5 * (s - a)
+        u = (a + half)[..., None] + half[..., None] * _GL16_X
         lpsi_u = self._local_heading(u)
-        lx = s * (np.cos(lpsi_u) @ w)
-        ly = s * (np.sin(lpsi_u) @ w)
+        lx = X0[k] + half * (np.cos(lpsi_u) @ _GL16_W)
+        ly = Y0[k] + half * (np.sin(lpsi_u) @ _GL16_W)
         lpsi = self._local_heading(s)
         x, y, psi = _to_global(self.start, self.start_heading, lx, ly, lpsi)
         return x, y, psi, self.curvature_start + self.sharpness * s

@@ -120,6 +120,10 @@ def check_finite(name: str, value: Any) -> np.ndarray | float:
     raise :class:`TypeError`.
     """
     arr = check_real(name, value)
+    if arr.size == 0:
+        # np.all of nothing is True: an empty array would pass every range
+        # check below and fail later without the argument's name
+        raise ValueError(f"{name} must not be empty, got an array of shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} must be finite, got {_short(value)}")
     return float(arr) if arr.ndim == 0 else arr
