@@ -60,8 +60,10 @@ def yaw_acceleration(
     SingularStateError
         If any ``|delta_f| >= pi/2``.
     ValueError, TypeError
-        If an argument is not finite real numbers (naming it), the shapes do
-        not broadcast, or magnitudes so extreme that the result overflows.
+        If an argument is not real numbers or a scalar is not finite (naming
+        it), the shapes do not broadcast, or magnitudes so extreme that the
+        result overflows. Non-finite elements of arrays give non-finite
+        elements in their place (see :func:`~fws_control.models.check_inputs`).
 
     Examples
     --------
@@ -87,10 +89,11 @@ def yaw_acceleration(
     check_result(
         "yaw acceleration",
         out,
-        delta_f=delta_f,
-        delta_f_rate=delta_f_rate,
-        delta_r_rate=delta_r_rate,
-        speed=speed,
+        delta_f=df,
+        delta_r=dr,
+        delta_f_rate=rf,
+        delta_r_rate=rr,
+        speed=V,
     )
     return float(out) if np.ndim(out) == 0 else out
 
@@ -124,8 +127,10 @@ def lateral_acceleration(
     SingularStateError
         If any ``|delta_f| >= pi/2``.
     ValueError, TypeError
-        If an argument is not finite real numbers (naming it), the shapes do
-        not broadcast, or magnitudes so extreme that the result overflows.
+        If an argument is not real numbers or a scalar is not finite (naming
+        it), the shapes do not broadcast, or magnitudes so extreme that the
+        result overflows. Non-finite elements of arrays give non-finite
+        elements in their place (see :func:`~fws_control.models.check_inputs`).
 
     Examples
     --------
@@ -145,5 +150,13 @@ def lateral_acceleration(
     dr, rr, V = (np.asarray(v, dtype=float) for v in (delta_r, delta_r_rate, speed))
     with np.errstate(over="ignore", invalid="ignore"):
         out = V * (psi_dot + rr) * np.cos(dr) + vehicle.rear_to_cg * psi_ddot
-    check_result("lateral acceleration", out, delta_r_rate=delta_r_rate, speed=speed)
+    check_result(
+        "lateral acceleration",
+        out,
+        delta_f=delta_f,
+        delta_r=dr,
+        delta_f_rate=delta_f_rate,
+        delta_r_rate=rr,
+        speed=V,
+    )
     return float(out) if np.ndim(out) == 0 else out

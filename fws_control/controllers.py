@@ -114,6 +114,17 @@ def steering_command(
     delta_f, delta_r : ndarray
         Front and rear steering angles [rad], broadcast over the arguments.
 
+    Raises
+    ------
+    TypeError
+        If `vehicle` or `gains` has the wrong type, or `feedforward` is not
+        a bool (``"False"`` would read as true).
+    ValueError
+        If an argument is not real numbers or a scalar is not finite (naming
+        it; non-finite elements of arrays give non-finite elements in their
+        place, see :func:`~fws_control.models.check_inputs`), or magnitudes
+        so extreme that the command overflows.
+
     Examples
     --------
     >>> import fws_control as fws
@@ -136,8 +147,8 @@ def steering_command(
         if feedforward:
             delta_f = fb + np.arctan(vehicle.wheelbase * k_)
         delta_r = gains.ratio * fb
-    check_result("steering command", delta_f, e=e, theta=theta)
-    check_result("steering command", delta_r, e=e, theta=theta)
+    check_result("steering command", delta_f, e=e_, theta=th_, curvature=k_)
+    check_result("steering command", delta_r, e=e_, theta=th_)
     max_f = _limit(vehicle.max_steer_front)
     max_r = _limit(vehicle.max_steer_rear)
     if math.isfinite(max_f):
@@ -186,6 +197,11 @@ def steering_command_rate(
     delta_f_rate, delta_r_rate : ndarray
         [rad/s], broadcast over the arguments.
 
+    Raises
+    ------
+    TypeError, ValueError
+        As in :func:`steering_command`.
+
     Examples
     --------
     >>> import fws_control as fws
@@ -199,7 +215,7 @@ def steering_command_rate(
     check_type("vehicle", vehicle, Vehicle)
     gains = _check_gains(gains)
     feedforward = check_bool("feedforward", feedforward)
-    _, _, er, thr, k_, kr = check_inputs(
+    e_, th_, er, thr, k_, kr = check_inputs(
         e=e,
         theta=theta,
         e_rate=e_rate,
@@ -219,9 +235,10 @@ def steering_command_rate(
         check_result(
             "steering rate",
             out,
-            e_rate=e_rate,
-            theta_rate=theta_rate,
-            curvature_rate=curvature_rate,
+            e_rate=er,
+            theta_rate=thr,
+            curvature=k_,
+            curvature_rate=kr,
         )
     max_f = _limit(vehicle.max_steer_front)
     max_r = _limit(vehicle.max_steer_rear)

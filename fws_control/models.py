@@ -23,7 +23,13 @@ import control as ct
 import numpy as np
 
 from .exceptions import SingularStateError
-from .validation import check_finite, check_nonzero, check_scalar, check_type
+from .validation import (
+    check_finite,
+    check_nonzero,
+    check_real,
+    check_scalar,
+    check_type,
+)
 from .vehicle import Vehicle
 
 __all__ = [
@@ -68,18 +74,31 @@ def check_steering(delta_f) -> None:
 
 
 def check_inputs(**values) -> list[np.ndarray]:
-    """Each keyword as a float array if it is finite real numbers.
+    """Each keyword as a float array of real numbers, checked by name.
 
-    Raises :class:`ValueError` or :class:`TypeError` naming the keyword
-    (NaN, inf, None, bool, complex, strings); the shapes must broadcast.
+    ``None``, bools, complex numbers, strings and foreign objects raise
+    :class:`TypeError` or :class:`ValueError` naming the keyword, and so does
+    a non-finite **scalar**. In an **array** a non-finite element is data
+    (a vectorised evaluation over many samples, e.g. the batch simulation's
+    stopped runs): it gives a non-finite element in its place of the result,
+    and the finite elements are unaffected. The shapes must broadcast.
 
     Examples
     --------
     >>> from fws_control.models import check_inputs
     >>> [a.tolist() for a in check_inputs(e=1.0, theta=[0.0, 0.1])]
     [1.0, [0.0, 0.1]]
+    >>> check_inputs(e=float("nan"))
+    Traceback (most recent call last):
+        ...
+    ValueError: e must be finite, got nan
     """
-    out = [np.asarray(check_finite(k, v), dtype=float) for k, v in values.items()]
+    out = []
+    for k, v in values.items():
+        arr = check_real(k, v)
+        if arr.ndim == 0 and not np.isfinite(arr):
+            raise ValueError(f"{k} must be finite, got {v!r}")
+        out.append(arr)
     try:
         np.broadcast_shapes(*(a.shape for a in out))
     except ValueError:
@@ -89,18 +108,29 @@ def check_inputs(**values) -> list[np.ndarray]:
 
 
 def check_result(what: str, value, **inputs) -> None:
-    """Raise ValueError naming the inputs if `value` overflowed to inf/NaN.
+    """Raise ValueError naming the inputs where finite inputs overflowed.
 
-    Only called on results of finite inputs, so a non-finite value means an
-    input of extreme magnitude; the message names them.
+    An element of `value` that is not finite although every input at its
+    place is finite comes from a magnitude beyond the floating-point range
+    (e.g. a speed of 1e300); the message names the inputs. Non-finite
+    elements of array inputs (see :func:`check_inputs`) pass through.
 
     Examples
     --------
     >>> from fws_control.models import check_result
     >>> check_result("yaw rate", 0.5, speed=5.0)  # fine: nothing raised
     """
-    if not np.all(np.isfinite(value)):
-        names = ", ".join(f"{k}={v!r}" for k, v in inputs.items())
+    value = np.asarray(value, dtype=float)
+    if np.all(np.isfinite(value)):
+        return
+    finite = np.ones(value.shape, dtype=bool)
+    for v in inputs.values():
+        finite = finite & np.isfinite(np.asarray(v, dtype=float))
+    if np.any(~np.isfinite(value) & finite):
+        names = ", ".join(
+            f"{k}={v!r}" if np.ndim(v) == 0 else f"{k} (array)"
+            for k, v in inputs.items()
+        )
         raise ValueError(
             f"the {what} overflows for these magnitudes ({names}): "
             "use physical values (speed in m/s, angles in rad)"
@@ -156,8 +186,10 @@ def yaw_rate(
     SingularStateError
         If any ``|delta_f| >= pi/2``.
     ValueError, TypeError
-        If an argument is not finite real numbers (naming it), or the
-        magnitudes are so extreme that the yaw rate overflows.
+        If an argument is not real numbers or a scalar is not finite (naming
+        it), or the magnitudes are so extreme that the yaw rate overflows.
+        Non-finite elements of arrays give non-finite elements in their place
+        (see :func:`check_inputs`).
 
     Examples
     --------
@@ -171,7 +203,7 @@ def yaw_rate(
     check_steering(df)
     with np.errstate(over="ignore", invalid="ignore"):
         out = _yaw_rate(V, vehicle.wheelbase, df, dr)
-    check_result("yaw rate", out, speed=speed)
+    check_result("yaw rate", out, delta_f=df, delta_r=dr, speed=V)
     return float(out) if np.ndim(out) == 0 else out
 
 

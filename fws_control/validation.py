@@ -120,10 +120,6 @@ def check_finite(name: str, value: Any) -> np.ndarray | float:
     raise :class:`TypeError`.
     """
     arr = check_real(name, value)
-    if arr.size == 0:
-        # np.all of nothing is True: an empty array would pass every range
-        # check below and fail later without the argument's name
-        raise ValueError(f"{name} must not be empty, got an array of shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} must be finite, got {_short(value)}")
     return float(arr) if arr.ndim == 0 else arr
@@ -152,9 +148,20 @@ def check_bool(name: str, value: Any) -> bool:
     )
 
 
+def _not_empty(name: str, v: Any) -> None:
+    # np.all of nothing is True: an empty array would pass a range check and
+    # fail later without the argument's name (empty data arrays are fine in
+    # check_finite: a vectorised function may be called on zero samples)
+    if np.size(v) == 0:
+        raise ValueError(
+            f"{name} must not be empty, got an array of shape {np.shape(v)}"
+        )
+
+
 def check_positive(name: str, value: Any) -> np.ndarray | float:
     """Return `value` as float (array) if every element is finite and > 0."""
     v = check_finite(name, value)
+    _not_empty(name, v)
     if not np.all(np.asarray(v) > 0):
         raise ValueError(f"{name} must be > 0, got {_short(value)}")
     return v
@@ -163,6 +170,7 @@ def check_positive(name: str, value: Any) -> np.ndarray | float:
 def check_nonzero(name: str, value: Any) -> np.ndarray | float:
     """Return `value` as float (array) if every element is finite and != 0."""
     v = check_finite(name, value)
+    _not_empty(name, v)
     if np.any(np.asarray(v) == 0):
         raise ValueError(f"{name} must be finite and nonzero, got {_short(value)}")
     return v
