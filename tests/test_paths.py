@@ -818,6 +818,7 @@ def test_kdtree_projection_equals_dense_method_and_brute_force(name, monkeypatch
     x0, y0 = path.position(s0)
     px = x0 + rng.normal(0.0, 8.0, s0.size)
     py = y0 + rng.normal(0.0, 8.0, s0.size)
+    monkeypatch.setattr(paths_module, "_FIRST_PASS", "kdtree")  # forced
     new = path.project(px, py)
     monkeypatch.setattr(paths_module, "_FIRST_PASS", "dense")
     old = path.project(px, py)  # same cached samples, no tree
