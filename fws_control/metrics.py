@@ -208,8 +208,9 @@ def settling_time(
     """
     t, x = _time_and_signal(t, signal)
     mag = np.abs(x)
+    fraction = check_positive("fraction", fraction)  # checked even if unused
     if band is None:
-        band = check_positive("fraction", fraction) * mag[..., 0]
+        band = fraction * mag[..., 0]
     else:
         # NaN would compare False everywhere ("settled at once") and a
         # negative band can never be entered: both are refused, by name.

@@ -59,6 +59,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import re
 import signal
 from collections import Counter
 from collections.abc import Callable
@@ -273,6 +274,7 @@ class Case:
     kwargs: dict[str, Any] = field(default_factory=dict)
     post: Callable[[Any, dict], bool] = finite
     examples: int = EXAMPLES
+    flags: tuple[str, ...] = ()  # arguments that take a bool (or None)
 
     def call(self, override: dict[str, Any]) -> tuple[Any, dict]:
         values = {**self.args, **self.kwargs, **override}
@@ -575,11 +577,13 @@ CASES: dict[str, Case] = {
         fws.Spline,
         dict(waypoints=[[0.0, 0.0], [10.0, 3.0], [20.0, 0.0]]),
         dict(closed=None),
+        flags=("closed",),
     ),
     "PathChain": Case(
         fws.PathChain,
         dict(segments=(fws.Straight(length=5.0), fws.Arc(0.1, length=5.0))),
         dict(closed=None),
+        flags=("closed",),
     ),
 }
 
@@ -632,7 +636,11 @@ KNOWN: dict[tuple[str, str | None], str] = {
         ("compare", a): _CMP
         for a in ("actuator_time_constant", "delay", "dt", "offset", "speed")
     },
-    ("default_controllers", "speed"): _CMP,
+    **{("default_controllers", a): _CMP for a in ("speed", "ratio", "pole")},
+    ("as_controller", "feedforward"): (
+        "baselines.py: feedforward is read by its truth value (complex accepted)"
+    ),
+    ("gain_locus", "scale"): "rootlocus.py: an empty scale fails without its name",
     **{("Gate", a): _MAN for a in ("x_start", "x_end", "y_left", "y_right")},
     **{
         ("Manoeuvre", a): _MAN
@@ -724,13 +732,23 @@ def judge(case: Case, arg: str, value: Any) -> tuple[bool, str]:
             signal.signal(signal.SIGALRM, old)
     except (ValueError, TypeError) as exc:
         msg = str(exc)
-        if arg in msg:
+        if re.search(rf"(?<![A-Za-z0-9_]){re.escape(arg)}(?![A-Za-z0-9_])", msg):
             return True, ""
         return False, f"{type(exc).__name__} without {arg!r}: {msg[:300]}"
     except CallTimeout as exc:
         return False, f"hang: {exc}"
     except Exception as exc:  # noqa: BLE001 - every other outcome is a finding
         return False, f"{type(exc).__name__}: {str(exc)[:300]}"
+    # a bool or complex value where a real number (not a flag) is expected
+    # must be refused, whatever the result looks like: True is not 1, and a
+    # complex number would lose its imaginary part
+    baseline = {**case.args, **case.kwargs}.get(arg)
+    flag = isinstance(baseline, bool) or arg in case.flags
+    kind = np.asarray(value).dtype.kind if isinstance(value, np.ndarray) else None
+    if isinstance(value, (complex, np.complexfloating)) or kind == "c":
+        return False, f"complex {arg}={value!r} accepted"
+    if not flag and (isinstance(value, (bool, np.bool_)) or kind == "b"):
+        return False, f"bool {arg}={value!r} accepted as a number"
     try:
         ok = case.post(result, values)
     except Exception as exc:  # noqa: BLE001
