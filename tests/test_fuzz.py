@@ -39,7 +39,8 @@ ordinary failures.
 
 Deliberately excluded (with the reason)
 ---------------------------------------
-* ``symbolic``: a module (sympy derivations), not a callable.
+* ``symbolic``: a module (sympy derivations), not a callable; ``dynamics``:
+  a module too (the dynamic single-track core, not in ``__all__``).
 * ``SingularStateError``, ``UncontrollableError``,
   ``AmbiguousProjectionError``: exception classes.
 * ``Path``, ``LateralController``: abstract base classes (not instantiable).
@@ -82,6 +83,7 @@ STRICT = os.environ.get("FWS_FUZZ_STRICT", "") not in ("", "0")
 
 EXCLUDED = {
     "symbolic": "a module",
+    "dynamics": "a module (its functions are not in fws_control.__all__)",
     "SingularStateError": "exception class",
     "UncontrollableError": "exception class",
     "AmbiguousProjectionError": "exception class",
@@ -304,6 +306,11 @@ CASES: dict[str, Case] = {
             max_steer_rear=0.3,
             max_steer_rate_front=1.0,
             max_steer_rate_rear=1.0,
+            mass=1500.0,
+            yaw_inertia=2500.0,
+            cornering_front=8.0e4,
+            cornering_rear=8.0e4,
+            friction=1.0,
         ),
     ),
     "global_frame_model": Case(fws.global_frame_model, V, dict(speed=5.0)),
@@ -590,8 +597,8 @@ CASES: dict[str, Case] = {
 #: Known failures that other parts of the code must fix (see the module notes).
 #: (callable, argument) -> reason; argument None: every argument.
 _SIM = (
-    "simulation/ (another branch, issue 13 items 1-3, 7): tolerances, dt and "
-    "duration budget, stiff actuator, delay, flags and chunk_size unchecked"
+    "simulation/ (engine branch): feedforward and progress not checked as "
+    "bools (validation.check_bool), an array time constant fails unnamed"
 )
 _CMP = (
     "controller_comparison.py: scalar checks, work budget for dt/delay/time "
