@@ -108,12 +108,14 @@ def check_inputs(**values) -> list[np.ndarray]:
 
 
 def check_result(what: str, value, **inputs) -> None:
-    """Raise ValueError naming the inputs where finite inputs overflowed.
+    """Raise ValueError naming the inputs if finite scalars overflowed.
 
-    An element of `value` that is not finite although every input at its
-    place is finite comes from a magnitude beyond the floating-point range
-    (e.g. a speed of 1e300); the message names the inputs. Non-finite
-    elements of array inputs (see :func:`check_inputs`) pass through.
+    A scalar result that is not finite although every input is finite comes
+    from a magnitude beyond the floating-point range (e.g. a speed of
+    1e300); the message names the inputs. An array result is an elementwise
+    evaluation over samples (the batch simulation's runs, one of which may
+    have failed): its non-finite elements stay in their places, as those of
+    array inputs do (see :func:`check_inputs`).
 
     Examples
     --------
@@ -121,7 +123,7 @@ def check_result(what: str, value, **inputs) -> None:
     >>> check_result("yaw rate", 0.5, speed=5.0)  # fine: nothing raised
     """
     value = np.asarray(value, dtype=float)
-    if np.all(np.isfinite(value)):
+    if value.ndim or np.all(np.isfinite(value)):
         return
     finite = np.ones(value.shape, dtype=bool)
     for v in inputs.values():
