@@ -41,8 +41,8 @@ import numpy as np
 
 from .dynamics import dynamic_feedforward, dynamic_feedforward_derivative
 from .gains import SteeringGains
-from .models import STEERING_INPUTS
-from .validation import check_positive
+from .models import STEERING_INPUTS, check_inputs, check_result
+from .validation import check_positive, check_scalar, check_type
 from .vehicle import Vehicle
 
 __all__ = [
@@ -86,6 +86,11 @@ def check_feedforward(feedforward, *, speed=None) -> bool | str:
     """
     if isinstance(feedforward, (bool, np.bool_)):
         return "kinematic" if feedforward else False
+    if not isinstance(feedforward, str):
+        raise TypeError(
+            f"feedforward must be True, False or one of {FEEDFORWARDS}, got "
+            f"{feedforward!r}"
+        )
     if feedforward not in FEEDFORWARDS:
         raise ValueError(
             f"feedforward must be True, False or one of {FEEDFORWARDS}, got "
@@ -160,6 +165,17 @@ def steering_command(
     delta_f, delta_r : ndarray
         Front and rear steering angles [rad], broadcast over the arguments.
 
+    Raises
+    ------
+    TypeError
+        If `vehicle` or `gains` has the wrong type, or `feedforward` is not
+        a bool (``"False"`` would read as true).
+    ValueError
+        If an argument is not real numbers or a scalar is not finite (naming
+        it; non-finite elements of arrays give non-finite elements in their
+        place, see :func:`~fws_control.models.check_inputs`), or magnitudes
+        so extreme that the command overflows.
+
     Examples
     --------
     >>> import fws_control as fws
@@ -172,21 +188,24 @@ def steering_command(
     >>> float(fws.steering_command(lim, g, 1.0, 0.0, curvature=0.1)[0])
     0.1
     """
+    check_type("vehicle", vehicle, Vehicle)
     gains = _check_gains(gains)
     feedforward = check_feedforward(feedforward, speed=speed)
-    fb = -gains.k1 * np.asarray(e, dtype=float) - gains.k2 * np.asarray(
-        theta, dtype=float
-    )
-    delta_f = fb
-    delta_r = gains.ratio * fb
-    if feedforward == "kinematic":
-        delta_f = fb + np.arctan(vehicle.wheelbase * np.asarray(curvature, dtype=float))
-    elif feedforward == "dynamic":
+    e_, th_, k_ = check_inputs(e=e, theta=theta, curvature=curvature)
+    with np.errstate(over="ignore", invalid="ignore"):
+        fb = -gains.k1 * e_ - gains.k2 * th_
+        delta_f = fb
+        delta_r = gains.ratio * fb
+        if feedforward == "kinematic":
+            delta_f = fb + np.arctan(vehicle.wheelbase * k_)
+    if feedforward == "dynamic":
         ff_f, ff_r = dynamic_feedforward(
             vehicle, speed=speed, curvature=curvature, tyre=tyre
         )
         delta_f = fb + ff_f
         delta_r = delta_r + ff_r
+    check_result("steering command", delta_f, e=e_, theta=th_, curvature=k_)
+    check_result("steering command", delta_r, e=e_, theta=th_)
     max_f = _limit(vehicle.max_steer_front)
     max_r = _limit(vehicle.max_steer_rear)
     if math.isfinite(max_f):
@@ -240,6 +259,11 @@ def steering_command_rate(
     delta_f_rate, delta_r_rate : ndarray
         [rad/s], broadcast over the arguments.
 
+    Raises
+    ------
+    TypeError, ValueError
+        As in :func:`steering_command`.
+
     Examples
     --------
     >>> import fws_control as fws
@@ -250,24 +274,40 @@ def steering_command_rate(
     >>> [round(float(v), 6) for v in r]
     [0.1, -0.1]
     """
+    check_type("vehicle", vehicle, Vehicle)
     gains = _check_gains(gains)
     feedforward = check_feedforward(feedforward, speed=speed)
-    fb_rate = -gains.k1 * np.asarray(e_rate, dtype=float) - gains.k2 * np.asarray(
-        theta_rate, dtype=float
+    e_, th_, er, thr, k_, kr = check_inputs(
+        e=e,
+        theta=theta,
+        e_rate=e_rate,
+        theta_rate=theta_rate,
+        curvature=curvature,
+        curvature_rate=curvature_rate,
     )
-    rate_f = fb_rate
-    rate_r = gains.ratio * fb_rate
-    if feedforward == "kinematic":
-        fk = vehicle.wheelbase * np.asarray(curvature, dtype=float)
-        rate_f = fb_rate + vehicle.wheelbase * np.asarray(curvature_rate) / (
-            1.0 + fk**2
-        )
-    elif feedforward == "dynamic":
+    with np.errstate(over="ignore", invalid="ignore"):
+        fb_rate = -gains.k1 * er - gains.k2 * thr
+        rate_f = fb_rate
+        rate_r = gains.ratio * fb_rate
+        if feedforward == "kinematic":
+            fk = vehicle.wheelbase * k_
+            # 1 + fk^2 overflows to inf for a huge curvature: the term -> 0
+            rate_f = fb_rate + vehicle.wheelbase * kr / (1.0 + fk**2)
+    if feedforward == "dynamic":
         d_f, d_r = dynamic_feedforward_derivative(
             vehicle, speed=speed, curvature=curvature, tyre=tyre
         )
-        rate_f = fb_rate + d_f * np.asarray(curvature_rate)
-        rate_r = rate_r + d_r * np.asarray(curvature_rate)
+        rate_f = fb_rate + d_f * kr
+        rate_r = rate_r + d_r * kr
+    for out in (rate_f, rate_r):
+        check_result(
+            "steering rate",
+            out,
+            e_rate=er,
+            theta_rate=thr,
+            curvature=k_,
+            curvature_rate=kr,
+        )
     max_f = _limit(vehicle.max_steer_front)
     max_r = _limit(vehicle.max_steer_rear)
     if math.isfinite(max_f) or math.isfinite(max_r):
@@ -343,6 +383,7 @@ def path_tracking_controller(
     >>> ctrl.output(0.0, [], [1.0, 0.0, 0.1]).round(6)
     array([0.163712, 0.1     ])
     """
+    check_type("vehicle", vehicle, Vehicle)
     gains = _check_gains(gains)
     if any(np.ndim(v) != 0 for v in (gains.k1, gains.k2, gains.ratio)):
         raise ValueError(
@@ -523,7 +564,8 @@ def steering_actuator(
     >>> act.dynamics(0.0, [0.0, 0.0], [0.2, 0.01]).round(6)
     array([0.5, 0.1])
     """
-    tau = float(check_positive("time_constant", time_constant))
+    check_type("vehicle", vehicle, Vehicle)
+    tau = check_scalar("time_constant", check_positive("time_constant", time_constant))
 
     def update(t, x, u, params):
         rf, rr = actuator_rate(vehicle, u, x, time_constant=tau)
