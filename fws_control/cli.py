@@ -44,7 +44,14 @@ import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
-__all__ = ["main", "build_parser"]
+__all__ = [
+    "main",
+    "build_parser",
+    "BUDGETS",
+    "COMPARE_MIN_SPEED",
+    "DEBUG_ENV",
+    "MAX_MESSAGE",
+]
 
 PROG = "fws-control"
 

@@ -492,3 +492,20 @@ def test_closed_stderr_does_not_crash(tmp_path):
     assert out_ok.splitlines()[0] == str(out / "extra_turning_radius.png")
     assert bad.returncode == 2 and out_bad == ""  # nothing leaks onto stdout
     assert math.isfinite(len(out_ok))
+
+
+@pytest.mark.parametrize(
+    "dpi, exc, fragment",
+    [
+        (601, ValueError, "dpi must be in 1..600, got 601"),
+        (0, ValueError, "dpi must be in 1..600, got 0"),
+        (True, TypeError, "dpi must be an int, got bool"),
+        (110.0, TypeError, "dpi must be an int, got float"),
+    ],
+)
+def test_reproduce_library_dpi_budget(dpi, exc, fragment, tmp_path):
+    from fws_control.paper import reproduce
+
+    with pytest.raises(exc, match=re.escape(fragment)):
+        reproduce(tmp_path / "figs", quick=True, progress=False, dpi=dpi)
+    assert not (tmp_path / "figs").exists()  # refused before the folder
