@@ -1195,25 +1195,29 @@ def main(argv: Sequence[str] | None = None) -> int:
     ...
     0
     """
-    import logging
-
-    import matplotlib
-
     _ensure_std_streams()
-    matplotlib.use("Agg")
-    # Equal-aspect root-locus axes make matplotlib log "Ignoring fixed x
-    # limits ..." at every save; it is noise for a command-line user.
-    logging.getLogger("matplotlib").setLevel(logging.ERROR)
-    parser = build_parser()
     argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
-    args = parser.parse_args(_protect_negative_numbers(argv))
-    debug = args.debug or os.environ.get(DEBUG_ENV, "") not in ("", "0")
-    where = f"{PROG} {args.command}"
-    _warn_extreme(args)
+    debug = os.environ.get(DEBUG_ENV, "") not in ("", "0")
+    where = PROG
     try:
-        with _terminate_raises(), warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("default")
-            status = int(args.func(args) or 0)
+        # SIGTERM and Ctrl-C end in one line from here on, even while the
+        # libraries are still being imported.
+        with _terminate_raises():
+            import logging
+
+            import matplotlib
+
+            matplotlib.use("Agg")
+            # Equal-aspect root-locus axes make matplotlib log "Ignoring
+            # fixed x limits ..." at every save; noise for a command line.
+            logging.getLogger("matplotlib").setLevel(logging.ERROR)
+            args = build_parser().parse_args(_protect_negative_numbers(argv))
+            debug = debug or args.debug
+            where = f"{PROG} {args.command}"
+            _warn_extreme(args)
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("default")
+                status = int(args.func(args) or 0)
         _print_warnings(args.command, caught)
         return status
     except BrokenPipeError:
