@@ -49,6 +49,7 @@ __all__ = [
     "build_parser",
     "BUDGETS",
     "COMPARE_MIN_SPEED",
+    "COMPARE_MIN_STEERING_LAG",
     "DEBUG_ENV",
     "MAX_MESSAGE",
 ]
@@ -100,6 +101,11 @@ BUDGETS = {
 #: Slowest speed [m/s] of ``compare``: the manoeuvre's duration and cost grow
 #: as 1/speed (0.5 m/s already takes half a minute).
 COMPARE_MIN_SPEED = 1.0
+
+#: Fastest steering lag [s] of ``compare``: a faster first-order actuator
+#: makes the closed loop stiff, and the explicit solver's cost grows as 1/lag
+#: (0.01 s already doubles the run time; 0.001 s takes minutes).
+COMPARE_MIN_STEERING_LAG = 0.01
 
 #: Longest error line printed on stderr (characters of the message).
 MAX_MESSAGE = 200
@@ -503,7 +509,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--steering-lag",
         type=_finite,
-        help="steering actuator time constant [s] (none)",
+        help="steering actuator time constant [s], at least "
+        f"{COMPARE_MIN_STEERING_LAG:g} (none: ideal steering)",
     )
     p.add_argument(
         "--offset",
@@ -949,6 +956,13 @@ def _cmd_compare(args) -> int:
             f"--speed must be >= {COMPARE_MIN_SPEED:g} m/s, got {args.speed:g} (the "
             "manoeuvre lasts its length / speed; slower runs are beyond the budget: "
             "call fws_control.controller_comparison.compare from Python for them)"
+        )
+    lag = args.steering_lag
+    if lag is not None and 0 < lag < COMPARE_MIN_STEERING_LAG:
+        raise ValueError(
+            f"--steering-lag must be >= {COMPARE_MIN_STEERING_LAG:g} s, got {lag:g} "
+            "(a faster actuator makes the simulation stiff and slow, beyond the "
+            "budget; for ideal steering leave --steering-lag out)"
         )
     course = {
         "iso3888-1": lambda: double_lane_change(vehicle_width=args.vehicle_width),

@@ -175,10 +175,22 @@ def test_budget_table_matches_help_and_edges(tmp_path, capsys):
         assert getattr(args, option.lstrip("-").replace("-", "_")) == limit
 
 
-def test_compare_slow_speed_refused(capsys):
-    code, out, err = _exit_code(["compare", "--speed", "0.01"], capsys)
-    assert code == 2 and len(err) == 1
-    assert "--speed must be >= 1 m/s, got 0.01" in err[0]
+@pytest.mark.parametrize(
+    "argv, fragment",
+    [
+        (["--speed", "0.01"], "--speed must be >= 1 m/s, got 0.01"),
+        (["--steering-lag", "1e-7"], "--steering-lag must be >= 0.01 s, got 1e-07"),
+    ],
+)
+def test_compare_costly_requests_refused(argv, fragment, tmp_path, capsys):
+    t0 = time.perf_counter()
+    code, out, err = _exit_code(["compare", *argv, "--out", tmp_path / "c.png"], capsys)
+    assert time.perf_counter() - t0 < 2.0
+    assert code == 2 and len(err) == 1 and fragment in err[0], err
+    assert not list(tmp_path.iterdir())
+    limit = fragment.split(">= ")[1].split()[0]
+    assert re.search(re.escape(argv[0]) + r" \S+ [^-]*at least " + limit,
+                     _subcommand_help("compare"))  # fmt: skip
 
 
 def test_gains_overflow_one_line_no_numpy_warnings(capsys):
