@@ -50,6 +50,7 @@ __all__ = [
     "BUDGETS",
     "COMPARE_MIN_SPEED",
     "COMPARE_MIN_STEERING_LAG",
+    "DELAY_MARGIN_MIN_DELAY",
     "DEBUG_ENV",
     "MAX_MESSAGE",
 ]
@@ -101,6 +102,10 @@ BUDGETS = {
 #: Slowest speed [m/s] of ``compare``: the manoeuvre's duration and cost grow
 #: as 1/speed (0.5 m/s already takes half a minute).
 COMPARE_MIN_SPEED = 1.0
+
+#: Smallest nonzero ``delay-margin --delay`` [s]: the rightmost-root search
+#: grows as the delay shrinks (1e-4 s: 6 s, 1e-5 s: 31 s, 1e-6 s: minutes).
+DELAY_MARGIN_MIN_DELAY = 1e-4
 
 #: Fastest steering lag [s] of ``compare``: a faster first-order actuator
 #: makes the closed loop stiff, and the explicit solver's cost grows as 1/lag
@@ -214,7 +219,13 @@ def _budget_int(command: str, option: str, low: int = 2):
     return parse
 
 
-def _budget_float(command: str, option: str, *, positive: bool = True):
+def _budget_float(
+    command: str, option: str, *, positive: bool = True, smallest: float = 0.0
+):
+    """A number in ``(0, high]`` (``[0, high]`` if not ``positive``).
+
+    With ``smallest``, a nonzero value must be at least ``smallest`` too.
+    """
     high, unit, hint = BUDGETS[(command, option)]
 
     def parse(text: str) -> float:
@@ -223,6 +234,12 @@ def _budget_float(command: str, option: str, *, positive: bool = True):
             raise argparse.ArgumentTypeError(f"must be > 0, got {v:g}")
         if v < 0:
             raise argparse.ArgumentTypeError(f"must be >= 0, got {v:g}")
+        if 0 < v < smallest:
+            raise argparse.ArgumentTypeError(
+                f"{v:g} is below the smallest {smallest:g} {unit} that the budget "
+                f"allows (0 is allowed): the root search needs ever more work as "
+                "the delay shrinks"
+            )
         if v > high:
             raise argparse.ArgumentTypeError(
                 f"{v:g} is beyond the budget of {high:g} {unit}; {hint}"
@@ -459,9 +476,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--delay",
-        type=_budget_float("delay-margin", "--delay", positive=False),
-        help="also report the rightmost roots at this delay [s], 0 to "
-        f"{BUDGETS[('delay-margin', '--delay')][0]:g}",
+        type=_budget_float(
+            "delay-margin", "--delay", positive=False, smallest=DELAY_MARGIN_MIN_DELAY
+        ),
+        help="also report the rightmost roots at this delay [s]: 0, or "
+        f"{DELAY_MARGIN_MIN_DELAY:g} to {BUDGETS[('delay-margin', '--delay')][0]:g}",
     )
     _add_vehicle(p)
     p.set_defaults(func=_cmd_delay_margin)

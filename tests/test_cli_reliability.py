@@ -214,6 +214,8 @@ BAD_VALUES = [
     (["simulate", "--duration", "-1e1"], "--duration"),
     (["simulate", "--y0", "inf"], "--y0"),
     (["delay-margin", "--delay", "-1e-3"], "--delay"),
+    (["delay-margin", "--delay", "1e-300"], "--delay"),
+    (["delay-margin", "--delay", "5e-5"], "--delay"),
     (["delay-margin", "--steering-lag", "-2.7e-1"], "steering_lag"),
     (["compare", "--speed", "-2e1"], "--speed"),
     (["compare", "--manoeuvre", "moose"], "--manoeuvre"),
