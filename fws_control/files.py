@@ -126,9 +126,13 @@ def atomic_write(
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with _signals_deferred():
-        fd, tmp = tempfile.mkstemp(
-            dir=path.parent, prefix=f".{path.name}.", suffix=TEMP_SUFFIX
-        )
+        try:
+            fd, tmp = tempfile.mkstemp(
+                dir=path.parent, prefix=f".{path.name}.", suffix=TEMP_SUFFIX
+            )
+        except OSError as exc:
+            # Name the file the caller asked for, not the temporary one.
+            raise type(exc)(exc.errno, exc.strerror, str(path)) from None
     try:
         if mode == "w":
             fh = open(fd, "w", encoding=encoding or "utf-8", newline="")

@@ -56,6 +56,24 @@ def test_atomic_write_text_and_bad_mode(tmp_path):
             pass
 
 
+def test_atomic_write_error_names_the_final_file(tmp_path):
+    blocker = tmp_path / "plain_file"
+    blocker.write_bytes(b"")
+    target = blocker / "out.png"  # its folder is a file: cannot be created
+    with pytest.raises(OSError) as exc:
+        with atomic_write(target):
+            pass
+    assert "out.png" in str(exc.value) or "plain_file" in str(exc.value)
+    assert TEMP_SUFFIX not in str(exc.value)
+    if sys.platform.startswith("linux"):
+        # /proc exists, but no file can be created in it (not even by root):
+        # the temporary file fails, and the error names the final file.
+        with pytest.raises(OSError) as exc:
+            with atomic_write("/proc/fws_control_test.png"):
+                pass
+        assert str(exc.value).endswith("'/proc/fws_control_test.png'"), exc.value
+
+
 def test_remove_stale_temporaries_only_touches_temporaries(tmp_path):
     stale = tmp_path / f".fig3.png.k2j3{TEMP_SUFFIX}"
     stale.write_bytes(b"\x89PNG trunc")
