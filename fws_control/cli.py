@@ -52,6 +52,7 @@ __all__ = [
     "COMPARE_MIN_STEERING_LAG",
     "DELAY_MARGIN_MIN_DELAY",
     "DEBUG_ENV",
+    "DESIGN_TOLERANCE",
     "MAX_MESSAGE",
 ]
 
@@ -112,7 +113,15 @@ DELAY_MARGIN_MIN_DELAY = 1e-4
 #: (0.01 s already doubles the run time; 0.001 s takes minutes).
 COMPARE_MIN_STEERING_LAG = 0.01
 
-#: Longest error line printed on stderr (characters of the message).
+#: Largest relative distance of a design's closed-loop poles (in its own
+#: linearisation) from the requested double root before the CLI refuses the
+#: gains: well-posed designs reach about 1e-5 (measured over V 1..40 m/s,
+#: kappa 0..0.3, a -1.5..1.5, lambda0 -0.1..-10); a = 0.9999 on a straight
+#: road misses by 2e-3, a = 1 - 2e-6 by 1.5.
+DESIGN_TOLERANCE = 1e-3
+
+#: Error messages longer than this (plus a margin of 60) are cut to about
+#: this many characters on stderr, keeping their beginning and end.
 MAX_MESSAGE = 200
 
 #: Environment variable that, set to 1, lets errors end with a traceback.
@@ -613,8 +622,48 @@ def _gains(args, veh):
         raise ValueError("give both --k1 and --k2, or neither (then --pole is used)")
     if args.k1 is not None:
         return SteeringGains(args.k1, args.k2, args.ratio)
-    g = double_root_gains(_plant(args, veh), ratio=args.ratio, pole=args.pole)
+    plant = _plant(args, veh)
+    g = double_root_gains(plant, ratio=args.ratio, pole=args.pole)
+    _check_design(plant, g, args.pole, args.model)
     return SteeringGains(float(g.k1), float(g.k2), args.ratio)
+
+
+def _design_error(plant, g, pole: float) -> float:
+    """Largest distance of the closed-loop poles from ``pole``, relative to it."""
+    import numpy as np
+
+    from .linear import closed_loop
+
+    poles = np.asarray(closed_loop(plant, g).poles(), dtype=complex)
+    if not np.all(np.isfinite(poles)):
+        return math.inf
+    return float(np.max(np.abs(poles - pole)) / abs(pole))
+
+
+def _check_design(plant, g, pole: float, model: str) -> None:
+    """Refuse gains whose closed loop (in their own model) misses the double root.
+
+    Near a = 1 on a straight road, for extreme magnitudes or a pole next to
+    0 the design's linear system is so ill-conditioned that the gains place
+    the poles somewhere else (even in the right half plane); printing or
+    simulating them would be a silent wrong answer.
+    """
+    err = _design_error(plant, g, pole)
+    if not err <= DESIGN_TOLERANCE:
+        import numpy as np
+
+        from .linear import closed_loop
+
+        poles = np.sort_complex(np.asarray(closed_loop(plant, g).poles(), complex))
+        where = ", ".join(
+            f"{z.real:.4g}" if abs(z.imag) < 1e-9 else f"{z:.3g}" for z in poles
+        )
+        raise ValueError(
+            f"no reliable {model}-model design for --pole {pole:g}: its poles are "
+            f"{where} (off by {err:.2g} relative, limit {DESIGN_TOLERANCE:g}); "
+            "ill-conditioned: a near 1 on a straight road, extreme values or a "
+            "pole near 0"
+        )
 
 
 def _fmt_poles(p) -> str:
@@ -646,7 +695,13 @@ def _cmd_gains(args) -> int:
 
     veh = _vehicle(args)
     # Design first so that bad input fails before anything is printed.
-    double_root_gains(_plant(args, veh), ratio=args.ratio, pole=args.pole)
+    plant = _plant(args, veh)
+    _check_design(
+        plant,
+        double_root_gains(plant, ratio=args.ratio, pole=args.pole),
+        args.pole,
+        args.model,
+    )
     print(
         f"V = {args.speed:g} m/s, kappa = {args.curvature:g} 1/m, a = {args.ratio:g}, "
         f"lambda0 = {args.pole:g} 1/s, f = {veh.wheelbase:g} m"
@@ -661,6 +716,13 @@ def _cmd_gains(args) -> int:
             if model == args.model:
                 raise
             print(f"{model} model: no design ({exc})")
+            continue
+        err = _design_error(_plant(args, veh, model), g, args.pole)
+        if model != args.model and not err <= DESIGN_TOLERANCE:
+            print(
+                f"{model} model: no reliable design (its poles miss lambda0 by "
+                f"{err:.2g} relative)"
+            )
             continue
         tag = "" if model == args.model else " (for comparison)"
         print(f"{model} model{tag}:")
@@ -1121,7 +1183,7 @@ def _bounded(message: str, limit: int = MAX_MESSAGE) -> str:
     beginning (what is wrong) and its end (the valid range, what to do).
     """
     msg = " ".join(str(message).split())
-    if len(msg) <= limit:
+    if len(msg) <= limit + 60:  # cutting a few characters would hide, not save
         return msg
     tail = limit // 4
     head = limit - tail
