@@ -5,7 +5,9 @@ run ``python -m fws_control.cli`` as a subprocess, because signals, a closed
 stderr and concurrent runs are properties of a process.
 """
 
+import contextlib
 import csv
+import io
 import math
 import os
 import re
@@ -19,6 +21,8 @@ import control as ct
 import matplotlib.image as mpimg
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import fws_control.cli as cli
 from fws_control.cli import BUDGETS, build_parser, main
@@ -578,3 +582,62 @@ def test_well_conditioned_near_one_still_designed(capsys):
     np.testing.assert_allclose(np.sort(poles.real), [-1.0, -1.0], atol=2e-2)
     k1, k2 = _double_root_reference(5.0, 0.0, 0.999, -1.0)
     assert float(m[1]) == pytest.approx(k1, abs=1e-6)
+
+
+# --------------------------------------------------------------------------
+# A small fuzz of the command line (a longer run:
+# FWS_CLI_FUZZ_EXAMPLES=2000 python -m pytest tests/test_cli_reliability.py -k fuzz)
+
+_BAD_TEXT = ["nan", "-nan", "inf", "-inf", "0", "-0", "1e300", "-1e300", "1e-300",
+             "-1e-300", "5e-324", "", " ", "abc", "1e", "0x10", "True", "None",
+             "1+2j", "-1e3", "-.5", "1_000", "--", "-"]  # fmt: skip
+_GAINS_OPTIONS = ["--speed", "--curvature", "--ratio", "--pole", "--wheelbase",
+                  "--rear-to-cg"]  # fmt: skip
+
+
+@settings(
+    derandomize=True,
+    max_examples=int(os.environ.get("FWS_CLI_FUZZ_EXAMPLES", "40")),
+    deadline=None,
+)
+@given(
+    st.lists(
+        st.tuples(
+            st.sampled_from(_GAINS_OPTIONS),
+            st.one_of(
+                st.sampled_from(_BAD_TEXT),
+                st.floats(allow_nan=True, allow_infinity=True).map(repr),
+            ),
+        ),
+        min_size=1,
+        max_size=3,
+    )
+)
+def test_fuzz_gains_one_line_or_a_checked_design(pairs):
+    argv = ["gains"] + [tok for pair in pairs for tok in pair]
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = main(argv)
+        except SystemExit as exc:
+            code = exc.code
+    lines = err.getvalue().strip().splitlines()
+    assert code in (0, 2), (argv, code, lines)
+    assert "Traceback" not in err.getvalue()
+    assert all(len(line) <= 400 for line in lines), lines
+    warn = [ln for ln in lines if ": warning: --" in ln]  # extreme inputs
+    rest = [ln for ln in lines if ln not in warn]
+    if code == 2:
+        assert len(rest) == 1 and ": error: " in rest[0], (argv, lines)
+        return
+    assert rest == [], (argv, lines)
+    # A design was printed: its poles in its own linearisation are the
+    # double root (the check of the CLI; here from the printed numbers).
+    args = cli._protect_negative_numbers(argv)
+    ns = build_parser().parse_args(args)
+    text = out.getvalue()
+    block = text.split(f"{ns.model} model:")[1]
+    got = re.search(rf"closed-loop poles, {ns.model} linearisation: ([^\n]+)", block)
+    poles = [complex(p.strip().replace(" ", "")) for p in got[1].split(",")]
+    for p in poles:
+        assert abs(p - ns.pole) <= 2e-3 * abs(ns.pole) + 2e-6, (argv, poles)
