@@ -32,7 +32,7 @@ Modules: :mod:`~fws_control.vehicle`, :mod:`~fws_control.exceptions`,
 :mod:`~fws_control.paper` (imported only by the CLI).
 """
 
-from . import symbolic
+from . import dynamics, symbolic
 from .acceleration import lateral_acceleration, yaw_acceleration
 from .baselines import (
     LateralController,
@@ -167,6 +167,7 @@ __all__ = [
     "StabilityBoundary",
     "stability_boundaries",
     "symbolic",
+    "dynamics",
     "StabilityChart",
     "stability_chart",
     "LateralController",

@@ -21,6 +21,7 @@ __all__ = [
     "check_angle_limit",
     "check_rate_limit",
     "check_delay",
+    "check_optional_positive",
     "MODELS",
 ]
 
@@ -134,3 +135,23 @@ def check_delay(delay: Any) -> float:
     if np.ndim(d) != 0 or d < 0:
         raise ValueError(f"delay must be a finite scalar >= 0 s, got {delay!r}")
     return float(d)
+
+
+def check_optional_positive(name: str, value: Any, unit: str = "") -> float | None:
+    """Return None or `value` as a float if it is a finite real number > 0.
+
+    Examples
+    --------
+    >>> from fws_control.validation import check_optional_positive
+    >>> check_optional_positive("mass", 1500, "kg")
+    1500.0
+    """
+    if value is None:
+        return None
+    v = _float_or_nan(value)
+    if isinstance(value, complex) or not (math.isfinite(v) and v > 0.0):
+        unit = f" {unit}" if unit else ""
+        raise ValueError(
+            f"{name} must be None or a finite number > 0{unit}, got {value!r}"
+        )
+    return v

@@ -1,11 +1,11 @@
-"""Vehicle geometry and steering limits."""
+"""Vehicle geometry, steering limits and (optionally) mass and tyre data."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import KW_ONLY, dataclass
 
-from .validation import check_angle_limit, check_rate_limit
+from .validation import check_angle_limit, check_optional_positive, check_rate_limit
 
 __all__ = ["Vehicle"]
 
@@ -20,9 +20,20 @@ def _number(name: str, value: object) -> float:
         raise ValueError(f"{name} must be a number in metres, got {value!r}") from exc
 
 
+# Optional fields of the dynamic single-track model and their units (for the
+# error messages).
+_DYNAMIC_FIELDS = {
+    "mass": "kg",
+    "yaw_inertia": "kg m^2",
+    "cornering_front": "N/rad",
+    "cornering_rear": "N/rad",
+    "friction": "(dimensionless)",
+}
+
+
 @dataclass(frozen=True)
 class Vehicle:
-    """Geometry of a kinematic single-track (bicycle) vehicle with 4WS.
+    r"""Geometry of a kinematic single-track (bicycle) vehicle with 4WS.
 
     Parameters
     ----------
@@ -39,6 +50,19 @@ class Vehicle:
     max_steer_rate_front, max_steer_rate_rear : float or None, optional
         Steering-rate limits [rad/s], > 0. ``None`` (default) means
         unlimited.
+    mass : float or None, optional
+        Vehicle mass :math:`m` [kg], finite and > 0. Needed only by the
+        dynamic single-track model (:mod:`fws_control.dynamics`).
+    yaw_inertia : float or None, optional
+        Yaw moment of inertia about the centre of gravity :math:`I_z`
+        [kg m^2], finite and > 0.
+    cornering_front, cornering_rear : float or None, optional
+        Cornering stiffness of the front and the rear axle :math:`C_f, C_r`
+        [N/rad per axle, both tyres together], finite and > 0: the slope of
+        the lateral tyre force over the slip angle at zero slip.
+    friction : float or None, optional
+        Peak tyre-road friction coefficient :math:`\mu` [-], finite and > 0;
+        used only by the saturating tyre model.
 
     Raises
     ------
@@ -65,6 +89,11 @@ class Vehicle:
     max_steer_rear: float | None = None
     max_steer_rate_front: float | None = None
     max_steer_rate_rear: float | None = None
+    mass: float | None = None
+    yaw_inertia: float | None = None
+    cornering_front: float | None = None
+    cornering_rear: float | None = None
+    friction: float | None = None
 
     def __post_init__(self) -> None:
         f = _number("wheelbase", self.wheelbase)
@@ -84,6 +113,25 @@ class Vehicle:
             object.__setattr__(self, name, check_angle_limit(name, getattr(self, name)))
         for name in ("max_steer_rate_front", "max_steer_rate_rear"):
             object.__setattr__(self, name, check_rate_limit(name, getattr(self, name)))
+        for name, unit in _DYNAMIC_FIELDS.items():
+            value = check_optional_positive(name, getattr(self, name), unit)
+            object.__setattr__(self, name, value)
+
+    @property
+    def front_to_cg(self) -> float:
+        """Distance from the centre of gravity to the front axle [m]."""
+        return self.wheelbase - self.rear_to_cg
+
+    @property
+    def has_dynamics(self) -> bool:
+        """True if mass, yaw inertia and both cornering stiffnesses are set.
+
+        These four are what the dynamic single-track model needs.
+        """
+        return all(
+            getattr(self, name) is not None
+            for name in ("mass", "yaw_inertia", "cornering_front", "cornering_rear")
+        )
 
     @property
     def has_limits(self) -> bool:

@@ -376,6 +376,9 @@ def test_to_pandas_of_one_run():
         "k1",
         "k2",
         "ratio",
+        "message",
+        "feedforward",
+        "method",
     ]
     assert len(df) == res.t.size == 51
     np.testing.assert_array_equal(df["t"], res.t)
@@ -389,6 +392,8 @@ def test_to_pandas_of_one_run():
         {g.ratio},
     )
     assert df.attrs["feedforward"] is True
+    assert set(df["feedforward"]) == {True} and set(df["method"]) == {"DOP853"}
+    assert set(df["message"]) == {""}
 
 
 def test_plot_of_one_run_returns_controlplot_and_reuses_axes():

@@ -351,7 +351,8 @@ def simulate_reference(
     pade_order : int, optional
         Order of the Pade approximation of the delay.
     rtol, atol : float, optional
-        Solver tolerances.
+        Solver tolerances, in the ranges of
+        :func:`~fws_control.simulation.engine.check_tolerances`.
 
     Returns
     -------
@@ -372,7 +373,9 @@ def simulate_reference(
     >>> bool(abs(ref.outputs[4] - fast.e).max() < 1e-3)
     True
     """
-    from .engine import time_grid
+    from .engine import check_tolerances, time_grid
+
+    rtol, atol = check_tolerances(rtol, atol)
 
     sys = closed_loop_system(
         vehicle,

@@ -214,6 +214,9 @@ class SimulationResult:
         the continuous solution and their times (see :attr:`peaks`). None
         (both): :attr:`peaks` falls back to the samples, marked
         ``exact=False``.
+    method : str, optional
+        The solver that integrated the runs (what ``method="auto"`` chose:
+        ``"DOP853"`` or, for a stiff actuator, ``"Radau"``); None if unknown.
 
     Attributes
     ----------
@@ -273,6 +276,7 @@ class SimulationResult:
     path: Path | None = None
     run_peak: np.ndarray | None = None
     run_peak_time: np.ndarray | None = None
+    method: str | None = None
 
     x = _Signal("Global x of the rear-axle centre R [m].")
     y = _Signal("Global y of the rear-axle centre R [m].")
@@ -340,6 +344,7 @@ class SimulationResult:
             ("run_message", message),
             ("feedforward", bool(self.feedforward)),
             ("squeeze", bool(self.squeeze)),
+            ("method", None if self.method is None else str(self.method)),
             *per_run.items(),
         ):
             object.__setattr__(self, name, value)
@@ -400,6 +405,7 @@ class SimulationResult:
             path=self.path,
             run_peak=None if self.run_peak is None else self.run_peak[idx],
             run_peak_time=None if self.run_peak is None else self.run_peak_time[idx],
+            method=self.method,
         )
 
     @property
@@ -648,11 +654,12 @@ class SimulationResult:
 
         Columns ``run, t``, the signals of
         :data:`~fws_control.simulation.SIGNALS`, then the per-run ``status,
-        t_stop, speed, k1, k2, ratio`` (repeated on each of the run's rows).
-        A run's rows are its samples up to its stop; a run without any
-        sample (e.g. ``"uncontrollable"``, not simulated) keeps one row with
-        NaN ``t`` and signals, so that no run is dropped. ``attrs`` holds
-        ``feedforward``.
+        t_stop, speed, k1, k2, ratio, message`` and the batch's
+        ``feedforward, method`` (repeated on each of the run's rows, so that
+        a CSV file keeps them). A run's rows are its samples up to its stop;
+        a run without any sample (e.g. ``"uncontrollable"``, not simulated)
+        keeps one row with NaN ``t`` and signals, so that no run is dropped.
+        ``attrs`` holds ``feedforward`` and ``method`` too.
 
         Returns
         -------
@@ -704,10 +711,15 @@ class SimulationResult:
             ("k1", self.run_k1),
             ("k2", self.run_k2),
             ("ratio", self.run_ratio),
+            ("message", np.array(self.run_message, dtype=object)),
         ):
             data[name] = per_run[run]
+        # (as columns, not only in attrs: a CSV file keeps no attrs)
+        data["feedforward"] = np.full(run.size, self.feedforward)
+        data["method"] = np.full(run.size, self.method or "", dtype=object)
         df = pd.DataFrame(data)
         df.attrs["feedforward"] = self.feedforward
+        df.attrs["method"] = self.method
         return df
 
     # ------------------------------------------------------------------
@@ -973,4 +985,5 @@ def expand_runs(
         path=path,
         run_peak=peak,
         run_peak_time=peak_time,
+        method=None if result is None else result.method,
     )
