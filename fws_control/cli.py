@@ -971,8 +971,9 @@ def _write_csv(res, path: Path, *, gains, speed: float, curvature: float) -> Non
     After the signals come the run's own data, the same on every row, so
     that the file alone says what was run and how it ended: ``k1 [rad/m]``,
     ``k2 [-]``, ``ratio [-]``, ``speed [m/s]``, ``curvature [1/m]``,
-    ``run_status`` (the run's final status) and ``t_stop [s]`` (when it
-    stopped; the last time if it ran to the end). The status column reads
+    ``run_status`` (the run's final status), ``message`` (why it stopped,
+    empty for ``ok``) and ``t_stop [s]`` (when it stopped; the last time if
+    it ran to the end). The status column reads
     ``ok`` while the run is valid and the run's status (e.g.
     ``singular_steering``) from the stop on; samples after the stop are
     empty.
@@ -1003,6 +1004,7 @@ def _write_csv(res, path: Path, *, gains, speed: float, curvature: float) -> Non
     }
     constant = [f"{v:.10g}" for v in run.values()] + [
         run_status,
+        " ".join(str(res.message or "").split()),
         f"{float(res.t_stop):.10g}",
     ]
     with atomic_write(path, mode="w") as fh:
@@ -1010,7 +1012,7 @@ def _write_csv(res, path: Path, *, gains, speed: float, curvature: float) -> Non
         w.writerow(
             [f"{n} [{_CSV_UNITS[n]}]" for n in names]
             + list(run)
-            + ["run_status", "t_stop [s]", "status"]
+            + ["run_status", "message", "t_stop [s]", "status"]
         )
         for i in range(t.size):
             w.writerow(

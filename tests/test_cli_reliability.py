@@ -339,6 +339,7 @@ def test_simulate_csv_has_run_columns(tmp_path, capsys):
         rows = list(csv.DictReader(fh))
     k1, k2 = _double_root_reference(5.0, 0.1, -0.5, -2.0)
     assert {r["run_status"] for r in rows} == {"ok"}
+    assert {r["message"] for r in rows} == {""}
     assert float(rows[0]["k1 [rad/m]"]) == pytest.approx(k1, rel=1e-8)
     assert float(rows[-1]["k2 [-]"]) == pytest.approx(k2, rel=1e-8)
     assert float(rows[0]["ratio [-]"]) == -0.5
@@ -362,6 +363,7 @@ def test_simulate_csv_stopped_run(tmp_path, capsys):
     with open(data, newline="") as fh:
         rows = list(csv.DictReader(fh))
     assert {r["run_status"] for r in rows} == {"singular_steering"}
+    assert len({r["message"] for r in rows}) == 1 and rows[0]["message"] != ""
     assert float(rows[0]["t_stop [s]"]) == pytest.approx(t_stop, abs=5e-3)
     assert float(rows[0]["t_stop [s]"]) < 2.0
 
