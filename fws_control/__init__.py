@@ -32,7 +32,7 @@ Modules: :mod:`~fws_control.vehicle`, :mod:`~fws_control.exceptions`,
 :mod:`~fws_control.paper` (imported only by the CLI).
 """
 
-from . import dynamics, symbolic
+from . import dynamics, symbolic, vehicles
 from .acceleration import lateral_acceleration, yaw_acceleration
 from .baselines import (
     LateralController,
@@ -67,6 +67,13 @@ from .delay import (
     unstable_root_count,
 )
 from .design import double_root_gains
+from .dynamic_design import (
+    KinematicDesignLimit,
+    kinematic_design_limit,
+    steady_state_offset,
+    understeer_gradient,
+    zero_sideslip_ratio,
+)
 from .exceptions import (
     AmbiguousProjectionError,
     SingularStateError,
@@ -228,5 +235,14 @@ __all__ += [
     "PathChain",
     "Projection",
     "AmbiguousProjectionError",
+]
+# the dynamic single-track model (issue 10)
+__all__ += [
+    "vehicles",
+    "KinematicDesignLimit",
+    "kinematic_design_limit",
+    "steady_state_offset",
+    "understeer_gradient",
+    "zero_sideslip_ratio",
 ]
 __version__ = "0.2.0.dev0"

@@ -272,6 +272,13 @@ def compare_linear_nonlinear(
         raise ValueError(
             f"plant must be one operating point, got speed/curvature of shape {p.shape}"
         )
+    if p.model == "dynamic" or p.steering_lag is not None:
+        # the nonlinear run here is the kinematic model without actuator
+        raise ValueError(
+            "compare_linear_nonlinear compares the kinematic models ('exact', "
+            f"'paper') without a steering lag, got model={p.model!r}, "
+            f"steering_lag={p.steering_lag!r}"
+        )
     vehicle, speed, curvature = p.vehicle, float(p.speed), float(p.curvature)
     duration = float(check_positive("duration", duration))
     path = Straight() if curvature == 0.0 else Arc(curvature=curvature)

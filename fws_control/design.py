@@ -31,7 +31,7 @@ import numpy as np
 from .exceptions import UncontrollableError
 from .gains import SteeringGains
 from .linear import characteristic_coefficients
-from .plant import LateralPlant, as_plant
+from .plant import LateralPlant, as_plant, resolve_ratio
 from .validation import check_finite
 
 __all__ = ["double_root_gains"]
@@ -66,8 +66,10 @@ def double_root_gains(
     ----------
     plant : LateralPlant, control.StateSpace or Vehicle
         A second-order plant (see :mod:`fws_control.plant`).
-    ratio : float or array_like
-        Rear-to-front steering ratio :math:`a`.
+    ratio : float, array_like or callable
+        Rear-to-front steering ratio :math:`a`, or a schedule
+        ``ratio(vehicle, speed=...)`` evaluated at the plant's speed (e.g.
+        :func:`~fws_control.zero_sideslip_ratio`).
     pole : float or array_like
         Double root :math:`\lambda_0` [1/s], finite and < 0.
     speed, curvature, model : optional
@@ -105,6 +107,7 @@ def double_root_gains(
     fws_control.exceptions.UncontrollableError: ratio=1.0 with curvature=0.0 makes ...
     """
     p = as_plant(plant, speed=speed, curvature=curvature, model=model)
+    ratio = resolve_ratio(p, ratio)
     a = check_finite("ratio", ratio)
     lam = check_finite("pole", pole)
     if np.any(np.asarray(lam) >= 0):
@@ -117,6 +120,12 @@ def double_root_gains(
             "other poles. Choose (k1, k2) from stability_chart or parameter_locus; "
             "control.place on (A, B[:, delta_f] + a*B[:, delta_r]) gives a full "
             "state feedback, a different controller"
+            + (
+                "; for model='dynamic', design on the kinematic plant "
+                "(replace(plant, model='exact')) and check the design here"
+                if isinstance(p, LateralPlant) and p.model == "dynamic"
+                else ""
+            )
         )
     a1, b1, g1 = cp.n1[..., 1], cp.n2[..., 1], cp.open_loop[..., 1]
     a0, b0, g0 = cp.n1[..., 2], cp.n2[..., 2], cp.open_loop[..., 2]

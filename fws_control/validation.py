@@ -25,7 +25,7 @@ __all__ = [
     "MODELS",
 ]
 
-MODELS = ("exact", "paper")
+MODELS = ("exact", "paper", "dynamic")
 
 
 def check_finite(name: str, value: Any) -> np.ndarray | float:

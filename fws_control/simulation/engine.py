@@ -42,8 +42,14 @@ from ..controllers import (
     steering_command,
     steering_command_rate,
 )
+from ..dynamics import (
+    TYRES,
+    dynamic_path_derivatives,
+    require_dynamics,
+    slip_angles,
+)
 from ..gains import SteeringGains
-from ..models import path_frame_derivatives
+from ..models import path_frame_derivatives, yaw_rate
 from ..paths import Arc, Path, Straight
 from ..validation import check_finite, check_positive
 from ..vehicle import Vehicle
@@ -66,6 +72,9 @@ __all__ = [
     "RTOL_RANGE",
     "ATOL_RANGE",
     "check_initial_state",
+    "MODELS",
+    "check_model",
+    "split_initial_state",
     "run_gains",
     "resolve_time_constant",
     "time_grid",
@@ -130,7 +139,16 @@ SIGNALS = (
     "delta_f_rate",
     "delta_r_rate",
     "lateral_accel",
+    "v_y",
+    "yaw_rate",
+    "slip_front",
+    "slip_rear",
 )
+
+#: Vehicle models of the engine: the paper's kinematic model and the dynamic
+#: single-track model of :mod:`fws_control.dynamics` (tyre slip, states
+#: ``v_y`` and ``r`` added after the others).
+MODELS = ("kinematic", "dynamic")
 
 
 # --------------------------------------------------------------------------
@@ -278,6 +296,84 @@ def check_initial_state(initial_state: Any) -> np.ndarray:
             f"got shape {arr.shape}"
         )
     return np.atleast_2d(arr)
+
+
+def check_model(vehicle: Vehicle, model: Any, tyre: Any) -> tuple[str, str]:
+    """``(model, tyre)`` if valid for `vehicle`.
+
+    Raises
+    ------
+    ValueError
+        For a model not in :data:`MODELS`, a tyre not in
+        :data:`~fws_control.dynamics.TYRES`, ``tyre="magic"`` with the
+        kinematic model (which has no tyres), or a vehicle without the data
+        of the dynamic model (:func:`~fws_control.dynamics.require_dynamics`).
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> from fws_control.simulation.engine import check_model
+    >>> check_model(fws.Vehicle(2.7, 1.35), "kinematic", "linear")
+    ('kinematic', 'linear')
+    >>> check_model(fws.Vehicle(2.7, 1.35), "dynamic", "linear")
+    Traceback (most recent call last):
+    ...
+    ValueError: the dynamic model needs Vehicle fields mass, yaw_inertia, \
+cornering_front, cornering_rear (kg, kg m^2, N/rad per axle; friction for \
+tyre='magic'); they are None in the vehicle given
+    """
+    if model not in MODELS:
+        raise ValueError(f"model must be one of {MODELS}, got {model!r}")
+    if tyre not in TYRES:
+        raise ValueError(f"tyre must be one of {TYRES}, got {tyre!r}")
+    if model == "kinematic" and tyre != "linear":
+        raise ValueError(
+            f"tyre={tyre!r} needs model='dynamic' (the kinematic model has no "
+            "tyre forces), got model='kinematic'"
+        )
+    if model == "dynamic":
+        require_dynamics(vehicle, tyre=tyre)
+    return model, tyre
+
+
+def split_initial_state(initial_state: Any, *, model: str) -> np.ndarray:
+    """Initial states as an array ``(runs, 5)``: pose and ``(v_y, r)``.
+
+    The kinematic model takes poses ``(x_R, y_R, psi)``; the dynamic model
+    also ``(x_R, y_R, psi, v_y, r)`` (lateral velocity of G [m/s] and yaw
+    rate [rad/s]). Columns 3 and 4 are NaN where not given: the engine then
+    starts the dynamic model rolling without tyre slip at the initial
+    steering angles (:func:`integrate`).
+
+    Raises
+    ------
+    ValueError
+        If the values are not finite or the last axis has the wrong length.
+
+    Examples
+    --------
+    >>> from fws_control.simulation.engine import split_initial_state
+    >>> split_initial_state((0.0, 2.0, 0.0), model="dynamic").tolist()
+    [[0.0, 2.0, 0.0, nan, nan]]
+    >>> split_initial_state((0.0, 2.0, 0.0, 0.1, 0.0), model="dynamic").shape
+    (1, 5)
+    """
+    arr = np.asarray(check_finite("initial_state", initial_state), dtype=float)
+    sizes = (3, 5) if model == "dynamic" else (3,)
+    if arr.ndim == 0 or arr.shape[-1] not in sizes or arr.ndim > 2:
+        shapes = (
+            "(x_R, y_R, psi), (x_R, y_R, psi, v_y, r) or an array of shape "
+            "(runs, 3) or (runs, 5)"
+            if model == "dynamic"
+            else "(x_R, y_R, psi) or an array of shape (runs, 3)"
+        )
+        raise ValueError(
+            f"initial_state must be {shapes} for model={model!r}, got shape {arr.shape}"
+        )
+    arr = np.atleast_2d(arr)
+    if arr.shape[1] == 5:
+        return arr
+    return np.concatenate([arr, np.full((arr.shape[0], 2), np.nan)], axis=1)
 
 
 def run_gains(gains: Any, *, name: str = "gains") -> SteeringGains:
@@ -627,12 +723,13 @@ class _Engine:
     """Vectorised closed-loop right-hand side for ``n`` runs.
 
     The state is laid out as ``(m, n)`` flattened row-major: rows ``s, e,
-    theta`` and, with a steering actuator, ``delta_f, delta_r``.
+    theta``, with a steering actuator ``delta_f, delta_r``, and with the
+    dynamic model ``v_y, r`` last.
     """
 
     def __init__(
         self, vehicle, path, gains, speed, feedforward, tau, delay=0.0, history=None,
-        runs=None,
+        runs=None, model="kinematic", tyre="linear",
     ):  # fmt: skip
         self.delay = delay
         self.history = history
@@ -644,7 +741,9 @@ class _Engine:
         self.speed = speed
         self.ff = feedforward
         self.tau = tau
-        self.m = 3 if tau is None else 5
+        self.dynamic = model == "dynamic"
+        self.tyre = tyre
+        self.m = (3 if tau is None else 5) + (2 if self.dynamic else 0)
         self._kappa = _curvature_function(path)
         length = float(getattr(path, "length", math.inf))
         self.open_length = (
@@ -685,7 +784,15 @@ class _Engine:
             )
             return saturate(self.vehicle, df, dr)
         return steering_command(
-            self.vehicle, self.gains, Y[1], Y[2], curvature=kappa, feedforward=self.ff
+            self.vehicle,
+            self.gains,
+            Y[1],
+            Y[2],
+            curvature=kappa,
+            feedforward=self.ff,
+            # (used by feedforward="dynamic" only)
+            speed=self.speed,
+            tyre=self.tyre,
         )
 
     def command_rate(self, Y, Ydot, kappa):
@@ -704,6 +811,8 @@ class _Engine:
                 curvature=kappa,
                 curvature_rate=kappa_rate,
                 feedforward=self.ff,
+                speed=self.speed,
+                tyre=self.tyre,
             )
         ctrl = self.gains
         kw = dict(
@@ -733,16 +842,24 @@ class _Engine:
         s, e, th = Y[0], Y[1], Y[2]
         kappa = self.curvature(s)
         df, dr = self.steering(Y, kappa, t)
+        body = ()
         with np.errstate(divide="ignore", invalid="ignore"):
-            s_dot, e_dot, th_dot = path_frame_derivatives(
-                self.speed, self.vehicle.wheelbase, kappa, e, th, df, dr
-            )
+            if self.dynamic:
+                # v_y, r are the last two rows (after the actuator's)
+                s_dot, e_dot, th_dot, *body = dynamic_path_derivatives(
+                    self.vehicle, kappa, e, th, Y[-2], Y[-1], df, dr,
+                    speed=self.speed, tyre=self.tyre,
+                )  # fmt: skip
+            else:
+                s_dot, e_dot, th_dot = path_frame_derivatives(
+                    self.speed, self.vehicle.wheelbase, kappa, e, th, df, dr
+                )
         if self.tau is None:
-            Ydot = np.stack([s_dot, e_dot, th_dot])
+            Ydot = np.stack([s_dot, e_dot, th_dot, *body])
         else:
             cmd = self.command(Y, kappa, t)
             rf, rr = actuator_rate(self.vehicle, cmd, (df, dr), time_constant=self.tau)
-            Ydot = np.stack([s_dot, e_dot, th_dot, rf, rr])
+            Ydot = np.stack([s_dot, e_dot, th_dot, rf, rr, *body])
         return Ydot, kappa, df, dr
 
     def rhs(self, t, y):
@@ -915,6 +1032,9 @@ def integrate(
     atol: float = 1e-12,
     delay: float = 0.0,
     solution: list | None = None,
+    model: str = "kinematic",
+    tyre: str = "linear",
+    body_state: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate ``n`` runs together; a stopped run leaves the stacked state.
 
@@ -950,12 +1070,25 @@ def integrate(
         If given, a :class:`DenseSolution` (the solver's dense output of
         every accepted step: the continuous solution between the output
         times) is appended to it, for :func:`exact_peaks`.
+    model : {"kinematic", "dynamic"}, optional
+        Vehicle model (:data:`MODELS`, checked by :func:`check_model`). The
+        dynamic model (:func:`~fws_control.dynamics.dynamic_path_derivatives`,
+        ``speed`` is its constant longitudinal speed ``u > 0``) adds the
+        rows ``v_y, r`` last.
+    tyre : {"linear", "magic"}, optional
+        Tyre model of the dynamic model.
+    body_state : ndarray, optional
+        Initial ``(v_y, r)`` per run, shape ``(n, 2)``; a NaN row (or None
+        for all runs): the vehicle starts rolling without tyre slip at the
+        initial steering angles, ``r = u (tan delta_f - tan delta_r) / f``
+        and ``v_y - l_r r = u tan delta_r`` (the kinematic model's motion).
 
     Returns
     -------
     states : ndarray
         Shape ``(m, n, T)`` with rows ``s, e, theta`` (and ``delta_f,
-        delta_r`` with an actuator); NaN after a run's stop. With a delay,
+        delta_r`` with an actuator, then ``v_y, r`` with the dynamic model);
+        NaN after a run's stop. With a delay,
         six more rows: the path state ``s, e, theta`` at ``t - delay`` and
         its time derivative (zero before the start), which
         :func:`compute_outputs` needs for the applied steering.
@@ -981,7 +1114,8 @@ def integrate(
     z0 = np.asarray(path_state, dtype=float)
     n = speed.size
     T = t_eval.size
-    m = 3 if tau is None else 5
+    dyn = model == "dynamic"
+    m = (3 if tau is None else 5) + (2 if dyn else 0)
     controller = not isinstance(gains, SteeringGains)
     if not controller:
         k1, k2, a = (
@@ -1008,15 +1142,21 @@ def integrate(
             delay,
             history,
             idx,
+            model,
+            tyre,
         )
 
     active = np.arange(n)
     eng = engine_for(active)
     Y = np.empty((m, n))
     Y[:3] = z0.T
+    if tau is not None or dyn:
+        cmd = np.stack(eng.command(Y, eng.curvature(Y[0]), float(t_eval[0])))
     if tau is not None:
         # The actuator starts at the command: no initial transient of its own.
-        Y[3:] = np.stack(eng.command(Y, eng.curvature(Y[0]), float(t_eval[0])))
+        Y[3:5] = cmd
+    if dyn:
+        _initial_body_state(vehicle, Y, cmd, speed, body_state)
     out[:, :, 0] = Y
     if delay > 0.0 or solution is not None:
         history = _History(float(t_eval[0]), Y.copy())
@@ -1106,6 +1246,24 @@ def integrate(
     return out, status, message, t_stop
 
 
+def _initial_body_state(vehicle, Y, cmd, speed, body_state) -> None:
+    """Fill the rows ``v_y, r`` of `Y` (the last two) in place.
+
+    Given values where `body_state` is finite; elsewhere the no-slip motion
+    at the initial steering `cmd` (both slip angles zero).
+    """
+    f, l_r = vehicle.wheelbase, vehicle.rear_to_cg
+    with np.errstate(invalid="ignore"):
+        tan_f, tan_r = np.tan(cmd[0]), np.tan(cmd[1])
+    r0 = speed * (tan_f - tan_r) / f
+    vy0 = speed * tan_r + l_r * r0
+    if body_state is not None:
+        given = np.isfinite(np.asarray(body_state, dtype=float))
+        vy0 = np.where(given[:, 0], body_state[:, 0], vy0)
+        r0 = np.where(given[:, 1], body_state[:, 1], r0)
+    Y[-2], Y[-1] = vy0, r0
+
+
 def _delayed_rows(engine_for, history, out, t_eval, delay) -> np.ndarray:
     """Path state at ``t - delay`` and its derivative at the output times."""
     n, T = out.shape[1], out.shape[2]
@@ -1150,6 +1308,8 @@ def compute_outputs(
     states: np.ndarray,
     initial_heading: np.ndarray,
     delay: float = 0.0,
+    model: str = "kinematic",
+    tyre: str = "linear",
 ) -> np.ndarray:
     """All signals of :data:`SIGNALS` from the path-frame states.
 
@@ -1165,14 +1325,22 @@ def compute_outputs(
     delay : float, optional
         The input delay given to :func:`integrate` [s]; its six extra rows
         of `states` then give the applied (delayed) steering command.
+    model, tyre : str, optional
+        As given to :func:`integrate`.
 
     Returns
     -------
     ndarray
         Shape ``(n, len(SIGNALS), T)``, NaN where `states` is NaN. The rates
         are exact (chain rule through the controller and the path's
-        curvature derivative, or the actuator's rates); the lateral
-        acceleration is eq. (13) and NaN where ``|delta_f| >= pi/2``.
+        curvature derivative, or the actuator's rates). ``lateral_accel`` is
+        the acceleration of the centre of gravity G along the vehicle's
+        lateral axis: eq. (13) for the kinematic model, ``dv_y/dt + u r``
+        for the dynamic one; NaN where ``|delta_f| >= pi/2``. ``v_y`` is the
+        lateral velocity of G in the vehicle's frame and ``yaw_rate`` the
+        yaw rate (for the kinematic model ``V sin(delta_r) + l_r r`` and
+        eq. (10)); ``slip_front``, ``slip_rear`` are the slip angles of the
+        dynamic model (0 for the kinematic one, which has no slip).
 
     Examples
     --------
@@ -1208,7 +1376,7 @@ def compute_outputs(
     else:
         g = gains.subset(run_idx) if gains.runs() else gains
     V = speed[run_idx]
-    eng = _Engine(vehicle, path, g, V, feedforward, tau)
+    eng = _Engine(vehicle, path, g, V, feedforward, tau, model=model, tyre=tyre)
     if delayed is not None:
         Yd, Ydd = delayed[:3, valid], delayed[3:, valid]
         eng.delayed = Yd
@@ -1222,14 +1390,25 @@ def compute_outputs(
         rf, rr = Ydot[3], Ydot[4]
     ok = np.abs(df) < math.pi / 2
     acc = np.full(df.shape, np.nan)
-    acc[ok] = lateral_acceleration(
-        vehicle,
-        df[ok],
-        dr[ok],
-        np.asarray(rf)[ok],
-        np.asarray(rr)[ok],
-        speed=V[ok],
-    )
+    if eng.dynamic:
+        v_y, r = Y[-2], Y[-1]
+        slip_f, slip_r = slip_angles(vehicle, v_y, r, df, dr, speed=V)
+        # body-frame acceleration of G: d(v_y)/dt + u r
+        acc[ok] = (Ydot[-2] + V * r)[ok]
+    else:
+        r = np.full(df.shape, np.nan)
+        r[ok] = yaw_rate(vehicle, df[ok], dr[ok], speed=V[ok])
+        # G moves with R's velocity V (cos dr, sin dr) plus r x (l_r, 0)
+        v_y = V * np.sin(dr) + vehicle.rear_to_cg * r
+        slip_f = slip_r = np.where(ok, 0.0, np.nan)
+        acc[ok] = lateral_acceleration(
+            vehicle,
+            df[ok],
+            dr[ok],
+            np.asarray(rf)[ok],
+            np.asarray(rr)[ok],
+            speed=V[ok],
+        )
     rf = np.where(ok, rf, np.nan)
     rr = np.where(ok, rr, np.nan)
     s_path = eng.clip(Y[0])
@@ -1244,6 +1423,10 @@ def compute_outputs(
         ("delta_f_rate", rf),
         ("delta_r_rate", rr),
         ("lateral_accel", acc),
+        ("v_y", v_y),
+        ("yaw_rate", r),
+        ("slip_front", slip_f),
+        ("slip_rear", slip_r),
         ("x", np.asarray(px) - Y[1] * np.sin(heading)),
         ("y", np.asarray(py) + Y[1] * np.cos(heading)),
         ("psi", Y[2] + heading),
@@ -1348,6 +1531,8 @@ def exact_peaks(
     t_eval: np.ndarray,
     signals: np.ndarray,
     t_stop: np.ndarray,
+    model: str = "kinematic",
+    tyre: str = "linear",
 ) -> tuple[np.ndarray, np.ndarray]:
     r"""Peaks ``max |signal|`` of the continuous solution, per run and signal.
 
@@ -1376,6 +1561,8 @@ def exact_peaks(
         :func:`compute_outputs` at the output times, ``(n, len(SIGNALS), T)``.
     t_stop : ndarray
         Per run end time, from :func:`integrate`.
+    model, tyre : str, optional
+        As given to :func:`integrate`.
 
     Returns
     -------
@@ -1430,6 +1617,8 @@ def exact_peaks(
                 states=states,
                 initial_heading=np.zeros(n),
                 delay=solution.delay,
+                model=model,
+                tyre=tyre,
             )
         vals = np.abs(out[:, _PEAK_ROWS, :])
         vals = np.where(np.isfinite(vals), vals, np.inf)

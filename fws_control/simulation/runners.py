@@ -28,6 +28,8 @@ import numpy as np
 from scipy.integrate import DOP853, RK23, RK45
 
 from ..baselines import LateralController
+from ..controllers import check_feedforward
+from ..dynamics import require_dynamics
 from ..gains import SteeringGains
 from ..paths import Path
 from ..validation import check_delay, check_nonzero, check_type
@@ -36,8 +38,8 @@ from .engine import (
     PEAK_SIGNALS,
     SIGNALS,
     STATUS_FAILED,
-    check_initial_state,
     check_method,
+    check_model,
     check_output_budget,
     check_tolerances,
     choose_method,
@@ -48,6 +50,7 @@ from .engine import (
     output_samples,
     resolve_time_constant,
     run_gains,
+    split_initial_state,
     time_grid,
 )
 from .result import SimulationResult
@@ -106,7 +109,9 @@ def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, c
     continuous solution (:func:`~fws_control.simulation.engine.exact_peaks`).
     """
     g = SteeringGains(k1, k2, a) if ctrl is None else ctrl
-    z0 = initial_path_state(path, x0)
+    # x0: pose and (v_y, r) of the dynamic model (NaN: the default)
+    z0 = initial_path_state(path, x0[:, :3])
+    body = x0[:, 3:] if opts["model"] == "dynamic" else None
     states, status, message, t_stop = integrate(
         vehicle,
         path,
@@ -117,6 +122,7 @@ def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, c
         t_eval=t,
         time_constant=tau,
         solution=(solution := []),
+        body_state=body,
         **opts,
     )
     signals = _outputs_in_blocks(
@@ -129,6 +135,8 @@ def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, c
         states=states,
         initial_heading=x0[:, 2],
         delay=opts["delay"],
+        model=opts["model"],
+        tyre=opts["tyre"],
     )
     del states  # (the outputs hold everything the peaks need)
     peaks, peak_times = exact_peaks(
@@ -142,6 +150,8 @@ def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, c
         t_eval=t,
         signals=signals,
         t_stop=t_stop,
+        model=opts["model"],
+        tyre=opts["tyre"],
     )
     return signals, status, message, t_stop, peaks, peak_times
 
@@ -287,7 +297,15 @@ def _prepare(
     speed_arr = np.atleast_1d(np.asarray(check_nonzero("speed", speed), dtype=float))
     if speed_arr.ndim != 1:
         raise ValueError(f"speed must be a scalar or 1-D, got shape {speed_arr.shape}")
-    x0 = check_initial_state(initial_state)
+    opts["model"], opts["tyre"] = check_model(vehicle, opts["model"], opts["tyre"])
+    if opts["model"] == "dynamic" and np.any(speed_arr <= 0.0):
+        # the slip angles atan2(., u) and the 1/u of the tyre model assume
+        # forward motion
+        raise ValueError(
+            "speed must be > 0 for model='dynamic' (forward longitudinal speed "
+            f"u of the single-track model), got {speed!r}"
+        )
+    x0 = split_initial_state(initial_state, model=opts["model"])
     sizes = {n_gains, speed_arr.size, x0.shape[0]} - {1}
     if len(sizes) > 1:
         raise ValueError(
@@ -296,7 +314,7 @@ def _prepare(
         )
     n = sizes.pop() if sizes else 1
     k1, k2, a, V = (np.broadcast_to(v, (n,)).copy() for v in (*fields, speed_arr))
-    x0 = np.broadcast_to(x0, (n, 3)).copy()
+    x0 = np.broadcast_to(x0, (n, 5)).copy()
     # (before building the grid: dt = 1e-9 must not allocate 112 GiB first)
     samples = output_samples(duration, dt=dt, t_eval=t_eval)
     check_output_budget(n, samples, duration=duration, dt=dt, t_eval=t_eval)
@@ -348,6 +366,8 @@ def simulate(
     method: str = "auto",
     rtol: float = 1e-10,
     atol: float = 1e-12,
+    model: str = "kinematic",
+    tyre: str = "linear",
 ) -> SimulationResult:
     r"""Simulate the closed loop (one run) with the fast path-frame engine.
 
@@ -377,9 +397,12 @@ def simulate(
         ``(x_R, y_R, psi)`` of the rear-axle centre [m, m, rad].
     duration : float
         Final time [s], > 0.
-    feedforward : bool, optional
-        Include the curvature feedforward (default ``True``); ``False`` is
-        the feedback-only controller.
+    feedforward : bool or {"kinematic", "dynamic"}, optional
+        Include the curvature feedforward (default ``True``, the same as
+        ``"kinematic"``: eq. 26); ``False`` is the feedback-only controller;
+        ``"dynamic"`` the front and rear angles of
+        :func:`~fws_control.dynamics.dynamic_feedforward` (for the tyre model
+        `tyre`), which hold the dynamic model on a curve without offset.
     dt : float, optional
         Nominal spacing of the output times [s] (the solver chooses its own
         steps). The grid is ``linspace(0, duration, round(duration/dt) + 1)``,
@@ -420,6 +443,20 @@ def simulate(
         ``[100 eps, 0.1]`` (scipy's own floor to a 10 % error per step),
         atol in ``[1e-20, 0.1]`` [m, rad]; see
         :func:`~fws_control.simulation.engine.check_tolerances`.
+    model : {"kinematic", "dynamic"}, optional
+        Vehicle model. ``"kinematic"`` (default): the paper's model, no tyre
+        slip. ``"dynamic"``: the single-track model of
+        :mod:`fws_control.dynamics` (tyre slip; lateral velocity and yaw rate
+        as states; needs the vehicle's mass, yaw inertia and cornering
+        stiffnesses), with `speed` its constant longitudinal speed
+        :math:`u > 0`. The path errors are those of the rear-axle centre R
+        in both models, so every controller applies unchanged; delay and
+        actuator combine with either model. `initial_state` may then carry
+        ``(x_R, y_R, psi, v_y, r)``; with three values the vehicle starts
+        rolling without tyre slip at the initial steering angles.
+    tyre : {"linear", "magic"}, optional
+        Tyre model of ``model="dynamic"``: linear (default) or the
+        saturating simplified magic formula (needs ``vehicle.friction``).
 
     Returns
     -------
@@ -436,6 +473,9 @@ def simulate(
         :func:`simulate_batch`), a zero speed, a non-positive duration, an
         unknown method, tolerances out of range, or an output larger than
         :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES`.
+        unknown method, model, tyre or feedforward, or (``model="dynamic"``
+        or ``feedforward="dynamic"``) a vehicle without the dynamic data or a
+        negative speed.
     AmbiguousProjectionError
         If the initial position has no unique closest point on the path.
 
@@ -487,6 +527,8 @@ def simulate(
         method=method,
         rtol=rtol,
         atol=atol,
+        model=model,
+        tyre=tyre,
         chunk_size=1,
         progress=False,
     )
@@ -514,6 +556,8 @@ def simulate_batch(
     method: str = "auto",
     rtol: float = 1e-10,
     atol: float = 1e-12,
+    model: str = "kinematic",
+    tyre: str = "linear",
     chunk_size: int | None = None,
     client: Any = None,
     progress: bool | None = None,
@@ -535,11 +579,13 @@ def simulate_batch(
     speed : float or array_like
         Speed [m/s], scalar or one per run; nonzero.
     initial_state : array_like
-        ``(x_R, y_R, psi)`` for all runs, or shape ``(runs, 3)``.
+        ``(x_R, y_R, psi)`` for all runs, or shape ``(runs, 3)``; with
+        ``model="dynamic"`` also ``(x_R, y_R, psi, v_y, r)`` or ``(runs,
+        5)``, as in :func:`simulate`.
     duration : float
         Final time [s], > 0.
-    feedforward : bool, optional
-        Include the curvature feedforward (default), as in :func:`simulate`.
+    feedforward : bool or {"kinematic", "dynamic"}, optional
+        Curvature feedforward (default ``True``), as in :func:`simulate`.
     dt : float, optional
         Nominal output spacing [s], as in :func:`simulate`.
     t_eval : array_like, optional
@@ -552,6 +598,8 @@ def simulate_batch(
         Integration method, as in :func:`simulate`.
     rtol, atol : float, optional
         Solver tolerances, as in :func:`simulate`.
+    model, tyre : str, optional
+        Vehicle and tyre model, as in :func:`simulate`.
     chunk_size : int, optional
         Runs per chunk (one solver; one Dask task); default
         :data:`DEFAULT_CHUNK_SIZE`. Smaller chunks decouple the step sizes of
@@ -599,7 +647,14 @@ def simulate_batch(
     >>> fws.tracking_metrics(res).peak_lateral_accel.round(2).tolist()
     [2.0, 1.91, 1.73, 1.19]
     """
-    opts = {"method": method, "rtol": rtol, "atol": atol, "delay": check_delay(delay)}
+    opts = {
+        "method": method,
+        "rtol": rtol,
+        "atol": atol,
+        "delay": check_delay(delay),
+        "model": model,
+        "tyre": tyre,
+    }
     k1, k2, a, V, x0, t, tau, ctrl = _prepare(
         vehicle,
         path,
@@ -613,7 +668,16 @@ def simulate_batch(
         opts,
     )
     n = k1.size
-    feedforward = bool(feedforward)
+    # False, True (eq. 26) or "dynamic" (dynamics.dynamic_feedforward)
+    feedforward = check_feedforward(feedforward, speed=V)
+    if feedforward == "dynamic":
+        require_dynamics(vehicle, tyre=opts["tyre"])
+        if np.any(V <= 0.0):
+            raise ValueError(
+                f"speed must be > 0 for feedforward='dynamic', got {speed!r}"
+            )
+    else:
+        feedforward = bool(feedforward)
     if chunk_size is None:
         chunk_size = DEFAULT_CHUNK_SIZE
     if (
@@ -694,7 +758,7 @@ def simulate_batch(
         run_k1=k1,
         run_k2=k2,
         run_ratio=a,
-        run_initial_state=x0,
+        run_initial_state=x0[:, :3],
         feedforward=feedforward,
         squeeze=False,
         vehicle=vehicle,
@@ -702,4 +766,6 @@ def simulate_batch(
         method=opts["method"]
         if isinstance(opts["method"], str)
         else opts["method"].__name__,
+        model=opts["model"],
+        tyre=opts["tyre"],
     )
