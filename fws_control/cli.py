@@ -15,24 +15,46 @@ Angles are given and printed in degrees (also in the CSV of ``simulate``);
 everything else is SI. Every subcommand defaults to the curvature
 :data:`DEFAULT_CURVATURE` (0.1 1/m, the paper's Fig. 7 curve).
 
-Exit status: 0 success; 2 invalid input (a one-line message on stderr, no
-traceback); 3 ``simulate`` ran, but the run stopped early (e.g. at a singular
-steering angle, ``|delta_f| -> 90 deg``): the figure, the CSV and the printed
-status say when and why. Inputs far outside the range of the kinematic model
-(e.g. a curvature above 1 1/m, ``|k2| > 20``) are accepted with a one-line
-warning each on stderr.
+Exit status: 0 success; 1 an unexpected failure (one line on stderr; run
+with ``--debug`` or ``FWS_CONTROL_DEBUG=1`` for the traceback); 2 invalid
+input, a request beyond the work budget (:data:`BUDGETS`) or an output folder
+in use (a one-line message on stderr, no traceback); 3 ``simulate`` ran, but
+the run stopped early (e.g. at a singular steering angle, ``|delta_f| -> 90
+deg``): the figure, the CSV and the printed status say when and why; 130
+interrupted (Ctrl-C), 143 terminated (``SIGTERM``). Inputs far outside the
+range of the kinematic model (e.g. a curvature above 1 1/m, ``|k2| > 20``)
+are accepted with a one-line warning each on stderr.
+
+Every file is written to a temporary file in its folder and renamed into
+place (:func:`fws_control.files.atomic_write`): an interrupted command leaves
+complete files only. ``reproduce`` holds a lock on its output folder; a
+second ``reproduce`` into the same folder is refused at once (status 2).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
+import re
+import signal
 import sys
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
-__all__ = ["main", "build_parser"]
+__all__ = [
+    "main",
+    "build_parser",
+    "BUDGETS",
+    "COMPARE_MIN_SPEED",
+    "COMPARE_MIN_STEERING_LAG",
+    "DELAY_MARGIN_MIN_DELAY",
+    "DEBUG_ENV",
+    "DESIGN_TOLERANCE",
+    "MAX_MESSAGE",
+]
 
 PROG = "fws-control"
 
@@ -41,6 +63,69 @@ DEFAULT_CURVATURE = 0.1
 
 #: Exit status of ``simulate`` when the run stopped before --duration.
 EXIT_STOPPED = 3
+
+#: Work budget of each size option: (subcommand, option) -> (largest value,
+#: unit, what to do instead). A larger request is refused with exit status 2 before
+#: any work starts; the limits keep every command within about a gigabyte of
+#: memory and a minute on a laptop (measured: ``chart --points 2001`` 0.33 GB,
+#: 2.4 s; ``rlocus --points 10000`` 2.3 s; ``simulate --duration 3600`` 0.4
+#: GB, 4.8 s; ``reproduce --dpi 600``: the widest figure is 10200 x 3120
+#: pixels).
+BUDGETS = {
+    ("chart", "--points"): (
+        2001,
+        "points per axis",
+        "for finer detail narrow --k1-range/--k2-range",
+    ),
+    ("rlocus", "--points"): (10000, "values", "for finer detail narrow --range"),
+    ("simulate", "--duration"): (
+        3600.0,
+        "s",
+        "for longer runs use fws_control.simulate with a coarser dt",
+    ),
+    ("reproduce", "--dpi"): (
+        600,
+        "dpi",
+        "for larger images use fws_control.paper.make_figure and savefig",
+    ),
+    ("delay-margin", "--delay"): (
+        60.0,
+        "s",
+        "the critical delay (without --delay) decides stability at any delay",
+    ),
+    ("compare", "--delay"): (
+        10.0,
+        "s",
+        "longer than the whole manoeuvre",
+    ),
+}
+
+#: Slowest speed [m/s] of ``compare``: the manoeuvre's duration and cost grow
+#: as 1/speed (0.5 m/s already takes half a minute).
+COMPARE_MIN_SPEED = 1.0
+
+#: Smallest nonzero ``delay-margin --delay`` [s]: the rightmost-root search
+#: grows as the delay shrinks (1e-4 s: 6 s, 1e-5 s: 31 s, 1e-6 s: minutes).
+DELAY_MARGIN_MIN_DELAY = 1e-4
+
+#: Fastest steering lag [s] of ``compare``: a faster first-order actuator
+#: makes the closed loop stiff, and the explicit solver's cost grows as 1/lag
+#: (0.01 s already doubles the run time; 0.001 s takes minutes).
+COMPARE_MIN_STEERING_LAG = 0.01
+
+#: Largest relative distance of a design's closed-loop poles (in its own
+#: linearisation) from the requested double root before the CLI refuses the
+#: gains: well-posed designs reach about 1e-5 (measured over V 1..40 m/s,
+#: kappa 0..0.3, a -1.5..1.5, lambda0 -0.1..-10); a = 0.9999 on a straight
+#: road misses by 2e-3, a = 1 - 2e-6 by 1.5.
+DESIGN_TOLERANCE = 1e-3
+
+#: Error messages longer than this (plus a margin of 60) are cut to about
+#: this many characters on stderr, keeping their beginning and end.
+MAX_MESSAGE = 200
+
+#: Environment variable that, set to 1, lets errors end with a traceback.
+DEBUG_ENV = "FWS_CONTROL_DEBUG"
 
 #: (attribute, limit, what): a one-line warning when |value| exceeds limit.
 _EXTREME = (
@@ -58,27 +143,120 @@ class _Parser(argparse.ArgumentParser):
     """ArgumentParser whose errors are one line (no usage block)."""
 
     def error(self, message: str):  # noqa: D401 - argparse API
-        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
+        self.exit(2, f"{self.prog}: error: {_bounded(message)} (see --help)\n")
+
+    def exit(self, status=0, message=None):  # noqa: D401 - argparse API
+        if message:
+            _say(message.rstrip("\n"))
+        sys.exit(status)
+
+
+# A negative number in any float spelling: -1, -1.5, -.5, -1e3, -1.5e-2,
+# -1E+3, -inf, -nan. argparse (before Python 3.13.1) takes "-1e3" for an
+# option because its negative-number pattern knows no exponent.
+_NEGATIVE_NUMBER = re.compile(
+    r"-(?:(?:\d[\d_]*(?:\.[\d_]*)?|\.\d[\d_]*)(?:[eE][-+]?\d+)?|inf(?:inity)?|nan)",
+    re.IGNORECASE,
+)
+
+
+def _protect_negative_numbers(argv: Sequence[str]) -> list[str]:
+    """Let option values such as ``--pole -1e3`` through argparse.
+
+    argparse treats a token as an option when it starts with ``-``, and as a
+    value otherwise (no option of this program starts with a digit or a
+    dot). A leading space keeps a negative number a value; ``float`` and
+    ``int`` ignore it. Tokens after ``--`` are left alone.
+    """
+    out = []
+    rest = False
+    for tok in argv:
+        if tok == "--":
+            rest = True
+        if not rest and _NEGATIVE_NUMBER.fullmatch(tok):
+            tok = " " + tok
+        out.append(tok)
+    return out
 
 
 def _finite(text: str) -> float:
+    text = text.strip()
     try:
         v = float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+        raise argparse.ArgumentTypeError(f"not a number: {_short(text)}") from None
     if not math.isfinite(v):
         raise argparse.ArgumentTypeError(f"must be finite, got {text!r}")
     return v
 
 
-def _positive_int(text: str) -> int:
+def _positive_int(
+    text: str, *, low: int = 2, high: int | None = None, unit: str = "", hint=""
+) -> int:
+    """An integer in ``low..high``; integral floats (``1e4``) are accepted."""
+    text = text.strip()
     try:
         v = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if v < 2:
-        raise argparse.ArgumentTypeError(f"must be >= 2, got {v}")
+        try:
+            f = float(text)
+        except ValueError:
+            f = math.nan
+        if not (math.isfinite(f) and f == int(f)):
+            raise argparse.ArgumentTypeError(
+                f"not an integer: {_short(text)}"
+            ) from None
+        v = int(f)
+    if v < low:
+        raise argparse.ArgumentTypeError(f"must be >= {low}, got {v}")
+    if high is not None and v > high:
+        raise argparse.ArgumentTypeError(
+            f"{v} is beyond the budget of {high} {unit}; {hint}"
+            if hint
+            else f"must be <= {high}, got {v}"
+        )
     return v
+
+
+def _budget_int(command: str, option: str, low: int = 2):
+    high, unit, hint = BUDGETS[(command, option)]
+
+    def parse(text: str) -> int:
+        return _positive_int(text, low=low, high=high, unit=unit, hint=hint)
+
+    parse.__name__ = "integer"  # argparse names the type in some messages
+    return parse
+
+
+def _budget_float(
+    command: str, option: str, *, positive: bool = True, smallest: float = 0.0
+):
+    """A number in ``(0, high]`` (``[0, high]`` if not ``positive``).
+
+    With ``smallest``, a nonzero value must be at least ``smallest`` too.
+    """
+    high, unit, hint = BUDGETS[(command, option)]
+
+    def parse(text: str) -> float:
+        v = _finite(text)
+        if positive and v <= 0:
+            raise argparse.ArgumentTypeError(f"must be > 0, got {v:g}")
+        if v < 0:
+            raise argparse.ArgumentTypeError(f"must be >= 0, got {v:g}")
+        if 0 < v < smallest:
+            raise argparse.ArgumentTypeError(
+                f"{v:g} is below the smallest {smallest:g} {unit} that the budget "
+                f"allows (0 is allowed): the root search needs ever more work as "
+                "the delay shrinks"
+            )
+        if v > high:
+            raise argparse.ArgumentTypeError(
+                f"{v:g} is beyond the budget of {high:g} {unit}; {hint}"
+            )
+        return v
+
+    parse.__name__ = "number"
+    return parse
 
 
 def _add_vehicle(p: argparse.ArgumentParser) -> None:
@@ -131,6 +309,11 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--version", action="version", version=f"%(prog)s {__version__}"
     )
+    parser.add_argument(
+        "--debug",
+        action="store_true",
+        help=f"show the traceback of an error (also {DEBUG_ENV}=1)",
+    )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
 
@@ -171,7 +354,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="k2 axis [-] (-1 1)",
     )
     p.add_argument(
-        "--points", type=_positive_int, default=501, help="grid points per axis (501)"
+        "--points",
+        type=_budget_int("chart", "--points"),
+        default=501,
+        help=f"grid points per axis, 2 to {BUDGETS[('chart', '--points')][0]} (501)",
     )
     p.add_argument(
         "--paper-figure",
@@ -207,7 +393,12 @@ def build_parser() -> argparse.ArgumentParser:
         metavar=("MIN", "MAX"),
         help="range of the parameter (default: a sensible one)",
     )
-    p.add_argument("--points", type=_positive_int, default=400, help="values (400)")
+    p.add_argument(
+        "--points",
+        type=_budget_int("rlocus", "--points"),
+        default=400,
+        help=f"values, 2 to {BUDGETS[('rlocus', '--points')][0]} (400)",
+    )
     p.add_argument(
         "--redesign",
         action="store_true",
@@ -245,7 +436,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--x0", type=_finite, default=0.0, help="x_R(0) [m] (0)")
     p.add_argument("--y0", type=_finite, default=-5.0, help="y_R(0) [m] (-5)")
     p.add_argument("--psi0", type=_finite, default=0.0, help="psi(0) [deg] (0)")
-    p.add_argument("--duration", type=_finite, default=15.0, help="[s] (15)")
+    p.add_argument(
+        "--duration",
+        type=_budget_float("simulate", "--duration"),
+        default=15.0,
+        help="[s], at most "
+        f"{BUDGETS[('simulate', '--duration')][0]:g} s, sampled every 0.01 s (15)",
+    )
     p.add_argument(
         "--no-feedforward",
         action="store_true",
@@ -288,8 +485,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--delay",
-        type=_finite,
-        help="also report the rightmost roots at this delay [s]",
+        type=_budget_float(
+            "delay-margin", "--delay", positive=False, smallest=DELAY_MARGIN_MIN_DELAY
+        ),
+        help="also report the rightmost roots at this delay [s]: 0, or "
+        f"{DELAY_MARGIN_MIN_DELAY:g} to {BUDGETS[('delay-margin', '--delay')][0]:g}",
     )
     _add_vehicle(p)
     p.set_defaults(func=_cmd_delay_margin)
@@ -311,7 +511,13 @@ def build_parser() -> argparse.ArgumentParser:
         default="iso3888-1",
         help="course (default: iso3888-1)",
     )
-    p.add_argument("--speed", type=_finite, default=20.0, help="V [m/s] (20)")
+    p.add_argument(
+        "--speed",
+        type=_finite,
+        default=20.0,
+        help=f"V [m/s], at least {COMPARE_MIN_SPEED:g} (the run lasts course "
+        "length / V) (20)",
+    )
     p.add_argument(
         "--ratio",
         type=_finite,
@@ -322,12 +528,17 @@ def build_parser() -> argparse.ArgumentParser:
         "--pole", type=_finite, default=-1.0, help="double root of the paper's law (-1)"
     )
     p.add_argument(
-        "--delay", type=_finite, default=0.0, help="input delay on the steering [s] (0)"
+        "--delay",
+        type=_budget_float("compare", "--delay", positive=False),
+        default=0.0,
+        help="input delay on the steering [s], 0 to "
+        f"{BUDGETS[('compare', '--delay')][0]:g} (0)",
     )
     p.add_argument(
         "--steering-lag",
         type=_finite,
-        help="steering actuator time constant [s] (none)",
+        help="steering actuator time constant [s], at least "
+        f"{COMPARE_MIN_STEERING_LAG:g} (none: ideal steering)",
     )
     p.add_argument(
         "--offset",
@@ -348,7 +559,12 @@ def build_parser() -> argparse.ArgumentParser:
         "reproduce",
         help="write every figure of the paper (Figs. 2-9) and summary.md",
         description="Regenerate the paper's Figs. 2-9 (plus extras) as PNG files "
-        "and summary.md (gains table, Fig. 5 peak accelerations) in --out.",
+        "and summary.md (gains table, Fig. 5 peak accelerations) in --out. Each "
+        "file is written under a temporary name and renamed when complete, so an "
+        "interrupted run (Ctrl-C: exit status 130) leaves complete files only. "
+        "The run locks the folder (file .fws-control.lock, released when the "
+        "process ends, however it ends); a second run into a folder in use is "
+        "refused at once with exit status 2.",
     )
     p.add_argument(
         "--out", type=Path, default=Path("figures"), help="directory (figures)"
@@ -370,7 +586,12 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="NAME",
         help="write only these figures (e.g. fig2 fig5)",
     )
-    p.add_argument("--dpi", type=int, default=110, help="PNG resolution (110)")
+    p.add_argument(
+        "--dpi",
+        type=_budget_int("reproduce", "--dpi", low=1),
+        default=110,
+        help=f"PNG resolution, 1 to {BUDGETS[('reproduce', '--dpi')][0]} (110)",
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_reproduce)
     return parser
@@ -401,8 +622,48 @@ def _gains(args, veh):
         raise ValueError("give both --k1 and --k2, or neither (then --pole is used)")
     if args.k1 is not None:
         return SteeringGains(args.k1, args.k2, args.ratio)
-    g = double_root_gains(_plant(args, veh), ratio=args.ratio, pole=args.pole)
+    plant = _plant(args, veh)
+    g = double_root_gains(plant, ratio=args.ratio, pole=args.pole)
+    _check_design(plant, g, args.pole, args.model)
     return SteeringGains(float(g.k1), float(g.k2), args.ratio)
+
+
+def _design_error(plant, g, pole: float) -> float:
+    """Largest distance of the closed-loop poles from ``pole``, relative to it."""
+    import numpy as np
+
+    from .linear import closed_loop
+
+    poles = np.asarray(closed_loop(plant, g).poles(), dtype=complex)
+    if not np.all(np.isfinite(poles)):
+        return math.inf
+    return float(np.max(np.abs(poles - pole)) / abs(pole))
+
+
+def _check_design(plant, g, pole: float, model: str) -> None:
+    """Refuse gains whose closed loop (in their own model) misses the double root.
+
+    Near a = 1 on a straight road, for extreme magnitudes or a pole next to
+    0 the design's linear system is so ill-conditioned that the gains place
+    the poles somewhere else (even in the right half plane); printing or
+    simulating them would be a silent wrong answer.
+    """
+    err = _design_error(plant, g, pole)
+    if not err <= DESIGN_TOLERANCE:
+        import numpy as np
+
+        from .linear import closed_loop
+
+        poles = np.sort_complex(np.asarray(closed_loop(plant, g).poles(), complex))
+        where = ", ".join(
+            f"{z.real:.4g}" if abs(z.imag) < 1e-9 else f"{z:.3g}" for z in poles
+        )
+        raise ValueError(
+            f"no reliable {model}-model design for --pole {pole:g}: its poles are "
+            f"{where} (off by {err:.2g} relative, limit {DESIGN_TOLERANCE:g}); "
+            "ill-conditioned: a near 1 on a straight road, extreme values or a "
+            "pole near 0"
+        )
 
 
 def _fmt_poles(p) -> str:
@@ -434,7 +695,13 @@ def _cmd_gains(args) -> int:
 
     veh = _vehicle(args)
     # Design first so that bad input fails before anything is printed.
-    double_root_gains(_plant(args, veh), ratio=args.ratio, pole=args.pole)
+    plant = _plant(args, veh)
+    _check_design(
+        plant,
+        double_root_gains(plant, ratio=args.ratio, pole=args.pole),
+        args.pole,
+        args.model,
+    )
     print(
         f"V = {args.speed:g} m/s, kappa = {args.curvature:g} 1/m, a = {args.ratio:g}, "
         f"lambda0 = {args.pole:g} 1/s, f = {veh.wheelbase:g} m"
@@ -449,6 +716,13 @@ def _cmd_gains(args) -> int:
             if model == args.model:
                 raise
             print(f"{model} model: no design ({exc})")
+            continue
+        err = _design_error(_plant(args, veh, model), g, args.pole)
+        if model != args.model and not err <= DESIGN_TOLERANCE:
+            print(
+                f"{model} model: no reliable design (its poles miss lambda0 by "
+                f"{err:.2g} relative)"
+            )
             continue
         tag = "" if model == args.model else " (for comparison)"
         print(f"{model} model{tag}:")
@@ -657,13 +931,18 @@ def _cmd_simulate(args) -> int:
         f"{math.degrees(res.theta[-1]):.4g} deg"
     )
     if args.csv is not None:
-        _write_csv(res, args.csv)
+        _write_csv(
+            res,
+            args.csv,
+            gains=g,
+            speed=args.speed,
+            curvature=args.curvature if args.path == "arc" else 0.0,
+        )
         print(f"wrote {args.csv}")
     if stopped:
-        print(
+        _say(
             f"{PROG} simulate: run stopped at t = {float(res.t_stop):.3g} s "
-            f"({res.status}); exit status {EXIT_STOPPED}",
-            file=sys.stderr,
+            f"({res.status}); exit status {EXIT_STOPPED}"
         )
         return EXIT_STOPPED
     return 0
@@ -690,17 +969,24 @@ _CSV_UNITS = {
 }
 
 
-def _write_csv(res, path: Path) -> None:
+def _write_csv(res, path: Path, *, gains, speed: float, curvature: float) -> None:
     """One row per sample; header ``name [unit]``; last column the status.
 
-    The status column reads ``ok`` while the run is valid and the run's
-    status (e.g. ``singular_steering``) from the stop on; samples after the
-    stop are empty.
+    After the signals come the run's own data, the same on every row, so
+    that the file alone says what was run and how it ended: ``k1 [rad/m]``,
+    ``k2 [-]``, ``ratio [-]``, ``speed [m/s]``, ``curvature [1/m]``,
+    ``run_status`` (the run's final status), ``message`` (why it stopped,
+    empty for ``ok``) and ``t_stop [s]`` (when it stopped; the last time if
+    it ran to the end). The status column reads
+    ``ok`` while the run is valid and the run's status (e.g.
+    ``singular_steering``) from the stop on; samples after the stop are
+    empty.
     """
     import csv
 
     import numpy as np
 
+    from .files import atomic_write
     from .simulation import SIGNALS
 
     names = ("t", *SIGNALS)
@@ -710,15 +996,32 @@ def _write_csv(res, path: Path) -> None:
         cols.append(np.degrees(v) if _CSV_UNITS[n].startswith("deg") else v)
     t = cols[0]
     status = np.full(t.shape, "ok", dtype=object)
-    if str(res.status) != "ok":
-        status[t >= float(res.t_stop) - 1e-12] = str(res.status)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "w", newline="", encoding="utf-8") as fh:
+    run_status = str(res.status)
+    if run_status != "ok":
+        status[t >= float(res.t_stop) - 1e-12] = run_status
+    run = {
+        "k1 [rad/m]": float(gains.k1),
+        "k2 [-]": float(gains.k2),
+        "ratio [-]": float(gains.ratio),
+        "speed [m/s]": float(speed),
+        "curvature [1/m]": float(curvature),
+    }
+    constant = [f"{v:.10g}" for v in run.values()] + [
+        run_status,
+        " ".join(str(res.message or "").split()),
+        f"{float(res.t_stop):.10g}",
+    ]
+    with atomic_write(path, mode="w") as fh:
         w = csv.writer(fh)
-        w.writerow([f"{n} [{_CSV_UNITS[n]}]" for n in names] + ["status"])
+        w.writerow(
+            [f"{n} [{_CSV_UNITS[n]}]" for n in names]
+            + list(run)
+            + ["run_status", "message", "t_stop [s]", "status"]
+        )
         for i in range(t.size):
             w.writerow(
                 ["" if not np.isfinite(c[i]) else f"{c[i]:.10g}" for c in cols]
+                + constant
                 + [status[i]]
             )
 
@@ -735,8 +1038,19 @@ def _cmd_compare(args) -> int:
     )
 
     _check_out(args.out)
-    if args.speed <= 0:
-        raise ValueError(f"--speed must be > 0 m/s, got {args.speed:g}")
+    if args.speed < COMPARE_MIN_SPEED:
+        raise ValueError(
+            f"--speed must be >= {COMPARE_MIN_SPEED:g} m/s, got {args.speed:g} (the "
+            "manoeuvre lasts its length / speed; slower runs are beyond the budget: "
+            "call fws_control.controller_comparison.compare from Python for them)"
+        )
+    lag = args.steering_lag
+    if lag is not None and 0 < lag < COMPARE_MIN_STEERING_LAG:
+        raise ValueError(
+            f"--steering-lag must be >= {COMPARE_MIN_STEERING_LAG:g} s, got {lag:g} "
+            "(a faster actuator makes the simulation stiff and slow, beyond the "
+            "budget; for ideal steering leave --steering-lag out)"
+        )
     course = {
         "iso3888-1": lambda: double_lane_change(vehicle_width=args.vehicle_width),
         "iso3888-2": lambda: obstacle_avoidance(vehicle_width=args.vehicle_width),
@@ -837,10 +1151,12 @@ def _check_out(out: Path) -> None:
 
 
 def _save(fig, out: Path) -> None:
+    from .files import atomic_write
+
     out = Path(out)
     _check_out(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=110)
+    with atomic_write(out) as fh:
+        fig.savefig(fh, format="png", dpi=110)
     print(f"wrote {out}")
 
 
@@ -850,12 +1166,99 @@ def _warn_extreme(args) -> None:
         v = getattr(args, name, None)
         if v is not None and abs(v) > limit:
             u = f" {unit}" if unit else ""
-            print(
+            _say(
                 f"{PROG} {args.command}: warning: --{name.replace('_', '-')} "
                 f"{v:g}{u} is outside |{name}| <= {limit:g}{u} ({why}); "
-                "results may be meaningless",
-                file=sys.stderr,
+                "results may be meaningless"
             )
+
+
+def _short(value, limit: int = 60) -> str:
+    """``repr`` of a value cut to ``limit`` characters."""
+    import reprlib
+
+    r = reprlib.Repr()
+    r.maxstring = r.maxother = limit
+    return r.repr(value)
+
+
+def _bounded(message: str, limit: int = MAX_MESSAGE) -> str:
+    """One line of at most about ``limit`` characters.
+
+    A message that quotes a whole array would fill the terminal; keep its
+    beginning (what is wrong) and its end (the valid range, what to do).
+    """
+    msg = " ".join(str(message).split())
+    if len(msg) <= limit + 60:  # cutting a few characters would hide, not save
+        return msg
+    tail = limit // 4
+    head = limit - tail
+    return f"{msg[:head]} ... [{len(msg) - limit} characters] ... {msg[-tail:]}"
+
+
+def _say(line: str) -> None:
+    """Print one line on stderr; a closed or broken stderr is not an error."""
+    stream = sys.stderr
+    if stream is None:
+        return
+    try:
+        stream.write(line + "\n")
+        stream.flush()
+    except (OSError, ValueError):
+        pass
+
+
+def _ensure_std_streams() -> None:
+    """Give closed standard descriptors (``2>&-``) a /dev/null.
+
+    Otherwise the next file opened (a PNG, the lock) would get descriptor 2
+    and whatever writes to stderr, from Python or from C, would write into
+    it.
+    """
+    for fd, name, mode in ((0, "stdin", "r"), (1, "stdout", "w"), (2, "stderr", "w")):
+        try:
+            os.fstat(fd)
+        except OSError:
+            null = os.open(os.devnull, os.O_RDWR)
+            if null != fd:  # pragma: no cover - only if a lower fd is closed too
+                os.dup2(null, fd)
+                os.close(null)
+        if getattr(sys, name) is None:
+            setattr(sys, name, open(fd, mode, closefd=False))
+
+
+class _Terminated(BaseException):
+    """SIGTERM, raised in the main thread so that clean-up code runs."""
+
+
+@contextlib.contextmanager
+def _terminate_raises():
+    """Turn SIGTERM into :class:`_Terminated` for the duration of a command."""
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum, frame):
+        raise _Terminated
+
+    old = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
+def _print_warnings(command: str, caught) -> None:
+    """One line per distinct warning of a command that succeeded."""
+    seen = set()
+    for w in caught:
+        key = (w.category, str(w.message))
+        if key in seen:
+            continue
+        seen.add(key)
+        _say(f"{PROG} {command}: warning: {_bounded(w.message)}")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -863,35 +1266,94 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     Errors in the input (ValueError, including UncontrollableError and
     SingularStateError, TypeError, OSError) end with one line on stderr and
-    status 2; ``simulate`` returns 3 (:data:`EXIT_STOPPED`) when the run
-    stopped early. Extreme but valid inputs print one warning line each.
+    status 2, as do requests beyond the budgets of :data:`BUDGETS`, a
+    ``MemoryError`` and an output folder in use; any other error ends with
+    one line and status 1 (``--debug`` or ``FWS_CONTROL_DEBUG=1`` shows the
+    traceback instead). ``simulate`` returns 3 (:data:`EXIT_STOPPED`) when
+    the run stopped early; Ctrl-C returns 130 and ``SIGTERM`` 143, each with
+    one line, leaving complete files only. Extreme but valid inputs print
+    one warning line each; numerical warnings raised while a command works
+    are printed one line each after it succeeds and dropped when it fails
+    (its error line says what went wrong).
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        Arguments without the program name; default ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        The exit status.
+
+    Examples
+    --------
+    >>> from fws_control.cli import main
+    >>> main(["gains", "--speed", "5", "--curvature", "0", "--ratio", "-1",
+    ...       "--pole", "-1e0"])  # doctest: +ELLIPSIS
+    V = 5 m/s, kappa = 0 1/m, a = -1, lambda0 = -1 1/s, f = 2.7 m
+    exact model:
+    ...
+    0
     """
-    import logging
-
-    import matplotlib
-
-    matplotlib.use("Agg")
-    # Equal-aspect root-locus axes make matplotlib log "Ignoring fixed x
-    # limits ..." at every save; it is noise for a command-line user.
-    logging.getLogger("matplotlib").setLevel(logging.ERROR)
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    _warn_extreme(args)
+    _ensure_std_streams()
+    argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
+    debug = os.environ.get(DEBUG_ENV, "") not in ("", "0")
+    where = PROG
     try:
-        return int(args.func(args) or 0)
+        # SIGTERM and Ctrl-C end in one line from here on, even while the
+        # libraries are still being imported.
+        with _terminate_raises():
+            import logging
+
+            import matplotlib
+
+            matplotlib.use("Agg")
+            # Equal-aspect root-locus axes make matplotlib log "Ignoring
+            # fixed x limits ..." at every save; noise for a command line.
+            logging.getLogger("matplotlib").setLevel(logging.ERROR)
+            args = build_parser().parse_args(_protect_negative_numbers(argv))
+            debug = debug or args.debug
+            where = f"{PROG} {args.command}"
+            _warn_extreme(args)
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("default")
+                status = int(args.func(args) or 0)
+        _print_warnings(args.command, caught)
+        return status
     except BrokenPipeError:
         # Output piped into e.g. `head`, which closed early: not an error.
         # Point stdout at devnull so the interpreter's final flush is silent.
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return 0
-    except (ValueError, TypeError, OSError, ArithmeticError) as exc:
-        msg = " ".join(str(exc).split())
-        print(f"{PROG} {args.command}: error: {msg}", file=sys.stderr)
-        return 2
     except KeyboardInterrupt:
-        print(f"{PROG}: interrupted", file=sys.stderr)
+        _say(f"{where}: interrupted; files already written are complete")
         return 130
+    except _Terminated:
+        _say(f"{where}: terminated; files already written are complete")
+        return 143
+    except MemoryError:
+        if debug:
+            raise
+        _say(
+            f"{where}: error: out of memory; ask for less (--points, --duration, "
+            "--dpi, --range) and see --help for the budgets"
+        )
+        return 2
+    except (ValueError, TypeError, OSError, ArithmeticError) as exc:
+        if debug:
+            raise
+        _say(f"{where}: error: {_bounded(exc)}")
+        return 2
+    except Exception as exc:
+        if debug:
+            raise
+        _say(
+            f"{where}: internal error: {type(exc).__name__}: "
+            f"{_bounded(exc, MAX_MESSAGE - 60)} (--debug shows the traceback)"
+        )
+        return 1
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -25,6 +25,7 @@ import control as ct
 import numpy as np
 
 from ..design import UncontrollableError, double_root_gains
+from ..files import atomic_write, lock_folder, remove_stale_temporaries
 from ..linear import closed_loop
 from ..plant import LateralPlant
 from ..turning import plot_turning_radius, turning_radius
@@ -861,12 +862,45 @@ class ReproduceResult:
     summary: Path
 
 
+class _QuietStream:
+    """A text stream that forwards to ``stream`` until writing to it fails.
+
+    The progress bar is a courtesy: a closed or broken standard error
+    (``2>&-``, a pipe whose reader went away) must not stop the figures.
+    """
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def write(self, text):
+        if self._stream is not None:
+            try:
+                return self._stream.write(text)
+            except (OSError, ValueError):  # ValueError: I/O on a closed file
+                self._stream = None
+        return len(text)
+
+    def flush(self):
+        if self._stream is not None:
+            try:
+                self._stream.flush()
+            except (OSError, ValueError):
+                self._stream = None
+
+
 def _progress(iterable, enabled, total=None, desc=None):
-    if not enabled:
+    if not enabled or sys.stderr is None:
         return iterable
     from tqdm.auto import tqdm
 
-    return tqdm(iterable, total=total, desc=desc, file=sys.stderr, unit="fig")
+    return tqdm(
+        iterable, total=total, desc=desc, file=_QuietStream(sys.stderr), unit="fig"
+    )
+
+
+#: Largest resolution :func:`reproduce` accepts: at 600 dpi the widest figure
+#: (17 x 5.2 in) is 10200 x 3120 pixels, about 130 MB of RGBA while drawing.
+_MAX_DPI = 600
 
 
 def reproduce(
@@ -891,13 +925,30 @@ def reproduce(
     progress : bool, optional
         Show a tqdm progress bar on stderr.
     dpi : int, optional
-        Resolution of the PNG files.
+        Resolution of the PNG files, 1 to 600 (a higher one would need
+        gigabytes of memory for the widest figure).
     names : sequence of str, optional
         Subset of :data:`FIGURES` to write; default all.
 
     Returns
     -------
     ReproduceResult
+
+    Raises
+    ------
+    fws_control.files.FolderInUseError
+        Another process is writing into ``out`` (it holds the folder's lock,
+        :func:`fws_control.files.lock_folder`); nothing is written.
+
+    Notes
+    -----
+    Every file is written to a temporary file in ``out`` and renamed onto
+    its final name (:func:`fws_control.files.atomic_write`), so an
+    interrupted run (Ctrl-C, ``kill``, even ``kill -9``) leaves the files it
+    finished, complete, and no partial one; ``summary.md`` is written last.
+    Temporary files of a run killed with ``SIGKILL`` are removed by the next
+    run into the same folder. The folder keeps the empty lock file
+    ``.fws-control.lock``.
 
     Examples
     --------
@@ -916,17 +967,29 @@ def reproduce(
     for name in names:
         if name not in FIGURES:
             raise ValueError(f"names must be in {sorted(FIGURES)}, got {name!r}")
+    if isinstance(dpi, bool) or not isinstance(dpi, (int, np.integer)):
+        raise TypeError(f"dpi must be an int, got {type(dpi).__name__} {dpi!r}")
+    if not 1 <= dpi <= _MAX_DPI:
+        raise ValueError(f"dpi must be in 1..{_MAX_DPI}, got {dpi}")
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    written = []
-    for name in _progress(names, progress, total=len(names), desc="figures"):
-        fig = FIGURES[name].make(model=model, quick=quick)
-        path = out / f"{name}.png"
-        fig.savefig(path, dpi=dpi)
-        plt.close(fig)
-        written.append(path)
-    summary = out / "summary.md"
-    summary.write_text(_summary_text(model, written, quick), encoding="utf-8")
+    with lock_folder(out):
+        # Holding the lock, no live writer owns a temporary file here: any
+        # left is from a run that was killed.
+        remove_stale_temporaries(out)
+        written = []
+        for name in _progress(names, progress, total=len(names), desc="figures"):
+            fig = FIGURES[name].make(model=model, quick=quick)
+            path = out / f"{name}.png"
+            try:
+                with atomic_write(path) as fh:
+                    fig.savefig(fh, format="png", dpi=int(dpi))
+            finally:
+                plt.close(fig)
+            written.append(path)
+        summary = out / "summary.md"
+        text = _summary_text(model, written, quick)
+        with atomic_write(summary, mode="w") as fh:
+            fh.write(text)
     return ReproduceResult(out, tuple(written), summary)
 
 
