@@ -55,7 +55,7 @@ from .engine import (
 )
 from .result import SimulationResult
 
-__all__ = ["simulate", "simulate_batch", "DEFAULT_CHUNK_SIZE", "ENGINES"]
+__all__ = ["simulate", "simulate_batch", "DEFAULT_CHUNK_SIZE"]
 
 #: Runs per chunk (one solver, one Dask task) unless told otherwise.
 DEFAULT_CHUNK_SIZE = 256
@@ -185,8 +185,8 @@ def _run_isolated(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts
     return out
 
 
-#: Engines of :func:`simulate_batch`.
-ENGINES = ("numpy", "compiled")
+# Engines of simulate_batch (documented in its docstring).
+_ENGINES = ("numpy", "compiled")
 
 
 def _check_compiled(path, gains, *, delay, method, model, feedforward) -> None:
@@ -731,8 +731,8 @@ def simulate_batch(
     >>> fws.tracking_metrics(res).peak_lateral_accel.round(2).tolist()
     [2.0, 1.91, 1.73, 1.19]
     """
-    if isinstance(engine, bool) or engine not in ENGINES:
-        raise ValueError(f"engine must be one of {ENGINES}, got {engine!r}")
+    if isinstance(engine, bool) or engine not in _ENGINES:
+        raise ValueError(f"engine must be one of {_ENGINES}, got {engine!r}")
     if engine == "compiled" and isinstance(method, str) and method == "auto":
         method = "DOP853"  # the only compiled method (also for a stiff actuator)
     opts = {
