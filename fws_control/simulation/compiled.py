@@ -54,10 +54,11 @@ that channel held at the limit (or free), so that the right-hand side is
 smooth within every step (``switching=False`` clips with min/max inside the
 right-hand side instead, as the numpy engine does).
 
-Not supported here (the numpy engine remains the general path and the
-fallback): :class:`~fws_control.LateralController` baselines, an input
-delay, other solvers than DOP853, the dense solution for exact peaks, and
-any model other than the kinematic one. A stiff actuator (small time
+Not supported here (the numpy engine remains the general path;
+``simulate(..., engine="compiled")`` raises for these):
+:class:`~fws_control.LateralController` baselines, an input delay, other
+solvers than DOP853, the dense solution for exact peaks, and any model
+other than the kinematic one. A stiff actuator (small time
 constant) is detected with Hairer's test (``stiff`` in the statistics) but
 still integrated explicitly: the explicit step is then limited by stability
 to about :math:`6\,T` (see ``docs/performance.md``).
