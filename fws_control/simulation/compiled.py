@@ -54,10 +54,11 @@ that channel held at the limit (or free), so that the right-hand side is
 smooth within every step (``switching=False`` clips with min/max inside the
 right-hand side instead, as the numpy engine does).
 
-Not supported here (the numpy engine remains the general path and the
-fallback): :class:`~fws_control.LateralController` baselines, an input
-delay, other solvers than DOP853, the dense solution for exact peaks, and
-any model other than the kinematic one. A stiff actuator (small time
+Not supported here (the numpy engine remains the general path;
+``simulate(..., engine="compiled")`` raises for these):
+:class:`~fws_control.LateralController` baselines, an input delay, other
+solvers than DOP853, the dense solution for exact peaks, and any model
+other than the kinematic one. A stiff actuator (small time
 constant) is detected with Hairer's test (``stiff`` in the statistics) but
 still integrated explicitly: the explicit step is then limited by stability
 to about :math:`6\,T` (see ``docs/performance.md``).
@@ -85,6 +86,7 @@ from ..paths import Arc, Clothoid, Path, PathChain, Straight
 from ..validation import check_positive
 from ..vehicle import Vehicle
 from .engine import (
+    SIGNALS,
     STATUS_END_OF_PATH,
     STATUS_FAILED,
     STATUS_OK,
@@ -193,6 +195,8 @@ _P_SPEED, _P_K1, _P_K2, _P_RATIO = 0, 1, 2, 3
 # modes of the four clips (front/rear angle, front/rear rate): -1, 0 or +1
 _P_MODE = 4
 _NP = 8
+# rows of compiled_outputs, in the order of engine.SIGNALS
+_NSIG = len(SIGNALS)
 _N_STOPS = 4
 _N_EVENTS = 8
 #: Most clip switches per run (a guard against chattering).
@@ -917,9 +921,11 @@ def _curvature_rate(s, q, breaks, coefs):
 
 @_jit
 def _signals_batch(states, P, q, breaks, coefs, d_cg, pose, sig):
-    # sig (n, 11, T) in the order of engine.SIGNALS. Rows 3-10 -- s, e,
+    # sig (n, 15, T) in the order of engine.SIGNALS. Rows 3-14 -- s, e,
     # theta, delta_f, delta_r, their rates, the lateral acceleration of
-    # eq. (13) -- are computed here with the operations of compute_outputs;
+    # eq. (13), v_y, the yaw rate of eq. (10) and the slip angles (0: the
+    # kinematic model has no slip) -- are computed here with the operations
+    # of compute_outputs;
     # rows 0-2 (x, y, psi) too when pose[0] is 1 (Straight) or 2 (Arc):
     # pose = (kind, x0, y0, psi0, kappa). psi = theta + psi0 + kappa * s is
     # continuous in time by construction (no unwrapping needed).
@@ -938,7 +944,7 @@ def _signals_batch(states, P, q, breaks, coefs, d_cg, pose, sig):
         for k in range(T):
             s = states[i, 0, k]
             if not np.isfinite(s):
-                for r in range(11):
+                for r in range(_NSIG):
                     sig[i, r, k] = np.nan
                 continue
             e = states[i, 1, k]
@@ -991,10 +997,14 @@ def _signals_batch(states, P, q, breaks, coefs, d_cg, pose, sig):
                 sig[i, 8, k] = rf
                 sig[i, 9, k] = rr
                 sig[i, 10, k] = V * (psi_dot + rr) * math.cos(dr) + d_cg * psi_ddot
+                # G moves with R's velocity V (cos dr, sin dr) plus r x (l_r, 0)
+                sig[i, 11, k] = V * math.sin(dr) + d_cg * psi_dot
+                sig[i, 12, k] = psi_dot
+                sig[i, 13, k] = 0.0
+                sig[i, 14, k] = 0.0
             else:
-                sig[i, 8, k] = np.nan
-                sig[i, 9, k] = np.nan
-                sig[i, 10, k] = np.nan
+                for r in range(8, _NSIG):
+                    sig[i, r, k] = np.nan
             if kind == 0:
                 continue
             sp = s
@@ -1503,8 +1513,10 @@ def compiled_outputs(
     :func:`~fws_control.simulation.engine.compute_outputs` for the paper's
     law: ``s, e, theta``, the steering angles, their exact rates (chain rule
     through the law and the curvature table's derivative, zero where an
-    angle is clipped; the actuator's rates with an actuator) and the lateral
-    acceleration of eq. (13) are computed per output time in compiled code;
+    angle is clipped; the actuator's rates with an actuator), the lateral
+    acceleration of eq. (13), ``v_y``, the yaw rate of eq. (10) and the slip
+    angles (0: the kinematic model has no slip) are computed per output time
+    in compiled code;
     the global pose ``x, y, psi`` from the path's position and heading at
     ``s`` (numpy), with ``psi`` unwrapped in time on the branch of the
     initial heading.
@@ -1520,7 +1532,7 @@ def compiled_outputs(
     table : CurvatureTable, optional
         The path's table, if already built.
     out : ndarray, optional
-        Preallocated ``(n, 11, T)`` float array for the result.
+        Preallocated ``(n, len(SIGNALS), T)`` float array for the result.
 
     Returns
     -------
@@ -1554,10 +1566,10 @@ def compiled_outputs(
     if n != speed.size:
         raise ValueError(f"states must hold {speed.size} runs, got {n}")
     if out is None:
-        out = np.empty((n, 11, T))
-    elif out.shape != (n, 11, T) or out.dtype != np.float64:
+        out = np.empty((n, _NSIG, T))
+    elif out.shape != (n, _NSIG, T) or out.dtype != np.float64:
         raise ValueError(
-            f"out must be a float64 array of shape {(n, 11, T)}, got "
+            f"out must be a float64 array of shape {(n, _NSIG, T)}, got "
             f"{out.dtype} {out.shape}"
         )
     if isinstance(path, Straight):

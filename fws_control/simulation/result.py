@@ -96,14 +96,14 @@ class Peak:
 class Peaks:
     r"""Peaks ``max |signal|`` of a result's runs, one :class:`Peak` per signal.
 
-    With ``exact=True`` (every result of the simulation runners) they are
+    With ``exact=True`` (every result of the runners' numpy engine) they are
     the maxima of the continuous solution over each run's integrated
     interval ``[0, t_stop]``, located on the solver's dense output (see
     :func:`~fws_control.simulation.engine.exact_peaks`): they do not depend
-    on the output grid. ``exact=False`` (a result built from samples only)
-    marks the maxima of the output samples. A rate or the lateral
-    acceleration of a run stopped at a singular state diverges there: its
-    exact peak is ``inf``.
+    on the output grid. ``exact=False`` (a result built from samples only,
+    or by ``engine="compiled"``) marks the maxima of the output samples. A
+    rate or the lateral acceleration of a run stopped at a singular state
+    diverges there: its exact peak is ``inf``.
 
     Attributes
     ----------
@@ -224,6 +224,9 @@ class SimulationResult:
         ``"dynamic"`` (:data:`~fws_control.simulation.engine.MODELS`).
     tyre : str, optional
         Its tyre model, ``"linear"`` (default) or ``"magic"``.
+    engine : str, optional
+        The engine that integrated the runs: ``"numpy"`` (default) or
+        ``"compiled"`` (see :func:`~fws_control.simulate`).
 
     Attributes
     ----------
@@ -295,6 +298,7 @@ class SimulationResult:
     method: str | None = None
     model: str = "kinematic"
     tyre: str = "linear"
+    engine: str = "numpy"
 
     x = _Signal("Global x of the rear-axle centre R [m].")
     y = _Signal("Global y of the rear-axle centre R [m].")
@@ -353,6 +357,10 @@ class SimulationResult:
             raise ValueError(
                 f"model must be one of {MODELS} and tyre 'linear' or 'magic', "
                 f"got {self.model!r}, {self.tyre!r}"
+            )
+        if self.engine not in ("numpy", "compiled"):
+            raise ValueError(
+                f"engine must be 'numpy' or 'compiled', got {self.engine!r}"
             )
         if self.squeeze and n != 1:
             raise ValueError(f"squeeze=True needs exactly one run, got {n}")
@@ -441,6 +449,7 @@ class SimulationResult:
             method=self.method,
             model=self.model,
             tyre=self.tyre,
+            engine=self.engine,
         )
 
     @property
@@ -448,8 +457,9 @@ class SimulationResult:
         """Peaks ``max |signal|`` per run, with their times (:class:`Peaks`).
 
         Exact maxima of the continuous solution for every result of the
-        runners; a result built without them (``run_peak=None``) gives the
-        maxima of its samples, marked ``exact=False``.
+        runners' numpy engine; a result built without them (``run_peak=None``,
+        e.g. ``engine="compiled"``) gives the maxima of its samples, marked
+        ``exact=False``.
         """
         if self.run_peak is not None:
             values, times, exact = self.run_peak, self.run_peak_time, True
@@ -1027,4 +1037,5 @@ def expand_runs(
         run_peak=peak,
         run_peak_time=peak_time,
         method=None if result is None else result.method,
+        engine="numpy" if result is None else result.engine,
     )

@@ -185,6 +185,65 @@ def _run_isolated(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts
     return out
 
 
+# Engines of simulate_batch (documented in its docstring).
+_ENGINES = ("numpy", "compiled")
+
+
+def _check_compiled(path, gains, *, delay, method, model, feedforward) -> None:
+    """Raise ValueError if ``engine="compiled"`` cannot run this case."""
+    # imported here: numba's import is paid only by those who use it
+    from .compiled import compiled_support
+
+    reason = compiled_support(path, gains, delay=delay, method=method)
+    if reason is None and model != "kinematic":
+        reason = f"only model='kinematic' is compiled, got model={model!r}"
+    if reason is None and feedforward == "dynamic":
+        reason = "feedforward='dynamic' is not compiled"
+    if reason is not None:
+        raise ValueError(
+            f"engine='compiled' cannot run this simulation: {reason}; use "
+            "engine='numpy'"
+        )
+
+
+def _run_compiled(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl):
+    """:func:`_run_chunk` on the compiled engine (each run alone, no peaks).
+
+    Same arguments and results (NaN peaks: the compiled engine keeps no
+    dense solution); module-level so that Dask can pickle it. A run's
+    solver, steps and stop are its own, so a failure needs no isolation.
+    """
+    from .compiled import compiled_outputs, curvature_table, integrate_compiled
+
+    g = SteeringGains(k1, k2, a)
+    table = curvature_table(path)  # once for the integration and the outputs
+    states, status, message, t_stop, _ = integrate_compiled(
+        vehicle,
+        table,
+        g,
+        speed=speed,
+        feedforward=feedforward,
+        path_state=initial_path_state(path, x0[:, :3]),
+        t_eval=t,
+        time_constant=tau,
+        rtol=opts["rtol"],
+        atol=opts["atol"],
+    )
+    signals = compiled_outputs(
+        vehicle,
+        path,
+        g,
+        speed=speed,
+        feedforward=feedforward,
+        time_constant=tau,
+        states=states,
+        initial_heading=x0[:, 2],
+        table=table,
+    )
+    nan = np.full((speed.size, len(PEAK_SIGNALS)), np.nan)
+    return signals, status, message, t_stop, nan, nan.copy()
+
+
 def _lost_chunk(n: int, t_size: int, note: str):
     """The outputs of :func:`_run_chunk` for runs whose Dask task was lost."""
     nan = np.full((n, len(PEAK_SIGNALS)), np.nan)
@@ -205,7 +264,7 @@ def _chunk_controller(ctrl, lo: int, hi: int):
     return ctrl.subset(np.arange(lo, hi))
 
 
-def _run_on_dask(client, bounds, args, keep, t_size, bar) -> None:
+def _run_on_dask(client, bounds, args, keep, t_size, bar, run) -> None:
     """Run the chunks on a Dask cluster; keep every chunk that finishes.
 
     A client that cannot take the tasks (closed) raises at once, before any
@@ -231,7 +290,7 @@ def _run_on_dask(client, bounds, args, keep, t_size, bar) -> None:
     futures = {}
     try:
         for j, (lo, hi) in enumerate(bounds):
-            fut = client.submit(_run_isolated, *args(lo, hi), pure=False)
+            fut = client.submit(run, *args(lo, hi), pure=False)
             futures[fut] = j
     except Exception as exc:
         for fut in futures:
@@ -368,6 +427,7 @@ def simulate(
     atol: float = 1e-12,
     model: str = "kinematic",
     tyre: str = "linear",
+    engine: str = "numpy",
 ) -> SimulationResult:
     r"""Simulate the closed loop (one run) with the fast path-frame engine.
 
@@ -457,6 +517,22 @@ def simulate(
     tyre : {"linear", "magic"}, optional
         Tyre model of ``model="dynamic"``: linear (default) or the
         saturating simplified magic formula (needs ``vehicle.friction``).
+    engine : {"numpy", "compiled"}, optional
+        ``"numpy"`` (default): the engine described above, for every case.
+        ``"compiled"``: the numba port of DOP853 of
+        :mod:`fws_control.simulation.compiled` (extra ``fast``), each run
+        with its own steps and stop, at compiled speed. It runs the paper's
+        law (:class:`~fws_control.SteeringGains`) on the kinematic model
+        without delay, with ``method="DOP853"`` or ``"auto"`` (which then
+        means DOP853, even for a stiff actuator) and `feedforward` True or
+        False; any other case raises :class:`ValueError` (no fallback).
+        Its results agree with the numpy engine's to the solver tolerance
+        (the same method; angle and rate limits are switched as events, and
+        a run stops ``1e-3`` before a singularity: see that module). It
+        keeps no dense solution: the result's
+        :attr:`~fws_control.SimulationResult.peaks` are the maxima of the
+        output samples, marked ``exact=False``, and its ``engine`` is
+        ``"compiled"``.
 
     Returns
     -------
@@ -475,7 +551,8 @@ def simulate(
         :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES`.
         unknown method, model, tyre or feedforward, or (``model="dynamic"``
         or ``feedforward="dynamic"``) a vehicle without the dynamic data or a
-        negative speed.
+        negative speed; for an unknown `engine`, or ``engine="compiled"``
+        for a case it does not run (the message says why).
     AmbiguousProjectionError
         If the initial position has no unique closest point on the path.
 
@@ -529,6 +606,7 @@ def simulate(
         atol=atol,
         model=model,
         tyre=tyre,
+        engine=engine,
         chunk_size=1,
         progress=False,
     )
@@ -558,6 +636,7 @@ def simulate_batch(
     atol: float = 1e-12,
     model: str = "kinematic",
     tyre: str = "linear",
+    engine: str = "numpy",
     chunk_size: int | None = None,
     client: Any = None,
     progress: bool | None = None,
@@ -600,6 +679,11 @@ def simulate_batch(
         Solver tolerances, as in :func:`simulate`.
     model, tyre : str, optional
         Vehicle and tyre model, as in :func:`simulate`.
+    engine : {"numpy", "compiled"}, optional
+        Integration engine, as in :func:`simulate`. With ``"compiled"`` each
+        run has its own steps, error norm and stop, so a run's result does
+        not depend on the other runs (nor on `chunk_size`); peaks come from
+        the samples (``exact=False``).
     chunk_size : int, optional
         Runs per chunk (one solver; one Dask task); default
         :data:`DEFAULT_CHUNK_SIZE`. Smaller chunks decouple the step sizes of
@@ -647,6 +731,10 @@ def simulate_batch(
     >>> fws.tracking_metrics(res).peak_lateral_accel.round(2).tolist()
     [2.0, 1.91, 1.73, 1.19]
     """
+    if isinstance(engine, bool) or engine not in _ENGINES:
+        raise ValueError(f"engine must be one of {_ENGINES}, got {engine!r}")
+    if engine == "compiled" and isinstance(method, str) and method == "auto":
+        method = "DOP853"  # the only compiled method (also for a stiff actuator)
     opts = {
         "method": method,
         "rtol": rtol,
@@ -678,6 +766,15 @@ def simulate_batch(
             )
     else:
         feedforward = bool(feedforward)
+    if engine == "compiled":
+        _check_compiled(
+            path,
+            SteeringGains(k1, k2, a) if ctrl is None else ctrl,
+            delay=opts["delay"],
+            method=opts["method"],
+            model=opts["model"],
+            feedforward=feedforward,
+        )
     if chunk_size is None:
         chunk_size = DEFAULT_CHUNK_SIZE
     if (
@@ -691,6 +788,8 @@ def simulate_batch(
     bounds = [(i, min(i + chunk_size, n)) for i in range(0, n, chunk_size)]
     if progress is None:
         progress = _stderr_is_tty()
+
+    run = _run_isolated if engine == "numpy" else _run_compiled
 
     def args(lo, hi):
         return (
@@ -739,10 +838,10 @@ def simulate_batch(
     try:
         if client is None:
             for j, (lo, hi) in enumerate(bounds):
-                keep(j, _run_isolated(*args(lo, hi)))
+                keep(j, run(*args(lo, hi)))
                 bar.update(1)
         else:
-            _run_on_dask(client, bounds, args, keep, t.size, bar)
+            _run_on_dask(client, bounds, args, keep, t.size, bar, run)
     finally:
         bar.close()
 
@@ -752,8 +851,9 @@ def simulate_batch(
         run_status=status.astype(str),
         run_message=tuple(str(m) for m in message),
         run_t_stop=t_stop,
-        run_peak=peak,
-        run_peak_time=peak_time,
+        # the compiled engine has no dense solution: sample peaks (exact=False)
+        run_peak=peak if engine == "numpy" else None,
+        run_peak_time=peak_time if engine == "numpy" else None,
         run_speed=V,
         run_k1=k1,
         run_k2=k2,
@@ -768,4 +868,5 @@ def simulate_batch(
         else opts["method"].__name__,
         model=opts["model"],
         tyre=opts["tyre"],
+        engine=engine,
     )
