@@ -72,6 +72,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3, help="runs per command (3)")
     ap.add_argument("--no-reproduce", action="store_true", help="skip reproduce")
+    ap.add_argument("--only-reproduce", action="store_true", help="time reproduce only")
     ap.add_argument("--baseline", type=Path, help="another checkout to compare with")
     opts = ap.parse_args()
     if opts.repeat < 3:
@@ -89,6 +90,8 @@ def main() -> None:
         ("fws-control --help", [*cli, "--help"], 0.3),
         ("fws-control gains", [*cli, "gains"], 0.5),
     ]
+    if opts.only_reproduce:
+        rows = []
     if not opts.no_reproduce:
         rows.append(
             (
