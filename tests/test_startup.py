@@ -65,12 +65,12 @@ def test_help_imports_only_the_parser():
         "        cli.main(['--help'])\n"
         "    except SystemExit as exc:\n"
         "        assert exc.code == 0, exc.code\n"
-        "assert 'reproduce' in buf.getvalue()\n"
-        "assert 'numpy' not in sys.modules\n" + _REPORT
+        "assert 'reproduce' in buf.getvalue()\n" + _REPORT
     )
     res = _fresh("import sys\n" + code)
     assert res["heavy"] == []
-    assert res["loaded"] == ["fws_control", "fws_control.cli"]
+    # No analysis module either: each subcommand imports its own.
+    assert not {"fws_control.plant", "fws_control.simulation"} & set(res["loaded"])
 
 
 def test_gains_without_python_control_gives_its_poles():
