@@ -42,7 +42,7 @@ import importlib.util
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # static tools see the names; at run time __getattr__ loads them
-    from . import dynamics, symbolic
+    from . import dynamics, symbolic, vehicles
     from .acceleration import lateral_acceleration, yaw_acceleration
     from .baselines import (
         LateralController,
@@ -81,6 +81,13 @@ if TYPE_CHECKING:  # static tools see the names; at run time __getattr__ loads t
         unstable_root_count,
     )
     from .design import double_root_gains
+    from .dynamic_design import (
+        KinematicDesignLimit,
+        kinematic_design_limit,
+        steady_state_offset,
+        understeer_gradient,
+        zero_sideslip_ratio,
+    )
     from .exceptions import (
         AmbiguousProjectionError,
         SingularStateError,
@@ -243,6 +250,15 @@ __all__ += [
     "Projection",
     "AmbiguousProjectionError",
 ]
+# the dynamic single-track model (issue 10)
+__all__ += [
+    "vehicles",
+    "KinematicDesignLimit",
+    "kinematic_design_limit",
+    "steady_state_offset",
+    "understeer_gradient",
+    "zero_sideslip_ratio",
+]
 __version__ = "0.2.0.dev0"
 
 
@@ -253,7 +269,10 @@ __version__ = "0.2.0.dev0"
 # at first access and then cached in the module's namespace.
 #: Submodule -> the public names the package re-exports from it.
 _EXPORTS = {
-    "acceleration": ("lateral_acceleration", "yaw_acceleration"),
+    "acceleration": (
+        "lateral_acceleration",
+        "yaw_acceleration",
+    ),
     "baselines": (
         "LateralController",
         "LQRController",
@@ -270,8 +289,15 @@ _EXPORTS = {
         "delay_margin_chart",
         "stability_chart",
     ),
-    "comparison": ("LinearNonlinearComparison", "compare_linear_nonlinear"),
-    "controller_comparison": ("ControllerComparison", "compare", "default_controllers"),
+    "comparison": (
+        "LinearNonlinearComparison",
+        "compare_linear_nonlinear",
+    ),
+    "controller_comparison": (
+        "ControllerComparison",
+        "compare",
+        "default_controllers",
+    ),
     "controllers": (
         "feedback_controller",
         "feedforward_feedback_controller",
@@ -287,6 +313,13 @@ _EXPORTS = {
         "unstable_root_count",
     ),
     "design": ("double_root_gains",),
+    "dynamic_design": (
+        "KinematicDesignLimit",
+        "kinematic_design_limit",
+        "steady_state_offset",
+        "understeer_gradient",
+        "zero_sideslip_ratio",
+    ),
     "exceptions": (
         "AmbiguousProjectionError",
         "SingularStateError",
@@ -332,8 +365,17 @@ _EXPORTS = {
         "Spline",
         "Straight",
     ),
-    "plant": ("LateralPlant", "LoopMatrices", "as_plant", "loop_matrices"),
-    "rootlocus": ("gain_locus", "gain_loop", "parameter_locus"),
+    "plant": (
+        "LateralPlant",
+        "LoopMatrices",
+        "as_plant",
+        "loop_matrices",
+    ),
+    "rootlocus": (
+        "gain_locus",
+        "gain_loop",
+        "parameter_locus",
+    ),
     "simulation": (
         "SimulationResult",
         "closed_loop_system",

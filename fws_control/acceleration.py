@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .models import check_steering, yaw_rate
+from .models import check_inputs, check_result, check_steering, yaw_rate
+from .validation import check_type
 from .vehicle import Vehicle
 
 __all__ = ["yaw_acceleration", "lateral_acceleration"]
@@ -58,6 +59,11 @@ def yaw_acceleration(
     ------
     SingularStateError
         If any ``|delta_f| >= pi/2``.
+    ValueError, TypeError
+        If an argument is not real numbers or a scalar is not finite (naming
+        it), the shapes do not broadcast, or magnitudes so extreme that the
+        result overflows. Non-finite elements of arrays give non-finite
+        elements in their place (see :func:`~fws_control.models.check_inputs`).
 
     Examples
     --------
@@ -66,13 +72,28 @@ def yaw_acceleration(
     >>> round(fws.yaw_acceleration(veh, 0.0, 0.0, 0.27, 0.0, speed=5.0), 6)
     0.5
     """
-    df = np.asarray(delta_f, dtype=float)
-    dr = np.asarray(delta_r, dtype=float)
+    check_type("vehicle", vehicle, Vehicle)
+    df, dr, rf, rr, V = check_inputs(
+        delta_f=delta_f,
+        delta_r=delta_r,
+        delta_f_rate=delta_f_rate,
+        delta_r_rate=delta_r_rate,
+        speed=speed,
+    )
     check_steering(df)
     cf = np.cos(df)
-    out = (speed / vehicle.wheelbase) * (
-        np.cos(dr) / cf**2 * np.asarray(delta_f_rate, dtype=float)
-        - np.cos(df - dr) / cf * np.asarray(delta_r_rate, dtype=float)
+    with np.errstate(over="ignore", invalid="ignore"):
+        out = (V / vehicle.wheelbase) * (
+            np.cos(dr) / cf**2 * rf - np.cos(df - dr) / cf * rr
+        )
+    check_result(
+        "yaw acceleration",
+        out,
+        delta_f=df,
+        delta_r=dr,
+        delta_f_rate=rf,
+        delta_r_rate=rr,
+        speed=V,
     )
     return float(out) if np.ndim(out) == 0 else out
 
@@ -105,6 +126,11 @@ def lateral_acceleration(
     ------
     SingularStateError
         If any ``|delta_f| >= pi/2``.
+    ValueError, TypeError
+        If an argument is not real numbers or a scalar is not finite (naming
+        it), the shapes do not broadcast, or magnitudes so extreme that the
+        result overflows. Non-finite elements of arrays give non-finite
+        elements in their place (see :func:`~fws_control.models.check_inputs`).
 
     Examples
     --------
@@ -120,8 +146,17 @@ def lateral_acceleration(
     psi_ddot = yaw_acceleration(
         vehicle, delta_f, delta_r, delta_f_rate, delta_r_rate, speed=speed
     )
-    out = (
-        speed * (psi_dot + np.asarray(delta_r_rate, dtype=float)) * np.cos(delta_r)
-        + vehicle.rear_to_cg * psi_ddot
+    # the inputs passed the checks of yaw_rate and yaw_acceleration
+    dr, rr, V = (np.asarray(v, dtype=float) for v in (delta_r, delta_r_rate, speed))
+    with np.errstate(over="ignore", invalid="ignore"):
+        out = V * (psi_dot + rr) * np.cos(dr) + vehicle.rear_to_cg * psi_ddot
+    check_result(
+        "lateral acceleration",
+        out,
+        delta_f=delta_f,
+        delta_r=dr,
+        delta_f_rate=delta_f_rate,
+        delta_r_rate=rr,
+        speed=V,
     )
     return float(out) if np.ndim(out) == 0 else out

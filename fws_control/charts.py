@@ -26,7 +26,7 @@ from .design import double_root_gains
 from .exceptions import UncontrollableError
 from .gains import SteeringGains
 from .linear import AffinePolynomial, characteristic_coefficients
-from .plant import LateralPlant, as_plant, loop_matrices
+from .plant import LateralPlant, as_plant, loop_matrices, resolve_ratio
 from .reprs import summary_repr
 from .stability import (
     BoundaryCurve,
@@ -587,8 +587,9 @@ def stability_chart(
     plant : LateralPlant, control.StateSpace or Vehicle
         One operating point of a plant of any order (see
         :mod:`fws_control.plant`).
-    ratio : float
-        Rear-to-front steering ratio :math:`a`.
+    ratio : float or callable
+        Rear-to-front steering ratio :math:`a`, or a schedule
+        ``ratio(vehicle, speed=...)`` evaluated at the plant's speed.
     k1, k2 : array_like, optional
         Strictly monotonic 1-D grid axes [rad/m], [-]; default
         :data:`DEFAULT_GAIN_AXIS` (401 points on ``[-1, 1]``).
@@ -645,7 +646,7 @@ def stability_chart(
             f"stability_chart needs one operating point, got speed/curvature of "
             f"shape {p.shape}"
         )
-    ratio = check_scalar("ratio", ratio)
+    ratio = check_scalar("ratio", resolve_ratio(p, ratio))
     k1a = _axis("k1", k1)
     k2a = _axis("k2", k2)
     # Outer broadcasting (k2 down the rows, k1 across) avoids a meshgrid.

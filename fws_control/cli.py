@@ -689,6 +689,10 @@ _CSV_UNITS = {
     "delta_f_rate": "deg/s",
     "delta_r_rate": "deg/s",
     "lateral_accel": "m/s^2",
+    "v_y": "m/s",
+    "yaw_rate": "deg/s",
+    "slip_front": "deg",
+    "slip_rear": "deg",
 }
 
 

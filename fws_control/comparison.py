@@ -30,9 +30,14 @@ from .paths import Arc, Straight
 from .plant import LateralPlant, as_plant
 from .reprs import summary_repr
 from .simulation import SimulationResult, simulate
-from .validation import check_finite, check_positive
+from .validation import check_bool, check_finite, check_positive, check_scalar
 
 __all__ = ["LinearNonlinearComparison", "compare_linear_nonlinear"]
+
+#: Output samples of one comparison beyond which the request is refused
+#: (each signal of both responses is held in memory; 1e7 samples of the
+#: ~15 signals are about 1.2 GB).
+_MAX_SAMPLES = 10_000_000
 
 
 @summary_repr
@@ -93,11 +98,30 @@ class LinearNonlinearComparison:
         -------
         dict
             ``{"e": [m], "theta": [rad], "delta_f": [rad], "delta_r": [rad]}``.
+
+        Raises
+        ------
+        ValueError
+            If the nonlinear run did not reach the end (its status is not
+            ``"ok"``, e.g. it stopped at a singular state at t = 0): the gap
+            over the part it ran would understate the linearisation error
+            (at t = 0 both start from the same state, so it is zero). The
+            message gives the status and the stop time; the partial run is
+            still in :attr:`nonlinear` and :meth:`plot` shows it.
         """
+        nl = self.nonlinear
+        status = str(np.asarray(nl.status).item())
+        if status != "ok":
+            raise ValueError(
+                f"the nonlinear run stopped at t = {float(nl.t[-1]):.6g} s with "
+                f"status {status!r}, so the responses cannot be compared over the "
+                "duration: max_difference would only measure the part before the "
+                "stop (zero for a stop at t = 0). Use smaller initial errors or "
+                "look at .nonlinear"
+            )
         n = self.nonlinear.t.size
         y = self.linear.outputs[:, :n]
         df, dr = self._linear_steering()
-        nl = self.nonlinear
         return {
             "e": float(np.nanmax(np.abs(y[0] - nl.e))),
             "theta": float(np.nanmax(np.abs(y[1] - nl.theta))),
@@ -250,6 +274,10 @@ def compare_linear_nonlinear(
     ------
     ValueError
         For both `initial_state` and `initial_errors`, or invalid values.
+    TypeError
+        For `gains` that are not :class:`SteeringGains`, a plant that is not
+        kinematic, or a `feedforward` that is not a bool (``"False"`` would
+        read as true).
 
     Examples
     --------
@@ -272,13 +300,37 @@ def compare_linear_nonlinear(
         raise ValueError(
             f"plant must be one operating point, got speed/curvature of shape {p.shape}"
         )
+    if p.model == "dynamic" or p.steering_lag is not None:
+        # the nonlinear run here is the kinematic model without actuator
+        raise ValueError(
+            "compare_linear_nonlinear compares the kinematic models ('exact', "
+            f"'paper') without a steering lag, got model={p.model!r}, "
+            f"steering_lag={p.steering_lag!r}"
+        )
     vehicle, speed, curvature = p.vehicle, float(p.speed), float(p.curvature)
-    duration = float(check_positive("duration", duration))
+    duration = check_scalar("duration", check_positive("duration", duration))
+    feedforward = check_bool("feedforward", feedforward)
+    dt = check_scalar("dt", check_positive("dt", dt))
+    if dt > duration:
+        raise ValueError(
+            f"dt must be <= duration = {duration:g} s (at least two output "
+            f"samples), got dt={dt:g}"
+        )
+    if duration / dt > _MAX_SAMPLES:
+        raise ValueError(
+            f"duration/dt = {duration:g}/{dt:g} asks for more than {_MAX_SAMPLES:.0e} "
+            "output samples: use a larger dt or a shorter duration"
+        )
     path = Straight() if curvature == 0.0 else Arc(curvature=curvature)
     if initial_state is not None and initial_errors is not None:
         raise ValueError("give initial_state or initial_errors, not both")
     if initial_errors is not None:
-        e0, th0 = (float(v) for v in check_finite("initial_errors", initial_errors))
+        errs = np.ravel(check_finite("initial_errors", initial_errors))
+        if errs.size != 2:
+            raise ValueError(
+                f"initial_errors must be a pair (e0, theta0), got {initial_errors!r}"
+            )
+        e0, th0 = (float(v) for v in errs)
         px, py = path.position(0.0)
         h = float(path.heading(0.0))
         initial_state = (

@@ -34,13 +34,15 @@ them, so the law has one implementation.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import control as ct
 import numpy as np
 
+from .dynamics import dynamic_feedforward, dynamic_feedforward_derivative
 from .gains import SteeringGains
-from .models import STEERING_INPUTS
-from .validation import check_positive
+from .models import STEERING_INPUTS, check_inputs, check_result
+from .validation import check_positive, check_scalar, check_type
 from .vehicle import Vehicle
 
 __all__ = [
@@ -53,6 +55,8 @@ __all__ = [
     "actuator_rate",
     "CONTROLLER_INPUTS",
     "DEFAULT_ACTUATOR_TIME_CONSTANT",
+    "FEEDFORWARDS",
+    "check_feedforward",
 ]
 
 #: Inputs of the controller blocks: the path-frame errors and the path
@@ -62,6 +66,42 @@ CONTROLLER_INPUTS = ("e", "theta", "curvature")
 #: Time constant [s] of :func:`steering_actuator` used by the simulators when
 #: a rate limit is set and no other value is given.
 DEFAULT_ACTUATOR_TIME_CONSTANT = 0.05
+
+
+#: Feedforward options of :func:`steering_command` besides ``True``/``False``.
+FEEDFORWARDS = ("kinematic", "dynamic")
+
+
+def check_feedforward(feedforward, *, speed=None) -> bool | str:
+    """Normalise a feedforward option: ``False``, ``"kinematic"`` or ``"dynamic"``.
+
+    ``True`` means ``"kinematic"`` (paper eq. 26). ``"dynamic"`` needs the
+    `speed`.
+
+    Examples
+    --------
+    >>> from fws_control.controllers import check_feedforward
+    >>> check_feedforward(True), check_feedforward(False)
+    ('kinematic', False)
+    """
+    if isinstance(feedforward, (bool, np.bool_)):
+        return "kinematic" if feedforward else False
+    if not isinstance(feedforward, str):
+        raise TypeError(
+            f"feedforward must be True, False or one of {FEEDFORWARDS}, got "
+            f"{feedforward!r}"
+        )
+    if feedforward not in FEEDFORWARDS:
+        raise ValueError(
+            f"feedforward must be True, False or one of {FEEDFORWARDS}, got "
+            f"{feedforward!r}"
+        )
+    if feedforward == "dynamic" and speed is None:
+        raise ValueError(
+            "feedforward='dynamic' needs the keyword speed= (m/s, > 0): the "
+            "tyre slip angles it supplies grow with the speed"
+        )
+    return feedforward
 
 
 def _limit(value: float | None) -> float:
@@ -81,7 +121,9 @@ def steering_command(
     theta,
     *,
     curvature=0.0,
-    feedforward: bool = True,
+    feedforward: bool | str = True,
+    speed=None,
+    tyre: str = "linear",
 ) -> tuple[np.ndarray, np.ndarray]:
     r"""Steering angles of the path-tracking controller, paper eqs. (24)-(29).
 
@@ -105,14 +147,34 @@ def steering_command(
     curvature : float or array_like, optional
         Path curvature at the projection point [1/m]; only used by the
         feedforward term.
-    feedforward : bool, optional
-        Include the feedforward angle of eq. (26) (default). With ``False``
-        this is the feedback-only controller of eqs. (28)-(29).
+    feedforward : bool or {"kinematic", "dynamic"}, optional
+        ``True`` or ``"kinematic"`` (default): the feedforward angle of
+        eq. (26). ``False``: the feedback-only controller of eqs. (28)-(29).
+        ``"dynamic"``: the front *and* rear angles of
+        :func:`~fws_control.dynamics.dynamic_feedforward`, which hold the
+        dynamic (tyre-slip) model on the curve with ``e = theta = 0``
+        (removing the offset of :func:`~fws_control.steady_state_offset`);
+        needs `speed` and the vehicle's dynamic data.
+    speed : float or array_like, optional
+        Longitudinal speed [m/s], > 0; only for ``feedforward="dynamic"``.
+    tyre : {"linear", "magic"}, optional
+        Tyre model of the dynamic feedforward (default ``"linear"``).
 
     Returns
     -------
     delta_f, delta_r : ndarray
         Front and rear steering angles [rad], broadcast over the arguments.
+
+    Raises
+    ------
+    TypeError
+        If `vehicle` or `gains` has the wrong type, or `feedforward` is not
+        a bool (``"False"`` would read as true).
+    ValueError
+        If an argument is not real numbers or a scalar is not finite (naming
+        it; non-finite elements of arrays give non-finite elements in their
+        place, see :func:`~fws_control.models.check_inputs`), or magnitudes
+        so extreme that the command overflows.
 
     Examples
     --------
@@ -126,14 +188,24 @@ def steering_command(
     >>> float(fws.steering_command(lim, g, 1.0, 0.0, curvature=0.1)[0])
     0.1
     """
+    check_type("vehicle", vehicle, Vehicle)
     gains = _check_gains(gains)
-    fb = -gains.k1 * np.asarray(e, dtype=float) - gains.k2 * np.asarray(
-        theta, dtype=float
-    )
-    delta_f = fb
-    if feedforward:
-        delta_f = fb + np.arctan(vehicle.wheelbase * np.asarray(curvature, dtype=float))
-    delta_r = gains.ratio * fb
+    feedforward = check_feedforward(feedforward, speed=speed)
+    e_, th_, k_ = check_inputs(e=e, theta=theta, curvature=curvature)
+    with np.errstate(over="ignore", invalid="ignore"):
+        fb = -gains.k1 * e_ - gains.k2 * th_
+        delta_f = fb
+        delta_r = gains.ratio * fb
+        if feedforward == "kinematic":
+            delta_f = fb + np.arctan(vehicle.wheelbase * k_)
+    if feedforward == "dynamic":
+        ff_f, ff_r = dynamic_feedforward(
+            vehicle, speed=speed, curvature=curvature, tyre=tyre
+        )
+        delta_f = fb + ff_f
+        delta_r = delta_r + ff_r
+    check_result("steering command", delta_f, e=e_, theta=th_, curvature=k_)
+    check_result("steering command", delta_r, e=e_, theta=th_)
     max_f = _limit(vehicle.max_steer_front)
     max_r = _limit(vehicle.max_steer_rear)
     if math.isfinite(max_f):
@@ -154,7 +226,9 @@ def steering_command_rate(
     *,
     curvature,
     curvature_rate=0.0,
-    feedforward: bool = True,
+    feedforward: bool | str = True,
+    speed=None,
+    tyre: str = "linear",
 ) -> tuple[np.ndarray, np.ndarray]:
     r"""Time derivatives of :func:`steering_command` by the chain rule.
 
@@ -169,8 +243,11 @@ def steering_command_rate(
 
     Parameters
     ----------
-    vehicle, gains, e, theta, curvature, feedforward
-        As in :func:`steering_command`.
+    vehicle, gains, e, theta, curvature, feedforward, speed, tyre
+        As in :func:`steering_command`; with ``feedforward="dynamic"`` the
+        feedforward rates are
+        :func:`~fws_control.dynamics.dynamic_feedforward_derivative` times
+        `curvature_rate` (at constant speed).
     e_rate, theta_rate : float or array_like
         :math:`\dot e` [m/s] and :math:`\dot\theta` [rad/s].
     curvature_rate : float or array_like, optional
@@ -182,6 +259,11 @@ def steering_command_rate(
     delta_f_rate, delta_r_rate : ndarray
         [rad/s], broadcast over the arguments.
 
+    Raises
+    ------
+    TypeError, ValueError
+        As in :func:`steering_command`.
+
     Examples
     --------
     >>> import fws_control as fws
@@ -192,27 +274,53 @@ def steering_command_rate(
     >>> [round(float(v), 6) for v in r]
     [0.1, -0.1]
     """
+    check_type("vehicle", vehicle, Vehicle)
     gains = _check_gains(gains)
-    fb_rate = -gains.k1 * np.asarray(e_rate, dtype=float) - gains.k2 * np.asarray(
-        theta_rate, dtype=float
+    feedforward = check_feedforward(feedforward, speed=speed)
+    e_, th_, er, thr, k_, kr = check_inputs(
+        e=e,
+        theta=theta,
+        e_rate=e_rate,
+        theta_rate=theta_rate,
+        curvature=curvature,
+        curvature_rate=curvature_rate,
     )
-    rate_f = fb_rate
-    if feedforward:
-        fk = vehicle.wheelbase * np.asarray(curvature, dtype=float)
-        rate_f = fb_rate + vehicle.wheelbase * np.asarray(curvature_rate) / (
-            1.0 + fk**2
+    with np.errstate(over="ignore", invalid="ignore"):
+        fb_rate = -gains.k1 * er - gains.k2 * thr
+        rate_f = fb_rate
+        rate_r = gains.ratio * fb_rate
+        if feedforward == "kinematic":
+            fk = vehicle.wheelbase * k_
+            # 1 + fk^2 overflows to inf for a huge curvature: the term -> 0
+            rate_f = fb_rate + vehicle.wheelbase * kr / (1.0 + fk**2)
+    if feedforward == "dynamic":
+        d_f, d_r = dynamic_feedforward_derivative(
+            vehicle, speed=speed, curvature=curvature, tyre=tyre
         )
-    rate_r = gains.ratio * fb_rate
+        rate_f = fb_rate + d_f * kr
+        rate_r = rate_r + d_r * kr
+    for out in (rate_f, rate_r):
+        check_result(
+            "steering rate",
+            out,
+            e_rate=er,
+            theta_rate=thr,
+            curvature=k_,
+            curvature_rate=kr,
+        )
     max_f = _limit(vehicle.max_steer_front)
     max_r = _limit(vehicle.max_steer_rear)
     if math.isfinite(max_f) or math.isfinite(max_r):
+        # the unclipped command: the vehicle without its angle limits
         cmd_f, cmd_r = steering_command(
-            Vehicle(vehicle.wheelbase, vehicle.rear_to_cg),
+            replace(vehicle, max_steer_front=None, max_steer_rear=None),
             gains,
             e,
             theta,
             curvature=curvature,
             feedforward=feedforward,
+            speed=speed,
+            tyre=tyre,
         )
         rate_f = np.where(np.abs(cmd_f) > max_f, 0.0, rate_f)
         rate_r = np.where(np.abs(cmd_r) > max_r, 0.0, rate_r)
@@ -224,7 +332,9 @@ def path_tracking_controller(
     vehicle: Vehicle,
     gains: SteeringGains,
     *,
-    feedforward: bool = True,
+    feedforward: bool | str = True,
+    speed: float | None = None,
+    tyre: str = "linear",
     name: str = "controller",
 ) -> ct.NonlinearIOSystem:
     r"""Static path-tracking controller block, paper eqs. (24)-(29).
@@ -235,9 +345,16 @@ def path_tracking_controller(
         Geometry; its steering-angle limits, if set, clip the outputs.
     gains : SteeringGains
         Scalar ``k1, k2, ratio``.
-    feedforward : bool, optional
+    feedforward : bool or {"kinematic", "dynamic"}, optional
         Add the curvature feedforward :math:`\arctan(\kappa f)` of eq. (26)
-        to the front angle (default). ``False`` gives the feedback-only law.
+        to the front angle (default, also ``"kinematic"``). ``False`` gives
+        the feedback-only law; ``"dynamic"`` the front and rear feedforward
+        of :func:`~fws_control.dynamics.dynamic_feedforward` (needs `speed`).
+    speed : float, optional
+        Longitudinal speed [m/s] for ``feedforward="dynamic"``; stored as the
+        block parameter ``speed``.
+    tyre : {"linear", "magic"}, optional
+        Tyre model of the dynamic feedforward.
     name : str, optional
         System name for :func:`control.interconnect`.
 
@@ -266,6 +383,7 @@ def path_tracking_controller(
     >>> ctrl.output(0.0, [], [1.0, 0.0, 0.1]).round(6)
     array([0.163712, 0.1     ])
     """
+    check_type("vehicle", vehicle, Vehicle)
     gains = _check_gains(gains)
     if any(np.ndim(v) != 0 for v in (gains.k1, gains.k2, gains.ratio)):
         raise ValueError(
@@ -273,12 +391,20 @@ def path_tracking_controller(
             f"shapes {np.shape(gains.k1)}, {np.shape(gains.k2)}, "
             f"{np.shape(gains.ratio)}"
         )
-    feedforward = bool(feedforward)
+    feedforward = check_feedforward(feedforward, speed=speed)
+    extra = {} if speed is None else {"speed": float(speed)}
 
     def output(t, x, u, params):
         g = SteeringGains(params["k1"], params["k2"], params["ratio"])
         df, dr = steering_command(
-            vehicle, g, u[0], u[1], curvature=u[2], feedforward=feedforward
+            vehicle,
+            g,
+            u[0],
+            u[1],
+            curvature=u[2],
+            feedforward=feedforward,
+            speed=params.get("speed"),
+            tyre=tyre,
         )
         return np.array([float(df), float(dr)])
 
@@ -291,6 +417,7 @@ def path_tracking_controller(
             "k1": float(gains.k1),
             "k2": float(gains.k2),
             "ratio": float(gains.ratio),
+            **extra,
         },
         name=name,
     )
@@ -437,7 +564,8 @@ def steering_actuator(
     >>> act.dynamics(0.0, [0.0, 0.0], [0.2, 0.01]).round(6)
     array([0.5, 0.1])
     """
-    tau = float(check_positive("time_constant", time_constant))
+    check_type("vehicle", vehicle, Vehicle)
+    tau = check_scalar("time_constant", check_positive("time_constant", time_constant))
 
     def update(t, x, u, params):
         rf, rr = actuator_rate(vehicle, u, x, time_constant=tau)

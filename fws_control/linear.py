@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .gains import SteeringGains
-from .plant import LateralPlant, LoopMatrices, as_plant, loop_matrices
+from .plant import LateralPlant, LoopMatrices, as_plant, loop_matrices, resolve_ratio
 from .reprs import summary_repr
 from .validation import check_finite, check_type
 
@@ -431,9 +431,11 @@ def characteristic_coefficients(
     ----------
     plant : LateralPlant, control.StateSpace or Vehicle
         The plant (see :mod:`fws_control.plant`).
-    ratio : float or array_like
+    ratio : float, array_like or callable
         Rear-to-front steering ratio :math:`a`; broadcasts with the
-        operating points of a :class:`LateralPlant`.
+        operating points of a :class:`LateralPlant`. A callable is a
+        schedule ``ratio(vehicle, speed=...)`` evaluated at the plant's speed
+        (:func:`~fws_control.plant.resolve_ratio`).
     speed, curvature, model : optional
         With a :class:`Vehicle` only, as in :func:`linearize`.
 
@@ -450,8 +452,8 @@ def characteristic_coefficients(
     (array([0.      , 0.      , 9.259259]), array([0.      , 1.851852, 0.      ]))
     """
     p = as_plant(plant, speed=speed, curvature=curvature, model=model)
-    ratio = check_finite("ratio", ratio)
-    if isinstance(p, LateralPlant) and p.steering_lag is None:
+    ratio = check_finite("ratio", resolve_ratio(p, ratio))
+    if isinstance(p, LateralPlant) and p.model != "dynamic" and p.steering_lag is None:
         return _lateral_coefficients(p, ratio)
     return _statespace_coefficients(loop_matrices(p), ratio)
 

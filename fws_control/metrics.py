@@ -32,7 +32,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .reprs import summary_repr
-from .validation import check_positive
+from .validation import (
+    check_bool,
+    check_finite,
+    check_positive,
+    check_real,
+    check_scalar,
+)
 
 if TYPE_CHECKING:  # for the annotation only: metrics need no simulation code
     from .simulation import SimulationResult
@@ -53,9 +59,37 @@ def _scalar(out):
     return float(out) if out.ndim == 0 else out
 
 
+def _signal(signal) -> np.ndarray:
+    """`signal` as a float array ``(..., time)``: real, NaN allowed, no inf.
+
+    NaN samples are data (a stopped run is padded with NaN); an infinite
+    sample is not.
+    """
+    x = check_real("signal", signal)
+    if x.ndim == 0 or x.shape[-1] == 0:
+        raise ValueError(
+            f"signal must have at least one sample on its last (time) axis, got "
+            f"shape {x.shape}"
+        )
+    if np.any(np.isinf(x)):
+        raise ValueError("signal must hold finite samples or NaN, got +-inf")
+    return x
+
+
+def _overflow(out, x, what: str) -> None:
+    # finite, NaN-free samples that give a non-finite metric: extreme values
+    bad = ~np.isfinite(out) & ~np.any(np.isnan(x), axis=-1)
+    if np.any(bad):
+        raise ValueError(
+            f"signal's magnitude (up to {np.nanmax(np.abs(x)):.3g}) overflows the "
+            f"{what}: rescale the signal"
+        )
+
+
 def _time_and_signal(t, signal):
+    t = check_finite("t", t)
     t = np.asarray(t, dtype=float)
-    x = np.asarray(signal, dtype=float)
+    x = _signal(signal)
     if t.ndim != 1 or x.shape[-1:] != t.shape:
         raise ValueError(
             f"signal must have time on its last axis matching t (length {t.size}), "
@@ -124,7 +158,7 @@ def peak_abs(signal, *, name: str | None = None) -> float | np.ndarray:
         raise ValueError(
             f"name={name!r} is only for a SimulationResult; got an array of samples"
         )
-    x = np.abs(np.asarray(signal, dtype=float))
+    x = np.abs(_signal(signal))
     valid = np.isfinite(x)
     out = np.max(np.where(valid, x, -np.inf), axis=-1)
     return _scalar(np.where(np.any(valid, axis=-1), out, np.nan))
@@ -145,8 +179,9 @@ def settling_time(
     signal : array_like
         Shape ``(..., time)``, converging to 0 (e.g. the lateral error).
     band : float or array_like, optional
-        Half-width of the band, in the signal's units; broadcasts with
-        ``signal[..., 0]``. Default: ``fraction * |signal[..., 0]|``.
+        Half-width of the band, in the signal's units, finite and > 0;
+        broadcasts with ``signal[..., 0]``. Default: ``fraction *
+        |signal[..., 0]|``.
     fraction : float, optional
         Relative band used when `band` is not given (default 2 %).
 
@@ -155,6 +190,13 @@ def settling_time(
     float or ndarray
         Settling time [s]: 0 if the signal never leaves the band, ``inf`` if it
         is outside the band at the last sample, NaN if any sample is NaN.
+
+    Raises
+    ------
+    ValueError
+        If `band` is not finite and > 0 (NaN would read as "settled at
+        once"), `fraction` is not finite and > 0, or `t` and `signal` do not
+        fit.
 
     Examples
     --------
@@ -166,9 +208,20 @@ def settling_time(
     """
     t, x = _time_and_signal(t, signal)
     mag = np.abs(x)
+    fraction = check_positive("fraction", fraction)  # checked even if unused
     if band is None:
-        band = check_positive("fraction", fraction) * mag[..., 0]
-    band = np.broadcast_to(np.asarray(band, dtype=float), mag.shape[:-1])
+        band = fraction * mag[..., 0]
+    else:
+        # NaN would compare False everywhere ("settled at once") and a
+        # negative band can never be entered: both are refused, by name.
+        band = check_positive("band", band)
+    try:
+        band = np.broadcast_to(np.asarray(band, dtype=float), mag.shape[:-1])
+    except ValueError:
+        raise ValueError(
+            f"band must broadcast with signal[..., 0] of shape {mag.shape[:-1]}, "
+            f"got shape {np.shape(band)}"
+        ) from None
     outside = mag > band[..., None]
     T = t.size
     # index of the last sample outside the band (-1: never outside)
@@ -216,13 +269,15 @@ def overshoot(signal, *, relative: bool = False) -> float | np.ndarray:
     >>> round(overshoot((1 - t) * np.exp(-t)), 6), round(math.exp(-2.0), 6)
     (0.135335, 0.135335)
     """
-    x = np.asarray(signal, dtype=float)
+    x = _signal(signal)
+    relative = check_bool("relative", relative)
     x0 = x[..., 0]
     sign = np.sign(x0)
     out = np.maximum(np.max(-sign[..., None] * x, axis=-1), 0.0)
     if relative:
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             out = out / np.abs(x0)
+        _overflow(np.where(sign == 0, 0.0, out), x, "relative overshoot")
     out = np.where((sign == 0) | np.any(np.isnan(x), axis=-1), np.nan, out)
     return _scalar(out)
 
@@ -254,8 +309,12 @@ def rms(t, signal, *, t_start: float = 0.0) -> float | np.ndarray:
     >>> round(rms(t, np.sin(t)), 6), round(1 / math.sqrt(2), 6)
     (0.707107, 0.707107)
     """
-    x = np.asarray(signal, dtype=float)
-    return _scalar(np.sqrt(_time_average(t, x**2, t_start)))
+    t, x = _time_and_signal(t, signal)
+    t_start = check_scalar("t_start", t_start)
+    with np.errstate(over="ignore"):
+        out = np.sqrt(_time_average(t, x**2, t_start, "t_start"))
+    _overflow(out, x, "rms")
+    return _scalar(out)
 
 
 def steady_state(t, signal, *, window: float = 1.0) -> float | np.ndarray:
@@ -283,20 +342,22 @@ def steady_state(t, signal, *, window: float = 1.0) -> float | np.ndarray:
     >>> round(steady_state(t, 0.3 + np.exp(-5 * t)), 9)
     0.3
     """
-    t, _ = _time_and_signal(t, signal)
-    window = float(check_positive("window", window))
-    return _scalar(_time_average(t, signal, t[-1] - window))
-
-
-def _time_average(t, signal, t_start):
-    """Trapezoidal time average of `signal` over ``t >= t_start``."""
     t, x = _time_and_signal(t, signal)
+    window = check_scalar("window", check_positive("window", window))
+    with np.errstate(over="ignore", invalid="ignore"):
+        out = _time_average(t, x, t[-1] - window, "window")
+    _overflow(out, x, "time average")
+    return _scalar(out)
+
+
+def _time_average(t, x, t_start, name):
+    """Trapezoidal time average of `x` over ``t >= t_start`` (checked arrays)."""
     # tolerate rounding in t[-1] - window
     sel = t >= t_start - 1e-9 * max(1.0, abs(t_start))
     if np.count_nonzero(sel) < 2:
         raise ValueError(
-            f"the averaging window from t={t_start!r} s must hold at least 2 samples "
-            f"of t in [{t[0]}, {t[-1]}] s"
+            f"{name}: the averaging window from t={t_start!r} s must hold at least "
+            f"2 samples of t in [{t[0]}, {t[-1]}] s"
         )
     ts, xs = t[sel], x[..., sel]
     return np.trapezoid(xs, ts, axis=-1) / (ts[-1] - ts[0])
@@ -404,6 +465,15 @@ def tracking_metrics(
     >>> m.status, round(m.peak_lateral_accel, 2), round(m.settling_time, 2)
     ('ok', 5.37, 6.23)
     """
+    if not all(hasattr(result, n) for n in ("t", "e", "theta", "status", "peaks")):
+        raise TypeError(
+            "result must be a fws_control.SimulationResult, got "
+            f"{type(result).__name__}"
+        )
+    if band is not None:
+        band = check_positive("band", band)
+    check_positive("fraction", fraction)
+    check_positive("window", window)
     t = np.asarray(result.t, dtype=float)
     status = np.asarray(result.status)
     ok = status == "ok"

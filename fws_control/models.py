@@ -23,7 +23,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .exceptions import SingularStateError
-from .validation import check_finite, check_nonzero, check_scalar, check_type
+from .validation import (
+    check_finite,
+    check_nonzero,
+    check_real,
+    check_scalar,
+    check_type,
+)
 from .vehicle import Vehicle
 
 if TYPE_CHECKING:  # imported where a model is built: ~1 s of start-up
@@ -35,6 +41,8 @@ __all__ = [
     "yaw_rate",
     "feedforward_steering",
     "check_steering",
+    "check_inputs",
+    "check_result",
     "GLOBAL_STATES",
     "PATH_STATES",
     "STEERING_INPUTS",
@@ -65,6 +73,72 @@ def check_steering(delta_f) -> None:
         raise SingularStateError(
             f"front steering angle delta_f={delta_f!r} rad has |delta_f| >= pi/2: "
             "the yaw rate V*sin(delta_f - delta_r)/(f*cos(delta_f)) is singular"
+        )
+
+
+def check_inputs(**values) -> list[np.ndarray]:
+    """Each keyword as a float array of real numbers, checked by name.
+
+    ``None``, bools, complex numbers, strings and foreign objects raise
+    :class:`TypeError` or :class:`ValueError` naming the keyword, and so does
+    a non-finite **scalar**. In an **array** a non-finite element is data
+    (a vectorised evaluation over many samples, e.g. the batch simulation's
+    stopped runs): it gives a non-finite element in its place of the result,
+    and the finite elements are unaffected. The shapes must broadcast.
+
+    Examples
+    --------
+    >>> from fws_control.models import check_inputs
+    >>> [a.tolist() for a in check_inputs(e=1.0, theta=[0.0, 0.1])]
+    [1.0, [0.0, 0.1]]
+    >>> check_inputs(e=float("nan"))
+    Traceback (most recent call last):
+        ...
+    ValueError: e must be finite, got nan
+    """
+    out = []
+    for k, v in values.items():
+        arr = check_real(k, v)
+        if arr.ndim == 0 and not np.isfinite(arr):
+            raise ValueError(f"{k} must be finite, got {v!r}")
+        out.append(arr)
+    try:
+        np.broadcast_shapes(*(a.shape for a in out))
+    except ValueError:
+        shapes = ", ".join(f"{k} {a.shape}" for k, a in zip(values, out, strict=True))
+        raise ValueError(f"the arguments must broadcast, got shapes {shapes}") from None
+    return out
+
+
+def check_result(what: str, value, **inputs) -> None:
+    """Raise ValueError naming the inputs if finite scalars overflowed.
+
+    A scalar result that is not finite although every input is finite comes
+    from a magnitude beyond the floating-point range (e.g. a speed of
+    1e300); the message names the inputs. An array result is an elementwise
+    evaluation over samples (the batch simulation's runs, one of which may
+    have failed): its non-finite elements stay in their places, as those of
+    array inputs do (see :func:`check_inputs`).
+
+    Examples
+    --------
+    >>> from fws_control.models import check_result
+    >>> check_result("yaw rate", 0.5, speed=5.0)  # fine: nothing raised
+    """
+    value = np.asarray(value, dtype=float)
+    if value.ndim or np.all(np.isfinite(value)):
+        return
+    finite = np.ones(value.shape, dtype=bool)
+    for v in inputs.values():
+        finite = finite & np.isfinite(np.asarray(v, dtype=float))
+    if np.any(~np.isfinite(value) & finite):
+        names = ", ".join(
+            f"{k}={v!r}" if np.ndim(v) == 0 else f"{k} (array)"
+            for k, v in inputs.items()
+        )
+        raise ValueError(
+            f"the {what} overflows for these magnitudes ({names}): "
+            "use physical values (speed in m/s, angles in rad)"
         )
 
 
@@ -116,6 +190,11 @@ def yaw_rate(
     ------
     SingularStateError
         If any ``|delta_f| >= pi/2``.
+    ValueError, TypeError
+        If an argument is not real numbers or a scalar is not finite (naming
+        it), or the magnitudes are so extreme that the yaw rate overflows.
+        Non-finite elements of arrays give non-finite elements in their place
+        (see :func:`check_inputs`).
 
     Examples
     --------
@@ -124,10 +203,12 @@ def yaw_rate(
     >>> round(fws.yaw_rate(veh, 0.1, -0.1, speed=5.0), 6)
     0.369753
     """
-    df = np.asarray(delta_f, dtype=float)
-    dr = np.asarray(delta_r, dtype=float)
+    check_type("vehicle", vehicle, Vehicle)
+    df, dr, V = check_inputs(delta_f=delta_f, delta_r=delta_r, speed=speed)
     check_steering(df)
-    out = _yaw_rate(speed, vehicle.wheelbase, df, dr)
+    with np.errstate(over="ignore", invalid="ignore"):
+        out = _yaw_rate(V, vehicle.wheelbase, df, dr)
+    check_result("yaw rate", out, delta_f=df, delta_r=dr, speed=V)
     return float(out) if np.ndim(out) == 0 else out
 
 
@@ -164,8 +245,10 @@ def feedforward_steering(vehicle: Vehicle, *, curvature) -> float | np.ndarray:
     >>> round(fws.feedforward_steering(veh, curvature=0.1), 6)
     0.263712
     """
+    check_type("vehicle", vehicle, Vehicle)
     k = check_finite("curvature", curvature)
-    out = np.arctan(np.asarray(k) * vehicle.wheelbase)
+    with np.errstate(over="ignore"):  # arctan(inf) = pi/2 is the right limit
+        out = np.arctan(np.asarray(k) * vehicle.wheelbase)
     return float(out) if np.ndim(out) == 0 else out
 
 

@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .dynamics import TYRES, dynamic_feedforward, path_jacobians, require_dynamics
 from .models import STEERING_INPUTS, feedforward_steering
 from .reprs import summary_repr
 from .validation import (
@@ -51,12 +52,17 @@ __all__ = [
     "LoopMatrices",
     "as_plant",
     "loop_matrices",
+    "resolve_ratio",
     "LINEAR_STATES",
+    "DYNAMIC_LINEAR_STATES",
     "PLANT_KEYWORDS",
 ]
 
 #: Names of the states (and outputs) of the kinematic linear plant.
 LINEAR_STATES = ("e", "theta")
+
+#: Names of the states of the dynamic linear plant (``model="dynamic"``).
+DYNAMIC_LINEAR_STATES = ("e", "theta", "v_y", "r")
 
 #: The keywords that turn a :class:`Vehicle` into a :class:`LateralPlant`.
 PLANT_KEYWORDS = ("speed", "curvature", "model")
@@ -67,11 +73,12 @@ _DEFAULT_NAME = re.compile(r"^[uxy]\[\d+\]$")
 
 @dataclass(frozen=True, eq=False)
 class LateralPlant:
-    r"""The kinematic 4WS vehicle at an operating point (a plant).
+    r"""The 4WS vehicle at an operating point (a plant).
 
     The operating point is the feedforward equilibrium on a path of constant
     curvature: ``e = theta = 0``, :math:`\delta_f = \arctan(\kappa f)`,
-    :math:`\delta_r = 0` (paper eqs. 26-27). Its linearisation is
+    :math:`\delta_r = 0` (paper eqs. 26-27) for the kinematic models. The
+    kinematic linearisation is
 
     .. math::
         \mathbf A = \begin{bmatrix}0 & V\\ -V\kappa^2 & 0\end{bmatrix},\quad
@@ -81,6 +88,16 @@ class LateralPlant:
     eqs. 18-19) and :math:`c = 1` for ``model="paper"`` (eq. 33, exact only on
     a straight path).
 
+    ``model="dynamic"`` linearises the dynamic single-track model
+    (:mod:`fws_control.dynamics`, tyre slip, states ``e, theta, v_y, r``) at
+    its own equilibrium ``e = theta = 0`` on the curve, reached with the
+    front *and* rear angles of :func:`~fws_control.dynamics.dynamic_feedforward`
+    (the kinematic feedforward leaves an offset there); inputs are deviations
+    from those angles. The matrices are
+    :func:`~fws_control.dynamics.path_jacobians`. The paper's controller with
+    the kinematic feedforward adds a constant input offset to this plant; its
+    steady state is :func:`~fws_control.steady_state_offset`.
+
     Parameters
     ----------
     vehicle : Vehicle
@@ -89,8 +106,10 @@ class LateralPlant:
         Speed :math:`V` [m/s], finite and nonzero (negative: reversing).
     curvature : float or array_like, optional
         Path curvature :math:`\kappa_C` [1/m], default 0 (straight path).
-    model : {"exact", "paper"}, optional
-        Linearisation, default ``"exact"``.
+    model : {"exact", "paper", "dynamic"}, optional
+        Linearisation, default ``"exact"``. ``"dynamic"`` needs the
+        vehicle's mass, yaw inertia and cornering stiffnesses and a `speed`
+        > 0 (forward driving).
     steering_lag : float or (float, float) or None, optional
         Time constants :math:`T_f, T_r` [s] of a first-order lag between the
         steering command and the wheel angle,
@@ -101,14 +120,19 @@ class LateralPlant:
         commands; the analysis then goes through the general engine (no
         double-root design: two gains cannot place four poles). Rate limits
         remain a matter of the simulation.
+    tyre : {"linear", "magic"}, optional
+        Tyre model of ``model="dynamic"`` (default ``"linear"``; ``"magic"``
+        needs the vehicle's friction). The kinematic models take only
+        ``"linear"`` (they have no tyres).
 
     Raises
     ------
     TypeError
         If `vehicle` is not a :class:`Vehicle`.
     ValueError
-        For a zero or non-finite `speed`, a non-finite `curvature` or an
-        unknown `model`.
+        For a zero or non-finite `speed`, a non-finite `curvature`, an
+        unknown `model` or `tyre`, or (``model="dynamic"``) missing vehicle
+        data, a negative speed or a curve the tyres cannot hold.
 
     Notes
     -----
@@ -140,10 +164,20 @@ class LateralPlant:
     curvature: float | np.ndarray = 0.0
     model: str = "exact"
     steering_lag: float | tuple[float, float] | None = None
+    tyre: str = "linear"
 
     def __post_init__(self) -> None:
         check_type("vehicle", self.vehicle, Vehicle)
         check_model(self.model)
+        if self.tyre not in TYRES:
+            raise ValueError(f"tyre must be one of {TYRES}, got {self.tyre!r}")
+        if self.model == "dynamic":
+            require_dynamics(self.vehicle, tyre=self.tyre)
+        elif self.tyre != "linear":
+            raise ValueError(
+                f"tyre={self.tyre!r} applies only to model='dynamic'; the "
+                f"{self.model!r} model is kinematic (no tyres)"
+            )
         if self.steering_lag is not None:
             lag = self.steering_lag
             pair = (lag, lag) if np.ndim(lag) == 0 else tuple(np.ravel(lag))
@@ -163,6 +197,12 @@ class LateralPlant:
                 "speed and curvature must broadcast, got shapes "
                 f"{np.shape(speed)} and {np.shape(curvature)}"
             ) from None
+        if self.model == "dynamic":
+            # the operating point must exist: raises for a curve the tyres
+            # cannot hold, or a speed <= 0
+            dynamic_feedforward(
+                self.vehicle, speed=speed, curvature=curvature, tyre=self.tyre
+            )
         object.__setattr__(self, "speed", speed)
         object.__setattr__(self, "curvature", curvature)
 
@@ -176,7 +216,17 @@ class LateralPlant:
         r"""Factor :math:`c` of the front-steering entry :math:`cV/f` of B.
 
         :math:`c = 1 + f^2\kappa^2` (exact) or 1 (paper, eq. 33).
+
+        Raises
+        ------
+        ValueError
+            For ``model="dynamic"``, whose B has no such entry.
         """
+        if self.model == "dynamic":
+            raise ValueError(
+                "input_gain_factor is defined for model='exact' or 'paper', "
+                "not for model='dynamic' (its B comes from the tyre forces)"
+            )
         kappa = np.asarray(self.curvature, dtype=float)
         if self.model == "paper":
             out = np.ones_like(kappa)
@@ -190,30 +240,76 @@ class LateralPlant:
         return feedforward_steering(self.vehicle, curvature=self.curvature)
 
     @property
+    def operating_point(self) -> tuple[float | np.ndarray, float | np.ndarray]:
+        r"""Steering angles ``(delta_f, delta_r)`` [rad] of the operating point.
+
+        :math:`(\arctan(\kappa f), 0)` for the kinematic models, the
+        :func:`~fws_control.dynamics.dynamic_feedforward` angles for
+        ``model="dynamic"``. The plant's inputs are deviations from them.
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+        >>> [round(x, 6) for x in fws.LateralPlant(veh, speed=5.0,
+        ...                                        curvature=0.1).operating_point]
+        [0.263712, 0.0]
+        """
+        if self.model == "dynamic":
+            return dynamic_feedforward(
+                self.vehicle, speed=self.speed, curvature=self.curvature, tyre=self.tyre
+            )
+        ff = self.feedforward
+        return ff, 0.0 * ff
+
+    @property
     def states(self) -> tuple[str, ...]:
-        """State names: ``e, theta`` (and the wheel angles with a lag)."""
+        """State names: ``e, theta`` (``v_y, r`` for the dynamic model, the
+        wheel angles ``delta_f_act, delta_r_act`` with a lag)."""
+        base = DYNAMIC_LINEAR_STATES if self.model == "dynamic" else LINEAR_STATES
         if self.steering_lag is None:
-            return LINEAR_STATES
-        return (*LINEAR_STATES, "delta_f_act", "delta_r_act")
+            return base
+        return (*base, "delta_f_act", "delta_r_act")
+
+    @property
+    def order(self) -> int:
+        """Number of states of the linearisation.
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> fws.LateralPlant(fws.Vehicle(2.7, 1.35), speed=5.0).order
+        2
+        """
+        return len(self.states)
 
     def matrices(self) -> tuple[np.ndarray, np.ndarray]:
         """``(A, B)`` of the linearisation, shapes ``(..., n, n)``, ``(..., n, 2)``.
 
         Broadcast over `speed` and `curvature`; columns of B are ``delta_f,
-        delta_r``; ``n = 2``, or 4 with a steering lag.
+        delta_r``; ``n = 2`` (kinematic) or 4 (dynamic), plus 2 with a
+        steering lag.
         """
-        A, B = self._kinematic_matrices()
+        if self.model == "dynamic":
+            A, B = path_jacobians(
+                self.vehicle, speed=self.speed, curvature=self.curvature, tyre=self.tyre
+            )
+        else:
+            A, B = self._kinematic_matrices()
         if self.steering_lag is None:
             return A, B
+        # the wheel angles become states; the commands drive them through the
+        # lag
+        n = A.shape[-1]
         inv = np.diag([1.0 / t for t in self.steering_lag])
         shape = A.shape[:-2]
-        A4 = np.zeros(shape + (4, 4))
-        A4[..., :2, :2] = A
-        A4[..., :2, 2:] = B
-        A4[..., 2:, 2:] = -inv
-        B4 = np.zeros(shape + (4, 2))
-        B4[..., 2:, :] = inv
-        return A4, B4
+        A_lag = np.zeros(shape + (n + 2, n + 2))
+        A_lag[..., :n, :n] = A
+        A_lag[..., :n, n:] = B
+        A_lag[..., n:, n:] = -inv
+        B_lag = np.zeros(shape + (n + 2, 2))
+        B_lag[..., n:, :] = inv
+        return A_lag, B_lag
 
     def _kinematic_matrices(self) -> tuple[np.ndarray, np.ndarray]:
         V, kappa, c = np.broadcast_arrays(
@@ -232,9 +328,9 @@ class LateralPlant:
     def linearize(self) -> ct.StateSpace:
         """The linearisation as a named :class:`control.StateSpace`.
 
-        States and outputs ``e, theta`` (deviations from the operating
-        point); inputs ``delta_f, delta_r`` (deviations from the feedforward
-        angles).
+        States :attr:`states` and outputs ``e, theta`` (deviations from the
+        operating point); inputs ``delta_f, delta_r`` (deviations from the
+        feedforward angles, :attr:`operating_point`).
 
         Raises
         ------
@@ -261,7 +357,7 @@ class LateralPlant:
         return ct.ss(
             A,
             B,
-            np.eye(n)[:2],
+            np.eye(n)[:2],  # e and theta are the first two states
             np.zeros((2, 2)),
             states=list(self.states),
             inputs=list(STEERING_INPUTS),
@@ -524,3 +620,49 @@ def loop_matrices(plant: LateralPlant | ct.StateSpace) -> LoopMatrices:
         f"plant must be a LateralPlant or a control.StateSpace, got "
         f"{type(plant).__name__}"
     )
+
+
+def resolve_ratio(plant: Any, ratio: Any) -> Any:
+    """A ratio, or a ratio schedule evaluated at the plant's speed.
+
+    A callable `ratio` is a schedule :math:`a(V)`, called as
+    ``ratio(vehicle, speed=speed)`` with the vehicle and the speed of a
+    :class:`LateralPlant` (e.g. :func:`fws_control.zero_sideslip_ratio`);
+    anything else is returned unchanged (the caller checks it).
+
+    Parameters
+    ----------
+    plant : LateralPlant, control.StateSpace or Vehicle
+        A resolved plant (:func:`as_plant`).
+    ratio : float, array_like or callable
+        Ratio or schedule.
+
+    Returns
+    -------
+    float or ndarray or the given `ratio`
+
+    Raises
+    ------
+    TypeError
+        For a schedule with a plant that has no vehicle and speed.
+    ValueError
+        If the schedule returns a value that is not finite.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> from fws_control.plant import resolve_ratio
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> plant = fws.LateralPlant(veh, speed=[5.0, 20.0])
+    >>> resolve_ratio(plant, lambda vehicle, speed: 0.01 * speed - 0.1)
+    array([-0.05,  0.1 ])
+    """
+    if not callable(ratio):
+        return ratio
+    if not isinstance(plant, LateralPlant):
+        raise TypeError(
+            "a ratio schedule ratio(vehicle, speed=...) needs a fws.LateralPlant "
+            f"(or a Vehicle with speed=), got a {type(plant).__name__}"
+        )
+    value = ratio(plant.vehicle, speed=plant.speed)
+    return check_finite(f"ratio (returned by the schedule {ratio!r})", value)

@@ -320,7 +320,8 @@ def parameter_locus(
         linearisation.
     design_model : {"exact", "paper"}, optional
         Model used for the redesign (a :class:`LateralPlant` only); default
-        the plant's.
+        the plant's. With a ``model="dynamic"`` plant, ``"exact"`` shows
+        where the kinematic double-root design puts the dynamic poles.
     speed, curvature, model : optional
         With a :class:`Vehicle` only, as in :func:`linearize`.
 
@@ -392,7 +393,9 @@ def parameter_locus(
             )
         target = swept
         if design_model is not None:
-            target = replace(swept, model=design_model)
+            # a kinematic design model has no tyres: drop a magic tyre
+            tyre = swept.tyre if design_model == "dynamic" else "linear"
+            target = replace(swept, model=design_model, tyre=tyre)
         d = double_root_gains(target, ratio=par["ratio"], pole=redesign_pole)
         par["k1"], par["k2"] = d.k1, d.k2
     cp = characteristic_coefficients(swept, ratio=par["ratio"])

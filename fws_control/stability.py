@@ -32,7 +32,7 @@ import numpy as np
 from .delay import unstable_root_count
 from .gains import SteeringGains
 from .linear import AffinePolynomial, characteristic_coefficients, check_gains
-from .plant import LateralPlant, as_plant
+from .plant import LateralPlant, as_plant, resolve_ratio
 from .reprs import summary_repr
 from .validation import check_delay, check_finite
 
@@ -619,8 +619,9 @@ def stability_boundaries(
     ----------
     plant : LateralPlant, control.StateSpace or Vehicle
         One operating point (see :mod:`fws_control.plant`), any order.
-    ratio : float
-        Rear-to-front steering ratio :math:`a`.
+    ratio : float or callable
+        Rear-to-front steering ratio :math:`a`, or a schedule
+        ``ratio(vehicle, speed=...)`` evaluated at the plant's speed.
     omega : array_like, optional
         Frequencies [rad/s] of the complex-root curve; default
         :func:`default_frequencies`.
@@ -647,7 +648,7 @@ def stability_boundaries(
     ('p0 > 0', ['p1 > 0', 'p0 > 0'])
     """
     p = as_plant(plant, speed=speed, curvature=curvature, model=model)
-    ratio = check_finite("ratio", ratio)
+    ratio = check_finite("ratio", resolve_ratio(p, ratio))
     if np.ndim(ratio) or (isinstance(p, LateralPlant) and p.shape != ()):
         raise ValueError(
             "stability_boundaries needs one operating point and a scalar ratio"

@@ -9,7 +9,10 @@ and one independent derivation.
 
 Symbols: ``V`` speed, ``f`` wheelbase, ``d`` rear_to_cg, ``kappa``
 curvature, ``a`` ratio, ``k1, k2`` gains, ``lam0`` double root, ``lam`` the
-Laplace variable.
+Laplace variable; for the dynamic model also ``m`` mass, ``I_z`` yaw
+inertia, ``C_f, C_r`` cornering stiffnesses, ``v_y`` lateral velocity of G
+and ``r`` yaw rate (:data:`DYNAMIC_SYMBOLS`). In the dynamic model ``V`` is
+the constant longitudinal speed :math:`u` of the body.
 """
 
 from __future__ import annotations
@@ -27,6 +30,11 @@ __all__ = [
     "double_root_gains",
     "paper_gain_formulas",
     "lateral_acceleration",
+    "DYNAMIC_SYMBOLS",
+    "dynamic_path_rhs",
+    "dynamic_small_angle_rhs",
+    "dynamic_steady_state",
+    "zero_sideslip_ratio",
 ]
 
 V, f, d, kappa, a, k1, k2, lam0, lam = sp.symbols(
@@ -170,3 +178,144 @@ def lateral_acceleration() -> sp.Expr:
         .subs({dr: drs})
     )
     return sp.simplify(lat)
+
+
+m, I_z, C_f, C_r = sp.symbols("m I_z C_f C_r", positive=True)
+_vy, _r = sp.symbols("v_y r", real=True)
+DYNAMIC_SYMBOLS = {
+    "mass": m,
+    "yaw_inertia": I_z,
+    "cornering_front": C_f,
+    "cornering_rear": C_r,
+    "v_y": _vy,
+    "yaw_rate": _r,
+    "e": _e,
+    "theta": _theta,
+    "delta_f": _df,
+    "delta_r": _dr,
+}
+
+
+@cache
+def dynamic_path_rhs() -> sp.Matrix:
+    r"""``[s_dot, e_dot, theta_dot, v_y_dot, r_dot]`` of the dynamic model.
+
+    Derived from Newton-Euler for a rigid body in the plane with linear
+    tyres, not from the numeric code:
+
+    * the velocity of G in the world is :math:`R(\psi)[V, v_y]^T`; its time
+      derivative (``psi``, ``v_y`` functions of time, ``V`` constant),
+      projected on the body's lateral axis, is the lateral acceleration;
+    * each axle point P (``+l_f`` and ``-l_r`` on the body axis) moves with
+      :math:`v_G + \omega\times r_{GP}` (transport formula); its slip angle
+      is the steering angle minus the direction of that velocity in the body
+      frame, :math:`\alpha = \delta - \arctan(v_{P,y}/V)` (``V > 0``);
+    * the axle force :math:`C\alpha`, normal to the wheel, is the vector
+      :math:`C\alpha[-\sin\delta, \cos\delta]` in the body frame; the
+      lateral equation takes the body-``y`` components, the yaw equation the
+      moments :math:`(r_{GP}\times F)_z` about G;
+    * R is the point ``-l_r``; its world velocity, rotated into the path
+      frame at ``psi = theta + psi_C``, gives ``s_dot``, ``e_dot`` as in
+      :func:`path_frame_rhs`, and ``theta_dot = r - kappa*s_dot``.
+
+    The longitudinal equation is not used: the drive holds ``V`` constant.
+    """
+    tt = t
+    psi = sp.Function("psi", real=True)(tt)
+    vy = sp.Function("v_y", real=True)(tt)
+    rot = sp.Matrix([[sp.cos(psi), -sp.sin(psi)], [sp.sin(psi), sp.cos(psi)]])
+    acc = rot.T * (rot * sp.Matrix([V, vy])).diff(tt)  # body-frame acceleration
+    r_t = psi.diff(tt)
+    lat_acc = sp.simplify(acc[1]).subs({vy.diff(tt): sp.Symbol("vyd"), r_t: _r})
+    lat_acc = lat_acc.subs(vy, _vy)
+    l_f, l_r = f - d, d
+    omega = sp.Matrix([0, 0, _r])
+    v_g = sp.Matrix([V, _vy, 0])
+    forces, moment = sp.Integer(0), sp.Integer(0)
+    for pos, delta, stiff in ((l_f, _df, C_f), (-l_r, _dr, C_r)):
+        r_gp = sp.Matrix([pos, 0, 0])
+        v_p = v_g + omega.cross(r_gp)
+        # atan2(v_y, v_x) = atan(v_y/v_x) for v_x = V > 0 (forward driving)
+        alpha = delta - sp.atan(v_p[1] / v_p[0])
+        force = stiff * alpha * sp.Matrix([-sp.sin(delta), sp.cos(delta), 0])
+        forces += force[1]
+        moment += r_gp.cross(force)[2]
+    vyd = sp.solve(sp.Eq(m * lat_acc, forces), sp.Symbol("vyd"))[0]
+    rd = moment / I_z
+    # R in the world frame, then in the path frame
+    psi_c = sp.Symbol("psi_C", real=True)
+    v_r_body = v_g + omega.cross(sp.Matrix([-l_r, 0, 0]))
+    ps = _theta + psi_c
+    xd = v_r_body[0] * sp.cos(ps) - v_r_body[1] * sp.sin(ps)
+    yd = v_r_body[0] * sp.sin(ps) + v_r_body[1] * sp.cos(ps)
+    s_dot = (xd * sp.cos(psi_c) + yd * sp.sin(psi_c)) / (1 - kappa * _e)
+    e_dot = -xd * sp.sin(psi_c) + yd * sp.cos(psi_c)
+    theta_dot = _r - kappa * s_dot
+    return sp.Matrix(
+        [
+            sp.simplify(s_dot),
+            sp.simplify(e_dot),
+            sp.simplify(theta_dot),
+            sp.expand(vyd),
+            sp.expand(rd),
+        ]
+    )
+
+
+@cache
+def dynamic_small_angle_rhs() -> sp.Matrix:
+    """:func:`dynamic_path_rhs` to first order in the small quantities.
+
+    First order in the angles, velocities, errors and the curvature; keeps
+    the ``-kappa**2 V e`` term of ``theta_dot`` (first order in ``e`` at a
+    given curvature), as the exact kinematic linearisation does.
+    """
+    rhs = dynamic_path_rhs()
+    eps = sp.Symbol("epsilon")
+    small = {x: eps * x for x in (_e, _theta, _vy, _r, _df, _dr)}
+    out = []
+    for expr in rhs:
+        # scale the small quantities and the curvature by eps and keep the
+        # first order; the kappa**2*e term is restored below
+        scaled = expr.subs(small).subs(kappa, eps * kappa)
+        first = scaled.subs(eps, 0) + sp.diff(scaled, eps).subs(eps, 0)
+        out.append(sp.expand(sp.simplify(first)))
+    out[2] = out[2] - kappa**2 * V * _e
+    return sp.Matrix(out)
+
+
+@cache
+def dynamic_steady_state() -> dict[sp.Symbol, sp.Expr]:
+    r"""Steady ``{e: ..., theta: ..., v_y: ..., r: ...}`` of the paper's loop.
+
+    The paper's controller with the kinematic feedforward,
+    :math:`\delta_f = \kappa f - k_1 e - k_2\theta` (first order of
+    :math:`\arctan(\kappa f)`), :math:`\delta_r = a(-k_1 e - k_2\theta)`,
+    closes the small-angle form of :func:`dynamic_path_rhs` (first order in
+    every angle, velocity, error and in the curvature, keeping the
+    :math:`-\kappa^2 V e` of ``theta_dot``); the steady state solves
+    ``e_dot = theta_dot = v_y_dot = r_dot = 0``.
+    """
+    rhs = dynamic_small_angle_rhs()
+    z = k1 * _e + k2 * _theta
+    law = {_df: kappa * f - z, _dr: -a * z}
+    eqs = [sp.expand(x.subs(law)) for x in rhs[1:]]
+    sol = sp.solve(eqs, [_e, _theta, _vy, _r], dict=True)
+    (only,) = sol
+    return {k: sp.factor(v) for k, v in only.items()}
+
+
+@cache
+def zero_sideslip_ratio() -> sp.Expr:
+    r"""Ratio :math:`a = \delta_r/\delta_f` with zero steady sideslip at G.
+
+    Steady turning of the small-angle form of :func:`dynamic_path_rhs`
+    (``v_y_dot = r_dot = 0``) with ``delta_r = a*delta_f`` and ``v_y = 0``,
+    solved for ``a``.
+    """
+    rhs = dynamic_small_angle_rhs()
+    eqs = [x.subs({_vy: 0, _dr: a * _df}) for x in rhs[3:]]
+    sol = sp.solve(eqs, [a, _r], dict=True)
+    sol = [s_ for s_ in sol if s_[_r] != 0]
+    (only,) = sol
+    return sp.factor(only[a])

@@ -12,7 +12,9 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "check_real",
     "check_finite",
+    "check_bool",
     "check_positive",
     "check_nonzero",
     "check_scalar",
@@ -25,37 +27,153 @@ __all__ = [
     "MODELS",
 ]
 
-MODELS = ("exact", "paper")
+MODELS = ("exact", "paper", "dynamic")
+
+
+def _short(value: Any) -> str:
+    # one line, bounded: an error message never prints a whole array
+    text = repr(value)
+    if len(text) > 80 or "\n" in text:
+        shape = np.shape(value) if isinstance(value, np.ndarray) else None
+        head = " ".join(text[:60].split())
+        return f"{head}... (shape {shape})" if shape is not None else f"{head}..."
+    return text
+
+
+_NOT_REAL = (bool, np.bool_, complex, np.complexfloating)
+
+
+def _mixed(value: Any, budget: int = 10_000) -> bool:
+    """True if a (nested) list/tuple/object array holds a bool or complex.
+
+    numpy would turn ``(True, 0.5)`` into ``[1.0, 0.5]`` without a word.
+    """
+    stack = [value]
+    while stack and budget > 0:
+        v = stack.pop()
+        budget -= 1
+        if isinstance(v, _NOT_REAL):
+            return True
+        if isinstance(v, (list, tuple)):
+            stack.extend(v)
+        elif isinstance(v, np.ndarray):
+            if v.dtype.kind in "bc":
+                return True
+            if v.dtype.kind == "O":
+                stack.extend(v.ravel().tolist())
+    return False
+
+
+def check_real(name: str, value: Any) -> np.ndarray:
+    """Return `value` as a float array if it is real numbers (not yet finite).
+
+    ``bool`` and complex values are refused with :class:`TypeError` naming
+    `name`: ``True`` is not 1 m, and a complex number would silently lose its
+    imaginary part. Strings, ``None`` and ragged or non-numeric sequences are
+    refused with :class:`ValueError`.
+
+    Examples
+    --------
+    >>> from fws_control.validation import check_real
+    >>> check_real("x", [1, 2.5]).tolist()
+    [1.0, 2.5]
+    >>> check_real("x", True)
+    Traceback (most recent call last):
+        ...
+    TypeError: x must be a real number, not a bool, got True
+    """
+    if isinstance(value, (str, bytes)) or value is None:
+        raise ValueError(f"{name} must be a finite number, got {_short(value)}")
+    if isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name} must be a real number, not a bool, got {value!r}")
+    if isinstance(value, (complex, np.complexfloating)):
+        raise TypeError(
+            f"{name} must be a real number, not a complex one, got {value!r}"
+        )
+    try:
+        raw = np.asarray(value)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(
+            f"{name} must be a finite number or array, got {_short(value)}"
+        ) from exc
+    if raw.dtype.kind == "b":
+        raise TypeError(f"{name} must be real numbers, not bools, got {_short(value)}")
+    if raw.dtype.kind == "c":
+        raise TypeError(
+            f"{name} must be real numbers, not complex ones, got {_short(value)}"
+        )
+    if (raw.dtype.kind == "O" or isinstance(value, (list, tuple))) and _mixed(value):
+        raise TypeError(
+            f"{name} must be real numbers (no bool or complex), got {_short(value)}"
+        )
+    try:
+        return np.asarray(raw, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(
+            f"{name} must be a finite number or array, got {_short(value)}"
+        ) from exc
 
 
 def check_finite(name: str, value: Any) -> np.ndarray | float:
-    """Return `value` as float (or float array) if every element is finite."""
-    if isinstance(value, (str, bytes)) or value is None:
-        raise ValueError(f"{name} must be a finite number, got {value!r}")
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(
-            f"{name} must be a finite number or array, got {value!r}"
-        ) from exc
+    """Return `value` as float (or float array) if every element is finite.
+
+    Real numbers only (see :func:`check_real`): ``bool`` and complex values
+    raise :class:`TypeError`.
+    """
+    arr = check_real(name, value)
     if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must be finite, got {value!r}")
+        raise ValueError(f"{name} must be finite, got {_short(value)}")
     return float(arr) if arr.ndim == 0 else arr
+
+
+def check_bool(name: str, value: Any) -> bool:
+    """Return `value` if it is a ``bool`` (or numpy bool), else raise TypeError.
+
+    A flag given as a string (``"False"``) or a number is a mistake that
+    would otherwise be read by its truth value (``"False"`` is true).
+
+    Examples
+    --------
+    >>> from fws_control.validation import check_bool
+    >>> check_bool("feedforward", False)
+    False
+    >>> check_bool("feedforward", "False")
+    Traceback (most recent call last):
+        ...
+    TypeError: feedforward must be True or False, got 'False' (str)
+    """
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise TypeError(
+        f"{name} must be True or False, got {_short(value)} ({type(value).__name__})"
+    )
+
+
+def _not_empty(name: str, v: Any) -> None:
+    # np.all of nothing is True: an empty array would pass a range check and
+    # fail later without the argument's name (empty data arrays are fine in
+    # check_finite: a vectorised function may be called on zero samples)
+    if np.size(v) == 0:
+        raise ValueError(
+            f"{name} must not be empty, got an array of shape {np.shape(v)}"
+        )
 
 
 def check_positive(name: str, value: Any) -> np.ndarray | float:
     """Return `value` as float (array) if every element is finite and > 0."""
     v = check_finite(name, value)
+    _not_empty(name, v)
     if not np.all(np.asarray(v) > 0):
-        raise ValueError(f"{name} must be > 0, got {value!r}")
+        raise ValueError(f"{name} must be > 0, got {_short(value)}")
     return v
 
 
 def check_nonzero(name: str, value: Any) -> np.ndarray | float:
     """Return `value` as float (array) if every element is finite and != 0."""
     v = check_finite(name, value)
+    _not_empty(name, v)
     if np.any(np.asarray(v) == 0):
-        raise ValueError(f"{name} must be finite and nonzero, got {value!r}")
+        raise ValueError(f"{name} must be finite and nonzero, got {_short(value)}")
     return v
 
 
@@ -83,14 +201,14 @@ def check_type(name: str, value: Any, cls: type, what: str | None = None) -> Any
 
 def check_model(model: Any) -> str:
     """Return `model` if it names a known linearisation."""
-    if model not in MODELS:
-        raise ValueError(f"model must be one of {MODELS}, got {model!r}")
+    if not isinstance(model, str) or model not in MODELS:
+        raise ValueError(f"model must be one of {MODELS}, got {_short(model)}")
     return model
 
 
 def _float_or_nan(value: Any) -> float:
     # a value that is no number fails the range test below with its name
-    if isinstance(value, bool):
+    if isinstance(value, (bool, np.bool_, complex, np.complexfloating)):
         return math.nan
     try:
         return float(value)

@@ -5,15 +5,18 @@ from __future__ import annotations
 import math
 from dataclasses import KW_ONLY, dataclass
 
+import numpy as np
+
 from .validation import check_angle_limit, check_optional_positive, check_rate_limit
 
 __all__ = ["Vehicle"]
 
 
 def _number(name: str, value: object) -> float:
-    # bool is an int subclass; a True wheelbase is a bug, not 1 m
-    if isinstance(value, bool):
-        raise ValueError(f"{name} must be a number in metres, got {value!r}")
+    # bool is an int subclass; a True wheelbase is a bug, not 1 m; a complex
+    # number would silently lose its imaginary part in float()
+    if isinstance(value, (bool, np.bool_, complex, np.complexfloating)):
+        raise ValueError(f"{name} must be a real number in metres, got {value!r}")
     try:
         return float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError) as exc:

@@ -831,7 +831,13 @@ def _plot_factories():
         g = fws.SteeringGains(0.05, 0.5, ratio=0.0)
         return fws.compare(veh, m, {"paper": g}, speed=5.0).plot
 
+    def design_limit():
+        return fws.kinematic_design_limit(
+            fws.vehicles.BMW_320I, ratio=0.0, pole=-1.0, speeds=[5.0, 20.0, 40.0]
+        ).plot
+
     return {
+        "KinematicDesignLimit.plot": design_limit,
         "ControllerComparison.plot": controller_comparison,
         "StabilityChart.plot": chart,
         "DelayMarginChart.plot": delay_chart,

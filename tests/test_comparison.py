@@ -162,3 +162,39 @@ def test_bad_input(veh, plant, design):
         fws.compare_linear_nonlinear(fws.LateralPlant(veh, speed=[5.0, 6.0]), design)
     with pytest.raises(TypeError, match="speed="):
         fws.compare_linear_nonlinear(veh, design)
+
+
+def test_max_difference_refuses_a_run_that_stopped(veh, plant, design):
+    # Issue 13 item 6: from e0 = 12 m beyond the centre of the 10 m arc the
+    # nonlinear run stops at t = 0 (1 - kappa*e < 0); both responses share
+    # the initial state, so the "gap" used to be all zeros.
+    cmp = fws.compare_linear_nonlinear(plant, design, initial_errors=(12.0, 0.0))
+    assert cmp.nonlinear.status != "ok" and cmp.nonlinear.t[-1] == 0.0
+    with pytest.raises(ValueError, match=r"stopped at t = 0 s with status"):
+        cmp.max_difference()
+    # a run that reaches the end still compares (gap > 0 from e0 = 2 m)
+    ok = fws.compare_linear_nonlinear(plant, design, initial_errors=(2.0, 0.0))
+    assert ok.max_difference()["e"] > 0.0
+
+
+@pytest.mark.parametrize("bad", ["False", 0, 1.0, None])
+def test_feedforward_must_be_a_bool(plant, design, bad):
+    # "False" is a true string: it used to run *with* feedforward
+    with pytest.raises(TypeError, match="feedforward must be True or False"):
+        fws.compare_linear_nonlinear(plant, design, feedforward=bad, duration=1.0)
+
+
+@pytest.mark.parametrize(
+    "kwargs, name",
+    [
+        (dict(dt=float("nan")), "dt"),
+        (dict(dt=-0.1), "dt"),
+        (dict(dt=1e-9), "dt"),
+        (dict(duration=float("inf")), "duration"),
+        (dict(initial_errors=(1.0, 0.0, 3.0)), "initial_errors"),
+        (dict(initial_errors=(True, 0.0)), "initial_errors"),
+    ],
+)
+def test_bad_values_name_the_argument(plant, design, kwargs, name):
+    with pytest.raises((ValueError, TypeError), match=name):
+        fws.compare_linear_nonlinear(plant, design, **kwargs)

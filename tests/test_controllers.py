@@ -188,3 +188,94 @@ def test_actuator_step_response_matches_closed_form():
 def test_actuator_time_constant_must_be_positive():
     with pytest.raises(ValueError, match="time_constant"):
         fws.steering_actuator(VEH, time_constant=0.0)
+
+
+# -- issue 13 item 7: types, non-finite values, flags, magnitudes -------------
+
+_G = fws.SteeringGains(0.1, 0.5, ratio=-1.0)
+_V = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+
+
+@pytest.mark.parametrize(
+    "call, name, exc",
+    [
+        (lambda: fws.yaw_rate(_V, float("nan"), 0.0, speed=5.0), "delta_f", ValueError),
+        (lambda: fws.yaw_rate(_V, 0.1, None, speed=5.0), "delta_r", ValueError),
+        (lambda: fws.yaw_rate(_V, 0.1, 0.0, speed=float("inf")), "speed", ValueError),
+        (lambda: fws.yaw_rate(_V, True, 0.0, speed=5.0), "delta_f", TypeError),
+        (lambda: fws.yaw_rate(_V, 0.1 + 1j, 0.0, speed=5.0), "delta_f", TypeError),
+        # V sin(1.5)/(f cos(1.5)) = 5.2e308 overflows
+        (lambda: fws.yaw_rate(_V, 1.5, 0.0, speed=1e308), "speed", ValueError),
+        (lambda: fws.yaw_rate("veh", 0.1, 0.0, speed=5.0), "vehicle", TypeError),
+        (lambda: fws.feedforward_steering(None, curvature=0.1), "vehicle", TypeError),
+        (
+            lambda: fws.lateral_acceleration(
+                _V, 0.1, 0.0, float("nan"), 0.0, speed=5.0
+            ),
+            "delta_f_rate",
+            ValueError,
+        ),
+        (
+            lambda: fws.yaw_acceleration(_V, 0.1, 0.0, 0.0, None, speed=5.0),
+            "delta_r_rate",
+            ValueError,
+        ),
+        (lambda: fws.steering_command(_V, _G, float("nan"), 0.0), "e", ValueError),
+        (lambda: fws.steering_command(_V, _G, 0.0, None), "theta", ValueError),
+        (
+            lambda: fws.steering_command(_V, fws.SteeringGains(10, 0, 0), 1e308, 0.0),
+            "e",
+            ValueError,
+        ),
+        (lambda: fws.steering_command(_V, "g", 0.0, 0.0), "gains", TypeError),
+        (lambda: fws.steering_command(3.0, _G, 0.0, 0.0), "vehicle", TypeError),
+        (
+            # a string is a valid type ("kinematic", "dynamic"); "False" is not
+            # one of the values
+            lambda: fws.steering_command(_V, _G, 1.0, 0.0, feedforward="False"),
+            "feedforward",
+            ValueError,
+        ),
+        (
+            lambda: fws.steering_command(_V, _G, 1.0, 0.0, feedforward=1j),
+            "feedforward",
+            TypeError,
+        ),
+        (
+            lambda: fws.steering_command_rate(
+                _V, _G, 1.0, 0.0, float("inf"), 0.0, curvature=0.1
+            ),
+            "e_rate",
+            ValueError,
+        ),
+        (
+            lambda: fws.path_tracking_controller(_V, _G, feedforward="False"),
+            "feedforward",
+            ValueError,
+        ),
+        (lambda: fws.steering_actuator(None), "vehicle", TypeError),
+    ],
+)
+def test_bad_input_names_the_argument(call, name, exc):
+    with pytest.raises(exc, match=rf"\b{name}\b"):
+        call()
+
+
+def test_feedforward_false_string_was_feedforward_on():
+    # the reference: by the formula, with and without the feedforward angle
+    ff = math.atan(2.7 * 0.1)
+    fb = -0.1 * 1.0
+    on = fws.steering_command(_V, _G, 1.0, 0.0, curvature=0.1, feedforward=True)
+    off = fws.steering_command(_V, _G, 1.0, 0.0, curvature=0.1, feedforward=False)
+    assert float(on[0]) == pytest.approx(ff + fb, abs=1e-15)
+    assert float(off[0]) == pytest.approx(fb, abs=1e-15)
+
+
+def test_array_inputs_are_elementwise_with_nan_samples():
+    # a NaN sample (a stopped run of a batch) stays in its place; the finite
+    # samples equal the scalar evaluations of eq. (10)
+    df = np.array([0.1, np.nan, -0.2])
+    got = fws.yaw_rate(_V, df, 0.0, speed=5.0)
+    ref = 5.0 * np.sin(df) / (2.7 * np.cos(df))
+    assert np.isnan(got[1])
+    np.testing.assert_allclose(got[[0, 2]], ref[[0, 2]], rtol=1e-15)

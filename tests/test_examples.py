@@ -83,6 +83,7 @@ def test_every_example_is_covered():
     tested = {
         "plot_any_plant.py",
         "plot_delay.py",
+        "plot_dynamic.py",
         "plot_fws_vs_4ws.py",
         "plot_quick_start.py",
         "plot_ratio_sweep.py",
@@ -396,3 +397,37 @@ def test_getting_started_numbers():
     k1 = float(gains[S.k1].subs(vals))
     k2 = float(gains[S.k2].subs(vals))
     assert f"{k1:.4f}" in text and f"{k2:.4f}" in text
+
+
+def test_dynamic(tmp_path):
+    out = run_example("plot_dynamic.py", tmp_path)
+    assert (tmp_path / "dynamic_charts.png").stat().st_size > 10_000
+    # Brute force on a 51 x 51 subgrid of the example's 201 x 201 grid:
+    # eigenvalues of the closed loop built on control.linearize of the
+    # nonlinear dynamic path model (straight path, ratio 0).
+    veh = fws.vehicles.BMW_320I
+    k1 = np.linspace(-0.2, 0.6, 51)
+    k2 = np.linspace(-0.5, 1.5, 51)
+    K1, K2 = np.meshgrid(k1, k2)
+    for speed in (10.0, 20.0, 30.0):
+        nl = fws.dynamics.dynamic_path_model(veh, speed=speed)
+        lin = ct.linearize(nl, np.zeros(5), [0.0, 0.0])
+        A, b = np.asarray(lin.A)[1:, 1:], np.asarray(lin.B)[1:, 0]
+        row = np.stack([K1, K2, 0 * K1, 0 * K1], axis=-1)
+        eig = np.linalg.eigvals(A - b[:, None] * row[..., None, :])
+        frac = np.mean(np.all(eig.real < 0, axis=-1))
+        printed = floats_after(f"dynamic, V = {speed:g} m/s: stable fraction", out)
+        assert printed[0] == pytest.approx(frac, abs=0.01)
+    # drift speed: the dominant poles of the kinematic design on the dynamic
+    # plant are 25 % of |lambda0| away there (python-control eigenvalues)
+    v = floats_after("drift > 25 % above", out)[0]
+    for speed, side in ((v - 0.1, -1), (v + 0.1, 1)):
+        g = fws.double_root_gains(
+            fws.LateralPlant(veh, speed=speed), ratio=0.0, pole=-1.0
+        )
+        lin = ct.linearize(fws.dynamics.dynamic_path_model(veh, speed=speed),
+                           np.zeros(5), [0.0, 0.0])  # fmt: skip
+        A, b = np.asarray(lin.A)[1:, 1:], np.asarray(lin.B)[1:, 0]
+        p = np.linalg.eigvals(A - np.outer(b, [g.k1, g.k2, 0.0, 0.0]))
+        drift = np.max(np.abs(p[np.argsort(-p.real)][:2] + 1.0))
+        assert side * (drift - 0.25) > 0

@@ -137,3 +137,28 @@ def test_tracking_metrics_of_stopped_run_has_nan_horizon_metrics():
     assert mb.status.tolist() == ["singular_steering", "ok"]
     assert math.isnan(mb.settling_time[0]) and np.isfinite(mb.settling_time[1])
     assert mb.peak_delta_f[0] == pytest.approx(m.peak_delta_f, rel=1e-6)
+
+
+@pytest.mark.parametrize("band", [float("nan"), -0.1, 0.0, float("inf"), True, 1j])
+def test_settling_band_must_be_finite_and_positive(band):
+    # Issue 13 item 6: band=nan compared False everywhere and reported 0.0
+    # ("settled at once") even for a constant signal; a negative band was
+    # accepted. The constant signal 1 never enters a band of 0.5:
+    assert fws.settling_time(T, np.ones_like(T), band=0.5) == math.inf
+    with pytest.raises((ValueError, TypeError), match="band"):
+        fws.settling_time(T, np.ones_like(T), band=band)
+
+
+def test_tracking_metrics_checks_band_and_result_type():
+    g = fws.SteeringGains(0.1, 0.5, ratio=0.0)
+    res = fws.simulate(
+        VEH, Straight(), g, speed=5.0, initial_state=(0, 1, 0), duration=2.0
+    )
+    with pytest.raises(ValueError, match="band"):
+        fws.tracking_metrics(res, band=float("nan"))
+    with pytest.raises(ValueError, match="band"):
+        fws.tracking_metrics(res, band=-1.0)
+    with pytest.raises(
+        TypeError, match="result must be a fws_control.SimulationResult"
+    ):
+        fws.tracking_metrics(res.e)

@@ -760,3 +760,92 @@ def test_invalid_evaluation_and_projection_inputs():
         PATHS["spline_open"].project([1.0, 2.0], [1.0, 1.0], s_guess=[1.0, 2.0, 3.0])
     with pytest.raises(ValueError, match="psi must be finite"):
         seg.errors(1.0, 1.0, math.nan)
+
+
+# -- cusps (issue 13 item 5) --------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "wp, index",
+    [
+        ([[0, 0], [0, 2], [0, 1]], 1),
+        ([[0, 0], [10, 0], [5, 0]], 1),
+        ([[0, 0], [10, 0], [20, 0], [15, 0]], 2),
+    ],
+)
+def test_spline_refuses_waypoints_that_double_back(wp, index):
+    # Reference: the chord-length natural spline written with scipy directly;
+    # its tangent reverses (dot product of the unit tangents at two nearby
+    # parameters < 0) between the samples, so the path has a cusp.
+    w = np.asarray(wp, dtype=float)
+    t = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(w, axis=0).T))])
+    cs = CubicSpline(t, w, axis=0, bc_type="natural")
+    tt = np.linspace(0.0, t[-1], 20001)
+    d = cs(tt, 1)
+    u = d / np.hypot(d[:, 0], d[:, 1])[:, None]
+    assert np.min(np.sum(u[:-1] * u[1:], axis=1)) < 0.0
+    with pytest.raises(ValueError, match=rf"cusp .*near waypoint {index}\b"):
+        Spline(wp)
+
+
+def test_spline_hairpin_is_not_a_cusp():
+    # a tight U-turn turns by pi over a finite length: accepted, and its
+    # heading changes continuously (no jump of pi between close samples)
+    sp = Spline([[0, 0], [5, 0], [5, 0.5], [0, 0.5]])
+    s = np.linspace(0.0, sp.length, 4001)
+    jump = np.abs(np.diff(np.unwrap(sp.heading(s))))
+    assert jump.max() < 0.1
+
+
+# -- projection first pass: KD-tree vs the dense method (issue 14 item 5) -----
+
+
+PROJECTION_PATHS = {
+    **{k: v for k, v in PATHS.items()},
+    "straight": Straight(length=30.0, start=(1.0, -2.0), start_heading=0.4),
+    "arc_full": Arc(0.1),
+    "clothoid_turning": Clothoid(-0.3, 0.5, 60.0),
+}
+
+
+@pytest.mark.parametrize("name", sorted(PROJECTION_PATHS))
+def test_kdtree_projection_equals_dense_method_and_brute_force(name, monkeypatch):
+    import fws_control.paths as paths_module
+
+    path = PROJECTION_PATHS[name]
+    rng = np.random.default_rng(7)
+    s0 = rng.uniform(0.0, min(path.length, 200.0), 60)
+    x0, y0 = path.position(s0)
+    px = x0 + rng.normal(0.0, 8.0, s0.size)
+    py = y0 + rng.normal(0.0, 8.0, s0.size)
+    monkeypatch.setattr(paths_module, "_FIRST_PASS", "kdtree")  # forced
+    new = path.project(px, py)
+    monkeypatch.setattr(paths_module, "_FIRST_PASS", "dense")
+    old = path.project(px, py)  # same cached samples, no tree
+    # the same candidates in the same order: bitwise the same answer
+    for f in ("s", "e", "distance", "unique"):
+        np.testing.assert_array_equal(getattr(new, f), getattr(old, f))
+    _, d_ref = reference_nearest(path, px, py)
+    assert_close(new.distance, d_ref, atol=1e-9, rtol=1e-9)
+
+
+def test_clothoid_projection_memory_does_not_grow_with_turning_squared():
+    # 1000 rad of turning used to need ~6 GB (samples x panels); now each
+    # point costs one 16-node panel integral.
+    import tracemalloc
+
+    c = Clothoid(0.0, 2.0, length=1000.0)
+    tracemalloc.start()
+    p = c.project([3.0, 100.0, 600.0], [1.0, -50.0, 30.0])
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    assert peak < 50e6, peak
+    # positions against scipy's Fresnel integrals at high turning, and the
+    # projection against the brute-force reference
+    s = np.linspace(0.0, 1000.0, 11)
+    x, y = c.position(s)
+    xr, yr = fresnel_clothoid(0.0, 2.0, 1000.0, s)
+    assert_close(x, xr, atol=1e-9)
+    assert_close(y, yr, atol=1e-9)
+    _, d_ref = reference_nearest(c, [3.0, 100.0, 600.0], [1.0, -50.0, 30.0], n=400001)
+    assert_close(p.distance, d_ref, atol=1e-8, rtol=1e-9)

@@ -376,6 +376,9 @@ def test_to_pandas_of_one_run():
         "k1",
         "k2",
         "ratio",
+        "message",
+        "feedforward",
+        "method",
     ]
     assert len(df) == res.t.size == 51
     np.testing.assert_array_equal(df["t"], res.t)
@@ -389,6 +392,8 @@ def test_to_pandas_of_one_run():
         {g.ratio},
     )
     assert df.attrs["feedforward"] is True
+    assert set(df["feedforward"]) == {True} and set(df["method"]) == {"DOP853"}
+    assert set(df["message"]) == {""}
 
 
 def test_plot_of_one_run_returns_controlplot_and_reuses_axes():
@@ -430,7 +435,8 @@ def test_to_time_response_matches_the_python_control_reference():
     resp = res.to_time_response()
     assert isinstance(resp, ct.TimeResponseData)
     assert resp.output_labels == list(fws.simulation.SIGNALS)
-    assert resp.ntraces == 0 and resp.outputs.shape == (11, res.t.size)
+    n_signals = len(fws.simulation.SIGNALS)
+    assert resp.ntraces == 0 and resp.outputs.shape == (n_signals, res.t.size)
     assert resp.success and resp.params["k1"] == g.k1
     np.testing.assert_array_equal(resp.time, res.t)
     # the same signals, by name, as the interconnected reference's response
@@ -443,7 +449,7 @@ def test_to_time_response_matches_the_python_control_reference():
     # python-control plots it: one panel per signal, the data of the result
     cplt = ct.time_response_plot(resp)
     try:
-        assert isinstance(cplt, ct.ControlPlot) and cplt.axes.shape == (11, 1)
+        assert isinstance(cplt, ct.ControlPlot) and cplt.axes.shape == (n_signals, 1)
         e_row = resp.output_labels.index("e")
         np.testing.assert_allclose(cplt.lines[e_row, 0][0].get_ydata(), res.e)
     finally:

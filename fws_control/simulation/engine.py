@@ -42,8 +42,14 @@ from ..controllers import (
     steering_command,
     steering_command_rate,
 )
+from ..dynamics import (
+    TYRES,
+    dynamic_path_derivatives,
+    require_dynamics,
+    slip_angles,
+)
 from ..gains import SteeringGains
-from ..models import path_frame_derivatives
+from ..models import path_frame_derivatives, yaw_rate
 from ..paths import Arc, Path, Straight
 from ..validation import check_finite, check_positive
 from ..vehicle import Vehicle
@@ -59,10 +65,22 @@ __all__ = [
     "STATUSES",
     "SOLVERS",
     "check_method",
+    "check_tolerances",
+    "choose_method",
+    "STIFF_TIME_CONSTANT",
+    "MAX_STEPS",
+    "RTOL_RANGE",
+    "ATOL_RANGE",
     "check_initial_state",
+    "MODELS",
+    "check_model",
+    "split_initial_state",
     "run_gains",
     "resolve_time_constant",
     "time_grid",
+    "MAX_OUTPUT_BYTES",
+    "output_samples",
+    "check_output_budget",
     "initial_path_state",
     "integrate",
     "compute_outputs",
@@ -121,7 +139,16 @@ SIGNALS = (
     "delta_f_rate",
     "delta_r_rate",
     "lateral_accel",
+    "v_y",
+    "yaw_rate",
+    "slip_front",
+    "slip_rear",
 )
+
+#: Vehicle models of the engine: the paper's kinematic model and the dynamic
+#: single-track model of :mod:`fws_control.dynamics` (tyre slip, states
+#: ``v_y`` and ``r`` added after the others).
+MODELS = ("kinematic", "dynamic")
 
 
 # --------------------------------------------------------------------------
@@ -153,6 +180,101 @@ def check_method(method: Any) -> type[OdeSolver]:
         ) from None
 
 
+#: Accepted ``rtol``: from scipy's own floor ``100 * eps`` (below it scipy
+#: raises rtol silently, with a warning) to 0.1 (a 10 % error per step: any
+#: looser setting no longer controls the error, and with ``rtol = 10`` the
+#: solver strides across singular states).
+RTOL_RANGE = (100 * float(np.finfo(float).eps), 0.1)
+#: Accepted ``atol`` (the states are metres and radians): from 1e-20, far
+#: below the rounding error of any state of the loop (an absolute tolerance
+#: of 1e-300 overflows scipy's error norm of a state at 0: the solver then
+#: fails at t = 0), to 0.1 m or rad for the reason of the upper bound of
+#: ``rtol``.
+ATOL_RANGE = (1e-20, 0.1)
+
+
+#: Actuator time constant [s] below which ``method="auto"`` integrates with
+#: Radau, at ``rtol = 1e-10``; it scales as ``(rtol / 1e-10) ** (1/6)`` (see
+#: :func:`choose_method`).
+STIFF_TIME_CONSTANT = 0.004
+
+
+def choose_method(time_constant: float | None, rtol: float) -> str:
+    r"""The solver ``method="auto"`` uses: ``"Radau"`` when the loop is stiff.
+
+    The steering actuator adds the eigenvalue :math:`-1/T` to the loop. An
+    explicit method's step is then bounded by stability, not accuracy: DOP853
+    steps about :math:`6.4\,T` (measured), so its cost grows as
+    ``duration / T`` (with :math:`T = 10^{-5}` s it needed 20,000 steps, 15
+    s of CPU, for the first 1.3 s of the paper's scenario; Radau does the
+    whole 5 s run in 0.4 s). The
+    implicit Radau IIA method (order 5, L-stable) steps by accuracy alone,
+    about 0.19 s on the paper's scenario at ``rtol = 1e-10``, but each step
+    costs about 3.5 DOP853 steps. Measured on the paper's 15 s scenarios (V
+    = 5 and 20 m/s), the two cost the same near :math:`T = 0.004` s (Radau
+    1.7x faster at 0.002 s, DOP853 2-3.5x faster at 0.01-0.02 s). Radau's
+    accuracy step grows as :math:`rtol^{1/6}` while the stability bound does
+    not, so the rule is
+
+    .. math:: T < 0.004\,\mathrm{s}\cdot(\mathrm{rtol}/10^{-10})^{1/6}
+              \Rightarrow \text{Radau, else DOP853.}
+
+    Without an actuator (`time_constant` None) the loop is not stiff:
+    DOP853.
+
+    Examples
+    --------
+    >>> from fws_control.simulation.engine import choose_method
+    >>> choose_method(None, 1e-10), choose_method(0.05, 1e-10)
+    ('DOP853', 'DOP853')
+    >>> choose_method(1e-4, 1e-10), choose_method(0.01, 1e-4)
+    ('Radau', 'Radau')
+    """
+    if time_constant is None:
+        return "DOP853"
+    limit = STIFF_TIME_CONSTANT * (rtol / 1e-10) ** (1.0 / 6.0)
+    return "Radau" if time_constant < limit else "DOP853"
+
+
+def check_tolerances(rtol: Any, atol: Any) -> tuple[float, float]:
+    """``(rtol, atol)`` as floats if they lie in :data:`RTOL_RANGE`, :data:`ATOL_RANGE`.
+
+    The solver never returns for ``atol = 0`` with a state that starts at
+    exactly 0, nor for a NaN or infinite tolerance (its error norm is NaN,
+    so every step is rejected and retried): these are refused here, before
+    any integration.
+
+    Raises
+    ------
+    ValueError
+        Naming the argument, its value and the valid range.
+
+    Examples
+    --------
+    >>> from fws_control.simulation.engine import check_tolerances
+    >>> check_tolerances(1e-10, 1e-12)
+    (1e-10, 1e-12)
+    >>> check_tolerances(1e-10, 0.0)
+    Traceback (most recent call last):
+    ...
+    ValueError: atol must be a finite number in [1e-20, 0.1], got 0.0
+    """
+    lo, hi = RTOL_RANGE
+    out = []
+    for name, value, ok, span in (
+        ("rtol", rtol, lambda v: lo <= v <= hi, f"[{lo:.3g}, {hi:g}]"),
+        ("atol", atol, lambda v: ATOL_RANGE[0] <= v <= ATOL_RANGE[1], "[1e-20, 0.1]"),
+    ):
+        try:
+            v = float(value) if not isinstance(value, (bool, str, bytes)) else math.nan
+        except (TypeError, ValueError):
+            v = math.nan
+        if not (math.isfinite(v) and ok(v)):
+            raise ValueError(f"{name} must be a finite number in {span}, got {value!r}")
+        out.append(v)
+    return out[0], out[1]
+
+
 def check_initial_state(initial_state: Any) -> np.ndarray:
     """Initial poses ``(x_R, y_R, psi)`` as an array of shape ``(runs, 3)``.
 
@@ -174,6 +296,84 @@ def check_initial_state(initial_state: Any) -> np.ndarray:
             f"got shape {arr.shape}"
         )
     return np.atleast_2d(arr)
+
+
+def check_model(vehicle: Vehicle, model: Any, tyre: Any) -> tuple[str, str]:
+    """``(model, tyre)`` if valid for `vehicle`.
+
+    Raises
+    ------
+    ValueError
+        For a model not in :data:`MODELS`, a tyre not in
+        :data:`~fws_control.dynamics.TYRES`, ``tyre="magic"`` with the
+        kinematic model (which has no tyres), or a vehicle without the data
+        of the dynamic model (:func:`~fws_control.dynamics.require_dynamics`).
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> from fws_control.simulation.engine import check_model
+    >>> check_model(fws.Vehicle(2.7, 1.35), "kinematic", "linear")
+    ('kinematic', 'linear')
+    >>> check_model(fws.Vehicle(2.7, 1.35), "dynamic", "linear")
+    Traceback (most recent call last):
+    ...
+    ValueError: the dynamic model needs Vehicle fields mass, yaw_inertia, \
+cornering_front, cornering_rear (kg, kg m^2, N/rad per axle; friction for \
+tyre='magic'); they are None in the vehicle given
+    """
+    if model not in MODELS:
+        raise ValueError(f"model must be one of {MODELS}, got {model!r}")
+    if tyre not in TYRES:
+        raise ValueError(f"tyre must be one of {TYRES}, got {tyre!r}")
+    if model == "kinematic" and tyre != "linear":
+        raise ValueError(
+            f"tyre={tyre!r} needs model='dynamic' (the kinematic model has no "
+            "tyre forces), got model='kinematic'"
+        )
+    if model == "dynamic":
+        require_dynamics(vehicle, tyre=tyre)
+    return model, tyre
+
+
+def split_initial_state(initial_state: Any, *, model: str) -> np.ndarray:
+    """Initial states as an array ``(runs, 5)``: pose and ``(v_y, r)``.
+
+    The kinematic model takes poses ``(x_R, y_R, psi)``; the dynamic model
+    also ``(x_R, y_R, psi, v_y, r)`` (lateral velocity of G [m/s] and yaw
+    rate [rad/s]). Columns 3 and 4 are NaN where not given: the engine then
+    starts the dynamic model rolling without tyre slip at the initial
+    steering angles (:func:`integrate`).
+
+    Raises
+    ------
+    ValueError
+        If the values are not finite or the last axis has the wrong length.
+
+    Examples
+    --------
+    >>> from fws_control.simulation.engine import split_initial_state
+    >>> split_initial_state((0.0, 2.0, 0.0), model="dynamic").tolist()
+    [[0.0, 2.0, 0.0, nan, nan]]
+    >>> split_initial_state((0.0, 2.0, 0.0, 0.1, 0.0), model="dynamic").shape
+    (1, 5)
+    """
+    arr = np.asarray(check_finite("initial_state", initial_state), dtype=float)
+    sizes = (3, 5) if model == "dynamic" else (3,)
+    if arr.ndim == 0 or arr.shape[-1] not in sizes or arr.ndim > 2:
+        shapes = (
+            "(x_R, y_R, psi), (x_R, y_R, psi, v_y, r) or an array of shape "
+            "(runs, 3) or (runs, 5)"
+            if model == "dynamic"
+            else "(x_R, y_R, psi) or an array of shape (runs, 3)"
+        )
+        raise ValueError(
+            f"initial_state must be {shapes} for model={model!r}, got shape {arr.shape}"
+        )
+    arr = np.atleast_2d(arr)
+    if arr.shape[1] == 5:
+        return arr
+    return np.concatenate([arr, np.full((arr.shape[0], 2), np.nan)], axis=1)
 
 
 def run_gains(gains: Any, *, name: str = "gains") -> SteeringGains:
@@ -269,14 +469,93 @@ def resolve_time_constant(vehicle: Vehicle, value: float | None) -> float | None
     return DEFAULT_ACTUATOR_TIME_CONSTANT if has_rate else None
 
 
+#: Budget of the output of one call [bytes]: the returned signals, ``runs x
+#: len(SIGNALS) x samples x 8`` bytes (float64), may not exceed it. 2 GiB is
+#: 24 million run-samples: 16,000 runs of the paper's 15 s scenario at the
+#: default output step, or one run with dt = 6e-7 s. The peak memory of a
+#: call is its output, the states (3/11 of it, 5/11 with an actuator) and a
+#: bounded block of about 12 MB of temporaries: measured 2.2 times the
+#: output at 13 MB, 1.45 times at 132 MB (it was 4.4 times). Larger requests
+#: are refused with the way to ask for less (see :func:`check_output_budget`).
+MAX_OUTPUT_BYTES = 2 * 2**30
+
+
+def output_samples(duration: float, *, dt: float = 0.01, t_eval: Any = None) -> float:
+    """Number of output times :func:`time_grid` would give, without building them.
+
+    A float, so that an absurd request (``dt = 1e-320``) is a large number
+    (or ``inf``) instead of an overflow.
+
+    Examples
+    --------
+    >>> from fws_control.simulation.engine import output_samples
+    >>> output_samples(15.0, dt=0.01), output_samples(15.0, dt=1e-320)
+    (1501.0, inf)
+    """
+    if t_eval is not None:
+        return float(np.size(t_eval))
+    duration = float(check_positive("duration", duration))
+    dt = float(check_positive("dt", dt))
+    with np.errstate(over="ignore"):
+        ratio = duration / dt
+    return max(float(round(ratio)) if math.isfinite(ratio) else math.inf, 1.0) + 1.0
+
+
+def check_output_budget(
+    runs: int, samples: float, *, duration: float, dt: float, t_eval: Any = None
+) -> None:
+    """Refuse a call whose signals would exceed :data:`MAX_OUTPUT_BYTES`.
+
+    The solver chooses its own steps: the output grid (`dt` or `t_eval`)
+    only sets where the solution is sampled, not its accuracy, so a request
+    for more samples than fit in memory is almost always meant as a finer
+    solution, which the tolerances give.
+
+    Raises
+    ------
+    ValueError
+        Naming the arguments, the size asked for and the budget, and saying
+        how to get what was meant: a larger `dt`, a `t_eval` with the times
+        needed, a shorter `duration` or fewer runs per call.
+
+    Examples
+    --------
+    >>> from fws_control.simulation.engine import check_output_budget
+    >>> check_output_budget(1, 1501.0, duration=15.0, dt=0.01)   # 0.13 MB: fine
+    >>> check_output_budget(1, 1.5e10 + 1, duration=15.0, dt=1e-9)
+    Traceback (most recent call last):
+    ...
+    ValueError: dt=1e-09 over duration=15.0 asks for 1.5e+10 output samples ...
+    """
+    nbytes = float(runs) * float(samples) * len(SIGNALS) * 8.0
+    if nbytes <= MAX_OUTPUT_BYTES:
+        return
+    limit = MAX_OUTPUT_BYTES / (len(SIGNALS) * 8.0)
+    what = (
+        f"t_eval of {int(samples)} times"
+        if t_eval is not None
+        else f"dt={dt!r} over duration={duration!r}"
+    )
+    raise ValueError(
+        f"{what} asks for {samples:.4g} output samples for each of {runs} runs: "
+        f"{nbytes / 2**30:.4g} GiB of signals (runs x {len(SIGNALS)} signals x "
+        f"samples x 8 bytes), more than the budget of "
+        f"{MAX_OUTPUT_BYTES / 2**30:g} GiB (runs x samples <= {limit:.4g}). The "
+        "solver chooses its own steps: dt only sets the output grid, not the "
+        "accuracy (use rtol, atol). Ask for less output: a larger dt, t_eval "
+        "with only the times you need, a shorter duration, or fewer runs per call"
+    )
+
+
 def time_grid(duration: float, *, dt: float = 0.01, t_eval: Any = None) -> np.ndarray:
     """Output times: ``linspace(0, duration, round(duration/dt) + 1)`` or `t_eval`.
 
     Raises
     ------
     ValueError
-        For a non-positive `duration` or `dt`, or a `t_eval` that is not
-        strictly increasing from 0 to at most `duration`.
+        For a non-positive `duration` or `dt`, a `t_eval` that is not
+        strictly increasing from 0 to at most `duration`, or a grid whose
+        signals for one run would exceed :data:`MAX_OUTPUT_BYTES`.
 
     Examples
     --------
@@ -287,13 +566,15 @@ def time_grid(duration: float, *, dt: float = 0.01, t_eval: Any = None) -> np.nd
     duration = float(check_positive("duration", duration))
     if t_eval is None:
         dt = float(check_positive("dt", dt))
-        n = max(int(round(duration / dt)), 1)
-        return np.linspace(0.0, duration, n + 1)
+        samples = output_samples(duration, dt=dt)
+        check_output_budget(1, samples, duration=duration, dt=dt)
+        return np.linspace(0.0, duration, int(samples))
     t = np.asarray(check_finite("t_eval", t_eval), dtype=float).ravel()
     if t.size < 1 or t[0] != 0.0 or np.any(np.diff(t) <= 0) or t[-1] > duration:
+        got = f"{t.size} values" + (f" from {t[0]:g} to {t[-1]:g}" if t.size else "")
         raise ValueError(
             "t_eval must be strictly increasing, start at 0 and end at or before "
-            f"duration={duration}, got {t_eval!r}"
+            f"duration={duration}, got {got}"
         )
     return t
 
@@ -411,10 +692,11 @@ def _dense_at(dense, times, pos, m, width) -> np.ndarray:
 
     `dense` interpolates the stacked state ``(m, width)`` (flattened
     row-major); pair ``j`` is run ``pos[j]`` at ``times[j]``. The
-    interpolants of DOP853 and the explicit Runge-Kutta methods are
+    interpolants of DOP853, the explicit Runge-Kutta methods and Radau are
     evaluated for the requested components only; other solvers' dense
     output is called on the distinct times.
     """
+    from scipy.integrate._ivp.radau import RadauDenseOutput
     from scipy.integrate._ivp.rk import Dop853DenseOutput, RkDenseOutput
 
     cols = np.arange(m)[:, None] * width + pos[None, :]  # (m, P)
@@ -425,10 +707,12 @@ def _dense_at(dense, times, pos, m, width) -> np.ndarray:
             y += f[cols]
             y *= x if i % 2 == 0 else 1 - x
         return y + dense.y_old[cols]
-    if isinstance(dense, RkDenseOutput):
+    if isinstance(dense, (RkDenseOutput, RadauDenseOutput)):
         x = (times - dense.t_old) / dense.h
         p = np.cumprod(np.tile(x, (dense.order + 1, 1)), axis=0)  # (order+1, P)
-        y = dense.h * np.einsum("mpj,jp->mp", dense.Q[cols], p)
+        y = np.einsum("mpj,jp->mp", dense.Q[cols], p)
+        # (scipy's Radau interpolant is not scaled by h, the RK ones are)
+        y = y if isinstance(dense, RadauDenseOutput) else dense.h * y
         return y + dense.y_old[cols]
     ut, inv = np.unique(times, return_inverse=True)
     y = np.asarray(dense(ut)).reshape(m, width, ut.size)
@@ -439,12 +723,13 @@ class _Engine:
     """Vectorised closed-loop right-hand side for ``n`` runs.
 
     The state is laid out as ``(m, n)`` flattened row-major: rows ``s, e,
-    theta`` and, with a steering actuator, ``delta_f, delta_r``.
+    theta``, with a steering actuator ``delta_f, delta_r``, and with the
+    dynamic model ``v_y, r`` last.
     """
 
     def __init__(
         self, vehicle, path, gains, speed, feedforward, tau, delay=0.0, history=None,
-        runs=None,
+        runs=None, model="kinematic", tyre="linear",
     ):  # fmt: skip
         self.delay = delay
         self.history = history
@@ -456,7 +741,9 @@ class _Engine:
         self.speed = speed
         self.ff = feedforward
         self.tau = tau
-        self.m = 3 if tau is None else 5
+        self.dynamic = model == "dynamic"
+        self.tyre = tyre
+        self.m = (3 if tau is None else 5) + (2 if self.dynamic else 0)
         self._kappa = _curvature_function(path)
         length = float(getattr(path, "length", math.inf))
         self.open_length = (
@@ -497,7 +784,15 @@ class _Engine:
             )
             return saturate(self.vehicle, df, dr)
         return steering_command(
-            self.vehicle, self.gains, Y[1], Y[2], curvature=kappa, feedforward=self.ff
+            self.vehicle,
+            self.gains,
+            Y[1],
+            Y[2],
+            curvature=kappa,
+            feedforward=self.ff,
+            # (used by feedforward="dynamic" only)
+            speed=self.speed,
+            tyre=self.tyre,
         )
 
     def command_rate(self, Y, Ydot, kappa):
@@ -516,6 +811,8 @@ class _Engine:
                 curvature=kappa,
                 curvature_rate=kappa_rate,
                 feedforward=self.ff,
+                speed=self.speed,
+                tyre=self.tyre,
             )
         ctrl = self.gains
         kw = dict(
@@ -545,16 +842,24 @@ class _Engine:
         s, e, th = Y[0], Y[1], Y[2]
         kappa = self.curvature(s)
         df, dr = self.steering(Y, kappa, t)
+        body = ()
         with np.errstate(divide="ignore", invalid="ignore"):
-            s_dot, e_dot, th_dot = path_frame_derivatives(
-                self.speed, self.vehicle.wheelbase, kappa, e, th, df, dr
-            )
+            if self.dynamic:
+                # v_y, r are the last two rows (after the actuator's)
+                s_dot, e_dot, th_dot, *body = dynamic_path_derivatives(
+                    self.vehicle, kappa, e, th, Y[-2], Y[-1], df, dr,
+                    speed=self.speed, tyre=self.tyre,
+                )  # fmt: skip
+            else:
+                s_dot, e_dot, th_dot = path_frame_derivatives(
+                    self.speed, self.vehicle.wheelbase, kappa, e, th, df, dr
+                )
         if self.tau is None:
-            Ydot = np.stack([s_dot, e_dot, th_dot])
+            Ydot = np.stack([s_dot, e_dot, th_dot, *body])
         else:
             cmd = self.command(Y, kappa, t)
             rf, rr = actuator_rate(self.vehicle, cmd, (df, dr), time_constant=self.tau)
-            Ydot = np.stack([s_dot, e_dot, th_dot, rf, rr])
+            Ydot = np.stack([s_dot, e_dot, th_dot, rf, rr, *body])
         return Ydot, kappa, df, dr
 
     def rhs(self, t, y):
@@ -594,71 +899,122 @@ _COLLAPSE_MARGIN = 1e-3
 
 @dataclass
 class _Segment:
-    y_eval: np.ndarray  # states at the requested output times reached
     outcome: str  # "done", "event" or "failed"
     t_last: float
     y_last: np.ndarray
     message: str = ""
 
 
+#: Points of each accepted step (fractions of it) where the stop margins are
+#: checked: a loose tolerance lets a step cross a singular state and come
+#: back, or end where the state is NaN, and the end of the step alone would
+#: miss it.
+_MARGIN_NODES = (0.25, 0.5, 0.75, 1.0)
+
+#: Most solver steps of one integration segment (beyond those a delay's
+#: maximum step forces): beyond it the runs still active are marked failed
+#: instead of running on (a speed of 1e20 m/s asks for ~1e20 steps).
+MAX_STEPS = 20_000
+
+
+def _locate_stop(event, dense, lo: float, hi: float) -> float:
+    """First time in ``(lo, hi]`` where the margin is no longer > 0.
+
+    The margin is > 0 at `lo` and not at `hi`. A NaN margin (a state beyond
+    a singularity) counts as a stop, so the root is that of a function that
+    is -1 wherever the margin is NaN: brentq keeps a sign-changing bracket.
+    """
+
+    def f(tt):
+        g = event(tt, dense(tt))
+        return -1.0 if math.isnan(g) else max(g, -1.0)
+
+    if f(hi) == 0.0:
+        return hi
+    if not f(lo) > 0.0:  # (the segment starts regular; kept safe here)
+        return lo
+    return brentq(f, lo, hi, xtol=4 * np.finfo(float).eps * max(1.0, abs(hi)))
+
+
+def _jacobian_sparsity(m: int, n: int):
+    """Sparsity of the stacked Jacobian: each run's states couple only in it.
+
+    The state is ``(m, n)`` flattened row-major, so entry ``(a*n + i, b*n +
+    j)`` can be nonzero only for ``i == j``. Given to the implicit solvers,
+    it lets scipy estimate the Jacobian of all runs with ``m`` evaluations of
+    the right-hand side (one per state row) instead of ``m * n``, and solve
+    with a sparse LU.
+    """
+    from scipy.sparse import eye, kron
+
+    return kron(np.ones((m, m)), eye(n), format="csc")
+
+
 def _solve_segment(
-    eng, solver_cls, t0, y0, t_end, t_eval, rtol, atol, record=None, runs=None
+    eng, solver_cls, t0, y0, t_end, t_eval, rtol, atol, store, record=None, runs=None
 ) -> _Segment:
-    """Step `solver_cls` from `t0`; stop at the first sign change of the margin.
+    """Step `solver_cls` from `t0`; stop where a margin first reaches 0.
 
     Same stepping, dense output and event location as
     :func:`scipy.integrate.solve_ivp` with a terminal event, but the last
     accepted state is kept when the solver fails, so that a collapse of the
-    step size at a singular state can be attributed to the run that caused it.
-    With a `record` (:class:`_History`), the dense output of every accepted
-    step is added to it with the global indices `runs` of the stacked runs
-    (the delay's history, and the continuous solution for exact peaks).
+    step size at a singular state can be attributed to the run that caused it,
+    and the margins are checked at the nodes :data:`_MARGIN_NODES` of every
+    accepted step (a NaN margin counts as a stop), so that no tolerance lets
+    a run cross a singular state unnoticed. The states at the output times
+    `t_eval` are passed to ``store(k, y)`` (``y`` of shape ``(y0.size,
+    K)`` for the output times ``k:k+K``) as they are reached, so that no
+    copy of them builds up here. With a `record` (:class:`_History`), the
+    dense output of every accepted step is added to it with the global
+    indices `runs` of the stacked runs (the delay's history, and the
+    continuous solution for exact peaks).
     """
     extra = {}
     if eng.delay > 0.0:
         # Method of steps: a stage at t + h needs the state at t + h - delay,
         # which is known (accepted) only if h <= delay.
         extra["max_step"] = eng.delay
+    if issubclass(solver_cls, (Radau, BDF)):
+        extra["jac_sparsity"] = _jacobian_sparsity(eng.m, y0.size // eng.m)
     solver = solver_cls(eng.rhs, t0, y0, t_end, rtol=rtol, atol=atol, **extra)
-    g_old = eng.event(t0, y0)
-    recorded: list[np.ndarray] = []
     k = 0  # next output time
+    steps = 0
+    # (the steps a delay's max_step forces come on top of the budget)
+    budget = MAX_STEPS + (int((t_end - t0) / eng.delay) if eng.delay > 0.0 else 0)
     while True:
         msg = solver.step()
-        if solver.status == "failed":
-            y_eval = np.stack(recorded, axis=1) if recorded else np.empty((y0.size, 0))
-            return _Segment(y_eval, "failed", float(solver.t), solver.y.copy(), msg)
-        t_old, t_new = solver.t_old, solver.t
-        dense = None
-        if record is not None:
-            dense = solver.dense_output()
-            record.add(t_old, t_new, dense, runs)
-        g_new = eng.event(t_new, solver.y)
-        t_hit = None
-        if g_old > 0.0 and g_new <= 0.0:
-            dense = solver.dense_output()
-            t_hit = brentq(
-                lambda tt, d=dense: eng.event(tt, d(tt)),
-                t_old,
-                t_new,
-                xtol=4 * np.finfo(float).eps * max(1.0, abs(t_new)),
+        steps += 1
+        if solver.status != "failed" and steps > budget:
+            msg = (
+                f"more than {MAX_STEPS} solver steps (MAX_STEPS) from t={t0:.6g} s: "
+                "dynamics too fast for the output interval, or stiff (try "
+                "method='Radau')"
             )
+            return _Segment("failed", float(solver.t), solver.y.copy(), msg)
+        if solver.status == "failed":
+            return _Segment("failed", float(solver.t), solver.y.copy(), msg)
+        t_old, t_new = solver.t_old, solver.t
+        dense = solver.dense_output()
+        if record is not None:
+            record.add(t_old, t_new, dense, runs)
+        t_hit = None
+        prev = t_old
+        for frac in _MARGIN_NODES:
+            tt = t_new if frac == 1.0 else t_old + frac * (t_new - t_old)
+            y_tt = solver.y if frac == 1.0 else dense(tt)
+            if not eng.event(tt, y_tt) > 0.0:  # also NaN
+                t_hit = _locate_stop(eng.event, dense, prev, tt)
+                break
+            prev = tt
         upto = t_new if t_hit is None else t_hit
         k_end = int(np.searchsorted(t_eval, upto, side="right"))
         if k_end > k:
-            if dense is None:
-                dense = solver.dense_output()
-            y_k = dense(t_eval[k:k_end])
-            recorded.extend(y_k.T)
+            store(k, dense(t_eval[k:k_end]))
             k = k_end
-        y_eval = None
         if t_hit is not None:
-            y_eval = np.stack(recorded, axis=1) if recorded else np.empty((y0.size, 0))
-            return _Segment(y_eval, "event", float(t_hit), dense(t_hit))
+            return _Segment("event", float(t_hit), dense(t_hit))
         if solver.status == "finished":
-            y_eval = np.stack(recorded, axis=1) if recorded else np.empty((y0.size, 0))
-            return _Segment(y_eval, "done", float(t_new), solver.y.copy())
-        g_old = g_new
+            return _Segment("done", float(t_new), solver.y.copy())
 
 
 def integrate(
@@ -676,6 +1032,9 @@ def integrate(
     atol: float = 1e-12,
     delay: float = 0.0,
     solution: list | None = None,
+    model: str = "kinematic",
+    tyre: str = "linear",
+    body_state: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate ``n`` runs together; a stopped run leaves the stacked state.
 
@@ -711,12 +1070,25 @@ def integrate(
         If given, a :class:`DenseSolution` (the solver's dense output of
         every accepted step: the continuous solution between the output
         times) is appended to it, for :func:`exact_peaks`.
+    model : {"kinematic", "dynamic"}, optional
+        Vehicle model (:data:`MODELS`, checked by :func:`check_model`). The
+        dynamic model (:func:`~fws_control.dynamics.dynamic_path_derivatives`,
+        ``speed`` is its constant longitudinal speed ``u > 0``) adds the
+        rows ``v_y, r`` last.
+    tyre : {"linear", "magic"}, optional
+        Tyre model of the dynamic model.
+    body_state : ndarray, optional
+        Initial ``(v_y, r)`` per run, shape ``(n, 2)``; a NaN row (or None
+        for all runs): the vehicle starts rolling without tyre slip at the
+        initial steering angles, ``r = u (tan delta_f - tan delta_r) / f``
+        and ``v_y - l_r r = u tan delta_r`` (the kinematic model's motion).
 
     Returns
     -------
     states : ndarray
         Shape ``(m, n, T)`` with rows ``s, e, theta`` (and ``delta_f,
-        delta_r`` with an actuator); NaN after a run's stop. With a delay,
+        delta_r`` with an actuator, then ``v_y, r`` with the dynamic model);
+        NaN after a run's stop. With a delay,
         six more rows: the path state ``s, e, theta`` at ``t - delay`` and
         its time derivative (zero before the start), which
         :func:`compute_outputs` needs for the applied steering.
@@ -742,7 +1114,8 @@ def integrate(
     z0 = np.asarray(path_state, dtype=float)
     n = speed.size
     T = t_eval.size
-    m = 3 if tau is None else 5
+    dyn = model == "dynamic"
+    m = (3 if tau is None else 5) + (2 if dyn else 0)
     controller = not isinstance(gains, SteeringGains)
     if not controller:
         k1, k2, a = (
@@ -769,15 +1142,21 @@ def integrate(
             delay,
             history,
             idx,
+            model,
+            tyre,
         )
 
     active = np.arange(n)
     eng = engine_for(active)
     Y = np.empty((m, n))
     Y[:3] = z0.T
+    if tau is not None or dyn:
+        cmd = np.stack(eng.command(Y, eng.curvature(Y[0]), float(t_eval[0])))
     if tau is not None:
         # The actuator starts at the command: no initial transient of its own.
-        Y[3:] = np.stack(eng.command(Y, eng.curvature(Y[0]), float(t_eval[0])))
+        Y[3:5] = cmd
+    if dyn:
+        _initial_body_state(vehicle, Y, cmd, speed, body_state)
     out[:, :, 0] = Y
     if delay > 0.0 or solution is not None:
         history = _History(float(t_eval[0]), Y.copy())
@@ -799,6 +1178,13 @@ def integrate(
         eng = engine_for(active)
         first = int(np.searchsorted(t_eval, t0, side="right"))
         seg_end = next(b for b in breaks if b > t0)
+
+        def store(k, y, first=first, active=active):
+            # straight into the output: no per-segment copy of the samples
+            out[:, active, first + k : first + k + y.shape[1]] = y.reshape(
+                m, active.size, -1
+            )
+
         seg = _solve_segment(
             eng,
             solver_cls,
@@ -808,12 +1194,10 @@ def integrate(
             t_eval[first:],
             rtol,
             atol,
+            store,
             record=history,
             runs=active,
         )
-        nt = seg.y_eval.shape[1]
-        if nt:
-            out[:, active, first : first + nt] = seg.y_eval.reshape(m, active.size, nt)
         if seg.outcome == "done":
             if seg_end >= t_end:
                 break
@@ -840,10 +1224,18 @@ def integrate(
                     f"at t={seg.t_last:.6g} s the ODE solver failed: {seg.message}"
                 )
             break
-        i = active[j]
-        status[i], t_stop[i] = kind, seg.t_last
-        message[i] = f"at t={seg.t_last:.6g} s: {note}"
-        keep = np.arange(active.size) != j
+        # The run that set the stop, and any other at its margin there too
+        # (e.g. identical runs): one left in would start the next segment
+        # past its stop, where no sign change can be seen.
+        stops = np.union1d([j], np.flatnonzero(~(np.min(marg, axis=0) > 0.0)))
+        for jj in stops:
+            kind_jj = _STOP_KINDS[int(np.argmin(marg[:, jj]))]
+            i = active[jj]
+            status[i], t_stop[i] = kind_jj, seg.t_last
+            message[i] = f"at t={seg.t_last:.6g} s: " + (
+                note if jj == j else _STOP_MESSAGES[kind_jj]
+            )
+        keep = ~np.isin(np.arange(active.size), stops)
         active, Y, t0 = active[keep], Y_last[:, keep], seg.t_last
     if delay > 0.0:
         out = np.concatenate(
@@ -852,6 +1244,24 @@ def integrate(
     if solution is not None:
         solution.append(DenseSolution(history, engine_for, delay))
     return out, status, message, t_stop
+
+
+def _initial_body_state(vehicle, Y, cmd, speed, body_state) -> None:
+    """Fill the rows ``v_y, r`` of `Y` (the last two) in place.
+
+    Given values where `body_state` is finite; elsewhere the no-slip motion
+    at the initial steering `cmd` (both slip angles zero).
+    """
+    f, l_r = vehicle.wheelbase, vehicle.rear_to_cg
+    with np.errstate(invalid="ignore"):
+        tan_f, tan_r = np.tan(cmd[0]), np.tan(cmd[1])
+    r0 = speed * (tan_f - tan_r) / f
+    vy0 = speed * tan_r + l_r * r0
+    if body_state is not None:
+        given = np.isfinite(np.asarray(body_state, dtype=float))
+        vy0 = np.where(given[:, 0], body_state[:, 0], vy0)
+        r0 = np.where(given[:, 1], body_state[:, 1], r0)
+    Y[-2], Y[-1] = vy0, r0
 
 
 def _delayed_rows(engine_for, history, out, t_eval, delay) -> np.ndarray:
@@ -898,6 +1308,8 @@ def compute_outputs(
     states: np.ndarray,
     initial_heading: np.ndarray,
     delay: float = 0.0,
+    model: str = "kinematic",
+    tyre: str = "linear",
 ) -> np.ndarray:
     """All signals of :data:`SIGNALS` from the path-frame states.
 
@@ -913,14 +1325,22 @@ def compute_outputs(
     delay : float, optional
         The input delay given to :func:`integrate` [s]; its six extra rows
         of `states` then give the applied (delayed) steering command.
+    model, tyre : str, optional
+        As given to :func:`integrate`.
 
     Returns
     -------
     ndarray
         Shape ``(n, len(SIGNALS), T)``, NaN where `states` is NaN. The rates
         are exact (chain rule through the controller and the path's
-        curvature derivative, or the actuator's rates); the lateral
-        acceleration is eq. (13) and NaN where ``|delta_f| >= pi/2``.
+        curvature derivative, or the actuator's rates). ``lateral_accel`` is
+        the acceleration of the centre of gravity G along the vehicle's
+        lateral axis: eq. (13) for the kinematic model, ``dv_y/dt + u r``
+        for the dynamic one; NaN where ``|delta_f| >= pi/2``. ``v_y`` is the
+        lateral velocity of G in the vehicle's frame and ``yaw_rate`` the
+        yaw rate (for the kinematic model ``V sin(delta_r) + l_r r`` and
+        eq. (10)); ``slip_front``, ``slip_rear`` are the slip angles of the
+        dynamic model (0 for the kinematic one, which has no slip).
 
     Examples
     --------
@@ -956,7 +1376,7 @@ def compute_outputs(
     else:
         g = gains.subset(run_idx) if gains.runs() else gains
     V = speed[run_idx]
-    eng = _Engine(vehicle, path, g, V, feedforward, tau)
+    eng = _Engine(vehicle, path, g, V, feedforward, tau, model=model, tyre=tyre)
     if delayed is not None:
         Yd, Ydd = delayed[:3, valid], delayed[3:, valid]
         eng.delayed = Yd
@@ -970,14 +1390,25 @@ def compute_outputs(
         rf, rr = Ydot[3], Ydot[4]
     ok = np.abs(df) < math.pi / 2
     acc = np.full(df.shape, np.nan)
-    acc[ok] = lateral_acceleration(
-        vehicle,
-        df[ok],
-        dr[ok],
-        np.asarray(rf)[ok],
-        np.asarray(rr)[ok],
-        speed=V[ok],
-    )
+    if eng.dynamic:
+        v_y, r = Y[-2], Y[-1]
+        slip_f, slip_r = slip_angles(vehicle, v_y, r, df, dr, speed=V)
+        # body-frame acceleration of G: d(v_y)/dt + u r
+        acc[ok] = (Ydot[-2] + V * r)[ok]
+    else:
+        r = np.full(df.shape, np.nan)
+        r[ok] = yaw_rate(vehicle, df[ok], dr[ok], speed=V[ok])
+        # G moves with R's velocity V (cos dr, sin dr) plus r x (l_r, 0)
+        v_y = V * np.sin(dr) + vehicle.rear_to_cg * r
+        slip_f = slip_r = np.where(ok, 0.0, np.nan)
+        acc[ok] = lateral_acceleration(
+            vehicle,
+            df[ok],
+            dr[ok],
+            np.asarray(rf)[ok],
+            np.asarray(rr)[ok],
+            speed=V[ok],
+        )
     rf = np.where(ok, rf, np.nan)
     rr = np.where(ok, rr, np.nan)
     s_path = eng.clip(Y[0])
@@ -992,6 +1423,10 @@ def compute_outputs(
         ("delta_f_rate", rf),
         ("delta_r_rate", rr),
         ("lateral_accel", acc),
+        ("v_y", v_y),
+        ("yaw_rate", r),
+        ("slip_front", slip_f),
+        ("slip_rear", slip_r),
         ("x", np.asarray(px) - Y[1] * np.sin(heading)),
         ("y", np.asarray(py) + Y[1] * np.cos(heading)),
         ("psi", Y[2] + heading),
@@ -1061,6 +1496,29 @@ class DenseSolution:
         return np.concatenate([Y, rows])
 
 
+def _sample_peaks(signals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Index and value of the largest output sample of each peak signal.
+
+    ``|signal|`` per run and signal of :data:`PEAK_SIGNALS`, ``inf`` where a
+    signal is not finite at a sample where the state is, ``-inf`` after the
+    stop. One signal at a time, so that the temporaries are a fraction of
+    the signals (``1 / len(SIGNALS)`` each), not a copy of them.
+    """
+    n, T = signals.shape[0], signals.shape[2]
+    have = np.isfinite(signals[:, SIGNALS.index("s"), :])
+    k = np.zeros((n, len(_PEAK_ROWS)), dtype=int)
+    v = np.full((n, len(_PEAK_ROWS)), -np.inf)
+    if T == 0:
+        return k, v
+    for j, row in enumerate(_PEAK_ROWS):
+        a = np.abs(signals[:, row, :])
+        a[~np.isfinite(a)] = np.inf
+        a[~have] = -np.inf
+        k[:, j] = np.argmax(a, axis=1)
+        v[:, j] = a[np.arange(n), k[:, j]]
+    return k, v
+
+
 def exact_peaks(
     vehicle: Vehicle,
     path: Path,
@@ -1073,6 +1531,8 @@ def exact_peaks(
     t_eval: np.ndarray,
     signals: np.ndarray,
     t_stop: np.ndarray,
+    model: str = "kinematic",
+    tyre: str = "linear",
 ) -> tuple[np.ndarray, np.ndarray]:
     r"""Peaks ``max |signal|`` of the continuous solution, per run and signal.
 
@@ -1101,6 +1561,8 @@ def exact_peaks(
         :func:`compute_outputs` at the output times, ``(n, len(SIGNALS), T)``.
     t_stop : ndarray
         Per run end time, from :func:`integrate`.
+    model, tyre : str, optional
+        As given to :func:`integrate`.
 
     Returns
     -------
@@ -1155,6 +1617,8 @@ def exact_peaks(
                 states=states,
                 initial_heading=np.zeros(n),
                 delay=solution.delay,
+                model=model,
+                tyre=tyre,
             )
         vals = np.abs(out[:, _PEAK_ROWS, :])
         vals = np.where(np.isfinite(vals), vals, np.inf)
@@ -1178,15 +1642,10 @@ def exact_peaks(
     K = times.shape[1]
 
     # Best so far: the nodes and the output samples (all on the solution).
-    samp = np.abs(np.asarray(signals, dtype=float)[:, _PEAK_ROWS, :])
-    have = np.isfinite(np.asarray(signals)[:, SIGNALS.index("s"), :])
-    samp = np.where(np.isfinite(samp), samp, np.inf)
-    samp = np.where(have[:, None, :], samp, -np.inf)
+    k_samp, samp_v = _sample_peaks(np.asarray(signals, dtype=float))
     j_node = np.argmax(node_v, axis=2)
     best_v = np.take_along_axis(node_v, j_node[..., None], 2)[..., 0]
     best_t = times[all_runs[:, None], j_node]
-    k_samp = np.argmax(samp, axis=2)
-    samp_v = np.take_along_axis(samp, k_samp[..., None], 2)[..., 0]
     better = samp_v > best_v
     best_v = np.where(better, samp_v, best_v)
     best_t = np.where(better, t_eval[k_samp], best_t)

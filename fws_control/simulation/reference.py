@@ -19,12 +19,13 @@ import numpy as np
 
 from ..baselines import LateralController, saturate
 from ..controllers import path_tracking_controller, steering_actuator
+from ..dynamics import dynamic_global_model
 from ..gains import SteeringGains
 from ..models import global_frame_model
 from ..paths import Path
 from ..validation import check_delay, check_nonzero, check_scalar, check_type
 from ..vehicle import Vehicle
-from .engine import resolve_time_constant
+from .engine import check_model, resolve_time_constant, split_initial_state
 
 __all__ = [
     "closed_loop_system",
@@ -87,6 +88,8 @@ def closed_loop_system(
     actuator_time_constant: float | None = None,
     delay: float = 0.0,
     pade_order: int = DEFAULT_PADE_ORDER,
+    model: str = "kinematic",
+    tyre: str = "linear",
 ) -> ct.InterconnectedSystem:
     r"""The closed loop as a python-control interconnection (the reference).
 
@@ -108,8 +111,8 @@ def closed_loop_system(
         Scalar ``k1, k2, ratio``.
     speed : float
         Speed :math:`V` [m/s], nonzero.
-    feedforward : bool, optional
-        Include the curvature feedforward (default), as in
+    feedforward : bool or {"kinematic", "dynamic"}, optional
+        Curvature feedforward (default ``True``), as in
         :func:`~fws_control.simulation.simulate`.
     actuator_time_constant : float, optional
         Steering actuator time constant [s], as in
@@ -122,16 +125,24 @@ def closed_loop_system(
     pade_order : int, optional
         Order of the Pade approximation (>= 1); default
         :data:`DEFAULT_PADE_ORDER`.
+    model : {"kinematic", "dynamic"}, optional
+        Vehicle block: :func:`~fws_control.global_frame_model` (default) or
+        :func:`~fws_control.dynamics.dynamic_global_model` (states ``x, y,
+        psi, v_y, r``; `speed` is its longitudinal speed, > 0), as in
+        :func:`~fws_control.simulation.simulate`.
+    tyre : {"linear", "magic"}, optional
+        Tyre model of ``model="dynamic"``.
 
     Returns
     -------
     control.InterconnectedSystem
         No inputs; outputs ``x, y, psi, s, e, theta, curvature, delta_f,
-        delta_r`` (the applied angles). Simulate it with
+        delta_r`` (the applied angles), and ``v_y, yaw_rate`` for the
+        dynamic model. Simulate it with
         :func:`control.input_output_response`; the initial state is
-        ``(x_R, y_R, psi)``, followed by the states of the Pade blocks (front,
-        rear) and of the actuator (:func:`reference_initial_state` builds
-        it).
+        ``(x_R, y_R, psi)`` (and ``v_y, r`` for the dynamic model), followed
+        by the states of the Pade blocks (front, rear) and of the actuator
+        (:func:`reference_initial_state` builds it).
 
     Examples
     --------
@@ -152,13 +163,22 @@ def closed_loop_system(
     check_type("vehicle", vehicle, Vehicle)
     speed = check_scalar("speed", check_nonzero("speed", speed))
     tau = resolve_time_constant(vehicle, actuator_time_constant)
-    veh_sys = global_frame_model(vehicle, speed=speed, name="vehicle")
+    model, tyre = check_model(vehicle, model, tyre)
+    if model == "dynamic":
+        veh_sys = dynamic_global_model(vehicle, speed=speed, tyre=tyre, name="vehicle")
+    else:
+        veh_sys = global_frame_model(vehicle, speed=speed, name="vehicle")
     proj = projection_system(path, name="projection")
     if isinstance(gains, LateralController):
         ctrl = gains.system(vehicle, path, speed=speed, name="controller")
     else:
         ctrl = path_tracking_controller(
-            vehicle, gains, feedforward=bool(feedforward), name="controller"
+            vehicle,
+            gains,
+            feedforward=feedforward,
+            speed=speed,
+            tyre=tyre,
+            name="controller",
         )
     delay = check_delay(delay)
     syslist = [veh_sys, proj, ctrl]
@@ -206,12 +226,16 @@ def closed_loop_system(
         applied["f"],
         applied["r"],
     ]
+    outputs = ["x", "y", "psi", "s", "e", "theta", "curvature", "delta_f", "delta_r"]
+    if model == "dynamic":
+        outlist += ["vehicle.v_y", "vehicle.r"]
+        outputs += ["v_y", "yaw_rate"]
     return ct.interconnect(
         syslist,
         connections=connections,
         inplist=[],
         outlist=outlist,
-        outputs=["x", "y", "psi", "s", "e", "theta", "curvature", "delta_f", "delta_r"],
+        outputs=outputs,
         name="closed_loop",
     )
 
@@ -234,24 +258,29 @@ def reference_initial_state(
     actuator_time_constant: float | None = None,
     delay: float = 0.0,
     pade_order: int = DEFAULT_PADE_ORDER,
+    model: str = "kinematic",
+    tyre: str = "linear",
 ) -> np.ndarray:
     """Initial state of :func:`closed_loop_system` matching the fast engine's.
 
     The vehicle starts at `initial_state`; the Pade blocks start at their
     steady state for the initial command (the held initial history of
     :func:`~fws_control.simulation.simulate`), and the actuator at the
-    initial command.
+    initial command. The dynamic model starts with the given ``(v_y, r)``
+    or, as in the engine, rolling without tyre slip at the initial
+    command.
 
     Parameters
     ----------
     vehicle, path, gains
         As in :func:`closed_loop_system`.
     initial_state : array_like
-        ``(x_R, y_R, psi)`` [m, m, rad].
+        ``(x_R, y_R, psi)`` [m, m, rad]; for the dynamic model also
+        ``(x_R, y_R, psi, v_y, r)``.
     speed : float, optional
         Speed [m/s]; needed when `gains` is a controller (its law may
-        depend on the speed).
-    feedforward, actuator_time_constant, delay, pade_order : optional
+        depend on the speed) and for the dynamic model.
+    feedforward, actuator_time_constant, delay, pade_order, model, tyre : optional
         As in :func:`closed_loop_system`.
 
     Returns
@@ -273,7 +302,14 @@ def reference_initial_state(
     """
     from ..controllers import steering_command
 
-    x0 = np.asarray(initial_state, dtype=float).reshape(3)
+    if model not in ("kinematic", "dynamic"):
+        raise ValueError(f"model must be 'kinematic' or 'dynamic', got {model!r}")
+    full = split_initial_state(initial_state, model=model)
+    if full.shape[0] != 1:
+        raise ValueError(
+            f"initial_state must hold one run, got shape {np.shape(initial_state)}"
+        )
+    x0, body = full[0, :3], full[0, 3:]
     s, e, theta, kappa = path.errors(*x0, strict=True)
     if isinstance(gains, LateralController):
         if speed is None:
@@ -301,11 +337,20 @@ def reference_initial_state(
                 float(e),
                 float(theta),
                 curvature=float(kappa),
-                feedforward=bool(feedforward),
+                feedforward=feedforward,
+                speed=speed,
+                tyre=tyre,
             ),
             dtype=float,
         )
     parts = [x0]
+    if model == "dynamic":
+        if speed is None:
+            raise TypeError("reference_initial_state needs speed= for model='dynamic'")
+        if not np.all(np.isfinite(body)):  # rolling without slip, as the engine
+            r0 = speed * (np.tan(u0[0]) - np.tan(u0[1])) / vehicle.wheelbase
+            body = np.array([speed * np.tan(u0[1]) + vehicle.rear_to_cg * r0, r0])
+        parts.append(body)
     if check_delay(delay) > 0.0:
         for u in u0:
             blk = _pade_block(delay, pade_order, "d")
@@ -330,6 +375,8 @@ def simulate_reference(
     pade_order: int = DEFAULT_PADE_ORDER,
     rtol: float = 1e-10,
     atol: float = 1e-12,
+    model: str = "kinematic",
+    tyre: str = "linear",
 ) -> ct.TimeResponseData:
     """Simulate :func:`closed_loop_system` with :func:`control.input_output_response`.
 
@@ -343,7 +390,8 @@ def simulate_reference(
     vehicle, path, gains, speed, feedforward, actuator_time_constant, delay
         As in :func:`closed_loop_system`.
     initial_state : array_like
-        ``(x_R, y_R, psi)`` [m, m, rad].
+        ``(x_R, y_R, psi)`` [m, m, rad]; for the dynamic model also
+        ``(x_R, y_R, psi, v_y, r)``.
     duration : float
         Final time [s].
     dt : float, optional
@@ -351,12 +399,16 @@ def simulate_reference(
     pade_order : int, optional
         Order of the Pade approximation of the delay.
     rtol, atol : float, optional
-        Solver tolerances.
+        Solver tolerances, in the ranges of
+        :func:`~fws_control.simulation.engine.check_tolerances`.
+    model, tyre : str, optional
+        Vehicle and tyre model, as in :func:`closed_loop_system`.
 
     Returns
     -------
     control.TimeResponseData
-        Outputs ``x, y, psi, s, e, theta, curvature, delta_f, delta_r``.
+        Outputs ``x, y, psi, s, e, theta, curvature, delta_f, delta_r`` (and
+        ``v_y, yaw_rate`` for the dynamic model).
 
     Examples
     --------
@@ -372,7 +424,9 @@ def simulate_reference(
     >>> bool(abs(ref.outputs[4] - fast.e).max() < 1e-3)
     True
     """
-    from .engine import time_grid
+    from .engine import check_tolerances, time_grid
+
+    rtol, atol = check_tolerances(rtol, atol)
 
     sys = closed_loop_system(
         vehicle,
@@ -383,6 +437,8 @@ def simulate_reference(
         actuator_time_constant=actuator_time_constant,
         delay=delay,
         pade_order=pade_order,
+        model=model,
+        tyre=tyre,
     )
     x0 = reference_initial_state(
         vehicle,
@@ -394,6 +450,8 @@ def simulate_reference(
         actuator_time_constant=actuator_time_constant,
         delay=delay,
         pade_order=pade_order,
+        model=model,
+        tyre=tyre,
     )
     t = time_grid(duration, dt=dt)
     return ct.input_output_response(

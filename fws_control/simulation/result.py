@@ -47,6 +47,7 @@ from ..paths import Path
 from ..reprs import brief, html_table
 from ..vehicle import Vehicle
 from .engine import (
+    MODELS,
     PEAK_SIGNALS,
     SIGNALS,
     STATUS_OK,
@@ -199,8 +200,9 @@ class SimulationResult:
         Per run gains; ``k1, k2`` are NaN for a design that does not exist.
     run_initial_state : ndarray
         Per run ``(x_R, y_R, psi)``, shape ``(runs, 3)``.
-    feedforward : bool, optional
-        Whether the curvature feedforward was used (all runs).
+    feedforward : bool or "dynamic", optional
+        Whether the curvature feedforward was used (all runs): True (eq. 26),
+        False, or ``"dynamic"`` (:func:`~fws_control.dynamics.dynamic_feedforward`).
     squeeze : bool, optional
         Drop the run axis from every per-run attribute; only for one run.
     vehicle : Vehicle, optional
@@ -214,6 +216,14 @@ class SimulationResult:
         the continuous solution and their times (see :attr:`peaks`). None
         (both): :attr:`peaks` falls back to the samples, marked
         ``exact=False``.
+    method : str, optional
+        The solver that integrated the runs (what ``method="auto"`` chose:
+        ``"DOP853"`` or, for a stiff actuator, ``"Radau"``); None if unknown.
+    model : str, optional
+        The vehicle model simulated, ``"kinematic"`` (default) or
+        ``"dynamic"`` (:data:`~fws_control.simulation.engine.MODELS`).
+    tyre : str, optional
+        Its tyre model, ``"linear"`` (default) or ``"magic"``.
 
     Attributes
     ----------
@@ -230,7 +240,16 @@ class SimulationResult:
         Their time derivatives [rad/s], exact (chain rule through the
         controller and the path's curvature derivative).
     lateral_accel : ndarray
-        Lateral acceleration of the centre of gravity G, eq. (13) [m/s^2].
+        Lateral acceleration of the centre of gravity G along the vehicle's
+        lateral axis [m/s^2]: eq. (13) for the kinematic model,
+        :math:`\dot v_y + u r` for the dynamic one.
+    v_y, yaw_rate : ndarray
+        Lateral velocity of G in the vehicle's frame [m/s] and yaw rate
+        [rad/s] (kinematic model: :math:`V\sin\delta_r + l_r\dot\psi` and
+        eq. (10)).
+    slip_front, slip_rear : ndarray
+        Slip angles of the front and rear axle [rad] (dynamic model; 0 for
+        the kinematic one).
     status, message, t_stop, speed, k1, k2, ratio, initial_state
         The ``run_*`` fields, squeezed (see the module documentation).
     gains : SteeringGains or None
@@ -273,6 +292,9 @@ class SimulationResult:
     path: Path | None = None
     run_peak: np.ndarray | None = None
     run_peak_time: np.ndarray | None = None
+    method: str | None = None
+    model: str = "kinematic"
+    tyre: str = "linear"
 
     x = _Signal("Global x of the rear-axle centre R [m].")
     y = _Signal("Global y of the rear-axle centre R [m].")
@@ -284,7 +306,14 @@ class SimulationResult:
     delta_r = _Signal("Rear steering angle applied to the vehicle [rad].")
     delta_f_rate = _Signal("Front steering rate [rad/s].")
     delta_r_rate = _Signal("Rear steering rate [rad/s].")
-    lateral_accel = _Signal("Lateral acceleration of G, eq. (13) [m/s^2].")
+    lateral_accel = _Signal(
+        "Lateral acceleration of G along the vehicle's lateral axis [m/s^2] "
+        "(eq. (13) for the kinematic model, dv_y/dt + u r for the dynamic one)."
+    )
+    v_y = _Signal("Lateral velocity of G in the vehicle's frame [m/s].")
+    yaw_rate = _Signal("Yaw rate [rad/s].")
+    slip_front = _Signal("Slip angle of the front axle [rad] (0: kinematic model).")
+    slip_rear = _Signal("Slip angle of the rear axle [rad] (0: kinematic model).")
 
     def __post_init__(self) -> None:
         t = np.asarray(self.t, dtype=float)
@@ -320,6 +349,11 @@ class SimulationResult:
             raise ValueError(
                 f"run_message must hold one str per run ({n}), got {len(message)}"
             )
+        if self.model not in MODELS or self.tyre not in ("linear", "magic"):
+            raise ValueError(
+                f"model must be one of {MODELS} and tyre 'linear' or 'magic', "
+                f"got {self.model!r}, {self.tyre!r}"
+            )
         if self.squeeze and n != 1:
             raise ValueError(f"squeeze=True needs exactly one run, got {n}")
         if (self.run_peak is None) != (self.run_peak_time is None):
@@ -338,8 +372,12 @@ class SimulationResult:
             ("signals", sig),
             ("run_initial_state", x0),
             ("run_message", message),
-            ("feedforward", bool(self.feedforward)),
+            (
+                "feedforward",
+                "dynamic" if self.feedforward == "dynamic" else bool(self.feedforward),
+            ),
             ("squeeze", bool(self.squeeze)),
+            ("method", None if self.method is None else str(self.method)),
             *per_run.items(),
         ):
             object.__setattr__(self, name, value)
@@ -400,6 +438,9 @@ class SimulationResult:
             path=self.path,
             run_peak=None if self.run_peak is None else self.run_peak[idx],
             run_peak_time=None if self.run_peak is None else self.run_peak_time[idx],
+            method=self.method,
+            model=self.model,
+            tyre=self.tyre,
         )
 
     @property
@@ -456,6 +497,12 @@ class SimulationResult:
             ("speed [m/s]", brief(self.speed)),
             ("ratio a", brief(self.ratio)),
             ("feedforward", str(self.feedforward)),
+            (
+                "model",
+                self.model
+                if self.model == "kinematic"
+                else f"{self.model} ({self.tyre} tyres)",
+            ),
             ("signals", ", ".join(SIGNALS)),
         ]
         return html_table("SimulationResult", rows)
@@ -609,7 +656,7 @@ class SimulationResult:
         ...                    initial_state=(0.0, 1.0, 0.0), duration=2.0)
         >>> resp = res.to_time_response()
         >>> resp.output_labels[4], resp.outputs.shape, resp.ntraces
-        ('e', (11, 201), 0)
+        ('e', (15, 201), 0)
         """
         params = {
             "speed": self.speed,
@@ -648,11 +695,12 @@ class SimulationResult:
 
         Columns ``run, t``, the signals of
         :data:`~fws_control.simulation.SIGNALS`, then the per-run ``status,
-        t_stop, speed, k1, k2, ratio`` (repeated on each of the run's rows).
-        A run's rows are its samples up to its stop; a run without any
-        sample (e.g. ``"uncontrollable"``, not simulated) keeps one row with
-        NaN ``t`` and signals, so that no run is dropped. ``attrs`` holds
-        ``feedforward``.
+        t_stop, speed, k1, k2, ratio, message`` and the batch's
+        ``feedforward, method`` (repeated on each of the run's rows, so that
+        a CSV file keeps them). A run's rows are its samples up to its stop;
+        a run without any sample (e.g. ``"uncontrollable"``, not simulated)
+        keeps one row with NaN ``t`` and signals, so that no run is dropped.
+        ``attrs`` holds ``feedforward`` and ``method`` too.
 
         Returns
         -------
@@ -704,10 +752,15 @@ class SimulationResult:
             ("k1", self.run_k1),
             ("k2", self.run_k2),
             ("ratio", self.run_ratio),
+            ("message", np.array(self.run_message, dtype=object)),
         ):
             data[name] = per_run[run]
+        # (as columns, not only in attrs: a CSV file keeps no attrs)
+        data["feedforward"] = np.full(run.size, self.feedforward)
+        data["method"] = np.full(run.size, self.method or "", dtype=object)
         df = pd.DataFrame(data)
         df.attrs["feedforward"] = self.feedforward
+        df.attrs["method"] = self.method
         return df
 
     # ------------------------------------------------------------------
@@ -973,4 +1026,5 @@ def expand_runs(
         path=path,
         run_peak=peak,
         run_peak_time=peak_time,
+        method=None if result is None else result.method,
     )

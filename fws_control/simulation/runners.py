@@ -19,25 +19,38 @@ interactive terminals.
 
 from __future__ import annotations
 
+import dataclasses
 import sys
+import warnings
 from typing import Any
 
 import numpy as np
+from scipy.integrate import DOP853, RK23, RK45
 
 from ..baselines import LateralController
+from ..controllers import check_feedforward
+from ..dynamics import require_dynamics
 from ..gains import SteeringGains
 from ..paths import Path
-from ..validation import check_delay, check_nonzero, check_positive, check_type
+from ..validation import check_delay, check_nonzero, check_type
 from ..vehicle import Vehicle
 from .engine import (
-    check_initial_state,
+    PEAK_SIGNALS,
+    SIGNALS,
+    STATUS_FAILED,
     check_method,
+    check_model,
+    check_output_budget,
+    check_tolerances,
+    choose_method,
     compute_outputs,
     exact_peaks,
     initial_path_state,
     integrate,
+    output_samples,
     resolve_time_constant,
     run_gains,
+    split_initial_state,
     time_grid,
 )
 from .result import SimulationResult
@@ -55,6 +68,39 @@ def _stderr_is_tty() -> bool:
         return False
 
 
+#: Samples (runs x output times) whose signals are computed at once: the
+#: temporaries of :func:`~fws_control.simulation.engine.compute_outputs`
+#: (about forty-five arrays of this size, 12 MB) stay bounded, whatever the
+#: size of the output.
+_OUTPUT_BLOCK = 1 << 15
+_PSI = SIGNALS.index("psi")
+
+
+def _outputs_in_blocks(vehicle, path, g, *, states, initial_heading, **kw):
+    """:func:`compute_outputs` over blocks of output times, into one array.
+
+    ``psi`` is unwrapped in time within a block; each block starts on the
+    branch of the previous block's last value (consecutive samples differ
+    by less than pi), so the result equals one call over all times.
+    """
+    n, T = states.shape[1], states.shape[2]
+    step = max(1, _OUTPUT_BLOCK // max(n, 1))
+    if step >= T:
+        return compute_outputs(
+            vehicle, path, g, states=states, initial_heading=initial_heading, **kw
+        )
+    out = np.empty((n, len(SIGNALS), T))
+    heading = np.asarray(initial_heading, dtype=float)
+    for k0 in range(0, T, step):
+        part = out[:, :, k0 : k0 + step]
+        part[...] = compute_outputs(
+            vehicle, path, g, states=states[:, :, k0 : k0 + step],
+            initial_heading=heading, **kw,
+        )  # fmt: skip
+        heading = part[:, _PSI, -1]
+    return out
+
+
 def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl):
     """Simulate one chunk; module-level so that Dask can pickle it.
 
@@ -63,7 +109,9 @@ def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, c
     continuous solution (:func:`~fws_control.simulation.engine.exact_peaks`).
     """
     g = SteeringGains(k1, k2, a) if ctrl is None else ctrl
-    z0 = initial_path_state(path, x0)
+    # x0: pose and (v_y, r) of the dynamic model (NaN: the default)
+    z0 = initial_path_state(path, x0[:, :3])
+    body = x0[:, 3:] if opts["model"] == "dynamic" else None
     states, status, message, t_stop = integrate(
         vehicle,
         path,
@@ -74,9 +122,10 @@ def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, c
         t_eval=t,
         time_constant=tau,
         solution=(solution := []),
+        body_state=body,
         **opts,
     )
-    signals = compute_outputs(
+    signals = _outputs_in_blocks(
         vehicle,
         path,
         g,
@@ -86,7 +135,10 @@ def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, c
         states=states,
         initial_heading=x0[:, 2],
         delay=opts["delay"],
+        model=opts["model"],
+        tyre=opts["tyre"],
     )
+    del states  # (the outputs hold everything the peaks need)
     peaks, peak_times = exact_peaks(
         vehicle,
         path,
@@ -98,8 +150,52 @@ def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, c
         t_eval=t,
         signals=signals,
         t_stop=t_stop,
+        model=opts["model"],
+        tyre=opts["tyre"],
     )
     return signals, status, message, t_stop, peaks, peak_times
+
+
+def _run_isolated(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl):
+    """:func:`_run_chunk`, where a solver failure takes only its own run out.
+
+    The runs of a chunk share one solver, so one run whose solver fails
+    (e.g. a speed of 1e300 m/s) fails every run still active in the chunk.
+    Those runs are split in halves and integrated again, recursively, until
+    a run that fails alone is found: only it keeps the status ``"failed"``
+    (and its message); every other run keeps its own result. The cost is at
+    most about twice the chunk's (one half of each split finishes normally).
+    Module-level so that Dask can pickle it: on a cluster the retries run on
+    the worker.
+    """
+    out = _run_chunk(
+        vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl
+    )  # fmt: skip
+    failed = np.flatnonzero(out[1] == STATUS_FAILED)
+    if speed.size == 1 or failed.size == 0:
+        return out
+    for idx in np.array_split(failed, 2):
+        sub_ctrl = ctrl.subset(idx) if ctrl is not None and ctrl.runs() else ctrl
+        sub = _run_isolated(
+            vehicle, path, k1[idx], k2[idx], a[idx], speed[idx], feedforward,
+            x0[idx], t, tau, opts, sub_ctrl,
+        )  # fmt: skip
+        for whole, part in zip(out, sub, strict=True):
+            whole[idx] = part
+    return out
+
+
+def _lost_chunk(n: int, t_size: int, note: str):
+    """The outputs of :func:`_run_chunk` for runs whose Dask task was lost."""
+    nan = np.full((n, len(PEAK_SIGNALS)), np.nan)
+    return (
+        np.full((n, len(SIGNALS), t_size), np.nan),
+        np.full(n, STATUS_FAILED, dtype=object),
+        np.full(n, note, dtype=object),
+        np.full(n, np.nan),
+        nan,
+        nan.copy(),
+    )
 
 
 def _chunk_controller(ctrl, lo: int, hi: int):
@@ -107,6 +203,81 @@ def _chunk_controller(ctrl, lo: int, hi: int):
     if ctrl is None or not ctrl.runs():
         return ctrl
     return ctrl.subset(np.arange(lo, hi))
+
+
+def _run_on_dask(client, bounds, args, keep, t_size, bar) -> None:
+    """Run the chunks on a Dask cluster; keep every chunk that finishes.
+
+    A client that cannot take the tasks (closed) raises at once, before any
+    work. A task the cluster loses afterwards (cancelled, worker or
+    scheduler gone) does not discard the chunks that finished: its runs are
+    marked ``"failed"`` with NaN data and a message naming Dask's error, and
+    a :class:`RuntimeWarning` says how many runs were lost. An exception
+    raised by the simulation itself (e.g. an ambiguous initial projection)
+    propagates, as it would locally.
+    """
+    try:
+        from dask.distributed import as_completed
+    except ImportError as exc:  # pragma: no cover - optional extra
+        raise ImportError(
+            "client= needs dask.distributed; install the extra "
+            "`pip install fws-control[distributed]`"
+        ) from exc
+    if getattr(client, "status", "running") in ("closed", "closing"):
+        raise RuntimeError(
+            f"client={client!r} is closed: no chunk was submitted; start a "
+            "new dask.distributed.Client or pass client=None to run here"
+        )
+    futures = {}
+    try:
+        for j, (lo, hi) in enumerate(bounds):
+            fut = client.submit(_run_isolated, *args(lo, hi), pure=False)
+            futures[fut] = j
+    except Exception as exc:
+        for fut in futures:
+            fut.cancel()
+        raise RuntimeError(
+            f"the Dask client could not take the chunks ({type(exc).__name__}: "
+            f"{exc}); no chunk was kept"
+        ) from exc
+    pending = dict(futures)
+    lost = []
+    task_error = None
+    try:
+        for fut in as_completed(list(futures)):
+            j = pending.pop(fut)
+            try:
+                chunk = fut.result()
+            except Exception as exc:
+                if fut.status == "error":  # the simulation itself raised
+                    task_error = exc
+                    break
+                lost.append((j, exc))
+                continue
+            keep(j, chunk)
+            bar.update(1)
+    except Exception as exc:  # the cluster went away while we waited
+        lost.extend((j, exc) for j in pending.values())
+        pending.clear()
+    if task_error is not None:
+        for fut in pending:
+            fut.cancel()
+        raise task_error  # as it would be raised here
+    for j, exc in lost:
+        lo, hi = bounds[j]
+        note = (
+            f"not simulated: the Dask task of runs {lo}..{hi - 1} was lost "
+            f"({type(exc).__name__}: {exc}); the other chunks were kept"
+        )
+        keep(j, _lost_chunk(hi - lo, t_size, note))
+    if lost:
+        runs = sum(bounds[j][1] - bounds[j][0] for j, _ in lost)
+        warnings.warn(
+            f"simulate_batch: {runs} runs of {len(lost)} lost Dask tasks are "
+            "marked 'failed' (NaN data); the finished chunks were kept",
+            RuntimeWarning,
+            stacklevel=3,
+        )
 
 
 def _prepare(
@@ -126,7 +297,15 @@ def _prepare(
     speed_arr = np.atleast_1d(np.asarray(check_nonzero("speed", speed), dtype=float))
     if speed_arr.ndim != 1:
         raise ValueError(f"speed must be a scalar or 1-D, got shape {speed_arr.shape}")
-    x0 = check_initial_state(initial_state)
+    opts["model"], opts["tyre"] = check_model(vehicle, opts["model"], opts["tyre"])
+    if opts["model"] == "dynamic" and np.any(speed_arr <= 0.0):
+        # the slip angles atan2(., u) and the 1/u of the tyre model assume
+        # forward motion
+        raise ValueError(
+            "speed must be > 0 for model='dynamic' (forward longitudinal speed "
+            f"u of the single-track model), got {speed!r}"
+        )
+    x0 = split_initial_state(initial_state, model=opts["model"])
     sizes = {n_gains, speed_arr.size, x0.shape[0]} - {1}
     if len(sizes) > 1:
         raise ValueError(
@@ -135,13 +314,40 @@ def _prepare(
         )
     n = sizes.pop() if sizes else 1
     k1, k2, a, V = (np.broadcast_to(v, (n,)).copy() for v in (*fields, speed_arr))
-    x0 = np.broadcast_to(x0, (n, 3)).copy()
+    x0 = np.broadcast_to(x0, (n, 5)).copy()
+    # (before building the grid: dt = 1e-9 must not allocate 112 GiB first)
+    samples = output_samples(duration, dt=dt, t_eval=t_eval)
+    check_output_budget(n, samples, duration=duration, dt=dt, t_eval=t_eval)
     t = time_grid(duration, dt=dt, t_eval=t_eval)
     tau = resolve_time_constant(vehicle, tau)
-    check_method(opts["method"])
-    for name in ("rtol", "atol"):
-        opts[name] = float(check_positive(name, opts[name]))
+    opts["rtol"], opts["atol"] = check_tolerances(opts["rtol"], opts["atol"])
+    if isinstance(opts["method"], str) and opts["method"] == "auto":
+        opts["method"] = choose_method(tau, opts["rtol"])
+    else:
+        _warn_if_stiff(check_method(opts["method"]), tau, float(t[-1]))
     return k1, k2, a, V, x0, t, tau, ctrl
+
+
+#: Steps an explicit method may be forced to take by the actuator's
+#: stability bound (about 6.4 T for DOP853) before a warning.
+_STIFF_STEPS = 5000
+
+
+def _warn_if_stiff(solver, tau, duration) -> None:
+    """Warn when an explicitly chosen explicit method meets a stiff actuator."""
+    if tau is None or not issubclass(solver, (DOP853, RK23, RK45)):
+        return
+    steps = duration / (6.4 * tau)
+    if steps > _STIFF_STEPS:
+        warnings.warn(
+            f"method={solver.__name__!r} with actuator_time_constant={tau!r} over "
+            f"duration={duration!r}: the actuator makes the loop stiff, so this "
+            f"explicit method needs about {steps:.2g} steps (its step is bounded "
+            "near 6.4 times the time constant); method='auto' or 'Radau' steps "
+            "by accuracy instead",
+            RuntimeWarning,
+            stacklevel=4,
+        )
 
 
 def simulate(
@@ -157,9 +363,11 @@ def simulate(
     t_eval: Any = None,
     actuator_time_constant: float | None = None,
     delay: float = 0.0,
-    method: str = "DOP853",
+    method: str = "auto",
     rtol: float = 1e-10,
     atol: float = 1e-12,
+    model: str = "kinematic",
+    tyre: str = "linear",
 ) -> SimulationResult:
     r"""Simulate the closed loop (one run) with the fast path-frame engine.
 
@@ -189,14 +397,20 @@ def simulate(
         ``(x_R, y_R, psi)`` of the rear-axle centre [m, m, rad].
     duration : float
         Final time [s], > 0.
-    feedforward : bool, optional
-        Include the curvature feedforward (default ``True``); ``False`` is
-        the feedback-only controller.
+    feedforward : bool or {"kinematic", "dynamic"}, optional
+        Include the curvature feedforward (default ``True``, the same as
+        ``"kinematic"``: eq. 26); ``False`` is the feedback-only controller;
+        ``"dynamic"`` the front and rear angles of
+        :func:`~fws_control.dynamics.dynamic_feedforward` (for the tyre model
+        `tyre`), which hold the dynamic model on a curve without offset.
     dt : float, optional
         Nominal spacing of the output times [s] (the solver chooses its own
         steps). The grid is ``linspace(0, duration, round(duration/dt) + 1)``,
         so the actual spacing is ``duration/round(duration/dt)`` (at least
-        one interval): pass `t_eval` for exact times.
+        one interval): pass `t_eval` for exact times. It sets the output
+        only, not the accuracy (`rtol`, `atol`); the signals of one call may
+        not exceed
+        :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES` (2 GiB).
     t_eval : array_like, optional
         Output times instead of `dt`; increasing, from 0 to at most
         `duration`.
@@ -215,12 +429,34 @@ def simulate(
         initial state until ``t = delay``. Integrated by the method of steps
         (see :func:`~fws_control.simulation.engine.integrate`). Default 0.
     method : str or scipy.integrate.OdeSolver, optional
-        Integration method: a name in ``"DOP853", "RK45", "RK23", "Radau",
-        "BDF", "LSODA"`` or an OdeSolver class. The engine steps that solver
-        itself, as :func:`scipy.integrate.solve_ivp` would, so that it can
-        stop a run at a singular state.
+        Integration method: ``"auto"`` (default), a name in ``"DOP853",
+        "RK45", "RK23", "Radau", "BDF", "LSODA"`` or an OdeSolver class. The
+        engine steps that solver itself, as :func:`scipy.integrate.solve_ivp`
+        would, so that it can stop a run at a singular state. ``"auto"`` is
+        DOP853, or Radau when a fast actuator makes the loop stiff (rule and
+        measurements in
+        :func:`~fws_control.simulation.engine.choose_method`); the result's
+        ``method`` says which. An explicit method chosen for a stiff loop
+        gives a :class:`RuntimeWarning`.
     rtol, atol : float, optional
-        Relative and absolute tolerances of the solver, > 0.
+        Relative and absolute tolerances of the solver: rtol in
+        ``[100 eps, 0.1]`` (scipy's own floor to a 10 % error per step),
+        atol in ``[1e-20, 0.1]`` [m, rad]; see
+        :func:`~fws_control.simulation.engine.check_tolerances`.
+    model : {"kinematic", "dynamic"}, optional
+        Vehicle model. ``"kinematic"`` (default): the paper's model, no tyre
+        slip. ``"dynamic"``: the single-track model of
+        :mod:`fws_control.dynamics` (tyre slip; lateral velocity and yaw rate
+        as states; needs the vehicle's mass, yaw inertia and cornering
+        stiffnesses), with `speed` its constant longitudinal speed
+        :math:`u > 0`. The path errors are those of the rear-axle centre R
+        in both models, so every controller applies unchanged; delay and
+        actuator combine with either model. `initial_state` may then carry
+        ``(x_R, y_R, psi, v_y, r)``; with three values the vehicle starts
+        rolling without tyre slip at the initial steering angles.
+    tyre : {"linear", "magic"}, optional
+        Tyre model of ``model="dynamic"``: linear (default) or the
+        saturating simplified magic formula (needs ``vehicle.friction``).
 
     Returns
     -------
@@ -234,8 +470,12 @@ def simulate(
     ------
     ValueError
         For non-scalar gains, speed or initial state (use
-        :func:`simulate_batch`), a zero speed, a non-positive duration, or an
-        unknown method.
+        :func:`simulate_batch`), a zero speed, a non-positive duration, an
+        unknown method, tolerances out of range, or an output larger than
+        :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES`.
+        unknown method, model, tyre or feedforward, or (``model="dynamic"``
+        or ``feedforward="dynamic"``) a vehicle without the dynamic data or a
+        negative speed.
     AmbiguousProjectionError
         If the initial position has no unique closest point on the path.
 
@@ -287,10 +527,17 @@ def simulate(
         method=method,
         rtol=rtol,
         atol=atol,
+        model=model,
+        tyre=tyre,
         chunk_size=1,
         progress=False,
     )
-    return batch[0]
+    # batch[0] without copying the signals: the squeezed run's grid ends at
+    # its last sample (a view of the batch's arrays).
+    count = int(np.count_nonzero(np.isfinite(batch.signals[0, SIGNALS.index("s")])))
+    return dataclasses.replace(
+        batch, t=batch.t[:count], signals=batch.signals[:, :, :count], squeeze=True
+    )
 
 
 def simulate_batch(
@@ -306,9 +553,11 @@ def simulate_batch(
     t_eval: Any = None,
     actuator_time_constant: float | None = None,
     delay: float = 0.0,
-    method: str = "DOP853",
+    method: str = "auto",
     rtol: float = 1e-10,
     atol: float = 1e-12,
+    model: str = "kinematic",
+    tyre: str = "linear",
     chunk_size: int | None = None,
     client: Any = None,
     progress: bool | None = None,
@@ -330,11 +579,13 @@ def simulate_batch(
     speed : float or array_like
         Speed [m/s], scalar or one per run; nonzero.
     initial_state : array_like
-        ``(x_R, y_R, psi)`` for all runs, or shape ``(runs, 3)``.
+        ``(x_R, y_R, psi)`` for all runs, or shape ``(runs, 3)``; with
+        ``model="dynamic"`` also ``(x_R, y_R, psi, v_y, r)`` or ``(runs,
+        5)``, as in :func:`simulate`.
     duration : float
         Final time [s], > 0.
-    feedforward : bool, optional
-        Include the curvature feedforward (default), as in :func:`simulate`.
+    feedforward : bool or {"kinematic", "dynamic"}, optional
+        Curvature feedforward (default ``True``), as in :func:`simulate`.
     dt : float, optional
         Nominal output spacing [s], as in :func:`simulate`.
     t_eval : array_like, optional
@@ -347,6 +598,8 @@ def simulate_batch(
         Integration method, as in :func:`simulate`.
     rtol, atol : float, optional
         Solver tolerances, as in :func:`simulate`.
+    model, tyre : str, optional
+        Vehicle and tyre model, as in :func:`simulate`.
     chunk_size : int, optional
         Runs per chunk (one solver; one Dask task); default
         :data:`DEFAULT_CHUNK_SIZE`. Smaller chunks decouple the step sizes of
@@ -394,7 +647,14 @@ def simulate_batch(
     >>> fws.tracking_metrics(res).peak_lateral_accel.round(2).tolist()
     [2.0, 1.91, 1.73, 1.19]
     """
-    opts = {"method": method, "rtol": rtol, "atol": atol, "delay": check_delay(delay)}
+    opts = {
+        "method": method,
+        "rtol": rtol,
+        "atol": atol,
+        "delay": check_delay(delay),
+        "model": model,
+        "tyre": tyre,
+    }
     k1, k2, a, V, x0, t, tau, ctrl = _prepare(
         vehicle,
         path,
@@ -408,7 +668,16 @@ def simulate_batch(
         opts,
     )
     n = k1.size
-    feedforward = bool(feedforward)
+    # False, True (eq. 26) or "dynamic" (dynamics.dynamic_feedforward)
+    feedforward = check_feedforward(feedforward, speed=V)
+    if feedforward == "dynamic":
+        require_dynamics(vehicle, tyre=opts["tyre"])
+        if np.any(V <= 0.0):
+            raise ValueError(
+                f"speed must be > 0 for feedforward='dynamic', got {speed!r}"
+            )
+    else:
+        feedforward = bool(feedforward)
     if chunk_size is None:
         chunk_size = DEFAULT_CHUNK_SIZE
     if (
@@ -444,45 +713,59 @@ def simulate_batch(
     bar = tqdm(
         total=len(bounds), desc="simulate_batch", unit="chunk", disable=not progress
     )
-    chunks: list[Any] = [None] * len(bounds)
+    # The chunks are written into the batch's arrays as they arrive (a
+    # single chunk is kept as it is), so no second copy of the signals
+    # builds up.
+    single = len(bounds) == 1
+    signals = None if single else np.empty((n, len(SIGNALS), t.size))
+    status = np.empty(n, dtype=object)
+    message = np.empty(n, dtype=object)
+    t_stop = np.empty(n)
+    peak = np.empty((n, len(PEAK_SIGNALS)))
+    peak_time = np.empty((n, len(PEAK_SIGNALS)))
+
+    def keep(j, chunk):
+        nonlocal signals
+        lo, hi = bounds[j]
+        if single:
+            signals = chunk[0]
+        else:
+            signals[lo:hi] = chunk[0]
+        for whole, part in zip(
+            (status, message, t_stop, peak, peak_time), chunk[1:], strict=True
+        ):
+            whole[lo:hi] = part
+
     try:
         if client is None:
             for j, (lo, hi) in enumerate(bounds):
-                chunks[j] = _run_chunk(*args(lo, hi))
+                keep(j, _run_isolated(*args(lo, hi)))
                 bar.update(1)
         else:
-            try:
-                from dask.distributed import as_completed
-            except ImportError as exc:  # pragma: no cover - optional extra
-                raise ImportError(
-                    "client= needs dask.distributed; install the extra "
-                    "`pip install fws-control[distributed]`"
-                ) from exc
-            futures = {
-                client.submit(_run_chunk, *args(lo, hi), pure=False): j
-                for j, (lo, hi) in enumerate(bounds)
-            }
-            for fut in as_completed(list(futures)):
-                chunks[futures[fut]] = fut.result()
-                bar.update(1)
+            _run_on_dask(client, bounds, args, keep, t.size, bar)
     finally:
         bar.close()
 
     return SimulationResult(
         t=t,
-        signals=np.concatenate([c[0] for c in chunks]),
-        run_status=np.concatenate([c[1] for c in chunks]).astype(str),
-        run_message=tuple(str(m) for c in chunks for m in c[2]),
-        run_t_stop=np.concatenate([c[3] for c in chunks]),
-        run_peak=np.concatenate([c[4] for c in chunks]),
-        run_peak_time=np.concatenate([c[5] for c in chunks]),
+        signals=signals,
+        run_status=status.astype(str),
+        run_message=tuple(str(m) for m in message),
+        run_t_stop=t_stop,
+        run_peak=peak,
+        run_peak_time=peak_time,
         run_speed=V,
         run_k1=k1,
         run_k2=k2,
         run_ratio=a,
-        run_initial_state=x0,
+        run_initial_state=x0[:, :3],
         feedforward=feedforward,
         squeeze=False,
         vehicle=vehicle,
         path=path,
+        method=opts["method"]
+        if isinstance(opts["method"], str)
+        else opts["method"].__name__,
+        model=opts["model"],
+        tyre=opts["tyre"],
     )

@@ -1,0 +1,1595 @@
+r"""Compiled per-run engine: scipy's DOP853 ported to numba, one run at a time.
+
+The numpy engine (:mod:`~fws_control.simulation.engine`) stacks the runs of
+a chunk into one state vector and steps them with one scipy solver, so the
+step size, the error norm and the restarts after a stop are shared by the
+chunk: a run's answer depends on the batch it sits in. This module gives
+every run its **own** integration, at compiled speed:
+
+- the closed-loop right-hand side (kinematic path-frame model, corrected
+  eqs. 17-19; the paper's law of eqs. 24-29 with the curvature feedforward
+  and the steering-angle limits; optionally the rate-limited first-order
+  steering actuator of :func:`~fws_control.steering_actuator`) is compiled
+  with numba;
+- it is integrated by a line-by-line port of scipy's
+  :class:`~scipy.integrate.DOP853` (same Butcher tableau taken from scipy
+  itself, same initial step selection, step-size control, error norm and
+  dense output) with :func:`~scipy.integrate.solve_ivp`'s event handling
+  (sign change on the accepted step, root by a port of scipy's ``brentq``
+  on the dense output with ``xtol = rtol = 4 eps``) and output at ``t_eval``
+  from the dense output of the step that holds each time;
+- the error norm is scipy's RMS norm over *that run's* states only, and a
+  stop ends only that run.
+
+So each run gives exactly what :func:`scipy.integrate.solve_ivp` gives for
+it alone with ``method="DOP853"`` and a terminal event per stop condition
+(``tests/test_compiled_engine.py`` checks step by step), whatever else is in
+the batch.
+
+Stop conditions (each a terminal event, located on the dense output):
+
+======================  ===================================================
+status                  event
+======================  ===================================================
+``singular_steering``   :math:`|\delta_f| = \pi/2 - m_\delta`
+``singular_curvature``  :math:`1 - \kappa e = m_\kappa`
+``end_of_path``         ``s`` leaves ``[0, length]`` of an open path
+======================  ===================================================
+
+The margins :math:`m_\delta, m_\kappa` (default ``1e-3``) stop a run just
+before the singularity, where the solution has a square-root singularity
+and the step size would collapse; the numpy engine stops at the same places
+(it attributes a collapse within ``1e-3`` of the singularity to it).
+
+The path enters only through its curvature :math:`\kappa(s)`, given as a
+piecewise cubic table in ``s`` (:func:`curvature_table`): exact for
+:class:`~fws_control.Straight`, :class:`~fws_control.Arc`,
+:class:`~fws_control.Clothoid` and :class:`~fws_control.PathChain` of them;
+a cubic Hermite fit to a stated tolerance for other paths.
+
+The steering-angle and steering-rate limits are switched, not clipped:
+where a channel reaches its limit (or leaves it) is located as an event on
+the dense output, the step is cut there and the integration restarts with
+that channel held at the limit (or free), so that the right-hand side is
+smooth within every step (``switching=False`` clips with min/max inside the
+right-hand side instead, as the numpy engine does).
+
+Not supported here (the numpy engine remains the general path and the
+fallback): :class:`~fws_control.LateralController` baselines, an input
+delay, other solvers than DOP853, the dense solution for exact peaks, and
+any model other than the kinematic one. A stiff actuator (small time
+constant) is detected with Hairer's test (``stiff`` in the statistics) but
+still integrated explicitly: the explicit step is then limited by stability
+to about :math:`6\,T` (see ``docs/performance.md``).
+
+numba is an optional dependency (extra ``fast``). Without it the module
+still imports; :func:`integrate_compiled` raises :class:`ImportError`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+# The tableau of scipy's DOP853 itself, so that the port takes exactly the
+# same steps (a private scipy module: the test suite checks the port step by
+# step against scipy.integrate.DOP853, so a change there cannot go unseen).
+from scipy.integrate import DOP853
+from scipy.integrate._ivp import dop853_coefficients as _dop
+
+from ..controllers import steering_command
+from ..gains import SteeringGains
+from ..paths import Arc, Clothoid, Path, PathChain, Straight
+from ..validation import check_positive
+from ..vehicle import Vehicle
+from .engine import (
+    STATUS_END_OF_PATH,
+    STATUS_FAILED,
+    STATUS_OK,
+    STATUS_SINGULAR_CURVATURE,
+    STATUS_SINGULAR_STEERING,
+)
+
+try:  # optional dependency (extra "fast")
+    import numba
+except ImportError:  # pragma: no cover - exercised only without numba
+    numba = None
+
+__all__ = [
+    "available",
+    "CurvatureTable",
+    "curvature_table",
+    "compiled_support",
+    "integrate_compiled",
+    "compiled_outputs",
+    "shared_parameters",
+    "closed_loop_rhs",
+    "dop853_step",
+    "dense_output",
+    "locate_event",
+    "solve_run",
+    "STATUS_CODES",
+    "STAT_FIELDS",
+    "DEFAULT_MARGIN",
+]
+
+#: Status of each integer code returned by the kernels.
+STATUS_CODES = (
+    STATUS_OK,
+    STATUS_SINGULAR_STEERING,
+    STATUS_SINGULAR_CURVATURE,
+    STATUS_END_OF_PATH,
+    STATUS_FAILED,
+)
+
+#: Per run statistics returned by :func:`integrate_compiled` (columns).
+STAT_FIELDS = ("steps", "rejected", "rhs_evaluations", "stiff", "switches")
+
+#: Default stop margins ``steer_margin`` [rad] and ``curvature_margin`` [-].
+DEFAULT_MARGIN = 1e-3
+
+_MESSAGES = {
+    STATUS_SINGULAR_STEERING: "front steering angle reached |delta_f| = pi/2 - "
+    "steer_margin, next to the singular yaw rate V*sin(delta_f - delta_r)/"
+    "(f*cos(delta_f))",
+    STATUS_SINGULAR_CURVATURE: "1 - curvature*e reached curvature_margin: the "
+    "vehicle is at the path's centre of curvature and the projection is lost",
+    STATUS_END_OF_PATH: "the projection point left the open path",
+    STATUS_FAILED: "the step size fell below 10 ulp of t (scipy's TOO_SMALL_STEP)",
+}
+
+
+def available() -> bool:
+    """True if numba is installed, so that :func:`integrate_compiled` runs.
+
+    Examples
+    --------
+    >>> from fws_control.simulation.compiled import available
+    >>> isinstance(available(), bool)
+    True
+    """
+    return numba is not None
+
+
+def _jit(fn):
+    # cache=True: the compilation (seconds) is paid once per machine and
+    # numba version, not once per process. Without numba the kernels stay
+    # plain Python (importable, never called by integrate_compiled).
+    if numba is None:  # pragma: no cover
+        return fn
+    return numba.njit(cache=True, nogil=True)(fn)
+
+
+# --------------------------------------------------------------------------
+# DOP853 tableau (scipy's), as module constants frozen into the kernels
+
+_NS = _dop.N_STAGES  # 12
+_A = np.ascontiguousarray(_dop.A[:_NS, :_NS])
+_B = np.ascontiguousarray(_dop.B)
+_C = np.ascontiguousarray(_dop.C[:_NS])
+_E3 = np.ascontiguousarray(_dop.E3)
+_E5 = np.ascontiguousarray(_dop.E5)
+_D = np.ascontiguousarray(_dop.D)
+_A_EXTRA = np.ascontiguousarray(_dop.A[_NS + 1 :])
+_C_EXTRA = np.ascontiguousarray(_dop.C[_NS + 1 :])
+_NSE = _dop.N_STAGES_EXTENDED  # 16
+_NPOW = _dop.INTERPOLATOR_POWER  # 7
+# Hairer's stiffness test compares the last stage (at t + h) with f(y_new).
+assert _C[_NS - 1] == 1.0
+_EPS = float(np.finfo(float).eps)
+_ERROR_EXPONENT = -1.0 / (7 + 1)  # DOP853's error estimator is of order 7
+_SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
+
+# Layout of the shared parameter vector (one per call).
+_Q_WHEELBASE, _Q_FF, _Q_MAX_F, _Q_MAX_R, _Q_TAU = 0, 1, 2, 3, 4
+_Q_RATE_F, _Q_RATE_R, _Q_STEER_MARGIN, _Q_CURV_MARGIN = 5, 6, 7, 8
+_Q_PERIOD, _Q_S_LO, _Q_S_HI, _Q_OPEN_LENGTH = 9, 10, 11, 12
+_Q_SWITCH = 13  # 1: clips as modes switched at located events; 0: min/max
+_NQ = 14
+# Layout of the per run parameter vector.
+_P_SPEED, _P_K1, _P_K2, _P_RATIO = 0, 1, 2, 3
+# modes of the four clips (front/rear angle, front/rear rate): -1, 0 or +1
+_P_MODE = 4
+_NP = 8
+_N_STOPS = 4
+_N_EVENTS = 8
+#: Most clip switches per run (a guard against chattering).
+_MAX_SWITCHES = 100_000
+
+
+# --------------------------------------------------------------------------
+# The closed loop
+
+
+@_jit
+def _curvature(s, q, breaks, coefs):
+    period = q[_Q_PERIOD]
+    if period > 0.0:
+        s = s % period  # Python semantics, as np.mod in Path._domain
+        if s >= period:
+            s = 0.0
+    else:
+        # open paths: clipped, as the numpy engine does for trial stages
+        s = min(max(s, q[_Q_S_LO]), q[_Q_S_HI])
+    k = np.searchsorted(breaks, s, side="right") - 1
+    k = min(max(k, 0), coefs.shape[0] - 1)
+    d = s - breaks[k]
+    return coefs[k, 0] + d * (coefs[k, 1] + d * (coefs[k, 2] + d * coefs[k, 3]))
+
+
+@_jit
+def _raw_command(e, theta, kappa, p, q):
+    fb = -p[_P_K1] * e - p[_P_K2] * theta
+    cf = fb
+    if q[_Q_FF] != 0.0:
+        cf = fb + math.atan(q[_Q_WHEELBASE] * kappa)
+    return cf, p[_P_RATIO] * fb
+
+
+@_jit
+def _command(e, theta, kappa, p, q):
+    """The paper's law, as controllers.steering_command (same operations).
+
+    With switching (``q[13] = 1``) a clipped channel is held at its limit
+    by its mode (``p[4:6]``) rather than by min/max, so that the right-hand
+    side is smooth between the located switches.
+    """
+    cf, cr = _raw_command(e, theta, kappa, p, q)
+    mf, mr = q[_Q_MAX_F], q[_Q_MAX_R]
+    if q[_Q_SWITCH] != 0.0:
+        if p[_P_MODE] != 0.0:
+            cf = p[_P_MODE] * mf
+        if p[_P_MODE + 1] != 0.0:
+            cr = p[_P_MODE + 1] * mr
+        return cf, cr
+    cf = min(max(cf, -mf), mf)
+    cr = min(max(cr, -mr), mr)
+    return cf, cr
+
+
+@_jit
+def _clip_values(y, p, q, breaks, coefs, out):
+    """Unclipped front/rear commands and actuator rates, and their limits."""
+    kappa = _curvature(y[0], q, breaks, coefs)
+    raw_f, raw_r = _raw_command(y[1], y[2], kappa, p, q)
+    out[0], out[1] = raw_f, raw_r
+    out[4], out[5] = q[_Q_MAX_F], q[_Q_MAX_R]
+    out[6], out[7] = q[_Q_RATE_F], q[_Q_RATE_R]
+    tau = q[_Q_TAU]
+    if tau > 0.0:
+        cf, cr = _command(y[1], y[2], kappa, p, q)
+        out[2] = (cf - y[3]) / tau
+        out[3] = (cr - y[4]) / tau
+    else:
+        out[2], out[3] = 0.0, 0.0
+        out[6], out[7] = np.inf, np.inf
+
+
+@_jit
+def closed_loop_rhs(t, y, p, q, breaks, coefs, out):
+    """Right-hand side of one run; writes ``dy/dt`` into `out`.
+
+    Rows of `y`: ``s, e, theta`` and, with an actuator (``q[4] > 0``),
+    ``delta_f, delta_r``. `p` holds the run's ``(V, k1, k2, ratio)``, `q`
+    the shared parameters (see :func:`integrate_compiled`), ``breaks,
+    coefs`` the curvature table. Compiled with numba when it is installed.
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> from fws_control.simulation.compiled import closed_loop_rhs, curvature_table
+    >>> from fws_control.simulation.compiled import shared_parameters
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> tab = curvature_table(fws.Straight())
+    >>> q = shared_parameters(veh, tab, feedforward=False, time_constant=None)
+    >>> p = np.array([5.0, 0.1, 0.5, 0.0])          # V, k1, k2, ratio
+    >>> out = np.empty(3)
+    >>> closed_loop_rhs(0.0, np.array([0.0, 1.0, 0.0]), p, q, tab.breaks,
+    ...                 tab.coefs, out)
+    >>> out.round(6).tolist()            # theta_dot = V tan(-0.1) / f
+    [5.0, 0.0, -0.185805]
+    """
+    s, e, th = y[0], y[1], y[2]
+    kappa = _curvature(s, q, breaks, coefs)
+    cf, cr = _command(e, th, kappa, p, q)
+    tau = q[_Q_TAU]
+    if tau > 0.0:
+        df, dr = y[3], y[4]
+    else:
+        df, dr = cf, cr
+    V = p[_P_SPEED]
+    s_dot = V * math.cos(th + dr) / (1.0 - kappa * e)
+    out[0] = s_dot
+    out[1] = V * math.sin(th + dr)
+    out[2] = -kappa * s_dot + V * math.sin(df - dr) / (q[_Q_WHEELBASE] * math.cos(df))
+    if tau > 0.0:
+        rf = (cf - df) / tau
+        rr = (cr - dr) / tau
+        mf, mr = q[_Q_RATE_F], q[_Q_RATE_R]
+        if q[_Q_SWITCH] != 0.0:
+            if p[_P_MODE + 2] != 0.0:
+                rf = p[_P_MODE + 2] * mf
+            if p[_P_MODE + 3] != 0.0:
+                rr = p[_P_MODE + 3] * mr
+            out[3] = rf
+            out[4] = rr
+        else:
+            out[3] = min(max(rf, -mf), mf)
+            out[4] = min(max(rr, -mr), mr)
+
+
+@_jit
+def _events(y, p, q, breaks, coefs, g):
+    """Event functions: 0-3 stop a run, 4-7 switch a clip's mode (at <= 0)."""
+    s, e = y[0], y[1]
+    kappa = _curvature(s, q, breaks, coefs)
+    if q[_Q_TAU] > 0.0:
+        df = y[3]
+    else:
+        df = _command(e, y[2], kappa, p, q)[0]
+    g[0] = (0.5 * math.pi - q[_Q_STEER_MARGIN]) - abs(df)
+    g[1] = (1.0 - kappa * e) - q[_Q_CURV_MARGIN]
+    L = q[_Q_OPEN_LENGTH]
+    if L < np.inf:
+        # the offset lets a run start exactly at s = 0 (or at the end)
+        g[2] = (L - s) / L + 1e-9
+        g[3] = s / L + 1e-9
+    else:
+        g[2] = np.inf
+        g[3] = np.inf
+    if q[_Q_SWITCH] == 0.0:
+        for j in range(_N_STOPS, _N_EVENTS):
+            g[j] = np.inf
+        return
+    # clip j: free (mode 0) while |raw| < limit, held while mode * raw > limit
+    v = np.empty(8)
+    _clip_values(y, p, q, breaks, coefs, v)
+    for j in range(4):
+        mode = p[_P_MODE + j]
+        if mode == 0.0:
+            g[_N_STOPS + j] = v[4 + j] - abs(v[j])
+        else:
+            g[_N_STOPS + j] = mode * v[j] - v[4 + j]
+
+
+# --------------------------------------------------------------------------
+# DOP853, as scipy.integrate.DOP853 (line by line; comments name scipy's code)
+
+
+@_jit
+def _rms(x):
+    # scipy.integrate._ivp.common.norm: np.linalg.norm(x) / x.size ** 0.5
+    acc = 0.0
+    for v in x:
+        acc += v * v
+    return math.sqrt(acc) / x.size**0.5
+
+
+@_jit
+def _select_initial_step(t0, y0, t_bound, f0, rtol, atol, p, q, br, co, work):
+    # scipy.integrate._ivp.common.select_initial_step, direction +1, order 7
+    interval_length = abs(t_bound - t0)
+    if interval_length == 0.0:
+        return 0.0
+    m = y0.size
+    scale = atol + np.abs(y0) * rtol
+    d0 = _rms(y0 / scale)
+    d1 = _rms(f0 / scale)
+    if d0 < 1e-5 or d1 < 1e-5:
+        h0 = 1e-6
+    else:
+        h0 = 0.01 * d0 / d1
+    h0 = min(h0, interval_length)
+    y1 = y0 + h0 * 1.0 * f0
+    f1 = work[:m]
+    closed_loop_rhs(t0 + h0 * 1.0, y1, p, q, br, co, f1)
+    d2 = _rms((f1 - f0) / scale) / h0
+    if d1 <= 1e-15 and d2 <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
+    else:
+        h1 = (0.01 / max(d1, d2)) ** (1.0 / (7 + 1))
+    return min(100 * h0, h1, interval_length, np.inf)
+
+
+@_jit
+def _dense_coefficients(t_old, h, y_old, y, f, K, p, q, br, co, F, ytmp):
+    # DOP853._dense_output_impl: three extra stages, then the 7 coefficients
+    m = y.size
+    for s in range(_NS + 1, _NSE):
+        a = _A_EXTRA[s - _NS - 1]
+        c = _C_EXTRA[s - _NS - 1]
+        for i in range(m):
+            acc = 0.0
+            for j in range(s):
+                acc += K[j, i] * a[j]
+            ytmp[i] = y_old[i] + acc * h
+        closed_loop_rhs(t_old + c * h, ytmp, p, q, br, co, K[s])
+    for i in range(m):
+        f_old = K[0, i]
+        delta_y = y[i] - y_old[i]
+        F[0, i] = delta_y
+        F[1, i] = h * f_old - delta_y
+        F[2, i] = 2 * delta_y - h * (f[i] + f_old)
+        for r in range(_NPOW - 3):
+            acc = 0.0
+            for j in range(_NSE):
+                acc += _D[r, j] * K[j, i]
+            F[3 + r, i] = h * acc
+
+
+@_jit
+def _dense_eval(tt, t_old, t_new, y_old, F, out):
+    # Dop853DenseOutput._call_impl at one time
+    x = (tt - t_old) / (t_new - t_old)
+    m = y_old.size
+    for i in range(m):
+        v = 0.0
+        for k in range(_NPOW):
+            v += F[_NPOW - 1 - k, i]
+            if k % 2 == 0:
+                v *= x
+            else:
+                v *= 1 - x
+        out[i] = v + y_old[i]
+
+
+@_jit
+def _event_at(tt, j, t_old, t_new, y_old, F, p, q, br, co, ytmp, g):
+    _dense_eval(tt, t_old, t_new, y_old, F, ytmp)
+    _events(ytmp, p, q, br, co, g)
+    return g[j]
+
+
+@_jit
+def _brentq(j, xa, xb, t_old, t_new, y_old, F, p, q, br, co, ytmp, g):
+    # scipy.optimize.brentq (its C code), xtol = rtol = 4 eps, maxiter 100,
+    # on event j of the dense output: scipy's solve_event_equation
+    xtol = 4 * _EPS
+    rtol = 4 * _EPS
+    xpre, xcur = xa, xb
+    xblk, fblk, spre, scur = 0.0, 0.0, 0.0, 0.0
+    fpre = _event_at(xpre, j, t_old, t_new, y_old, F, p, q, br, co, ytmp, g)
+    fcur = _event_at(xcur, j, t_old, t_new, y_old, F, p, q, br, co, ytmp, g)
+    if fpre == 0:
+        return xpre
+    if fcur == 0:
+        return xcur
+    for _ in range(100):
+        if fpre != 0 and fcur != 0 and (np.signbit(fpre) != np.signbit(fcur)):
+            xblk = xpre
+            fblk = fpre
+            spre = scur = xcur - xpre
+        if abs(fblk) < abs(fcur):
+            xpre = xcur
+            xcur = xblk
+            xblk = xpre
+            fpre = fcur
+            fcur = fblk
+            fblk = fpre
+        delta = (xtol + rtol * abs(xcur)) / 2
+        sbis = (xblk - xcur) / 2
+        if fcur == 0 or abs(sbis) < delta:
+            return xcur
+        if abs(spre) > delta and abs(fcur) < abs(fpre):
+            if xpre == xblk:
+                stry = -fcur * (xcur - xpre) / (fcur - fpre)  # interpolate
+            else:  # extrapolate
+                dpre = (fpre - fcur) / (xpre - xcur)
+                dblk = (fblk - fcur) / (xblk - xcur)
+                stry = -fcur * (fblk - fpre) / (fblk * dpre - fpre * dblk)
+            if 2 * abs(stry) < min(abs(spre), 3 * abs(sbis) - delta):
+                spre = scur
+                scur = stry
+            else:
+                spre = sbis
+                scur = sbis
+        else:
+            spre = sbis
+            scur = sbis
+        xpre = xcur
+        fpre = fcur
+        if abs(scur) > delta:
+            xcur += scur
+        else:
+            xcur += delta if sbis > 0 else -delta
+        fcur = _event_at(xcur, j, t_old, t_new, y_old, F, p, q, br, co, ytmp, g)
+    return xcur
+
+
+@_jit
+def dop853_step(
+    t, y, f, h_abs, t_bound, rtol, atol, p, q, breaks, coefs, K, y_new, ystage
+):
+    """One accepted step of scipy's ``RungeKutta._step_impl`` for DOP853.
+
+    From ``(t, y)`` with ``f = f(t, y)`` and the proposed step `h_abs`, try
+    steps (shrinking after a rejection) until the error norm is below 1.
+    Fills `K` ``(16, m)`` (stage 13 is ``f(t_new, y_new)``), `y_new` and
+    `ystage` (the argument of the last stage, for the stiffness test).
+
+    Returns ``(ok, t_new, h, h_abs_next, rejected)``; ``ok`` is False when
+    the step fell below 10 ulp of ``t`` (scipy's TOO_SMALL_STEP).
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> from fws_control.simulation.compiled import (
+    ...     closed_loop_rhs, curvature_table, dop853_step, shared_parameters)
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> tab = curvature_table(fws.Straight())
+    >>> q = shared_parameters(veh, tab, feedforward=False, time_constant=None)
+    >>> p, y = np.array([5.0, 0.1, 0.5, 0.0]), np.array([0.0, 1.0, 0.0])
+    >>> f = np.empty(3)
+    >>> closed_loop_rhs(0.0, y, p, q, tab.breaks, tab.coefs, f)
+    >>> K, y_new = np.empty((16, 3)), np.empty(3)
+    >>> ok, t_new, h, h_next, rej = dop853_step(0.0, y, f, 0.01, 1.0, 1e-10,
+    ...     1e-12, p, q, tab.breaks, tab.coefs, K, y_new, np.empty(3))
+    >>> ok, t_new, rej, round(float(y_new[0]), 6)
+    (True, 0.01, 0, 0.05)
+    """
+    m = y.size
+    min_step = 10 * abs(np.nextafter(t, np.inf) - t)
+    if h_abs < min_step:
+        h_abs = min_step
+    step_rejected = False
+    rejected = 0
+    while True:
+        if h_abs < min_step:
+            return False, t, 0.0, h_abs, rejected
+        h = h_abs
+        t_new = t + h
+        if t_new - t_bound > 0:
+            t_new = t_bound
+        h = t_new - t
+        h_abs = abs(h)
+        # rk_step (sums in the order of the stages)
+        for i in range(m):
+            K[0, i] = f[i]
+        for s in range(1, _NS):
+            a = _A[s]
+            for i in range(m):
+                acc = 0.0
+                for j in range(s):
+                    acc += K[j, i] * a[j]
+                ystage[i] = y[i] + acc * h
+            closed_loop_rhs(t + _C[s] * h, ystage, p, q, breaks, coefs, K[s])
+        for i in range(m):
+            acc = 0.0
+            for j in range(_NS):
+                acc += K[j, i] * _B[j]
+            y_new[i] = y[i] + h * acc
+        closed_loop_rhs(t + h, y_new, p, q, breaks, coefs, K[_NS])
+        # DOP853._estimate_error_norm, scale = atol + max(|y|, |y_new|) rtol
+        e5 = 0.0
+        e3 = 0.0
+        for i in range(m):
+            sc = atol + max(abs(y[i]), abs(y_new[i])) * rtol
+            a5 = 0.0
+            a3 = 0.0
+            for j in range(_NS + 1):
+                a5 += K[j, i] * _E5[j]
+                a3 += K[j, i] * _E3[j]
+            a5 /= sc
+            a3 /= sc
+            e5 += a5 * a5
+            e3 += a3 * a3
+        e5 = math.sqrt(e5) ** 2
+        e3 = math.sqrt(e3) ** 2
+        if e5 == 0 and e3 == 0:
+            error_norm = 0.0
+        else:
+            denom = e5 + 0.01 * e3
+            error_norm = abs(h) * e5 / math.sqrt(denom * m)
+        if error_norm < 1:
+            if error_norm == 0:
+                factor = _MAX_FACTOR
+            else:
+                factor = min(_MAX_FACTOR, _SAFETY * error_norm**_ERROR_EXPONENT)
+            if step_rejected:
+                factor = min(1.0, factor)
+            return True, t_new, h, h_abs * factor, rejected
+        h_abs *= max(_MIN_FACTOR, _SAFETY * error_norm**_ERROR_EXPONENT)
+        step_rejected = True
+        rejected += 1
+
+
+@_jit
+def dense_output(tt, t_old, t_new, y_old, y_new, f_new, K, p, q, breaks, coefs, out):
+    """Value at `tt` of the dense output of the step ``t_old -> t_new``.
+
+    `K` holds the stages of :func:`dop853_step` (its three extra rows are
+    overwritten), as ``DOP853.dense_output()(tt)`` (scipy).
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> from fws_control.simulation.compiled import (closed_loop_rhs,
+    ...     curvature_table, dense_output, dop853_step, shared_parameters)
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> tab = curvature_table(fws.Straight())
+    >>> q = shared_parameters(veh, tab, feedforward=False, time_constant=None)
+    >>> p, y = np.array([5.0, 0.1, 0.5, 0.0]), np.array([0.0, 1.0, 0.0])
+    >>> f = np.empty(3)
+    >>> closed_loop_rhs(0.0, y, p, q, tab.breaks, tab.coefs, f)
+    >>> K, y_new = np.empty((16, 3)), np.empty(3)
+    >>> ok, t_new, *_ = dop853_step(0.0, y, f, 0.01, 1.0, 1e-10, 1e-12, p, q,
+    ...     tab.breaks, tab.coefs, K, y_new, np.empty(3))
+    >>> out = np.empty(3)
+    >>> dense_output(0.005, 0.0, t_new, y, y_new, K[12].copy(), K, p, q,
+    ...              tab.breaks, tab.coefs, out)
+    >>> round(float(out[0]), 6)
+    0.025
+    """
+    m = y_old.size
+    F = np.empty((_NPOW, m))
+    _dense_coefficients(
+        t_old, t_new - t_old, y_old, y_new, f_new, K, p, q, breaks, coefs, F, out
+    )
+    _dense_eval(tt, t_old, t_new, y_old, F, out)
+
+
+@_jit
+def locate_event(j, t_old, t_new, y_old, y_new, f_new, K, p, q, breaks, coefs):
+    """Root of stop event `j` on the dense output of one step (brentq).
+
+    As scipy's ``solve_event_equation``: ``brentq`` with ``xtol = rtol =
+    4 eps`` on ``event(t, sol(t))`` over ``[t_old, t_new]``. Events: 0
+    steering, 1 curvature, 2 end and 3 start of an open path.
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> from fws_control.simulation.compiled import (closed_loop_rhs,
+    ...     curvature_table, dop853_step, locate_event, shared_parameters)
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> tab = curvature_table(fws.Straight(length=0.1))   # ends after 0.02 s
+    >>> q = shared_parameters(veh, tab, feedforward=False, time_constant=None)
+    >>> p, y = np.array([5.0, 0.0, 0.0, 0.0]), np.array([0.0, 0.0, 0.0])
+    >>> f = np.empty(3)
+    >>> closed_loop_rhs(0.0, y, p, q, tab.breaks, tab.coefs, f)
+    >>> K, y_new = np.empty((16, 3)), np.empty(3)
+    >>> ok, t_new, *_ = dop853_step(0.0, y, f, 0.05, 1.0, 1e-10, 1e-12, p, q,
+    ...     tab.breaks, tab.coefs, K, y_new, np.empty(3))
+    >>> t = locate_event(2, 0.0, t_new, y, y_new, K[12].copy(), K, p, q,
+    ...                  tab.breaks, tab.coefs)
+    >>> round(t, 14)          # s = L (1 + 1e-9) at V = 5 m/s
+    0.02000000002
+    """
+    m = y_old.size
+    F = np.empty((_NPOW, m))
+    ytmp = np.empty(m)
+    g = np.empty(_N_EVENTS)
+    _dense_coefficients(
+        t_old, t_new - t_old, y_old, y_new, f_new, K, p, q, breaks, coefs, F, ytmp
+    )
+    return _brentq(
+        j, t_old, t_new, t_old, t_new, y_old, F, p, q, breaks, coefs, ytmp, g
+    )
+
+
+@_jit
+def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):
+    r"""Integrate one run from ``t_eval[0]`` to ``t_eval[-1]`` (compiled).
+
+    `out` ``(m, T)`` receives the states at `t_eval` (columns after a stop
+    are left untouched); `trace` ``(N,)`` receives the times of the first
+    ``N`` accepted steps (pass an empty array for none).
+
+    Returns ``(status_code, t_stop, steps, rejected, rhs_evaluations,
+    stiff, switches)``: the code indexes :data:`STATUS_CODES`; ``stiff`` is
+    1 if Hairer's stiffness test fired (15 steps with
+    :math:`|h\lambda| > 6.1` without 6 non-stiff steps in between);
+    ``switches`` counts the located switches of the clips (with
+    ``q[13] = 1``; `p` then has 8 entries, the last four the clips' modes,
+    which are overwritten).
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> from fws_control.simulation.compiled import (
+    ...     curvature_table, shared_parameters, solve_run)
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> tab = curvature_table(fws.Straight())
+    >>> q = shared_parameters(veh, tab, feedforward=False, time_constant=None)
+    >>> t = np.linspace(0.0, 10.0, 3)
+    >>> out = np.empty((3, t.size))
+    >>> code, t_stop, *_ = solve_run(np.array([0.0, 1.0, 0.0]),
+    ...     np.array([5.0, 0.1, 0.5, 0.0]), q, tab.breaks, tab.coefs, t,
+    ...     1e-10, 1e-12, out, np.empty(0))
+    >>> code, t_stop, bool(abs(out[1, -1]) < 0.1)
+    (0, 10.0, True)
+    """
+    m = y0.size
+    T = t_eval.size
+    n_trace = trace.size
+    K = np.empty((_NSE, m))
+    F = np.empty((_NPOW, m))
+    ytmp = np.empty(m)
+    ystage = np.empty(m)
+    work = np.empty(m)
+    g_old = np.empty(_N_EVENTS)
+    g_new = np.empty(_N_EVENTS)
+    g_tmp = np.empty(_N_EVENTS)
+    t = t_eval[0]
+    t_bound = t_eval[T - 1]
+    y = y0.copy()
+    y_new = np.empty(m)
+    f = np.empty(m)
+    switches = 0
+    if q[_Q_SWITCH] != 0.0:
+        # initial modes: a channel beyond its limit starts held (angles
+        # first: the actuator's rate depends on the held command)
+        v = np.empty(8)
+        for j in range(4):
+            p[_P_MODE + j] = 0.0
+        for j in range(4):
+            _clip_values(y, p, q, breaks, coefs, v)
+            if abs(v[j]) > v[4 + j]:
+                p[_P_MODE + j] = 1.0 if v[j] > 0 else -1.0
+    closed_loop_rhs(t, y, p, q, breaks, coefs, f)
+    nfev = 1
+    steps = 0
+    rejected_total = 0
+    iasti = 0
+    nonsti = 0
+    stiff = 0
+
+    # a run that starts at or beyond a stop condition stops at once
+    _events(y, p, q, breaks, coefs, g_old)
+    worst = 0
+    for j in range(_N_STOPS):
+        if g_old[j] < g_old[worst]:
+            worst = j
+    if g_old[worst] <= 0.0:
+        for i in range(m):
+            out[i, 0] = y[i]
+        return min(worst, 2) + 1, t, 0, 0, nfev, 0, 0
+    if T == 1 or t_bound == t:
+        for i in range(m):
+            out[i, 0] = y[i]
+        return 0, t, 0, 0, nfev, 0, 0
+
+    h_abs = _select_initial_step(
+        t, y, t_bound, f, rtol, atol, p, q, breaks, coefs, work
+    )
+    nfev += 1
+    k_out = 0
+    while True:
+        # ---- RungeKutta._step_impl (direction +1, max_step inf)
+        ok, t_new, h, h_abs, n_rej = dop853_step(
+            t, y, f, h_abs, t_bound, rtol, atol, p, q, breaks, coefs, K, y_new, ystage
+        )
+        nfev += _NS * (n_rej + 1)
+        rejected_total += n_rej
+        if not ok:
+            return 4, t, steps, rejected_total, nfev, stiff, switches
+        # Hairer's stiffness detection (dop853.f): |h lambda| from the last
+        # stage and f(y_new), both at t + h
+        num = 0.0
+        den = 0.0
+        for i in range(m):
+            num += (K[_NS, i] - K[_NS - 1, i]) ** 2
+            den += (y_new[i] - ystage[i]) ** 2
+        if den > 0.0:
+            if h * math.sqrt(num / den) > 6.1:
+                nonsti = 0
+                iasti += 1
+                if iasti == 15:
+                    stiff = 1
+            else:
+                nonsti += 1
+                if nonsti == 6:
+                    iasti = 0
+        # accepted: y_old = y, y = y_new, f = f_new
+        # (buffers swapped: y_old is only overwritten by the next step)
+        t_old = t
+        y_old = y
+        y = y_new
+        y_new = y_old
+        t = t_new
+        for i in range(m):
+            f[i] = K[_NS, i]
+        if steps < n_trace:
+            trace[steps] = t
+        steps += 1
+        dense_ready = False
+        # ---- solve_ivp: events (direction -1: g from >= 0 to <= 0)
+        _events(y, p, q, breaks, coefs, g_new)
+        code = 0
+        t_hit = np.inf
+        j_hit = -1
+        for j in range(_N_EVENTS):
+            if j < _N_STOPS:
+                hit = g_old[j] >= 0 and g_new[j] <= 0  # solve_ivp, direction -1
+            else:
+                # a clip's mode is wrong at the step's end: it switched in the
+                # step (g from > 0), or it was ~0 on the wrong side already at
+                # a restart (then the switch is at the step's start)
+                hit = g_new[j] < 0 or (g_new[j] == 0 and g_old[j] > 0)
+            if not hit:
+                continue
+            if j >= _N_STOPS and not g_old[j] > 0:
+                root = t_old
+            else:
+                if not dense_ready:
+                    _dense_coefficients(
+                        t_old, h, y_old, y, f, K, p, q, breaks, coefs, F, ytmp
+                    )
+                    nfev += 3
+                    dense_ready = True
+                root = _brentq(
+                    j, t_old, t, t_old, t, y_old, F, p, q, breaks, coefs, ytmp, g_tmp
+                )
+            if root < t_hit:
+                t_hit = root
+                j_hit = j
+        if 0 <= j_hit < _N_STOPS:
+            code = min(j_hit, 2) + 1
+        upto = t if j_hit < 0 else t_hit
+        # ---- solve_ivp: outputs at t_eval <= upto from this step's dense output
+        while k_out < T and t_eval[k_out] <= upto:
+            if not dense_ready:
+                _dense_coefficients(
+                    t_old, h, y_old, y, f, K, p, q, breaks, coefs, F, ytmp
+                )
+                nfev += 3
+                dense_ready = True
+            _dense_eval(t_eval[k_out], t_old, t, y_old, F, ytmp)
+            for i in range(m):
+                out[i, k_out] = ytmp[i]
+            k_out += 1
+        if code != 0:
+            return code, t_hit, steps, rejected_total, nfev, stiff, switches
+        if j_hit >= _N_STOPS:
+            # a clip switches: restart at the switch with the new mode (the
+            # rest of the step, integrated in the old mode, is discarded)
+            if not dense_ready:
+                _dense_coefficients(
+                    t_old, h, y_old, y, f, K, p, q, breaks, coefs, F, ytmp
+                )
+                nfev += 3
+            _dense_eval(t_hit, t_old, t, y_old, F, ytmp)
+            for i in range(m):
+                y[i] = ytmp[i]
+            t = t_hit
+            site = j_hit - _N_STOPS
+            if p[_P_MODE + site] != 0.0:
+                p[_P_MODE + site] = 0.0
+            else:
+                v = np.empty(8)
+                _clip_values(y, p, q, breaks, coefs, v)
+                p[_P_MODE + site] = 1.0 if v[site] > 0 else -1.0
+            switches += 1
+            if switches > _MAX_SWITCHES:
+                return 4, t, steps, rejected_total, nfev, stiff, switches
+            if t >= t_bound:
+                return 0, t_bound, steps, rejected_total, nfev, stiff, switches
+            closed_loop_rhs(t, y, p, q, breaks, coefs, f)
+            h_abs = _select_initial_step(
+                t, y, t_bound, f, rtol, atol, p, q, breaks, coefs, work
+            )
+            nfev += 2
+            _events(y, p, q, breaks, coefs, g_old)
+            continue
+        if t == t_bound:
+            return 0, t, steps, rejected_total, nfev, stiff, switches
+        for j in range(_N_EVENTS):
+            g_old[j] = g_new[j]
+
+
+@_jit
+def _solve_batch(
+    Y0, P, q, breaks, coefs, t_eval, rtol, atol, out, codes, t_stop, stats
+):
+    empty = np.empty(0)
+    for i in range(Y0.shape[0]):
+        r = solve_run(Y0[i], P[i], q, breaks, coefs, t_eval, rtol, atol, out[i], empty)
+        codes[i] = r[0]
+        t_stop[i] = r[1]
+        stats[i, 0] = r[2]
+        stats[i, 1] = r[3]
+        stats[i, 2] = r[4]
+        stats[i, 3] = r[5]
+        stats[i, 4] = r[6]
+        # NaN after the stop (the columns up to it are written by solve_run)
+        for k in range(t_eval.size):
+            if t_eval[k] > r[1]:
+                out[i, :, k] = np.nan
+
+
+@_jit
+def _curvature_rate(s, q, breaks, coefs):
+    # d kappa / ds of the table, at s clipped or wrapped as in _curvature
+    period = q[_Q_PERIOD]
+    if period > 0.0:
+        s = s % period
+        if s >= period:
+            s = 0.0
+    else:
+        s = min(max(s, q[_Q_S_LO]), q[_Q_S_HI])
+    k = np.searchsorted(breaks, s, side="right") - 1
+    k = min(max(k, 0), coefs.shape[0] - 1)
+    d = s - breaks[k]
+    return coefs[k, 1] + d * (2.0 * coefs[k, 2] + d * 3.0 * coefs[k, 3])
+
+
+@_jit
+def _signals_batch(states, P, q, breaks, coefs, d_cg, pose, sig):
+    # sig (n, 11, T) in the order of engine.SIGNALS. Rows 3-10 -- s, e,
+    # theta, delta_f, delta_r, their rates, the lateral acceleration of
+    # eq. (13) -- are computed here with the operations of compute_outputs;
+    # rows 0-2 (x, y, psi) too when pose[0] is 1 (Straight) or 2 (Arc):
+    # pose = (kind, x0, y0, psi0, kappa). psi = theta + psi0 + kappa * s is
+    # continuous in time by construction (no unwrapping needed).
+    n, m, T = states.shape
+    f = q[_Q_WHEELBASE]
+    mf, mr = q[_Q_MAX_F], q[_Q_MAX_R]
+    tau = q[_Q_TAU]
+    ff = q[_Q_FF] != 0.0
+    kind = int(pose[0])
+    x0, y0, psi0, kp = pose[1], pose[2], pose[3], pose[4]
+    c0, s0 = math.cos(psi0), math.sin(psi0)
+    period = q[_Q_PERIOD]
+    for i in range(n):
+        V = P[i, _P_SPEED]
+        k1, k2, a = P[i, _P_K1], P[i, _P_K2], P[i, _P_RATIO]
+        for k in range(T):
+            s = states[i, 0, k]
+            if not np.isfinite(s):
+                for r in range(11):
+                    sig[i, r, k] = np.nan
+                continue
+            e = states[i, 1, k]
+            th = states[i, 2, k]
+            kappa = _curvature(s, q, breaks, coefs)
+            fb = -k1 * e - k2 * th
+            raw_f = fb
+            fk_atan = 0.0
+            if ff:
+                fk_atan = math.atan(f * kappa)
+                raw_f = fb + fk_atan
+            raw_r = a * fb
+            cf = min(max(raw_f, -mf), mf)
+            cr = min(max(raw_r, -mr), mr)
+            if tau > 0.0:
+                df = states[i, 3, k]
+                dr = states[i, 4, k]
+            else:
+                df, dr = cf, cr
+            s_dot = V * math.cos(th + dr) / (1.0 - kappa * e)
+            e_dot = V * math.sin(th + dr)
+            sin_fr = math.sin(df - dr)
+            cos_f = math.cos(df)
+            psi_dot = V * sin_fr / (f * cos_f)
+            th_dot = -kappa * s_dot + psi_dot
+            if tau > 0.0:
+                rf = min(max((cf - df) / tau, -q[_Q_RATE_F]), q[_Q_RATE_F])
+                rr = min(max((cr - dr) / tau, -q[_Q_RATE_R]), q[_Q_RATE_R])
+            else:
+                # steering_command_rate: chain rule, 0 where an angle is clipped
+                fb_rate = -k1 * e_dot - k2 * th_dot
+                rf = fb_rate
+                if ff:
+                    k_rate = _curvature_rate(s, q, breaks, coefs) * s_dot
+                    rf = fb_rate + f * k_rate / (1.0 + (f * kappa) ** 2)
+                rr = a * fb_rate
+                if abs(raw_f) > mf:
+                    rf = 0.0
+                if abs(raw_r) > mr:
+                    rr = 0.0
+            sig[i, 3, k] = s
+            sig[i, 4, k] = e
+            sig[i, 5, k] = th
+            sig[i, 6, k] = df
+            sig[i, 7, k] = dr
+            if abs(df) < 0.5 * math.pi:
+                psi_ddot = (V / f) * (
+                    math.cos(dr) / cos_f**2 * rf - math.cos(df - dr) / cos_f * rr
+                )
+                sig[i, 8, k] = rf
+                sig[i, 9, k] = rr
+                sig[i, 10, k] = V * (psi_dot + rr) * math.cos(dr) + d_cg * psi_ddot
+            else:
+                sig[i, 8, k] = np.nan
+                sig[i, 9, k] = np.nan
+                sig[i, 10, k] = np.nan
+            if kind == 0:
+                continue
+            sp = s
+            if period > 0.0:
+                sp = s % period
+                if sp >= period:
+                    sp = 0.0
+            else:
+                sp = min(max(sp, q[_Q_S_LO]), q[_Q_S_HI])
+            if kind == 1:
+                lx, ly = sp, 0.0
+            else:  # Arc._frame
+                ks = kp * sp
+                lx = math.sin(ks) / kp
+                ly = 2.0 * math.sin(0.5 * ks) ** 2 / kp
+            px = x0 + c0 * lx - s0 * ly
+            py = y0 + s0 * lx + c0 * ly
+            h = psi0 + kp * s  # unwrapped heading of the path at s
+            sh, ch = math.sin(h), math.cos(h)
+            sig[i, 0, k] = px - e * sh
+            sig[i, 1, k] = py + e * ch
+            sig[i, 2, k] = th + h
+
+
+# --------------------------------------------------------------------------
+# Python side: curvature tables, parameters, the batch driver
+
+
+class CurvatureTable:
+    r"""Curvature :math:`\kappa(s)` of a path as a piecewise cubic in ``s``.
+
+    On ``[breaks[k], breaks[k+1])``, :math:`\kappa = c_0 + c_1 d + c_2 d^2 +
+    c_3 d^3` with ``d = s - breaks[k]`` and ``c = coefs[k]``. A closed path
+    (``period > 0``) wraps ``s`` modulo the period; an open one clips it to
+    ``[breaks[0], breaks[-1]]`` (``-inf``/``inf`` for an unbounded line).
+
+    Attributes
+    ----------
+    breaks : ndarray
+        Shape ``(K + 1,)``, increasing [m].
+    coefs : ndarray
+        Shape ``(K, 4)`` [1/m, 1/m^2, 1/m^3, 1/m^4].
+    period : float
+        Length of a closed path [m], 0 for an open one.
+    open_length : float
+        Length of an open path of finite length [m] (its end is a stop
+        event), ``inf`` otherwise.
+    max_error : float
+        Largest difference to the path's curvature found when the table was
+        built [1/m]: 0 for tables that are exact by construction.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> from fws_control.simulation.compiled import curvature_table
+    >>> tab = curvature_table(fws.Clothoid(0.0, 0.1, length=10.0))
+    >>> tab.breaks.tolist(), tab.coefs.tolist(), tab.max_error
+    ([0.0, 10.0], [[0.0, 0.01, 0.0, 0.0]], 0.0)
+    """
+
+    __slots__ = ("breaks", "coefs", "period", "open_length", "max_error")
+
+    def __init__(
+        self, breaks, coefs, *, period=0.0, open_length=math.inf, max_error=0.0
+    ):
+        self.breaks = np.ascontiguousarray(breaks, dtype=float)
+        self.coefs = np.ascontiguousarray(coefs, dtype=float).reshape(-1, 4)
+        if self.breaks.size != self.coefs.shape[0] + 1:
+            raise ValueError(
+                f"breaks must have one entry more than coefs has rows, got "
+                f"{self.breaks.size} and {self.coefs.shape[0]}"
+            )
+        self.period = float(period)
+        self.open_length = float(open_length)
+        self.max_error = float(max_error)
+
+    def __call__(self, s):
+        """Evaluate :math:`\\kappa(s)` (numpy, for checks)."""
+        s = np.asarray(s, dtype=float)
+        if self.period > 0.0:
+            s = np.mod(s, self.period)
+            s = np.where(s >= self.period, 0.0, s)
+        else:
+            s = np.clip(s, self.breaks[0], self.breaks[-1])
+        k = np.clip(np.searchsorted(self.breaks, s, side="right") - 1, 0,
+                    self.coefs.shape[0] - 1)  # fmt: skip
+        d = s - self.breaks[k]
+        c = self.coefs[k]
+        return c[..., 0] + d * (c[..., 1] + d * (c[..., 2] + d * c[..., 3]))
+
+    def __repr__(self) -> str:
+        return (
+            f"CurvatureTable(pieces={self.coefs.shape[0]}, period={self.period}, "
+            f"open_length={self.open_length}, max_error={self.max_error:.3g})"
+        )
+
+
+def _exact_pieces(path) -> tuple[list[float], list[list[float]]] | None:
+    """Breaks and coefficients of an exactly representable path, else None."""
+    if isinstance(path, Straight):
+        return [0.0, path.length], [[0.0, 0.0, 0.0, 0.0]]
+    if isinstance(path, Arc):
+        return [0.0, path.length], [[path.kappa, 0.0, 0.0, 0.0]]
+    if isinstance(path, Clothoid):
+        return [0.0, path.length], [[path.curvature_start, path.sharpness, 0.0, 0.0]]
+    if isinstance(path, PathChain):
+        breaks, coefs = [0.0], []
+        for seg, off in zip(path.segments, path.offsets[:-1], strict=True):
+            sub = _exact_pieces(seg)
+            if sub is None:
+                return None
+            breaks += [float(off) + b for b in sub[0][1:]]
+            coefs += sub[1]
+        breaks[-1] = float(path.length)
+        return breaks, coefs
+    return None
+
+
+def curvature_table(
+    path: Path, *, tol: float = 1e-10, max_pieces: int = 1 << 16
+) -> CurvatureTable:
+    r"""Curvature of `path` as a :class:`CurvatureTable` for the compiled engine.
+
+    Exact for :class:`~fws_control.Straight`, :class:`~fws_control.Arc`,
+    :class:`~fws_control.Clothoid` and :class:`~fws_control.PathChain` of
+    them. Other paths get a cubic Hermite interpolant of their curvature and
+    curvature rate on a uniform grid, refined (doubling) until the
+    difference to :meth:`~fws_control.paths.Path.curvature` at the midpoints
+    and quarter points of the pieces is at most `tol`.
+
+    Parameters
+    ----------
+    path : Path
+        The reference path.
+    tol : float, optional
+        Tolerance of the interpolant [1/m], > 0 (not used for exact tables).
+    max_pieces : int, optional
+        Largest number of pieces tried.
+
+    Returns
+    -------
+    CurvatureTable
+
+    Raises
+    ------
+    ValueError
+        If the tolerance is not reached with `max_pieces` pieces (then use
+        the numpy engine), or `tol` is not > 0.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> from fws_control.simulation.compiled import curvature_table
+    >>> curvature_table(fws.Arc(curvature=0.1))
+    CurvatureTable(pieces=1, period=62.83185307179586, open_length=inf, max_error=0)
+    """
+    tol = float(check_positive("tol", tol))
+    L = float(path.length)
+    closed = bool(path.closed)
+    period = L if closed else 0.0
+    open_length = L if (not closed and math.isfinite(L)) else math.inf
+    exact = _exact_pieces(path)
+    if exact is not None:
+        breaks, coefs = exact
+        return CurvatureTable(breaks, coefs, period=period, open_length=open_length)
+    if not math.isfinite(L):
+        raise ValueError(f"path must have a finite length for a table, got {path!r}")
+    # Adaptive bisection: a piece is halved while the interpolant misses the
+    # curvature by more than tol at its quarter points. Kinks of the
+    # curvature (a spline's curvature rate jumps at its waypoints) end up in
+    # tiny pieces; smooth stretches keep long ones.
+    s = np.linspace(0.0, L, 65)
+    err = math.inf
+    while s.size - 1 <= max_pieces:
+        table = _hermite_table(path, s, period, open_length)
+        h = np.diff(s)
+        probe = s[:-1, None] + h[:, None] * np.array([0.25, 0.5, 0.75])
+        miss = np.abs(table(probe) - path.curvature(probe))
+        err = float(np.max(miss))
+        if err <= tol:
+            table.max_error = err
+            return table
+        bad = np.flatnonzero(np.max(miss, axis=1) > tol)
+        s = np.sort(np.concatenate([s, s[bad] + 0.5 * h[bad]]))
+    raise ValueError(
+        f"curvature of {type(path).__name__} not within tol={tol} with "
+        f"max_pieces={max_pieces} cubic pieces (last error {err:.3g}); use the "
+        "numpy engine for this path"
+    )
+
+
+def _hermite_table(path, s, period, open_length) -> CurvatureTable:
+    """Cubic Hermite interpolant of the curvature on the nodes `s`."""
+    k = np.asarray(path.curvature(s), dtype=float)
+    dk = np.asarray(path.curvature_rate(s), dtype=float)
+    h = np.diff(s)
+    # one-sided rates at a kink: the right piece uses the rate just after it
+    slope = np.diff(k) / h
+    c2 = (3 * slope - 2 * dk[:-1] - dk[1:]) / h
+    c3 = (dk[:-1] + dk[1:] - 2 * slope) / h**2
+    coefs = np.stack([k[:-1], dk[:-1], c2, c3], axis=1)
+    return CurvatureTable(s, coefs, period=period, open_length=open_length)
+
+
+def _limit(value) -> float:
+    return math.inf if value is None else float(value)
+
+
+def shared_parameters(
+    vehicle: Vehicle,
+    table: CurvatureTable,
+    *,
+    feedforward: bool,
+    time_constant: float | None,
+    steer_margin: float = DEFAULT_MARGIN,
+    curvature_margin: float = DEFAULT_MARGIN,
+    switching: bool = False,
+) -> np.ndarray:
+    """The parameter vector shared by all runs of a call (for the kernels).
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Wheelbase, steering-angle and steering-rate limits.
+    table : CurvatureTable
+        The path's curvature (its period and open length).
+    feedforward : bool
+        Curvature feedforward of the paper's law on or off.
+    time_constant : float or None
+        Actuator lag [s]; None: no actuator (the angles are the commands).
+    steer_margin, curvature_margin : float, optional
+        Stop margins (see the module notes), >= 0.
+    switching : bool, optional
+        Locate the switches of the angle and rate clips as events and hold a
+        clipped channel by its mode (then the per run parameter vectors have
+        8 entries); default False: min/max in the right-hand side.
+
+    Returns
+    -------
+    ndarray
+        Shape ``(14,)``.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> from fws_control.simulation.compiled import curvature_table, shared_parameters
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> shared_parameters(veh, curvature_table(fws.Straight()), feedforward=True,
+    ...                   time_constant=None)[:3].tolist()
+    [2.7, 1.0, inf]
+    """
+    for name, val in (
+        ("steer_margin", steer_margin),
+        ("curvature_margin", curvature_margin),
+    ):
+        if not (isinstance(val, (int, float)) and 0.0 <= val < 1.0):
+            raise ValueError(f"{name} must be a number in [0, 1), got {val!r}")
+    q = np.empty(_NQ)
+    q[_Q_WHEELBASE] = vehicle.wheelbase
+    q[_Q_FF] = 1.0 if feedforward else 0.0
+    q[_Q_MAX_F] = _limit(vehicle.max_steer_front)
+    q[_Q_MAX_R] = _limit(vehicle.max_steer_rear)
+    q[_Q_TAU] = 0.0 if time_constant is None else float(time_constant)
+    q[_Q_RATE_F] = _limit(vehicle.max_steer_rate_front)
+    q[_Q_RATE_R] = _limit(vehicle.max_steer_rate_rear)
+    q[_Q_STEER_MARGIN] = steer_margin
+    q[_Q_CURV_MARGIN] = curvature_margin
+    q[_Q_PERIOD] = table.period
+    if table.period > 0.0:
+        q[_Q_S_LO], q[_Q_S_HI] = 0.0, table.period
+    elif math.isfinite(table.open_length):
+        q[_Q_S_LO], q[_Q_S_HI] = 0.0, table.open_length
+    else:
+        q[_Q_S_LO], q[_Q_S_HI] = -math.inf, math.inf
+    q[_Q_OPEN_LENGTH] = table.open_length
+    q[_Q_SWITCH] = 1.0 if switching else 0.0
+    return q
+
+
+def compiled_support(
+    path: Path, gains: Any, *, delay: float = 0.0, method: Any = "DOP853"
+) -> str | None:
+    """Why :func:`integrate_compiled` cannot run this case, or None if it can.
+
+    Parameters
+    ----------
+    path : Path
+        Reference path (any path with a finite length, or Straight/Arc).
+    gains : SteeringGains or LateralController
+        Only :class:`~fws_control.SteeringGains` (the paper's law) is
+        compiled.
+    delay : float, optional
+        Input delay [s]: only 0 is compiled.
+    method : str or scipy.integrate.OdeSolver, optional
+        Only ``"DOP853"`` (or the class) is compiled.
+
+    Returns
+    -------
+    str or None
+        A reason for the numpy engine, or None.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> from fws_control.simulation.compiled import compiled_support
+    >>> g = fws.SteeringGains(0.1, 0.5, 0.0)
+    >>> compiled_support(fws.Straight(), g, delay=0.1)
+    'an input delay (method of steps) is not compiled'
+    """
+    if numba is None:
+        return "numba is not installed (pip install fws-control[fast])"
+    if not isinstance(gains, SteeringGains):
+        return "only the paper's law (SteeringGains) is compiled, not controllers"
+    if delay != 0.0:
+        return "an input delay (method of steps) is not compiled"
+    if method != "DOP853" and method is not DOP853:
+        return f"only method='DOP853' is compiled, got {method!r}"
+    if _exact_pieces(path) is None and not math.isfinite(float(path.length)):
+        return "an unbounded path other than Straight has no curvature table"
+    return None
+
+
+def integrate_compiled(
+    vehicle: Vehicle,
+    path: Path | CurvatureTable,
+    gains: SteeringGains,
+    *,
+    speed: np.ndarray,
+    feedforward: bool,
+    path_state: np.ndarray,
+    t_eval: np.ndarray,
+    time_constant: float | None,
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
+    steer_margin: float = DEFAULT_MARGIN,
+    curvature_margin: float = DEFAULT_MARGIN,
+    switching: bool = True,
+    out: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Integrate ``n`` runs, each with its own DOP853 steps and events.
+
+    Same arguments and results as
+    :func:`~fws_control.simulation.engine.integrate` (without ``method``,
+    ``delay`` and ``solution``), plus the per run solver statistics.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Shared by all runs.
+    path : Path or CurvatureTable
+        The reference path (its :func:`curvature_table` is built), or a
+        table built once for many calls.
+    gains : SteeringGains
+        Per run ``k1, k2, ratio`` (arrays of shape ``(n,)`` or scalars).
+    speed : ndarray
+        Per run speed [m/s], shape ``(n,)``; its size is the number of runs.
+    feedforward : bool
+        Curvature feedforward on or off (all runs).
+    path_state : ndarray
+        Initial ``(s, e, theta)`` per run, shape ``(n, 3)``.
+    t_eval : ndarray
+        Output times, increasing; the runs go from ``t_eval[0]`` to
+        ``t_eval[-1]``.
+    time_constant : float or None
+        Actuator lag [s]; None: no actuator. The actuator states start at
+        the initial command.
+    rtol, atol : float, optional
+        Tolerances of DOP853 (scipy's meaning), > 0.
+    steer_margin, curvature_margin : float, optional
+        Stop margins, in [0, 1) (see the module notes).
+    switching : bool, optional
+        Locate where the steering-angle and steering-rate limits start and
+        stop clipping as events and restart the step there (default), so
+        that the right-hand side is smooth within every step; False: clip
+        with min/max inside the right-hand side, as the numpy engine does
+        (its kinks then fall inside steps).
+    out : ndarray, optional
+        Preallocated ``(n, m, T)`` float array for the states (``m = 3``, or
+        5 with an actuator), e.g. a slice of a larger result or a
+        memory-mapped file; NaN after each run's stop.
+
+    Returns
+    -------
+    states : ndarray
+        Shape ``(m, n, T)`` (a transposed view of `out`), NaN after a run's
+        stop.
+    status, message : ndarray of object
+        Per run status (one of :data:`STATUS_CODES`) and explanation.
+    t_stop : ndarray
+        Per run end time [s].
+    stats : ndarray
+        Shape ``(n, 5)``, columns :data:`STAT_FIELDS`.
+
+    Raises
+    ------
+    ImportError
+        If numba is not installed.
+    ValueError
+        For non-positive tolerances, margins out of range, or shapes that do
+        not match.
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> from fws_control.simulation.compiled import integrate_compiled
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> g = fws.SteeringGains(np.array([0.1, 0.1]), 0.5, 0.0)
+    >>> states, status, _, t_stop, stats = integrate_compiled(
+    ...     veh, fws.Straight(), g, speed=np.array([5.0, 5.0]), feedforward=False,
+    ...     path_state=np.array([[0.0, 1.0, 0.0], [0.0, 2.0, 0.0]]),
+    ...     t_eval=np.linspace(0.0, 1.0, 11), time_constant=None)
+    >>> states.shape, status.tolist(), t_stop.tolist()
+    ((3, 2, 11), ['ok', 'ok'], [1.0, 1.0])
+    """
+    if numba is None:
+        raise ImportError(
+            "integrate_compiled needs numba: pip install fws-control[fast]"
+        )
+    table = path if isinstance(path, CurvatureTable) else curvature_table(path)
+    rtol = float(check_positive("rtol", rtol))
+    atol = float(check_positive("atol", atol))
+    q = shared_parameters(
+        vehicle,
+        table,
+        feedforward=feedforward,
+        time_constant=time_constant,
+        steer_margin=steer_margin,
+        curvature_margin=curvature_margin,
+        switching=switching,
+    )
+    speed = np.ascontiguousarray(speed, dtype=float).ravel()
+    n = speed.size
+    P = _run_parameters(gains, speed)
+    z0 = np.asarray(path_state, dtype=float)
+    if z0.shape != (n, 3):
+        raise ValueError(f"path_state must have shape ({n}, 3), got {z0.shape}")
+    t_eval = np.ascontiguousarray(t_eval, dtype=float)
+    T = t_eval.size
+    m = 3 if time_constant is None else 5
+    Y0 = np.empty((n, m))
+    Y0[:, :3] = z0
+    if time_constant is not None:
+        # The actuator starts at the command: no initial transient of its own.
+        kappa = table(z0[:, 0])
+        Y0[:, 3:] = np.stack(
+            steering_command(
+                vehicle,
+                SteeringGains(P[:, _P_K1], P[:, _P_K2], P[:, _P_RATIO]),
+                z0[:, 1],
+                z0[:, 2],
+                curvature=kappa,
+                feedforward=feedforward,
+            ),
+            axis=1,
+        )
+    if out is None:
+        out = np.empty((n, m, T))
+    elif out.shape != (n, m, T) or out.dtype != np.float64:
+        raise ValueError(
+            f"out must be a float64 array of shape {(n, m, T)}, got "
+            f"{out.dtype} {out.shape}"
+        )
+    codes = np.empty(n, dtype=np.int64)
+    t_stop = np.empty(n)
+    stats = np.empty((n, len(STAT_FIELDS)), dtype=np.int64)
+    _solve_batch(
+        Y0, P, q, table.breaks, table.coefs, t_eval, rtol, atol, out, codes, t_stop,
+        stats,
+    )  # fmt: skip
+    status = np.array([STATUS_CODES[c] for c in codes], dtype=object)
+    message = np.array(
+        [
+            "" if c == 0 else f"at t={ts:.6g} s: {_MESSAGES[STATUS_CODES[c]]}"
+            for c, ts in zip(codes, t_stop, strict=True)
+        ],
+        dtype=object,
+    )
+    return np.moveaxis(out, 1, 0), status, message, t_stop, stats
+
+
+def _run_parameters(gains: SteeringGains, speed: np.ndarray) -> np.ndarray:
+    n = speed.size
+    P = np.zeros((n, _NP))  # clip modes 0
+    P[:, _P_SPEED] = speed
+    for col, v in ((_P_K1, gains.k1), (_P_K2, gains.k2), (_P_RATIO, gains.ratio)):
+        P[:, col] = np.broadcast_to(np.asarray(v, dtype=float).ravel(), (n,))
+    return P
+
+
+def compiled_outputs(
+    vehicle: Vehicle,
+    path: Path,
+    gains: SteeringGains,
+    *,
+    speed: np.ndarray,
+    feedforward: bool,
+    time_constant: float | None,
+    states: np.ndarray,
+    initial_heading: np.ndarray,
+    table: CurvatureTable | None = None,
+    out: np.ndarray | None = None,
+) -> np.ndarray:
+    """All signals of :data:`~fws_control.simulation.engine.SIGNALS`, compiled.
+
+    The compiled counterpart of
+    :func:`~fws_control.simulation.engine.compute_outputs` for the paper's
+    law: ``s, e, theta``, the steering angles, their exact rates (chain rule
+    through the law and the curvature table's derivative, zero where an
+    angle is clipped; the actuator's rates with an actuator) and the lateral
+    acceleration of eq. (13) are computed per output time in compiled code;
+    the global pose ``x, y, psi`` from the path's position and heading at
+    ``s`` (numpy), with ``psi`` unwrapped in time on the branch of the
+    initial heading.
+
+    Parameters
+    ----------
+    vehicle, path, gains, speed, feedforward, time_constant
+        As given to :func:`integrate_compiled`.
+    states : ndarray
+        Its states, shape ``(m, n, T)``, NaN after a run's stop.
+    initial_heading : ndarray
+        Per run initial ``psi`` [rad], shape ``(n,)``.
+    table : CurvatureTable, optional
+        The path's table, if already built.
+    out : ndarray, optional
+        Preallocated ``(n, 11, T)`` float array for the result.
+
+    Returns
+    -------
+    ndarray
+        Shape ``(n, len(SIGNALS), T)``, NaN where `states` is NaN.
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> from fws_control.simulation.compiled import compiled_outputs
+    >>> from fws_control.simulation.engine import SIGNALS
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> g = fws.SteeringGains(0.1, 0.5, 0.0)
+    >>> states = np.array([0.0, 2.0, 0.0]).reshape(3, 1, 1)   # s, e, theta
+    >>> sig = compiled_outputs(veh, fws.Straight(), g, speed=np.array([5.0]),
+    ...                        feedforward=False, time_constant=None,
+    ...                        states=states, initial_heading=np.array([0.0]))
+    >>> float(sig[0, SIGNALS.index("delta_f"), 0])   # -k1 * e
+    -0.2
+    """
+    if numba is None:
+        raise ImportError("compiled_outputs needs numba: pip install fws-control[fast]")
+    table = curvature_table(path) if table is None else table
+    q = shared_parameters(
+        vehicle, table, feedforward=feedforward, time_constant=time_constant
+    )
+    speed = np.ascontiguousarray(speed, dtype=float).ravel()
+    P = _run_parameters(gains, speed)
+    st = np.moveaxis(np.asarray(states, dtype=float), 0, 1)  # (n, m, T)
+    n, m, T = st.shape
+    if n != speed.size:
+        raise ValueError(f"states must hold {speed.size} runs, got {n}")
+    if out is None:
+        out = np.empty((n, 11, T))
+    elif out.shape != (n, 11, T) or out.dtype != np.float64:
+        raise ValueError(
+            f"out must be a float64 array of shape {(n, 11, T)}, got "
+            f"{out.dtype} {out.shape}"
+        )
+    if isinstance(path, Straight):
+        pose = np.array([1.0, *path.start, path.start_heading, 0.0])
+    elif isinstance(path, Arc):
+        pose = np.array([2.0, *path.start, path.start_heading, path.kappa])
+    else:
+        pose = np.zeros(5)
+    _signals_batch(
+        st, P, q, table.breaks, table.coefs, float(vehicle.rear_to_cg), pose, out
+    )
+    S = out[:, 3]
+    valid = np.isfinite(S)
+    if pose[0] == 0.0:
+        # other paths: position and heading from the path (numpy), psi
+        # unwrapped in time (a stopped run's NaN tail held at its last value)
+        s_path = S[valid]
+        if table.period == 0.0 and math.isfinite(table.open_length):
+            s_path = np.clip(s_path, 0.0, table.open_length)
+        heading = np.asarray(path.heading(s_path), dtype=float)
+        px, py = path.position(s_path)
+        e = out[:, 4][valid]
+        out[:, 0][valid] = px - e * np.sin(heading)
+        out[:, 1][valid] = py + e * np.cos(heading)
+        psi = np.full((n, T), np.nan)
+        psi[valid] = out[:, 5][valid] + heading
+        idx = np.where(valid, np.arange(T), 0)
+        np.maximum.accumulate(idx, axis=1, out=idx)
+        filled = np.nan_to_num(np.take_along_axis(psi, idx, axis=1))
+        out[:, 2] = np.where(valid, np.unwrap(filled, axis=1), np.nan)
+    # psi on the branch of the given initial heading
+    psi0 = np.asarray(initial_heading, dtype=float)
+    shift = 2 * math.pi * np.round((psi0 - out[:, 2, 0]) / (2 * math.pi))
+    out[:, 2] += np.nan_to_num(shift)[:, None]
+    return out

@@ -1,0 +1,860 @@
+"""Fuzz suite: every public callable of ``fws_control`` under bad input.
+
+For each name in ``fws_control.__all__`` a valid baseline call is written
+below (:data:`CASES`). Hypothesis replaces one argument at a time by a bad
+value -- NaN, +-inf, 0, negative, huge, tiny, bool, complex, None, a string,
+a foreign object, wrong shapes -- and the call must end in one of two ways:
+
+* a result that passes the function's own postconditions (finite where the
+  docstring promises it; for :func:`double_root_gains` the double root
+  placed, checked by the eigenvalues of the closed loop), or
+* a :class:`ValueError` or :class:`TypeError` (subclasses included) whose
+  message names the argument.
+
+Anything else -- another exception (``AttributeError``, ``OverflowError``,
+``LinAlgError``, ``ZeroDivisionError``, ...), a message that does not name the
+argument, a NaN result, a call that runs past :data:`TIME_LIMIT` -- fails.
+
+Runs
+----
+CI: derandomized (fixed seed), :data:`EXAMPLES` examples per callable
+(default 12; the slow ones fewer), about 20-30 s on 2 cores. A longer run::
+
+    FWS_FUZZ_EXAMPLES=2000 python -m pytest -q tests/test_fuzz.py
+
+and the exhaustive count of every (callable, argument, bad value) triple,
+printed as "N calls tried, M handled well" per callable::
+
+    python benchmarks/fuzz_counts.py
+
+Known failures
+--------------
+Callables whose fixes belong to other parts of the code (issue 13 items
+1-3 and 9: the simulation engine's tolerances, step and duration; items of
+modules outside ``validation/design/paths/metrics/comparison/models/
+acceleration/gains/vehicle/controllers``) are listed in :data:`KNOWN` with
+the reason. They are marked ``xfail`` (not strict, so a fix shows as
+XPASS) and listed in the test report; ``FWS_FUZZ_STRICT=1`` makes them
+ordinary failures.
+
+Deliberately excluded (with the reason)
+---------------------------------------
+* ``symbolic``: a module (sympy derivations), not a callable; ``dynamics``:
+  a module too (the dynamic single-track core, not in ``__all__``).
+* ``SingularStateError``, ``UncontrollableError``,
+  ``AmbiguousProjectionError``: exception classes.
+* ``Path``, ``LateralController``: abstract base classes (not instantiable).
+* Result records built by the library and not meant to be built by hand --
+  ``AffinePolynomial``, ``LoopMatrices``, ``StabilityBoundaries``,
+  ``BoundaryCurve``, ``CriticalDelay``, ``StabilityChart``,
+  ``ControllerComparison``, ``DelayMarginChart``, ``TurningGeometry``,
+  ``LinearNonlinearComparison``, ``SimulationResult``, ``TrackingMetrics``,
+  ``Projection``: their fields are fuzzed through the functions that build
+  them.
+* The arguments ``name`` (a label passed to python-control), ``ax`` and
+  ``client`` are not fuzzed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import re
+import signal
+from collections import Counter
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import control as ct
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import fws_control as fws
+from fws_control.simulation import STATUSES
+
+#: Examples per callable (hypothesis), from the environment for long runs.
+EXAMPLES = int(os.environ.get("FWS_FUZZ_EXAMPLES", "30"))
+#: Seconds one call may take before it counts as a hang.
+TIME_LIMIT = float(os.environ.get("FWS_FUZZ_TIME_LIMIT", "10"))
+STRICT = os.environ.get("FWS_FUZZ_STRICT", "") not in ("", "0")
+
+EXCLUDED = {
+    "symbolic": "a module",
+    "dynamics": "a module (its functions are not in fws_control.__all__)",
+    "SingularStateError": "exception class",
+    "UncontrollableError": "exception class",
+    "AmbiguousProjectionError": "exception class",
+    "Path": "abstract base class",
+    "LateralController": "abstract base class",
+    "AffinePolynomial": "result record",
+    "LoopMatrices": "result record",
+    "StabilityBoundaries": "result record",
+    "BoundaryCurve": "result record",
+    "CriticalDelay": "result record",
+    "StabilityChart": "result record",
+    "ControllerComparison": "result record",
+    "DelayMarginChart": "result record",
+    "TurningGeometry": "result record",
+    "LinearNonlinearComparison": "result record",
+    "SimulationResult": "result record",
+    "TrackingMetrics": "result record",
+    "Projection": "result record",
+}
+
+
+class _Foreign:
+    """An object of no expected type."""
+
+    def __repr__(self) -> str:
+        return "<foreign>"
+
+
+#: Bad values (label, value). Some are valid for some arguments (0 for a
+#: curvature, a negative speed): then the result must pass the checks.
+BAD_VALUES: list[tuple[str, Any]] = [
+    ("nan", math.nan),
+    ("inf", math.inf),
+    ("-inf", -math.inf),
+    ("zero", 0.0),
+    ("int zero", 0),
+    ("negative", -1.5),
+    ("huge", 1e300),
+    ("-huge", -1e300),
+    ("tiny", 1e-300),
+    ("True", True),
+    ("False", False),
+    ("complex", 1.0 + 2.0j),
+    ("complex real", np.complex128(1.0)),
+    ("None", None),
+    ("string", "1.0"),
+    ("foreign", _Foreign()),
+    ("empty", np.array([])),
+    ("matrix", np.array([[1.0, 2.0], [3.0, 4.0]])),
+    ("nan array", np.array([1.0, math.nan])),
+    ("bool array", np.array([True, False])),
+    ("list", [1.0, 2.0, 3.0]),
+]
+
+
+# --------------------------------------------------------------------------
+# baseline objects
+
+VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+PLANT = fws.LateralPlant(VEH, speed=5.0, curvature=0.1)
+GAINS = fws.double_root_gains(PLANT, ratio=-1.0, pole=-1.0)
+ARC = fws.Arc(curvature=0.1)
+T = np.linspace(0.0, 5.0, 51)
+SIGNAL = 2.0 * np.exp(-T)
+_RES = None
+
+
+def _result():
+    global _RES
+    if _RES is None:
+        _RES = fws.simulate(
+            VEH,
+            fws.Straight(),
+            fws.SteeringGains(0.1, 0.5, ratio=0.0),
+            speed=5.0,
+            initial_state=(0.0, 1.0, 0.0),
+            duration=3.0,
+            dt=0.1,
+        )
+    return _RES
+
+
+class _Lazy:
+    """A baseline value built on first use (simulation results)."""
+
+    def __init__(self, make: Callable[[], Any]):
+        self.make = make
+
+
+# --------------------------------------------------------------------------
+# postconditions
+
+
+def _finite_tree(x: Any, allow_inf: bool = False, depth: int = 0) -> bool:
+    """True if every float in `x` is finite (or +-inf if allowed), recursively."""
+    if depth > 6 or x is None or isinstance(x, (str, bool, np.bool_)):
+        return True
+    if isinstance(x, (int, float, np.number)):
+        v = float(np.real(x))
+        return (not math.isnan(v)) and (allow_inf or math.isfinite(v))
+    if isinstance(x, np.ndarray):
+        if x.dtype.kind not in "fiuc":
+            return True
+        a = np.asarray(x, dtype=complex if x.dtype.kind == "c" else float)
+        return not np.any(np.isnan(a)) and (allow_inf or bool(np.all(np.isfinite(a))))
+    if isinstance(x, (list, tuple)):
+        return all(_finite_tree(v, allow_inf, depth + 1) for v in x)
+    if isinstance(x, dict):
+        return all(_finite_tree(v, allow_inf, depth + 1) for v in x.values())
+    if isinstance(x, ct.StateSpace):
+        return all(_finite_tree(np.asarray(m), False) for m in (x.A, x.B, x.C, x.D))
+    if isinstance(x, ct.TransferFunction):
+        return all(
+            _finite_tree(np.asarray(c), False)
+            for row in x.num_array.tolist() + x.den_array.tolist()
+            for c in row
+        )
+    if isinstance(x, ct.InputOutputSystem):
+        return _finite_tree(dict(getattr(x, "params", {}) or {}), allow_inf, depth + 1)
+    if dataclasses.is_dataclass(x) and not isinstance(x, type):
+        return all(
+            _finite_tree(getattr(x, f.name), allow_inf, depth + 1)
+            for f in dataclasses.fields(x)
+            if not f.name.startswith("_")
+        )
+    return True
+
+
+def finite(result, call) -> bool:
+    return _finite_tree(result)
+
+
+def finite_or_inf(result, call) -> bool:
+    return _finite_tree(result, allow_inf=True)
+
+
+def _has_nonfinite_array(call) -> bool:
+    for v in call.values():
+        if isinstance(v, (np.ndarray, list)):
+            try:
+                a = np.asarray(v, dtype=float)
+            except (TypeError, ValueError):
+                continue
+            if a.ndim and not np.all(np.isfinite(a)):
+                return True
+    return False
+
+
+def elementwise(result, call) -> bool:
+    # documented: non-finite elements of array inputs give non-finite
+    # elements in their place (vectorised evaluation over samples)
+    return _has_nonfinite_array(call) or _finite_tree(result)
+
+
+def simulation_post(result, call) -> bool:
+    """Runs marked "ok" have finite signals; the others carry a status.
+
+    A run that stops or fails is marked, not raised (the design card): its
+    samples after the stop are NaN, and its status says why.
+    """
+    status = np.atleast_1d(np.asarray(result.status))
+    if not np.all(np.isin(status, list(STATUSES))):
+        return False
+    for name in ("x", "y", "psi", "e", "theta", "delta_f", "delta_r"):
+        sig = np.asarray(getattr(result, name), dtype=float)
+        sig = sig.reshape(status.size, -1)
+        if not np.all(np.isfinite(sig[status == "ok"])):
+            return False
+    return True
+
+
+def metric_post(result, call) -> bool:
+    # NaN samples are data (documented: a run with no valid sample gives
+    # NaN); a NaN result is fine only if the input signal held a NaN.
+    sig = call.get("signal")
+    has_nan = False
+    try:
+        has_nan = bool(np.any(np.isnan(np.asarray(sig, dtype=float))))
+    except (TypeError, ValueError):
+        pass
+    return has_nan or _finite_tree(result, allow_inf=True)
+
+
+def gains_placed(result, call) -> bool:
+    """The double root placed: eigenvalues of A - b k from a written-out A, B."""
+    plant, pole, a = call["plant"], call["pole"], call["ratio"]
+    if not _finite_tree(result):
+        return False
+    if not isinstance(plant, fws.LateralPlant) or np.ndim(pole) or np.ndim(a):
+        return True
+    V, k, f = float(plant.speed), float(plant.curvature), plant.vehicle.wheelbase
+    c = 1.0 + (f * k) ** 2 if plant.model == "exact" else 1.0
+    A = np.array([[0.0, V], [-V * k * k, 0.0]])
+    b = np.array([[0.0, V], [c * V / f, -V / f]]) @ np.array([1.0, float(a)])
+    ev = np.linalg.eigvals(A - np.outer(b, [float(result.k1), float(result.k2)]))
+    return bool(np.all(np.abs(ev - pole) <= 1e-4 * abs(pole)))
+
+
+# --------------------------------------------------------------------------
+# cases
+
+
+@dataclass
+class Case:
+    func: Callable[..., Any]
+    args: dict[str, Any]
+    kwargs: dict[str, Any] = field(default_factory=dict)
+    post: Callable[[Any, dict], bool] = finite
+    examples: int = EXAMPLES
+    flags: tuple[str, ...] = ()  # arguments that take a bool (or None)
+
+    def call(self, override: dict[str, Any]) -> tuple[Any, dict]:
+        values = {**self.args, **self.kwargs, **override}
+        values = {
+            k: (v.make() if isinstance(v, _Lazy) else v) for k, v in values.items()
+        }
+        pos = [values[k] for k in self.args]
+        kw = {k: values[k] for k in self.kwargs}
+        return self.func(*pos, **kw), values
+
+    @property
+    def names(self) -> list[str]:
+        return [*self.args, *self.kwargs]
+
+
+V = dict(vehicle=VEH)
+PG = dict(plant=PLANT, gains=GAINS)
+FEW = max(3, EXAMPLES // 3)
+RESULT = _Lazy(_result)
+
+CASES: dict[str, Case] = {
+    "Vehicle": Case(
+        fws.Vehicle,
+        dict(wheelbase=2.7, rear_to_cg=1.35),
+        dict(
+            max_steer_front=0.5,
+            max_steer_rear=0.3,
+            max_steer_rate_front=1.0,
+            max_steer_rate_rear=1.0,
+            mass=1500.0,
+            yaw_inertia=2500.0,
+            cornering_front=8.0e4,
+            cornering_rear=8.0e4,
+            friction=1.0,
+        ),
+    ),
+    "global_frame_model": Case(fws.global_frame_model, V, dict(speed=5.0)),
+    "path_frame_model": Case(fws.path_frame_model, V, dict(speed=5.0, curvature=0.1)),
+    "yaw_rate": Case(
+        fws.yaw_rate,
+        dict(vehicle=VEH, delta_f=0.1, delta_r=-0.1),
+        dict(speed=5.0),
+        post=elementwise,
+    ),
+    "feedforward_steering": Case(fws.feedforward_steering, V, dict(curvature=0.1)),
+    "yaw_acceleration": Case(
+        fws.yaw_acceleration,
+        dict(vehicle=VEH, delta_f=0.1, delta_r=0.0, delta_f_rate=0.2, delta_r_rate=0.0),
+        dict(speed=5.0),
+        post=elementwise,
+    ),
+    "lateral_acceleration": Case(
+        fws.lateral_acceleration,
+        dict(vehicle=VEH, delta_f=0.1, delta_r=0.0, delta_f_rate=0.2, delta_r_rate=0.0),
+        dict(speed=5.0),
+        post=elementwise,
+    ),
+    "linearize": Case(
+        fws.linearize, dict(plant=VEH), dict(speed=5.0, curvature=0.1, model="exact")
+    ),
+    "closed_loop": Case(fws.closed_loop, PG),
+    "LateralPlant": Case(
+        fws.LateralPlant,
+        dict(vehicle=VEH, speed=5.0),
+        dict(curvature=0.1, model="exact", steering_lag=None),
+    ),
+    "as_plant": Case(fws.as_plant, dict(plant=VEH), dict(speed=5.0, curvature=0.1)),
+    "loop_matrices": Case(fws.loop_matrices, dict(plant=PLANT)),
+    "characteristic_coefficients": Case(
+        fws.characteristic_coefficients, dict(plant=PLANT), dict(ratio=-1.0)
+    ),
+    "characteristic_polynomial": Case(fws.characteristic_polynomial, PG),
+    "SteeringGains": Case(fws.SteeringGains, dict(k1=0.1, k2=0.5, ratio=-1.0)),
+    "critical_delay": Case(fws.critical_delay, PG),
+    "rightmost_roots": Case(
+        fws.rightmost_roots, PG, dict(delay=0.2, n=4, nodes=20), examples=FEW
+    ),
+    "unstable_root_count": Case(fws.unstable_root_count, PG, dict(delay=0.2)),
+    "double_root_gains": Case(
+        fws.double_root_gains,
+        dict(plant=PLANT),
+        dict(ratio=-1.0, pole=-1.0),
+        post=gains_placed,
+    ),
+    "is_stable": Case(fws.is_stable, PG, dict(delay=0.0)),
+    "StabilityBoundary": Case(
+        fws.StabilityBoundary,
+        dict(alpha=1.0, beta=0.0, gamma=-0.5, condition="p0 > 0"),
+    ),
+    "stability_boundaries": Case(
+        fws.stability_boundaries, dict(plant=PLANT), dict(ratio=-1.0, delay=0.0)
+    ),
+    "stability_chart": Case(
+        fws.stability_chart,
+        dict(plant=PLANT),
+        dict(
+            ratio=-1.0,
+            k1=np.linspace(-0.5, 0.5, 5),
+            k2=np.linspace(-1.0, 1.0, 5),
+            pole=-1.0,
+        ),
+        post=finite_or_inf,
+        examples=FEW,
+    ),
+    "StateFeedback": Case(
+        fws.StateFeedback, dict(K=np.array([[0.1, 0.5], [-0.1, -0.5]]))
+    ),
+    "LQRController": Case(
+        fws.LQRController, dict(plant=PLANT), dict(Q=np.eye(2), R=1.0, ratio=-1.0)
+    ),
+    "PurePursuit": Case(
+        fws.PurePursuit, {}, dict(lookahead=5.0, lookahead_time=None, ratio=0.0)
+    ),
+    "Stanley": Case(fws.Stanley, {}, dict(gain=1.0, softening=0.1, ratio=0.0)),
+    "RearWheelFeedback": Case(
+        fws.RearWheelFeedback, {}, dict(k_e=0.05, k_theta=0.2, ratio=0.0)
+    ),
+    "saturate": Case(fws.saturate, dict(vehicle=VEH, delta_f=0.1, delta_r=-0.1)),
+    "as_controller": Case(fws.as_controller, dict(gains=GAINS), dict(feedforward=True)),
+    "compare": Case(
+        fws.compare,
+        dict(
+            vehicle=VEH,
+            manoeuvre=_Lazy(lambda: fws.constant_radius(radius=40.0, turns=0.05)),
+            controllers=_Lazy(lambda: {"4ws": GAINS}),
+        ),
+        dict(speed=5.0, offset=0.0, delay=0.0, actuator_time_constant=None, dt=0.1),
+        post=lambda r, c: _finite_tree(r.table),
+        examples=FEW,
+    ),
+    "default_controllers": Case(
+        fws.default_controllers, V, dict(speed=5.0, ratio=-0.3, pole=-1.0)
+    ),
+    "Gate": Case(fws.Gate, dict(x_start=0.0, x_end=5.0, y_right=-1.0, y_left=1.0)),
+    "Manoeuvre": Case(
+        fws.Manoeuvre,
+        dict(
+            name="m",
+            path=fws.Straight(length=50.0),
+            gates=(fws.Gate(10.0, 15.0, -1.5, 1.5),),
+            vehicle_width=1.8,
+        ),
+        dict(start_x=0.0),
+    ),
+    "double_lane_change": Case(
+        fws.double_lane_change,
+        {},
+        dict(vehicle_width=1.8, approach=30.0, exit_length=60.0),
+    ),
+    "obstacle_avoidance": Case(
+        fws.obstacle_avoidance,
+        {},
+        dict(vehicle_width=1.8, approach=30.0, exit_length=60.0),
+    ),
+    "slalom": Case(
+        fws.slalom,
+        {},
+        dict(pitch=18.0, amplitude=1.0, cones=6, approach=30.0, vehicle_width=1.8),
+    ),
+    "constant_radius": Case(fws.constant_radius, {}, dict(radius=40.0, turns=1.0)),
+    "delay_margin_chart": Case(
+        fws.delay_margin_chart,
+        dict(plant=PLANT),
+        dict(ratio=np.array([-1.0, 0.0]), pole=np.array([-1.0, -0.5])),
+        post=finite_or_inf,
+        examples=FEW,
+    ),
+    "gain_loop": Case(fws.gain_loop, PG),
+    "gain_locus": Case(
+        fws.gain_locus, PG, dict(scale=np.linspace(0.0, 2.0, 5)), examples=FEW
+    ),
+    "parameter_locus": Case(
+        fws.parameter_locus,
+        PG,
+        dict(parameter="speed", values=np.linspace(1.0, 10.0, 4)),
+        examples=FEW,
+    ),
+    "steady_turn": Case(fws.steady_turn, dict(vehicle=VEH, delta_f=0.3, delta_r=-0.1)),
+    "turning_radius": Case(
+        fws.turning_radius,
+        V,
+        dict(ratio=np.array([-1.0, 0.0]), max_steer_front=0.5, max_steer_rear=0.3),
+    ),
+    "plot_turning_radius": Case(
+        fws.plot_turning_radius,
+        V,
+        dict(ratios=np.array([-1.0, 0.0]), limits=None, max_steer_rear=None, ylim=12.0),
+        post=lambda r, c: True,
+        examples=FEW,
+    ),
+    "compare_linear_nonlinear": Case(
+        fws.compare_linear_nonlinear,
+        PG,
+        dict(initial_errors=(0.5, 0.0), duration=2.0, feedforward=True, dt=0.1),
+        examples=FEW,
+    ),
+    "steering_command": Case(
+        fws.steering_command,
+        dict(vehicle=VEH, gains=GAINS, e=1.0, theta=0.1),
+        dict(curvature=0.1, feedforward=True),
+        post=elementwise,
+    ),
+    "steering_command_rate": Case(
+        fws.steering_command_rate,
+        dict(vehicle=VEH, gains=GAINS, e=1.0, theta=0.1, e_rate=-0.5, theta_rate=0.0),
+        dict(curvature=0.1, curvature_rate=0.0, feedforward=True),
+        post=elementwise,
+    ),
+    "path_tracking_controller": Case(
+        fws.path_tracking_controller,
+        dict(vehicle=VEH, gains=GAINS),
+        dict(feedforward=True),
+    ),
+    "feedback_controller": Case(
+        fws.feedback_controller, dict(vehicle=VEH, gains=GAINS)
+    ),
+    "feedforward_feedback_controller": Case(
+        fws.feedforward_feedback_controller, dict(vehicle=VEH, gains=GAINS)
+    ),
+    "steering_actuator": Case(fws.steering_actuator, V, dict(time_constant=0.05)),
+    "simulate": Case(
+        fws.simulate,
+        dict(vehicle=VEH, path=ARC, gains=GAINS),
+        dict(
+            speed=5.0,
+            initial_state=(0.0, -1.0, 0.0),
+            duration=2.0,
+            feedforward=True,
+            dt=0.1,
+            t_eval=None,
+            actuator_time_constant=None,
+            delay=0.0,
+            method="DOP853",
+            rtol=1e-6,
+            atol=1e-9,
+        ),
+        post=simulation_post,
+        examples=FEW,
+    ),
+    "closed_loop_system": Case(
+        fws.closed_loop_system,
+        dict(vehicle=VEH, path=ARC, gains=GAINS),
+        dict(speed=5.0, feedforward=True, actuator_time_constant=None, delay=0.0),
+        examples=FEW,
+    ),
+    "projection_system": Case(fws.projection_system, dict(path=ARC)),
+    "simulate_batch": Case(
+        fws.simulate_batch,
+        dict(vehicle=VEH, path=ARC, gains=GAINS),
+        dict(
+            speed=np.array([5.0, 4.0]),
+            initial_state=(0.0, -1.0, 0.0),
+            duration=2.0,
+            feedforward=True,
+            dt=0.1,
+            t_eval=None,
+            actuator_time_constant=None,
+            delay=0.0,
+            method="DOP853",
+            rtol=1e-6,
+            atol=1e-9,
+            chunk_size=None,
+            progress=False,
+        ),
+        post=simulation_post,
+        examples=FEW,
+    ),
+    "peak_abs": Case(fws.peak_abs, dict(signal=SIGNAL), post=metric_post),
+    "settling_time": Case(
+        fws.settling_time,
+        dict(t=T, signal=SIGNAL),
+        dict(band=0.1, fraction=0.02),
+        post=metric_post,
+    ),
+    "overshoot": Case(
+        fws.overshoot, dict(signal=SIGNAL), dict(relative=False), post=metric_post
+    ),
+    "rms": Case(fws.rms, dict(t=T, signal=SIGNAL), dict(t_start=0.0), post=metric_post),
+    "steady_state": Case(
+        fws.steady_state, dict(t=T, signal=SIGNAL), dict(window=1.0), post=metric_post
+    ),
+    "tracking_metrics": Case(
+        fws.tracking_metrics,
+        dict(result=RESULT),
+        dict(band=0.05, fraction=0.02, window=1.0),
+        post=finite_or_inf,
+    ),
+    "Straight": Case(
+        fws.Straight,
+        {},
+        dict(length=10.0, start=(0.0, 0.0), start_heading=0.0),
+        post=finite_or_inf,  # length inf: the unbounded line (documented)
+    ),
+    "Arc": Case(
+        fws.Arc,
+        dict(curvature=0.1),
+        dict(length=5.0, start=(0.0, 0.0), start_heading=0.0),
+    ),
+    "Clothoid": Case(
+        fws.Clothoid,
+        dict(curvature_start=0.0, curvature_end=0.1, length=10.0),
+        dict(start=(0.0, 0.0), start_heading=0.0),
+    ),
+    "Spline": Case(
+        fws.Spline,
+        dict(waypoints=[[0.0, 0.0], [10.0, 3.0], [20.0, 0.0]]),
+        dict(closed=None),
+        flags=("closed",),
+    ),
+    "PathChain": Case(
+        fws.PathChain,
+        dict(segments=(fws.Straight(length=5.0), fws.Arc(0.1, length=5.0))),
+        dict(closed=None),
+        flags=("closed",),
+    ),
+}
+
+#: Known failures that other parts of the code must fix (see the module notes).
+#: (callable, argument) -> reason; argument None: every argument.
+_SIM = (
+    "simulation/ (engine branch): feedforward and progress not checked as "
+    "bools (validation.check_bool), an array time constant fails unnamed"
+)
+_CMP = (
+    "controller_comparison.py: scalar checks, work budget for dt/delay/time "
+    "constant, offset range"
+)
+_MAN = (
+    "manoeuvres.py: NaN and non-string fields accepted; array or huge "
+    "arguments fail without their name"
+)
+_TURN = "turning.py: no vehicle type check (AttributeError); limits named wrongly"
+_BASE = (
+    "baselines.py: LinAlgError for extreme R/ratio, scalar checks, saturate "
+    "passes NaN/inf/None"
+)
+_STAB = (
+    "stability.py/charts.py: NaN coefficients and non-string condition "
+    "accepted; an extreme ratio overflows to non-finite boundaries"
+)
+_DELAY = (
+    "delay.py: n/nodes unchecked (OverflowError, hang at 1e300), extreme "
+    "delay hangs or exhausts memory; extreme ratio/pole overflow"
+)
+KNOWN: dict[tuple[str, str | None], str] = {
+    **{
+        ("simulate", a): _SIM
+        for a in (
+            "actuator_time_constant atol delay dt duration feedforward rtol"
+        ).split()
+    },
+    **{
+        ("simulate_batch", a): _SIM
+        for a in (
+            "actuator_time_constant atol chunk_size delay dt duration feedforward "
+            "progress rtol speed"
+        ).split()
+    },
+    **{
+        ("closed_loop_system", a): _SIM
+        for a in ("actuator_time_constant", "delay", "feedforward")
+    },
+    **{
+        ("compare", a): _CMP
+        for a in ("actuator_time_constant", "delay", "dt", "offset", "speed")
+    },
+    **{("default_controllers", a): _CMP for a in ("speed", "ratio", "pole")},
+    ("as_controller", "feedforward"): (
+        "baselines.py: feedforward is read by its truth value (complex accepted)"
+    ),
+    ("gain_locus", "scale"): "rootlocus.py: an empty scale fails without its name",
+    **{("Gate", a): _MAN for a in ("x_start", "x_end", "y_left", "y_right")},
+    **{
+        ("Manoeuvre", a): _MAN
+        for a in ("name", "path", "gates", "vehicle_width", "start_x")
+    },
+    **{
+        (f, a): _MAN
+        for f in ("double_lane_change", "obstacle_avoidance")
+        for a in ("vehicle_width", "approach", "exit_length")
+    },
+    **{
+        ("slalom", a): _MAN
+        for a in ("pitch", "amplitude", "cones", "approach", "vehicle_width")
+    },
+    **{("constant_radius", a): _MAN for a in ("radius", "turns")},
+    ("steady_turn", "vehicle"): _TURN,
+    **{
+        ("turning_radius", a): _TURN
+        for a in ("vehicle", "max_steer_front", "max_steer_rear")
+    },
+    **{
+        ("plot_turning_radius", a): _TURN
+        for a in ("vehicle", "ratios", "limits", "max_steer_rear", "ylim")
+    },
+    **{("LQRController", a): _BASE for a in ("Q", "R", "ratio")},
+    ("Stanley", "softening"): _BASE,
+    **{("saturate", a): _BASE for a in ("delta_f", "delta_r")},
+    **{
+        ("StabilityBoundary", a): _STAB for a in ("alpha", "beta", "gamma", "condition")
+    },
+    ("stability_boundaries", "ratio"): _STAB,
+    ("stability_chart", "ratio"): _STAB,
+    **{("rightmost_roots", a): _DELAY for a in ("delay", "n", "nodes")},
+    ("unstable_root_count", "delay"): _DELAY,
+    ("is_stable", "delay"): _DELAY,
+    **{("delay_margin_chart", a): _DELAY for a in ("ratio", "pole")},
+    **{
+        ("parameter_locus", a): (
+            "rootlocus.py: parameter must be checked as a string; a value of 0 "
+            "is named as speed, not values"
+        )
+        for a in ("parameter", "values")
+    },
+    ("linearize", "curvature"): (
+        "plant.py: a curvature of extreme magnitude overflows V^2 kappa^2 to "
+        "inf in A (no range check)"
+    ),
+}
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_baseline_call_passes_its_postconditions(name):
+    # the valid call each fuzz case starts from: if it failed, every
+    # refusal of a bad value would prove nothing
+    case = CASES[name]
+    result, values = case.call({})
+    assert case.post(result, values)
+
+
+def test_every_public_name_is_covered_or_excluded():
+    names = set(fws.__all__)
+    missing = names - set(CASES) - set(EXCLUDED)
+    assert not missing, f"public names neither fuzzed nor excluded: {sorted(missing)}"
+    assert not set(CASES) & set(EXCLUDED)
+    assert set(CASES) | set(EXCLUDED) <= names
+
+
+# --------------------------------------------------------------------------
+# the judge
+
+
+class CallTimeout(Exception):
+    pass
+
+
+def _alarm(signum, frame):
+    raise CallTimeout(f"call took more than {TIME_LIMIT} s")
+
+
+def judge(case: Case, arg: str, value: Any) -> tuple[bool, str]:
+    """Call `case` with `arg` replaced by `value`: (handled well, why not)."""
+    old = signal.signal(signal.SIGALRM, _alarm)
+    signal.setitimer(signal.ITIMER_REAL, TIME_LIMIT)
+    try:
+        try:
+            result, values = case.call({arg: value})
+        finally:
+            signal.setitimer(signal.ITIMER_REAL, 0.0)
+            signal.signal(signal.SIGALRM, old)
+    except (ValueError, TypeError) as exc:
+        msg = str(exc)
+        if re.search(rf"(?<![A-Za-z0-9_]){re.escape(arg)}(?![A-Za-z0-9_])", msg):
+            return True, ""
+        return False, f"{type(exc).__name__} without {arg!r}: {msg[:300]}"
+    except CallTimeout as exc:
+        return False, f"hang: {exc}"
+    except Exception as exc:  # noqa: BLE001 - every other outcome is a finding
+        return False, f"{type(exc).__name__}: {str(exc)[:300]}"
+    # a bool or complex value where a real number (not a flag) is expected
+    # must be refused, whatever the result looks like: True is not 1, and a
+    # complex number would lose its imaginary part
+    baseline = {**case.args, **case.kwargs}.get(arg)
+    flag = isinstance(baseline, bool) or arg in case.flags
+    kind = np.asarray(value).dtype.kind if isinstance(value, np.ndarray) else None
+    if isinstance(value, (complex, np.complexfloating)) or kind == "c":
+        return False, f"complex {arg}={value!r} accepted"
+    if not flag and (isinstance(value, (bool, np.bool_)) or kind == "b"):
+        return False, f"bool {arg}={value!r} accepted as a number"
+    try:
+        ok = case.post(result, values)
+    except Exception as exc:  # noqa: BLE001
+        return False, f"postcondition raised {type(exc).__name__}: {exc}"
+    finally:
+        import matplotlib.pyplot as plt
+
+        plt.close("all")
+    return (True, "") if ok else (False, "result fails its postconditions")
+
+
+@pytest.fixture(scope="session")
+def fuzz_counts(request):
+    """Calls tried and handled well per callable, printed at the end."""
+    counts: dict[str, Counter] = {}
+
+    def report():
+        tr = request.config.pluginmanager.get_plugin("terminalreporter")
+        if tr is None or not counts:
+            return
+        tried = sum(c["tried"] for c in counts.values())
+        well = sum(c["well"] for c in counts.values())
+        capman = request.config.pluginmanager.get_plugin("capturemanager")
+        with capman.global_and_fixture_disabled():
+            tr.write_line("")
+            tr.write_line(
+                f"fuzz: {tried} calls tried, {well} handled well "
+                f"({len(counts)} callables)"
+            )
+            for name, c in sorted(counts.items()):
+                if c["well"] < c["tried"]:
+                    tr.write_line(
+                        f"  {name}: {c['tried']} tried, {c['well']} handled well"
+                    )
+
+    request.addfinalizer(report)
+    return counts
+
+
+def _params():
+    out = []
+    for name in CASES:
+        marks = []
+        reason = KNOWN.get((name, None))
+        if reason and not STRICT:
+            marks.append(pytest.mark.xfail(reason=reason, strict=False))
+        out.append(pytest.param(name, marks=marks, id=name))
+    return out
+
+
+@pytest.mark.parametrize("name", _params())
+def test_bad_input_is_handled(name, fuzz_counts):
+    case = CASES[name]
+    counts = fuzz_counts.setdefault(name, Counter())
+    found: dict[tuple[str, str], str] = {}
+
+    @settings(
+        max_examples=case.examples,
+        derandomize=True,
+        deadline=None,
+        database=None,
+        suppress_health_check=list(HealthCheck),
+    )
+    @given(arg=st.sampled_from(case.names), bad=st.sampled_from(BAD_VALUES))
+    def run(arg, bad):
+        label, value = bad
+        good, why = judge(case, arg, value)
+        counts["tried"] += 1
+        counts["well"] += int(good)
+        if not good:
+            found[(arg, label)] = why
+
+    run()
+    known = {k: v for k, v in found.items() if (name, k[0]) in KNOWN}
+    unknown = {k: v for k, v in found.items() if k not in known}
+    lines = [f"{name}({a}={lab}): {why}" for (a, lab), why in unknown.items()]
+    assert not unknown, "\n".join(lines)
+    if known and not STRICT:
+        pytest.xfail(
+            "; ".join(
+                f"{name}({a}={lab}) [{KNOWN[(name, a)]}]: {why[:120]}"
+                for (a, lab), why in known.items()
+            )
+        )
