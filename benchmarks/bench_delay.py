@@ -6,7 +6,9 @@ a = -1) with a 0.24 s input delay: :func:`fws_control.stability_chart` with
 point at once (argument principle). The reference decides each point from
 its rightmost characteristic root (:func:`fws_control.rightmost_roots`,
 spectral discretisation + Newton), timed on a random subsample and
-extrapolated to the grid. Each time is the best of three runs. Prints the
+extrapolated to the grid. Each time is the best of three runs, in CPU
+seconds (see ``timing.py``); the machine load is printed before and after.
+Prints the
 ratio and the agreement of the verdicts on the subsample (points whose
 rightmost root is within 1e-3 1/s of the axis are left out).
 
@@ -54,8 +56,8 @@ def main() -> None:
     far = np.abs(re) > 1e-3
     agree = np.mean((re < 0)[far] == ch.stable[idx[:, 0], idx[:, 1]][far])
     print(f"delayed chart {N}x{N}, delay {DELAY} s:")
-    print(f"  stability_chart(delay=...)   {t_chart:8.2f} s")
-    print(f"  rightmost root per point     {t_points:8.0f} s (extrapolated)")
+    print(f"  stability_chart(delay=...)   {t_chart:8.2f} s CPU")
+    print(f"  rightmost root per point     {t_points:8.0f} s CPU (extrapolated)")
     print(f"  ratio: {t_points / t_chart:.0f}x")
     print(
         f"  verdicts agree on {far.sum()} subsample points: {agree:.6f}; "

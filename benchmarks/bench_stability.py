@@ -13,7 +13,8 @@ closed-loop eigenvalues:
    the same subsample (the fastest eigenvalue route numpy offers),
    extrapolated likewise.
 
-Each time is the best of three runs. Prints the ratios (targets: >= 1000x
+Each time is the best of three runs, in CPU seconds (see ``timing.py``);
+the machine load is printed before and after. Prints the ratios (targets: >= 1000x
 against the loop for n = 2, >= 100x for n = 4) and the agreement of the
 verdicts on the subsample, away from the boundary.
 
@@ -85,9 +86,9 @@ def run(label: str, plant, ratio: float, n_grid: int, target: float) -> None:
     far = np.abs(re) > 1e-6
     agree = np.mean((re < 0)[far] == chart.stable[idx[:, 0], idx[:, 1]][far])
     print(f"{label}, {n_grid}x{n_grid} grid:")
-    print(f"  stability_chart            {t_chart * 1e3:9.2f} ms")
-    print(f"  per-point eigvals loop     {t_loop * 1e3:9.0f} ms (extrapolated)")
-    print(f"  stacked numpy eigvals      {t_stacked * 1e3:9.0f} ms (extrapolated)")
+    print(f"  stability_chart            {t_chart * 1e3:9.2f} ms CPU")
+    print(f"  per-point eigvals loop     {t_loop * 1e3:9.0f} ms CPU (extrapolated)")
+    print(f"  stacked numpy eigvals      {t_stacked * 1e3:9.0f} ms CPU (extrapolated)")
     print(
         f"  ratio vs loop: {t_loop / t_chart:.0f}x (target >= {target:g}x); "
         f"vs stacked eigvals: {t_stacked / t_chart:.0f}x"

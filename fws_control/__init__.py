@@ -30,118 +30,132 @@ Modules: :mod:`~fws_control.vehicle`, :mod:`~fws_control.exceptions`,
 :mod:`~fws_control.metrics`, :mod:`~fws_control.comparison`,
 :mod:`~fws_control.symbolic` (sympy derivations, the tests' reference) and
 :mod:`~fws_control.paper` (imported only by the CLI).
+
+``import fws_control`` itself imports no submodule: each name of ``__all__``
+is loaded from its module at first use (PEP 562), so that a script or a
+command-line call pays only for what it uses (python-control alone costs
+about a second and a half of CPU to import).
 """
 
-from . import dynamics, symbolic, vehicles
-from .acceleration import lateral_acceleration, yaw_acceleration
-from .baselines import (
-    LateralController,
-    LQRController,
-    PurePursuit,
-    RearWheelFeedback,
-    Stanley,
-    StateFeedback,
-    as_controller,
-    saturate,
-)
-from .charts import (
-    DelayMarginChart,
-    StabilityChart,
-    delay_margin_chart,
-    stability_chart,
-)
-from .comparison import LinearNonlinearComparison, compare_linear_nonlinear
-from .controller_comparison import ControllerComparison, compare, default_controllers
-from .controllers import (
-    feedback_controller,
-    feedforward_feedback_controller,
-    path_tracking_controller,
-    steering_actuator,
-    steering_command,
-    steering_command_rate,
-)
-from .delay import (
-    CriticalDelay,
-    critical_delay,
-    rightmost_roots,
-    unstable_root_count,
-)
-from .design import double_root_gains
-from .dynamic_design import (
-    KinematicDesignLimit,
-    kinematic_design_limit,
-    steady_state_offset,
-    understeer_gradient,
-    zero_sideslip_ratio,
-)
-from .exceptions import (
-    AmbiguousProjectionError,
-    SingularStateError,
-    UncontrollableError,
-)
-from .gains import SteeringGains
-from .linear import (
-    AffinePolynomial,
-    characteristic_coefficients,
-    characteristic_polynomial,
-    closed_loop,
-    linearize,
-)
-from .manoeuvres import (
-    Gate,
-    Manoeuvre,
-    constant_radius,
-    double_lane_change,
-    obstacle_avoidance,
-    slalom,
-)
-from .metrics import (
-    TrackingMetrics,
-    overshoot,
-    peak_abs,
-    rms,
-    settling_time,
-    steady_state,
-    tracking_metrics,
-)
-from .models import (
-    feedforward_steering,
-    global_frame_model,
-    path_frame_model,
-    yaw_rate,
-)
-from .paths import (
-    Arc,
-    Clothoid,
-    Path,
-    PathChain,
-    Projection,
-    Spline,
-    Straight,
-)
-from .plant import LateralPlant, LoopMatrices, as_plant, loop_matrices
-from .rootlocus import gain_locus, gain_loop, parameter_locus
-from .simulation import (
-    SimulationResult,
-    closed_loop_system,
-    projection_system,
-    simulate,
-    simulate_batch,
-)
-from .stability import (
-    BoundaryCurve,
-    StabilityBoundaries,
-    StabilityBoundary,
-    is_stable,
-    stability_boundaries,
-)
-from .turning import (
-    TurningGeometry,
-    plot_turning_radius,
-    steady_turn,
-    turning_radius,
-)
-from .vehicle import Vehicle
+import importlib
+import importlib.util
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # static tools see the names; at run time __getattr__ loads them
+    from . import dynamics, symbolic, vehicles
+    from .acceleration import lateral_acceleration, yaw_acceleration
+    from .baselines import (
+        LateralController,
+        LQRController,
+        PurePursuit,
+        RearWheelFeedback,
+        Stanley,
+        StateFeedback,
+        as_controller,
+        saturate,
+    )
+    from .charts import (
+        DelayMarginChart,
+        StabilityChart,
+        delay_margin_chart,
+        stability_chart,
+    )
+    from .comparison import LinearNonlinearComparison, compare_linear_nonlinear
+    from .controller_comparison import (
+        ControllerComparison,
+        compare,
+        default_controllers,
+    )
+    from .controllers import (
+        feedback_controller,
+        feedforward_feedback_controller,
+        path_tracking_controller,
+        steering_actuator,
+        steering_command,
+        steering_command_rate,
+    )
+    from .delay import (
+        CriticalDelay,
+        critical_delay,
+        rightmost_roots,
+        unstable_root_count,
+    )
+    from .design import double_root_gains
+    from .dynamic_design import (
+        KinematicDesignLimit,
+        kinematic_design_limit,
+        steady_state_offset,
+        understeer_gradient,
+        zero_sideslip_ratio,
+    )
+    from .exceptions import (
+        AmbiguousProjectionError,
+        SingularStateError,
+        UncontrollableError,
+    )
+    from .gains import SteeringGains
+    from .linear import (
+        AffinePolynomial,
+        characteristic_coefficients,
+        characteristic_polynomial,
+        closed_loop,
+        linearize,
+    )
+    from .manoeuvres import (
+        Gate,
+        Manoeuvre,
+        constant_radius,
+        double_lane_change,
+        obstacle_avoidance,
+        slalom,
+    )
+    from .metrics import (
+        TrackingMetrics,
+        overshoot,
+        peak_abs,
+        rms,
+        settling_time,
+        steady_state,
+        tracking_metrics,
+    )
+    from .models import (
+        feedforward_steering,
+        global_frame_model,
+        path_frame_model,
+        yaw_rate,
+    )
+    from .paths import (
+        Arc,
+        Clothoid,
+        Path,
+        PathChain,
+        Projection,
+        Spline,
+        Straight,
+    )
+    from .plant import LateralPlant, LoopMatrices, as_plant, loop_matrices
+    from .rootlocus import gain_locus, gain_loop, parameter_locus
+    from .simulation import (
+        SimulationResult,
+        closed_loop_system,
+        projection_system,
+        simulate,
+        simulate_batch,
+    )
+    from .stability import (
+        BoundaryCurve,
+        StabilityBoundaries,
+        StabilityBoundary,
+        is_stable,
+        stability_boundaries,
+    )
+    from .turning import (
+        TurningGeometry,
+        plot_turning_radius,
+        steady_turn,
+        turning_radius,
+    )
+    from .vehicle import Vehicle
 
 __all__ = [
     "Vehicle",
@@ -246,3 +260,159 @@ __all__ += [
     "zero_sideslip_ratio",
 ]
 __version__ = "0.2.0.dev0"
+
+
+# Lazy loading (PEP 562): ``import fws_control`` runs no submodule, so that a
+# command-line call or a script that needs a few names does not pay for
+# python-control (which pulls in matplotlib, scipy.signal and scipy.stats),
+# sympy or scipy.integrate. A name of __all__ is imported from its submodule
+# at first access and then cached in the module's namespace.
+#: Submodule -> the public names the package re-exports from it.
+_EXPORTS = {
+    "acceleration": (
+        "lateral_acceleration",
+        "yaw_acceleration",
+    ),
+    "baselines": (
+        "LateralController",
+        "LQRController",
+        "PurePursuit",
+        "RearWheelFeedback",
+        "Stanley",
+        "StateFeedback",
+        "as_controller",
+        "saturate",
+    ),
+    "charts": (
+        "DelayMarginChart",
+        "StabilityChart",
+        "delay_margin_chart",
+        "stability_chart",
+    ),
+    "comparison": (
+        "LinearNonlinearComparison",
+        "compare_linear_nonlinear",
+    ),
+    "controller_comparison": (
+        "ControllerComparison",
+        "compare",
+        "default_controllers",
+    ),
+    "controllers": (
+        "feedback_controller",
+        "feedforward_feedback_controller",
+        "path_tracking_controller",
+        "steering_actuator",
+        "steering_command",
+        "steering_command_rate",
+    ),
+    "delay": (
+        "CriticalDelay",
+        "critical_delay",
+        "rightmost_roots",
+        "unstable_root_count",
+    ),
+    "design": ("double_root_gains",),
+    "dynamic_design": (
+        "KinematicDesignLimit",
+        "kinematic_design_limit",
+        "steady_state_offset",
+        "understeer_gradient",
+        "zero_sideslip_ratio",
+    ),
+    "exceptions": (
+        "AmbiguousProjectionError",
+        "SingularStateError",
+        "UncontrollableError",
+    ),
+    "gains": ("SteeringGains",),
+    "linear": (
+        "AffinePolynomial",
+        "characteristic_coefficients",
+        "characteristic_polynomial",
+        "closed_loop",
+        "linearize",
+    ),
+    "manoeuvres": (
+        "Gate",
+        "Manoeuvre",
+        "constant_radius",
+        "double_lane_change",
+        "obstacle_avoidance",
+        "slalom",
+    ),
+    "metrics": (
+        "TrackingMetrics",
+        "overshoot",
+        "peak_abs",
+        "rms",
+        "settling_time",
+        "steady_state",
+        "tracking_metrics",
+    ),
+    "models": (
+        "feedforward_steering",
+        "global_frame_model",
+        "path_frame_model",
+        "yaw_rate",
+    ),
+    "paths": (
+        "Arc",
+        "Clothoid",
+        "Path",
+        "PathChain",
+        "Projection",
+        "Spline",
+        "Straight",
+    ),
+    "plant": (
+        "LateralPlant",
+        "LoopMatrices",
+        "as_plant",
+        "loop_matrices",
+    ),
+    "rootlocus": (
+        "gain_locus",
+        "gain_loop",
+        "parameter_locus",
+    ),
+    "simulation": (
+        "SimulationResult",
+        "closed_loop_system",
+        "projection_system",
+        "simulate",
+        "simulate_batch",
+    ),
+    "stability": (
+        "BoundaryCurve",
+        "StabilityBoundaries",
+        "StabilityBoundary",
+        "is_stable",
+        "stability_boundaries",
+    ),
+    "turning": (
+        "TurningGeometry",
+        "plot_turning_radius",
+        "steady_turn",
+        "turning_radius",
+    ),
+    "vehicle": ("Vehicle",),
+}
+_ORIGIN = {name: module for module, names in _EXPORTS.items() for name in names}
+
+
+def __getattr__(name: str):
+    module = _ORIGIN.get(name)
+    if module is not None:
+        value = getattr(importlib.import_module(f".{module}", __name__), name)
+        globals()[name] = value
+        return value
+    if not name.startswith("_") and importlib.util.find_spec(f"{__name__}.{name}"):
+        # A submodule or subpackage (``fws_control.symbolic``), imported on
+        # first access like the names above.
+        return importlib.import_module(f".{name}", __name__)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -338,38 +338,34 @@ class StabilityChart:
         artists = []
         region_label = "stable" if label is None else label
         if not self.empty:
-            z = self.stable.astype(float)
-            cs = ax.contourf(
-                self.k1, self.k2, z, levels=[0.5, 1.5], colors=[color], alpha=alpha
-            )
-            artists.append(cs)
+            fill, edge = _region_paths(self.k1, self.k2, self.stable)
+            # What contourf(levels=[0.5, 1.5]) and contour(levels=[0.5]) of the
+            # mask draw, built from the same contour paths without their
+            # per-call overhead (most of the cost of a many-panel figure).
+            artists.append(
+                _add_paths(
+                    ax, fill, facecolors=[color], edgecolors="none", alpha=alpha,
+                    antialiaseds=False, zorder=1,
+                )
+            )  # fmt: skip
             if hatch:
                 # A second, unfilled layer keeps the hatch opaque and in the
                 # region's colour, so overlaid regions stay distinguishable.
-                cs = ax.contourf(
-                    self.k1,
-                    self.k2,
-                    z,
-                    levels=[0.5, 1.5],
-                    colors="none",
-                    hatches=[hatch],
-                )
-                cs.set_edgecolor(color)
-                cs.set_linewidth(0.0)
-                artists.append(cs)
+                artists.append(
+                    _add_paths(
+                        ax, fill, facecolors="none", edgecolors=[color],
+                        linewidths=0.0, hatch=hatch, antialiaseds=False, zorder=1,
+                    )
+                )  # fmt: skip
             if outline:
                 # A broad translucent band along the inside of the region's
                 # edge: overlaid regions stay readable where fills overlap.
-                cs = ax.contour(
-                    self.k1,
-                    self.k2,
-                    z,
-                    levels=[0.5],
-                    colors=[color],
-                    linewidths=4.0,
-                    alpha=0.45,
-                )
-                artists.append(cs)
+                artists.append(
+                    _add_paths(
+                        ax, edge, facecolors="none", edgecolors=[color],
+                        linewidths=4.0, alpha=0.45, zorder=2,
+                    )
+                )  # fmt: skip
         # contourf makes no legend handle; a proxy patch stands in for it.
         handles = [
             Patch(
@@ -498,6 +494,45 @@ class StabilityChart:
             )
         opts.update(kwargs)
         return self._draw(ax, **opts)[1]
+
+
+def _region_paths(k1, k2, stable):
+    """Paths of ``contourf(k1, k2, stable, levels=[0.5, 1.5])`` and of its edge.
+
+    The contour generator and its settings are matplotlib's own (its
+    ``contour.algorithm`` and ``contour.corner_mask``), so the paths are those
+    that ``contourf``/``contour`` would draw.
+    """
+    import contourpy
+    import matplotlib as mpl
+    from matplotlib.path import Path as MplPath
+
+    gen = contourpy.contour_generator(
+        k1,
+        k2,
+        np.asarray(stable, dtype=float),
+        name=mpl.rcParams["contour.algorithm"],
+        corner_mask=mpl.rcParams["contour.corner_mask"],
+        line_type=contourpy.LineType.SeparateCode,
+        fill_type=contourpy.FillType.OuterCode,
+    )
+
+    def joined(parts):
+        vertices, codes = parts
+        if not len(vertices):
+            return MplPath(np.empty((0, 2)))
+        return MplPath(np.concatenate(vertices), np.concatenate(codes))
+
+    return joined(gen.filled(0.5, 1.5)), joined(gen.lines(0.5))
+
+
+def _add_paths(ax, path, **kwargs):
+    """Add one path in data coordinates as a collection (as contourf does)."""
+    from matplotlib.collections import PathCollection
+
+    coll = PathCollection([path], transform=ax.transData, **kwargs)
+    ax.add_collection(coll, autolim=False)
+    return coll
 
 
 def note_box(ax, notes) -> None:

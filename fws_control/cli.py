@@ -628,13 +628,30 @@ def _gains(args, veh):
     return SteeringGains(float(g.k1), float(g.k2), args.ratio)
 
 
+def _closed_loop_poles(plant, g, ratio: float):
+    """Eigenvalues of A - b (k1 c_e + k2 c_theta), the closed_loop state matrix.
+
+    Computed from the loop matrices, without building a control.StateSpace
+    (python-control costs ~1 s of import that ``gains`` does not need).
+    """
+    import numpy as np
+
+    from .plant import loop_matrices
+
+    lm = loop_matrices(plant)
+    k = float(g.k1) * lm.c_e + float(g.k2) * lm.c_theta
+    with np.errstate(all="ignore"):
+        a_cl = lm.A - np.outer(lm.input_vector(ratio), k)
+    if not np.all(np.isfinite(a_cl)):
+        return np.full(a_cl.shape[0], np.nan, dtype=complex)
+    return np.linalg.eigvals(a_cl)
+
+
 def _design_error(plant, g, pole: float) -> float:
     """Largest distance of the closed-loop poles from ``pole``, relative to it."""
     import numpy as np
 
-    from .linear import closed_loop
-
-    poles = np.asarray(closed_loop(plant, g).poles(), dtype=complex)
+    poles = np.asarray(_closed_loop_poles(plant, g, float(g.ratio)), dtype=complex)
     if not np.all(np.isfinite(poles)):
         return math.inf
     return float(np.max(np.abs(poles - pole)) / abs(pole))
@@ -652,9 +669,7 @@ def _check_design(plant, g, pole: float, model: str) -> None:
     if not err <= DESIGN_TOLERANCE:
         import numpy as np
 
-        from .linear import closed_loop
-
-        poles = np.sort_complex(np.asarray(closed_loop(plant, g).poles(), complex))
+        poles = np.sort_complex(_closed_loop_poles(plant, g, float(g.ratio)))
         where = ", ".join(
             f"{z.real:.4g}" if abs(z.imag) < 1e-9 else f"{z:.3g}" for z in poles
         )
@@ -691,7 +706,6 @@ def _fmt_coeffs(c) -> str:
 
 def _cmd_gains(args) -> int:
     from .design import UncontrollableError, double_root_gains
-    from .linear import closed_loop
 
     veh = _vehicle(args)
     # Design first so that bad input fails before anything is printed.
@@ -729,8 +743,8 @@ def _cmd_gains(args) -> int:
         print(f"  k1 = {float(g.k1):.6f} rad/m   k2 = {float(g.k2):.6f}")
         print(f"  k3 = {float(g.k3):.6f} rad/m   k4 = {float(g.k4):.6f}")
         for lin in ("exact", "paper"):
-            cl = closed_loop(_plant(args, veh, lin), g)
-            print(f"  closed-loop poles, {lin} linearisation: {_fmt_poles(cl.poles())}")
+            poles = _closed_loop_poles(_plant(args, veh, lin), g, args.ratio)
+            print(f"  closed-loop poles, {lin} linearisation: {_fmt_poles(poles)}")
     return 0
 
 
@@ -1306,9 +1320,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         with _terminate_raises():
             import logging
 
-            import matplotlib
-
-            matplotlib.use("Agg")
+            # Agg for every figure, without importing matplotlib here (0.2 s
+            # that --help and gains do not need): through the environment
+            # until it is imported.
+            if "matplotlib" in sys.modules:
+                sys.modules["matplotlib"].use("Agg")
+            else:
+                os.environ["MPLBACKEND"] = "Agg"
             # Equal-aspect root-locus axes make matplotlib log "Ignoring
             # fixed x limits ..." at every save; noise for a command line.
             logging.getLogger("matplotlib").setLevel(logging.ERROR)

@@ -44,13 +44,17 @@ speeds coincide; with rear steering they differ by a factor
 
 from __future__ import annotations
 
-import control as ct
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from .exceptions import SingularStateError
 from .models import STEERING_INPUTS
 from .validation import check_finite, check_nonzero, check_scalar, check_type
 from .vehicle import Vehicle
+
+if TYPE_CHECKING:  # imported where a model is built: ~1 s of start-up
+    import control as ct
 
 __all__ = [
     "GRAVITY",
@@ -387,6 +391,8 @@ def dynamic_global_model(
             dtype=float,
         )
 
+    import control as ct
+
     return ct.nlsys(
         update,
         None,
@@ -483,6 +489,8 @@ def dynamic_path_model(
             ),
             dtype=float,
         )
+
+    import control as ct
 
     return ct.nlsys(
         update,

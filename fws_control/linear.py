@@ -26,15 +26,17 @@ boundaries, the double-root design and the root loci all start from it.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import control as ct
 import numpy as np
 
 from .gains import SteeringGains
 from .plant import LateralPlant, LoopMatrices, as_plant, loop_matrices, resolve_ratio
 from .reprs import summary_repr
 from .validation import check_finite, check_type
+
+if TYPE_CHECKING:  # imported where a state space is built: ~1 s of start-up
+    import control as ct
 
 __all__ = [
     "linearize",
@@ -184,6 +186,8 @@ def closed_loop(
             np.hstack([np.eye(2), K @ Dso]),
         ]
     )
+    import control as ct
+
     return ct.ss(
         A_cl,
         B_cl,

@@ -18,8 +18,8 @@ with the ``params`` argument of :func:`control.input_output_response` or
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
-import control as ct
 import numpy as np
 
 from .exceptions import SingularStateError
@@ -31,6 +31,9 @@ from .validation import (
     check_type,
 )
 from .vehicle import Vehicle
+
+if TYPE_CHECKING:  # imported where a model is built: ~1 s of start-up
+    import control as ct
 
 __all__ = [
     "global_frame_model",
@@ -327,6 +330,8 @@ def global_frame_model(
     """
     check_type("vehicle", vehicle, Vehicle)
     speed = check_scalar("speed", check_nonzero("speed", speed))
+    import control as ct
+
     return ct.nlsys(
         _global_update,
         None,
@@ -392,6 +397,8 @@ def path_frame_model(
     check_type("vehicle", vehicle, Vehicle)
     speed = check_scalar("speed", check_nonzero("speed", speed))
     curvature = check_scalar("curvature", curvature)
+    import control as ct
+
     return ct.nlsys(
         _path_update,
         None,

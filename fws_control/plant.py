@@ -26,10 +26,10 @@ with :math:`\delta_f = -k_1 e - k_2\theta`, :math:`\delta_r = a\,\delta_f`.
 from __future__ import annotations
 
 import re
+import sys
 from dataclasses import KW_ONLY, dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import control as ct
 import numpy as np
 
 from .dynamics import TYRES, dynamic_feedforward, path_jacobians, require_dynamics
@@ -43,6 +43,9 @@ from .validation import (
     check_type,
 )
 from .vehicle import Vehicle
+
+if TYPE_CHECKING:  # imported where needed: ~1 s of start-up (see _control_class)
+    import control as ct
 
 __all__ = [
     "LateralPlant",
@@ -347,6 +350,8 @@ class LateralPlant:
                 "linearize needs one operating point, but speed and curvature "
                 f"have shape {self.shape}; index them first"
             )
+        import control as ct
+
         A, B = self.matrices()
         n = A.shape[-1]
         return ct.ss(
@@ -359,6 +364,16 @@ class LateralPlant:
             outputs=list(LINEAR_STATES),
             name=f"linear_{self.model}",
         )
+
+
+def _control_class(name: str) -> type | tuple[()]:
+    """A python-control class for isinstance, without importing python-control.
+
+    An instance of it cannot exist unless python-control was imported, so
+    until then ``()`` (which matches nothing) stands in for it.
+    """
+    ct = sys.modules.get("control")
+    return () if ct is None else getattr(ct, name)
 
 
 def as_plant(
@@ -414,14 +429,14 @@ def as_plant(
             curvature=0.0 if curvature is None else curvature,
             model="exact" if model is None else model,
         )
-    if isinstance(plant, (LateralPlant, ct.StateSpace)):
+    if isinstance(plant, (LateralPlant, _control_class("StateSpace"))):
         if given:
             raise TypeError(
                 f"{', '.join(k + '=' for k in given)} applies only to a Vehicle "
                 f"plant; a {type(plant).__name__} already fixes its operating point"
             )
         return plant
-    if isinstance(plant, ct.InputOutputSystem):
+    if isinstance(plant, _control_class("InputOutputSystem")):
         raise TypeError(
             f"plant must be a fws.LateralPlant, a control.StateSpace or a "
             f"fws.Vehicle, got {type(plant).__name__}: linearise a nonlinear "
@@ -599,7 +614,7 @@ def loop_matrices(plant: LateralPlant | ct.StateSpace) -> LoopMatrices:
         return LoopMatrices(
             A, B[..., 0], B[..., 1], eye[..., 0, :], eye[..., 1, :], plant.states
         )
-    if isinstance(plant, ct.StateSpace):
+    if isinstance(plant, _control_class("StateSpace")):
         return _statespace_loop(plant)
     raise TypeError(
         f"plant must be a LateralPlant or a control.StateSpace, got "

@@ -573,16 +573,18 @@ def test_ill_conditioned_design_refused(command, tmp_path, capsys):
 
 
 def test_well_conditioned_near_one_still_designed(capsys):
-    """a = 0.999: the poles are within 0.1 % of the double root; printed."""
+    """a = 0.98: well-conditioned (the library refuses from about a = 0.99 on a
+    straight road at 5 m/s, where round-off alone could move the double root
+    by more than 1e-5 relative); the design is printed."""
     code, out, err = _run_main(
-        ["gains", "--curvature", 0, "--ratio", 0.999, "--pole", -1], capsys
+        ["gains", "--curvature", 0, "--ratio", 0.98, "--pole", -1], capsys
     )
     assert code == 0 and err == []
     m = re.search(r"exact model:\s+k1 = (\S+) rad/m\s+k2 = (\S+)", out)
-    poles = _closed_loop_poles_by_hand(5.0, 0.0, 0.999, float(m[1]), float(m[2]))
+    poles = _closed_loop_poles_by_hand(5.0, 0.0, 0.98, float(m[1]), float(m[2]))
     # k1 is printed with 6 decimals: poles from the printed gains are close.
     np.testing.assert_allclose(np.sort(poles.real), [-1.0, -1.0], atol=2e-2)
-    k1, k2 = _double_root_reference(5.0, 0.0, 0.999, -1.0)
+    k1, k2 = _double_root_reference(5.0, 0.0, 0.98, -1.0)
     assert float(m[1]) == pytest.approx(k1, abs=1e-6)
 
 

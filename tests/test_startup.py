@@ -1,0 +1,196 @@
+"""Start-up: what ``import fws_control`` and the CLI import (issue 14, item 6).
+
+Timing a start-up in a test would fail on a busy machine and pass a
+regression on an idle one; what makes start-up slow is *which* modules get
+imported (python-control alone costs about 1.3 s of CPU: it pulls in
+matplotlib.pyplot, scipy.signal and scipy.stats; sympy 0.3 s). So these
+tests run a fresh interpreter and check ``sys.modules``; the times
+themselves are measured by ``benchmarks/bench_startup.py``.
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import fws_control as fws
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: Modules that cost most of a second or more to import.
+HEAVY = ("control", "matplotlib", "sympy", "scipy.integrate", "scipy.signal")
+
+
+def _fresh(code: str) -> dict:
+    """Run `code` in a new interpreter; it prints one JSON object last."""
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=120,
+        check=False,
+    )
+    assert out.returncode == 0, out.stderr
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+_REPORT = (
+    "import json, sys\n"
+    f"heavy = [m for m in {HEAVY!r} if m in sys.modules]\n"
+    "loaded = sorted(m for m in sys.modules if m.startswith('fws_control'))\n"
+    "print(json.dumps({'heavy': heavy, 'loaded': loaded}))\n"
+)
+
+
+def test_import_package_imports_no_submodule():
+    res = _fresh("import fws_control\n" + _REPORT)
+    assert res["heavy"] == []
+    assert res["loaded"] == ["fws_control"]
+
+
+def test_help_imports_only_the_parser():
+    code = (
+        "import contextlib, io\n"
+        "import fws_control.cli as cli\n"
+        "buf = io.StringIO()\n"
+        "with contextlib.redirect_stdout(buf):\n"
+        "    try:\n"
+        "        cli.main(['--help'])\n"
+        "    except SystemExit as exc:\n"
+        "        assert exc.code == 0, exc.code\n"
+        "assert 'reproduce' in buf.getvalue()\n" + _REPORT
+    )
+    res = _fresh("import sys\n" + code)
+    assert res["heavy"] == []
+    # No analysis module either: each subcommand imports its own.
+    assert not {"fws_control.plant", "fws_control.simulation"} & set(res["loaded"])
+
+
+def test_gains_without_python_control_gives_its_poles():
+    """``gains`` runs on numpy alone; its poles are python-control's."""
+    args = ["gains", "--speed", "20", "--curvature", "0.01", "--ratio", "0.5"]
+    code = (
+        "import contextlib, io, sys\n"
+        "import fws_control.cli as cli\n"
+        "buf = io.StringIO()\n"
+        "with contextlib.redirect_stdout(buf):\n"
+        f"    assert cli.main({args!r}) == 0\n"
+        "import json\n"
+        "print(json.dumps(buf.getvalue()))\n" + _REPORT
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=120,
+        check=False,
+    )
+    assert out.returncode == 0, out.stderr
+    *_, text, report = out.stdout.strip().splitlines()
+    assert json.loads(report)["heavy"] == []
+    printed = json.loads(text)
+    # Reference: python-control's state space of the closed loop, in this
+    # process, for the exact-model design in both linearisations.
+    veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    exact = fws.LateralPlant(veh, speed=20.0, curvature=0.01)
+    g = fws.double_root_gains(exact, ratio=0.5, pole=-1.0)
+    for lin in ("exact", "paper"):
+        plant = fws.LateralPlant(veh, speed=20.0, curvature=0.01, model=lin)
+        ref = np.sort_complex(fws.closed_loop(plant, g).poles())
+        line = next(
+            ln for ln in printed.splitlines() if f"poles, {lin} linearisation" in ln
+        )
+        vals = [complex(v.strip()) for v in line.split(":", 1)[1].split(",")]
+        np.testing.assert_allclose(np.sort_complex(vals), ref, atol=2e-6)
+
+
+def test_cli_selects_agg_without_importing_matplotlib():
+    code = (
+        "import contextlib, io, sys\n"
+        "import fws_control.cli as cli\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        "    cli.main(['gains'])\n"
+        "assert 'matplotlib' not in sys.modules\n"
+        "import json, matplotlib\n"
+        "print(json.dumps(matplotlib.get_backend().lower()))\n"
+    )
+    assert _fresh(code) == "agg"
+
+
+def test_plant_checks_without_python_control():
+    """isinstance checks against python-control classes import nothing."""
+    code = (
+        "import fws_control as fws\n"
+        "veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)\n"
+        "p = fws.as_plant(veh, speed=5.0)\n"
+        "assert fws.loop_matrices(p).order == 2\n"
+        "for bad in (fws.as_plant, fws.loop_matrices):\n"
+        "    try:\n"
+        "        bad(object())\n"
+        "    except TypeError as exc:\n"
+        "        assert 'plant must be' in str(exc), exc\n"
+        "    else:\n"
+        "        raise AssertionError('no TypeError')\n" + _REPORT
+    )
+    assert _fresh(code)["heavy"] == []
+
+
+def test_sympy_only_with_symbolic():
+    names = [n for n in fws.__all__ if n != "symbolic"]
+    code = (
+        "import sys, fws_control as fws\n"
+        f"for n in {names!r}:\n"
+        "    getattr(fws, n)\n"
+        "before = 'sympy' in sys.modules\n"
+        "fws.symbolic.characteristic_polynomial\n"
+        "import json\n"
+        "print(json.dumps([before, 'sympy' in sys.modules]))\n"
+    )
+    assert _fresh(code) == [False, True]
+
+
+def test_lazy_names_resolve_to_their_modules():
+    for name in fws.__all__:
+        obj = getattr(fws, name)
+        if name not in fws._ORIGIN:  # a submodule, e.g. fws_control.symbolic
+            assert obj.__name__ == f"fws_control.{name}"
+            continue
+        module = sys.modules[f"fws_control.{fws._ORIGIN[name]}"]
+        assert getattr(module, name) is obj, name
+    assert set(fws.__all__) <= set(dir(fws))
+    import fws_control.plant as plant_module
+    from fws_control import LateralPlant, simulate
+
+    assert fws.plant is plant_module
+    assert LateralPlant is plant_module.LateralPlant
+    assert simulate is fws.simulation.runners.simulate
+    with pytest.raises(AttributeError, match="no attribute 'not_a_name'"):
+        fws.not_a_name  # noqa: B018
+
+
+def test_lazy_table_matches_type_checking_imports():
+    """The name table and the imports static tools read say the same."""
+    tree = ast.parse((ROOT / "fws_control" / "__init__.py").read_text("utf-8"))
+    block = next(
+        node
+        for node in tree.body
+        if isinstance(node, ast.If) and getattr(node.test, "id", "") == "TYPE_CHECKING"
+    )
+    static = {}
+    for node in block.body:
+        assert isinstance(node, ast.ImportFrom) and node.level == 1
+        for alias in node.names:
+            static[alias.name] = node.module or alias.name
+    submodules = {n for n, m in static.items() if m == n}
+    assert {"symbolic", "dynamics"} <= submodules
+    lazy = {n: m for n, m in static.items() if n not in submodules}
+    assert lazy == fws._ORIGIN
+    assert set(static) == set(fws.__all__)
