@@ -103,6 +103,8 @@ EXCLUDED = {
     "SimulationResult": "result record",
     "TrackingMetrics": "result record",
     "Projection": "result record",
+    "KinematicDesignLimit": "result record",
+    "vehicles": "a module (example vehicle data sets, no callables)",
 }
 
 
@@ -147,6 +149,7 @@ VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
 PLANT = fws.LateralPlant(VEH, speed=5.0, curvature=0.1)
 GAINS = fws.double_root_gains(PLANT, ratio=-1.0, pole=-1.0)
 ARC = fws.Arc(curvature=0.1)
+BMW = fws.vehicles.BMW_320I
 T = np.linspace(0.0, 5.0, 51)
 SIGNAL = 2.0 * np.exp(-T)
 _RES = None
@@ -604,6 +607,29 @@ CASES: dict[str, Case] = {
         dict(closed=None),
         flags=("closed",),
     ),
+    "understeer_gradient": Case(fws.understeer_gradient, dict(vehicle=BMW)),
+    "zero_sideslip_ratio": Case(
+        fws.zero_sideslip_ratio, dict(vehicle=BMW), dict(speed=20.0)
+    ),
+    "steady_state_offset": Case(
+        fws.steady_state_offset,
+        dict(vehicle=BMW, gains=fws.SteeringGains(k1=0.02, k2=0.3, ratio=0.0)),
+        dict(speed=20.0, curvature=0.01),
+    ),
+    "kinematic_design_limit": Case(
+        fws.kinematic_design_limit,
+        dict(vehicle=BMW),
+        dict(
+            ratio=0.0,
+            pole=-2.0,
+            curvature=0.0,
+            speeds=np.array([5.0, 20.0, 40.0]),
+            tolerance=0.25,
+            tyre="linear",
+        ),
+        post=finite_or_inf,  # unstable_speed/drift_speed inf: never (documented)
+        examples=FEW,
+    ),
     "PathChain": Case(
         fws.PathChain,
         dict(segments=(fws.Straight(length=5.0), fws.Arc(0.1, length=5.0))),
@@ -709,10 +735,6 @@ KNOWN: dict[tuple[str, str | None], str] = {
         )
         for a in ("parameter", "values")
     },
-    ("linearize", "curvature"): (
-        "plant.py: a curvature of extreme magnitude overflows V^2 kappa^2 to "
-        "inf in A (no range check)"
-    ),
 }
 
 
