@@ -640,10 +640,6 @@ CASES: dict[str, Case] = {
 
 #: Known failures that other parts of the code must fix (see the module notes).
 #: (callable, argument) -> reason; argument None: every argument.
-_SIM = (
-    "simulation/ (engine branch): feedforward and progress not checked as "
-    "bools (validation.check_bool), an array time constant fails unnamed"
-)
 _CMP = (
     "controller_comparison.py: scalar checks, work budget for dt/delay/time "
     "constant, offset range"
@@ -666,23 +662,6 @@ _DELAY = (
     "delay hangs or exhausts memory; extreme ratio/pole overflow"
 )
 KNOWN: dict[tuple[str, str | None], str] = {
-    **{
-        ("simulate", a): _SIM
-        for a in (
-            "actuator_time_constant atol delay dt duration feedforward rtol"
-        ).split()
-    },
-    **{
-        ("simulate_batch", a): _SIM
-        for a in (
-            "actuator_time_constant atol chunk_size delay dt duration feedforward "
-            "progress rtol speed"
-        ).split()
-    },
-    **{
-        ("closed_loop_system", a): _SIM
-        for a in ("actuator_time_constant", "delay", "feedforward")
-    },
     **{
         ("compare", a): _CMP
         for a in ("actuator_time_constant", "delay", "dt", "offset", "speed")
