@@ -657,10 +657,7 @@ _STAB = (
     "stability.py/charts.py: NaN coefficients and non-string condition "
     "accepted; an extreme ratio overflows to non-finite boundaries"
 )
-_DELAY = (
-    "delay.py: n/nodes unchecked (OverflowError, hang at 1e300), extreme "
-    "delay hangs or exhausts memory; extreme ratio/pole overflow"
-)
+_DELAY = "charts.py (delay_margin_chart): an extreme ratio/pole overflows"
 KNOWN: dict[tuple[str, str | None], str] = {
     **{
         ("compare", a): _CMP
@@ -703,9 +700,6 @@ KNOWN: dict[tuple[str, str | None], str] = {
     },
     ("stability_boundaries", "ratio"): _STAB,
     ("stability_chart", "ratio"): _STAB,
-    **{("rightmost_roots", a): _DELAY for a in ("delay", "n", "nodes")},
-    ("unstable_root_count", "delay"): _DELAY,
-    ("is_stable", "delay"): _DELAY,
     **{("delay_margin_chart", a): _DELAY for a in ("ratio", "pole")},
     **{
         ("parameter_locus", a): (
