@@ -1066,3 +1066,56 @@ def test_saturate_respects_vehicle_limits():
 def test_bad_input_raises_naming_the_argument(make, exc, name):
     with pytest.raises(exc, match=name):
         make()
+
+
+@pytest.mark.parametrize(
+    "make, arg, exc",
+    [
+        (lambda: fws.Gate(math.nan, 5.0, -1.0, 1.0), "x_start", ValueError),
+        (lambda: fws.Gate(0.0, True, -1.0, 1.0), "x_end", TypeError),
+        (lambda: fws.Gate(0.0, 5.0, -1.0, math.inf), "y_left", ValueError),
+        (lambda: fws.Gate(0.0, 5.0, -1.0, 1.0, name=3), "name", TypeError),
+        (lambda: fws.Manoeuvre(None, fws.Straight(10.0), (), 1.8), "name", TypeError),
+        (lambda: fws.Manoeuvre("m", 1.0, (), 1.8), "path", TypeError),
+        (lambda: fws.Manoeuvre("m", fws.Straight(10.0), 1.0, 1.8), "gates", TypeError),
+        (
+            lambda: fws.Manoeuvre("m", fws.Straight(10.0), (), math.nan),
+            "vehicle_width",
+            ValueError,
+        ),  # fmt: skip
+        (
+            lambda: fws.Manoeuvre("m", fws.Straight(10.0), (), 1.8, start_x=math.inf),
+            "start_x",
+            ValueError,
+        ),  # fmt: skip
+        (
+            lambda: fws.double_lane_change(vehicle_width=1e300),
+            "vehicle_width",
+            ValueError,
+        ),  # fmt: skip
+        (
+            lambda: fws.obstacle_avoidance(exit_length=[1.0, 2.0]),
+            "exit_length",
+            ValueError,
+        ),  # fmt: skip
+        (lambda: fws.slalom(pitch=1e300), "pitch", ValueError),
+        (lambda: fws.slalom(pitch=1e-300), "pitch", ValueError),
+        (lambda: fws.slalom(cones="3"), "cones", ValueError),
+        (lambda: fws.constant_radius(turns=[1.0, 2.0]), "turns", ValueError),
+    ],
+)
+def test_issue13_manoeuvre_fields_checked(make, arg, exc):
+    # before: NaN/inf/bool fields stored, non-string names, and builders
+    # failing in s_bend/Straight without the argument's name
+    with pytest.raises(exc, match=rf"\b{arg}\b"):
+        make()
+
+
+def test_slalom_amplitude_bound_is_pitch_over_4():
+    # an S-bend of offset 2 A over the pitch p needs 2 A < p / 2: A < p/4
+    # (s_bend's own limit, offset below half the length)
+    assert fws.slalom(pitch=18.0, amplitude=4.49).gates[0].x_start == 30.0
+    with pytest.raises(ValueError, match="amplitude must be < pitch/4"):
+        fws.slalom(pitch=18.0, amplitude=4.5)
+    with pytest.raises(ValueError, match="offset must be below half"):
+        fws.manoeuvres.s_bend(2 * 4.5, 18.0)

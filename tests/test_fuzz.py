@@ -644,10 +644,6 @@ _CMP = (
     "controller_comparison.py: scalar checks, work budget for dt/delay/time "
     "constant, offset range"
 )
-_MAN = (
-    "manoeuvres.py: NaN and non-string fields accepted; array or huge "
-    "arguments fail without their name"
-)
 _TURN = "turning.py: no vehicle type check (AttributeError); limits named wrongly"
 _BASE = (
     "baselines.py: LinAlgError for extreme R/ratio, scalar checks, saturate "
@@ -668,21 +664,6 @@ KNOWN: dict[tuple[str, str | None], str] = {
         "baselines.py: feedforward is read by its truth value (complex accepted)"
     ),
     ("gain_locus", "scale"): "rootlocus.py: an empty scale fails without its name",
-    **{("Gate", a): _MAN for a in ("x_start", "x_end", "y_left", "y_right")},
-    **{
-        ("Manoeuvre", a): _MAN
-        for a in ("name", "path", "gates", "vehicle_width", "start_x")
-    },
-    **{
-        (f, a): _MAN
-        for f in ("double_lane_change", "obstacle_avoidance")
-        for a in ("vehicle_width", "approach", "exit_length")
-    },
-    **{
-        ("slalom", a): _MAN
-        for a in ("pitch", "amplitude", "cones", "approach", "vehicle_width")
-    },
-    **{("constant_radius", a): _MAN for a in ("radius", "turns")},
     ("steady_turn", "vehicle"): _TURN,
     **{
         ("turning_radius", a): _TURN
