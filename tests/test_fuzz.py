@@ -644,7 +644,6 @@ _CMP = (
     "controller_comparison.py: scalar checks, work budget for dt/delay/time "
     "constant, offset range"
 )
-_TURN = "turning.py: no vehicle type check (AttributeError); limits named wrongly"
 _BASE = (
     "baselines.py: LinAlgError for extreme R/ratio, scalar checks, saturate "
     "passes NaN/inf/None"
@@ -664,15 +663,6 @@ KNOWN: dict[tuple[str, str | None], str] = {
         "baselines.py: feedforward is read by its truth value (complex accepted)"
     ),
     ("gain_locus", "scale"): "rootlocus.py: an empty scale fails without its name",
-    ("steady_turn", "vehicle"): _TURN,
-    **{
-        ("turning_radius", a): _TURN
-        for a in ("vehicle", "max_steer_front", "max_steer_rear")
-    },
-    **{
-        ("plot_turning_radius", a): _TURN
-        for a in ("vehicle", "ratios", "limits", "max_steer_rear", "ylim")
-    },
     **{("LQRController", a): _BASE for a in ("Q", "R", "ratio")},
     ("Stanley", "softening"): _BASE,
     **{("saturate", a): _BASE for a in ("delta_f", "delta_r")},
