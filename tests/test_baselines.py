@@ -1119,3 +1119,61 @@ def test_slalom_amplitude_bound_is_pitch_over_4():
         fws.slalom(pitch=18.0, amplitude=4.5)
     with pytest.raises(ValueError, match="offset must be below half"):
         fws.manoeuvres.s_bend(2 * 4.5, 18.0)
+
+
+_P13 = fws.LateralPlant(fws.Vehicle(2.7, 1.35), speed=5.0, curvature=0.1)
+
+
+@pytest.mark.parametrize(
+    "make, arg, exc",
+    [
+        (
+            lambda: fws.saturate(fws.Vehicle(2.7, 1.35), math.nan, 0.0),
+            "delta_f",
+            ValueError,
+        ),  # fmt: skip
+        (
+            lambda: fws.saturate(fws.Vehicle(2.7, 1.35), 0.1, None),
+            "delta_r",
+            ValueError,
+        ),  # fmt: skip
+        (
+            lambda: fws.saturate(fws.Vehicle(2.7, 1.35), 0.1, np.array([True])),
+            "delta_r",
+            TypeError,
+        ),  # fmt: skip
+        (
+            lambda: fws.LQRController(_P13, Q=np.eye(2), R=np.eye(2), ratio=-1.0),
+            "R",
+            ValueError,
+        ),  # fmt: skip
+        (
+            lambda: fws.LQRController(_P13, Q=np.eye(2), R=1e300, ratio=-1.0),
+            "R",
+            ValueError,
+        ),  # fmt: skip
+        (
+            lambda: fws.LQRController(_P13, Q=np.eye(2), R=1.0, ratio=[1.0, 2.0]),
+            "ratio",
+            ValueError,
+        ),  # fmt: skip
+        (lambda: fws.Stanley(softening=[]), "softening", ValueError),
+        (
+            lambda: fws.as_controller(fws.Stanley(), feedforward=1j),
+            "feedforward",
+            TypeError,
+        ),  # fmt: skip
+    ],
+)
+def test_issue13_baseline_arguments_named(make, arg, exc):
+    # before: NaN/None passed through saturate, LinAlgError for R = 1e300, a
+    # reshape error for a matrix R, a complex feedforward read as true
+    with pytest.raises(exc, match=rf"\b{arg}\b"):
+        make()
+
+
+def test_saturate_keeps_nan_array_elements_in_place():
+    # documented: a non-finite element of an array is data (a stopped run)
+    veh = fws.Vehicle(2.7, 1.35, max_steer_front=0.5)
+    df, dr = fws.saturate(veh, np.array([0.7, np.nan, -0.2]), 0.0)
+    np.testing.assert_array_equal(df, [0.5, np.nan, -0.2])

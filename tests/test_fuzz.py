@@ -415,7 +415,9 @@ CASES: dict[str, Case] = {
     "RearWheelFeedback": Case(
         fws.RearWheelFeedback, {}, dict(k_e=0.05, k_theta=0.2, ratio=0.0)
     ),
-    "saturate": Case(fws.saturate, dict(vehicle=VEH, delta_f=0.1, delta_r=-0.1)),
+    "saturate": Case(
+        fws.saturate, dict(vehicle=VEH, delta_f=0.1, delta_r=-0.1), post=elementwise
+    ),
     "as_controller": Case(fws.as_controller, dict(gains=GAINS), dict(feedforward=True)),
     "compare": Case(
         fws.compare,
@@ -644,10 +646,6 @@ _CMP = (
     "controller_comparison.py: scalar checks, work budget for dt/delay/time "
     "constant, offset range"
 )
-_BASE = (
-    "baselines.py: LinAlgError for extreme R/ratio, scalar checks, saturate "
-    "passes NaN/inf/None"
-)
 _STAB = (
     "stability.py/charts.py: NaN coefficients and non-string condition "
     "accepted; an extreme ratio overflows to non-finite boundaries"
@@ -659,13 +657,7 @@ KNOWN: dict[tuple[str, str | None], str] = {
         for a in ("actuator_time_constant", "delay", "dt", "offset", "speed")
     },
     **{("default_controllers", a): _CMP for a in ("speed", "ratio", "pole")},
-    ("as_controller", "feedforward"): (
-        "baselines.py: feedforward is read by its truth value (complex accepted)"
-    ),
     ("gain_locus", "scale"): "rootlocus.py: an empty scale fails without its name",
-    **{("LQRController", a): _BASE for a in ("Q", "R", "ratio")},
-    ("Stanley", "softening"): _BASE,
-    **{("saturate", a): _BASE for a in ("delta_f", "delta_r")},
     **{
         ("StabilityBoundary", a): _STAB for a in ("alpha", "beta", "gamma", "condition")
     },
