@@ -28,6 +28,7 @@ __all__ = [
     "MODELS",
     "MAX_SPEED",
     "MAX_CURVATURE",
+    "MAX_RATIO",
 ]
 
 MODELS = ("exact", "paper", "dynamic")
@@ -40,6 +41,11 @@ MAX_SPEED = 1.0e6
 #: Largest curvature magnitude accepted by the plant models [1/m] (a radius
 #: of 1 micrometre); see :data:`MAX_SPEED`.
 MAX_CURVATURE = 1.0e6
+
+#: Largest rear-to-front ratio magnitude accepted where the characteristic
+#: coefficients are formed from it (stability lines, charts): |a| of a real
+#: four-wheel steering is below 10; 1e300 overflowed the coefficients.
+MAX_RATIO = 1.0e6
 
 
 def _short(value: Any) -> str:

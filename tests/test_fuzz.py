@@ -646,11 +646,6 @@ _CMP = (
     "controller_comparison.py: scalar checks, work budget for dt/delay/time "
     "constant, offset range"
 )
-_STAB = (
-    "stability.py/charts.py: NaN coefficients and non-string condition "
-    "accepted; an extreme ratio overflows to non-finite boundaries"
-)
-_DELAY = "charts.py (delay_margin_chart): an extreme ratio/pole overflows"
 KNOWN: dict[tuple[str, str | None], str] = {
     **{
         ("compare", a): _CMP
@@ -658,12 +653,6 @@ KNOWN: dict[tuple[str, str | None], str] = {
     },
     **{("default_controllers", a): _CMP for a in ("speed", "ratio", "pole")},
     ("gain_locus", "scale"): "rootlocus.py: an empty scale fails without its name",
-    **{
-        ("StabilityBoundary", a): _STAB for a in ("alpha", "beta", "gamma", "condition")
-    },
-    ("stability_boundaries", "ratio"): _STAB,
-    ("stability_chart", "ratio"): _STAB,
-    **{("delay_margin_chart", a): _DELAY for a in ("ratio", "pole")},
     **{
         ("parameter_locus", a): (
             "rootlocus.py: parameter must be checked as a string; a value of 0 "
