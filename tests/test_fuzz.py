@@ -652,14 +652,6 @@ KNOWN: dict[tuple[str, str | None], str] = {
         for a in ("actuator_time_constant", "delay", "dt", "offset", "speed")
     },
     **{("default_controllers", a): _CMP for a in ("speed", "ratio", "pole")},
-    ("gain_locus", "scale"): "rootlocus.py: an empty scale fails without its name",
-    **{
-        ("parameter_locus", a): (
-            "rootlocus.py: parameter must be checked as a string; a value of 0 "
-            "is named as speed, not values"
-        )
-        for a in ("parameter", "values")
-    },
 }
 
 
