@@ -1177,3 +1177,22 @@ def test_saturate_keeps_nan_array_elements_in_place():
     veh = fws.Vehicle(2.7, 1.35, max_steer_front=0.5)
     df, dr = fws.saturate(veh, np.array([0.7, np.nan, -0.2]), 0.0)
     np.testing.assert_array_equal(df, [0.5, np.nan, -0.2])
+
+
+@pytest.mark.parametrize(
+    "kw, arg",
+    [
+        (dict(speed=1e-300), "speed"),
+        (dict(offset=[0.0, 1.0]), "offset"),
+        (dict(actuator_time_constant=1e-300), "actuator_time_constant"),
+        (dict(dt=1e300), "dt"),
+    ],
+)
+def test_issue13_compare_ranges_named(kw, arg):
+    # before: a 1e295 GiB output request, a singular actuator factor, NaN
+    # metrics for dt beyond the run: refused with the stated floor/range
+    veh = fws.Vehicle(2.7, 1.35)
+    m = fws.constant_radius(radius=40.0, turns=0.05)
+    g = {"4ws": fws.SteeringGains(0.1, 0.5, ratio=0.0)}
+    with pytest.raises(ValueError, match=rf"\b{arg} must be"):
+        fws.compare(veh, m, g, **{"speed": 5.0, "dt": 0.1, **kw})

@@ -642,17 +642,7 @@ CASES: dict[str, Case] = {
 
 #: Known failures that other parts of the code must fix (see the module notes).
 #: (callable, argument) -> reason; argument None: every argument.
-_CMP = (
-    "controller_comparison.py: scalar checks, work budget for dt/delay/time "
-    "constant, offset range"
-)
-KNOWN: dict[tuple[str, str | None], str] = {
-    **{
-        ("compare", a): _CMP
-        for a in ("actuator_time_constant", "delay", "dt", "offset", "speed")
-    },
-    **{("default_controllers", a): _CMP for a in ("speed", "ratio", "pole")},
-}
+KNOWN: dict[tuple[str, str | None], str] = {}
 
 
 @pytest.mark.parametrize("name", list(CASES))
