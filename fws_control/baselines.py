@@ -50,10 +50,11 @@ from typing import Any
 import control as ct
 import numpy as np
 
+from .controllers import FEEDFORWARDS
 from .gains import SteeringGains
-from .models import STEERING_INPUTS
+from .models import STEERING_INPUTS, check_inputs
 from .plant import LateralPlant, as_plant, loop_matrices
-from .validation import check_finite, check_positive, check_type
+from .validation import check_finite, check_positive, check_scalar, check_type
 from .vehicle import Vehicle
 
 __all__ = [
@@ -84,7 +85,9 @@ def saturate(vehicle: Vehicle, delta_f, delta_r) -> tuple[np.ndarray, np.ndarray
     vehicle : Vehicle
         Its ``max_steer_front`` / ``max_steer_rear`` [rad] (None: no limit).
     delta_f, delta_r : array_like
-        Commanded angles [rad].
+        Commanded angles [rad], real; a scalar must be finite, a
+        non-finite array element gives a non-finite element in its place
+        (as in :func:`~fws_control.steering_command`).
 
     Returns
     -------
@@ -98,8 +101,9 @@ def saturate(vehicle: Vehicle, delta_f, delta_r) -> tuple[np.ndarray, np.ndarray
     [0.5, -0.7]
     """
     check_type("vehicle", vehicle, Vehicle)
-    df = np.asarray(delta_f, dtype=float)
-    dr = np.asarray(delta_r, dtype=float)
+    # real numbers; a non-finite scalar refused, non-finite array elements
+    # (stopped runs of a batch) kept in place, as in steering_command
+    df, dr = check_inputs(delta_f=delta_f, delta_r=delta_r)
     if vehicle.max_steer_front is not None:
         df = np.clip(df, -vehicle.max_steer_front, vehicle.max_steer_front)
     if vehicle.max_steer_rear is not None:
@@ -479,17 +483,32 @@ def LQRController(  # noqa: N802 - a constructor in the issue's naming
         R = np.asarray(check_finite("R", R), dtype=float)
         if R.shape != (2, 2):
             raise ValueError(f"R must be 2 x 2 without ratio=, got shape {R.shape}")
-        K, _, _ = ct.lqr(A, B, Q, R)
+        K = _lqr(A, B, Q, R, ratio)
         label = "LQR, independent rear"
     else:
-        a = float(check_finite("ratio", ratio))
-        R = np.asarray(check_positive("R", R), dtype=float).reshape(1, 1)
-        row, _, _ = ct.lqr(A, B @ np.array([[1.0], [a]]), Q, R)
+        a = check_scalar("ratio", ratio)
+        r = check_scalar("R", R)
+        if r <= 0.0:
+            raise ValueError(f"R must be a scalar > 0 with ratio=, got {R!r}")
+        row = _lqr(A, B @ np.array([[1.0], [a]]), Q, np.array([[r]]), ratio)
         K = np.outer([1.0, a], np.asarray(row).ravel())
         label = f"LQR, a = {a:g}"
     ctrl = StateFeedback(np.asarray(K, dtype=float), feedforward=feedforward)
     object.__setattr__(ctrl, "label", label)
     return ctrl
+
+
+def _lqr(A, B, Q, R, ratio):
+    """control.lqr, its numerical failures named by the arguments."""
+    try:
+        K, _, _ = ct.lqr(A, B, Q, R)
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        # e.g. R = 1e300: the Hamiltonian pencil has eigenvalues on the axis
+        raise ValueError(
+            f"no stabilising LQR solution for Q={Q.tolist()!r}, R={R.tolist()!r}, "
+            f"ratio={ratio!r}: {exc}"
+        ) from exc
+    return K
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
@@ -621,7 +640,7 @@ class Stanley(LateralController):
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "gain", _per_run("gain", self.gain, positive=True))
-        soft = float(check_finite("softening", self.softening))
+        soft = check_scalar("softening", self.softening)
         if soft < 0:
             raise ValueError(f"softening must be >= 0 m/s, got {self.softening!r}")
         object.__setattr__(self, "softening", soft)
@@ -735,6 +754,14 @@ def as_controller(gains: Any, *, feedforward: bool = True):
     >>> fws.as_controller(fws.PurePursuit()).label
     'pure pursuit'
     """
+    if not (
+        isinstance(feedforward, (bool, np.bool_))
+        or (isinstance(feedforward, str) and feedforward in FEEDFORWARDS)
+    ):
+        raise TypeError(
+            f"feedforward must be True, False or one of {FEEDFORWARDS}, got "
+            f"{feedforward!r}"
+        )
     if isinstance(gains, (LateralController, SteeringGains)):
         return gains
     raise TypeError(

@@ -36,7 +36,13 @@ from .stability import (
     is_stable,
     stability_boundaries,
 )
-from .validation import check_delay, check_finite, check_scalar
+from .validation import (
+    MAX_RATIO,
+    check_delay,
+    check_finite,
+    check_magnitude,
+    check_scalar,
+)
 
 __all__ = [
     "StabilityChart",
@@ -46,6 +52,10 @@ __all__ = [
     "note_box",
     "DEFAULT_GAIN_AXIS",
 ]
+
+#: Largest design pole magnitude of delay_margin_chart [1/s] (gains grow as
+#: pole^2: 1e300 overflowed).
+_MAX_POLE = 1.0e6
 
 #: Default grid axis of k1 and k2: 401 points on [-1, 1].
 DEFAULT_GAIN_AXIS = np.linspace(-1.0, 1.0, 401)
@@ -647,6 +657,7 @@ def stability_chart(
             f"shape {p.shape}"
         )
     ratio = check_scalar("ratio", resolve_ratio(p, ratio))
+    check_magnitude("ratio", ratio, MAX_RATIO)
     k1a = _axis("k1", k1)
     k2a = _axis("k2", k2)
     # Outer broadcasting (k2 down the rows, k1 across) avoids a meshgrid.
@@ -884,8 +895,9 @@ def delay_margin_chart(
     """
     p = as_plant(plant, speed=speed, curvature=curvature, model=model)
     dp = p if design_plant is None else as_plant(design_plant)
-    a = np.atleast_1d(check_finite("ratio", ratio)).astype(float)
-    lam = np.atleast_1d(check_finite("pole", pole)).astype(float)
+    a = np.atleast_1d(check_magnitude("ratio", ratio, MAX_RATIO)).astype(float)
+    # |pole| bounded as the ratio: 1e300 1/s overflowed the gains (k ~ pole^2)
+    lam = np.atleast_1d(check_magnitude("pole", pole, _MAX_POLE, "1/s")).astype(float)
     if a.ndim != 1 or lam.ndim != 1:
         raise ValueError("ratio and pole must be scalars or 1-D arrays")
     delay = np.full((a.size, lam.size), np.nan)

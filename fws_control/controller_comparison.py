@@ -49,7 +49,7 @@ from .gains import SteeringGains
 from .manoeuvres import Manoeuvre
 from .plant import LateralPlant
 from .simulation import SimulationResult, simulate
-from .validation import check_finite, check_nonzero, check_type
+from .validation import check_scalar, check_type
 from .vehicle import Vehicle
 
 __all__ = [
@@ -102,7 +102,11 @@ def default_controllers(
     >>> sorted(fws.default_controllers(veh, speed=20.0))[:3]
     ['LQR (a = -0.3)', 'LQR (independent rear)', 'Stanley']
     """
-    V = float(check_nonzero("speed", speed))
+    V = check_scalar("speed", speed)
+    if V <= 0.0:
+        raise ValueError(f"speed must be finite and > 0 m/s, got {speed!r}")
+    ratio = check_scalar("ratio", ratio)
+    pole = check_scalar("pole", pole)
     plant = LateralPlant(vehicle, speed=V)
     g0 = double_root_gains(plant, ratio=0.0, pole=pole)
     ga = double_root_gains(plant, ratio=ratio, pole=pole)
@@ -281,6 +285,13 @@ def _metrics(result: SimulationResult, manoeuvre: Manoeuvre, wheelbase: float):
     )
 
 
+#: Speed range of :func:`compare` [m/s], the largest start offset [m] and the
+#: shortest actuator time constant [s] (see the checks there).
+_MIN_SPEED, _MAX_SPEED = 0.1, 100.0
+_MAX_OFFSET = 10.0
+_MIN_TIME_CONSTANT = 1.0e-3
+
+
 def compare(
     vehicle: Vehicle,
     manoeuvre: Manoeuvre,
@@ -304,17 +315,19 @@ def compare(
         Label -> :class:`SteeringGains` (the paper's law with feedforward) or
         a :class:`~fws_control.LateralController`.
     speed : float
-        Speed [m/s], > 0.
+        Speed [m/s], in [0.1, 100].
     offset : float, optional
         Lateral offset [m] of R from the centre line at the start (the entry
-        of the first gate, heading along the course); positive left.
+        of the first gate, heading along the course); positive left; at
+        most 10 m either way.
     delay : float, optional
-        Input delay on the steering command [s] (all runs).
+        Input delay on the steering command [s] (all runs); 0 or at least
+        the run's duration / 1e4 (see :func:`~fws_control.simulate`).
     actuator_time_constant : float, optional
-        Steering actuator time constant [s] (all runs); rate limits of the
-        vehicle apply through it.
+        Steering actuator time constant [s] (all runs), None or >= 1e-3 s;
+        rate limits of the vehicle apply through it.
     dt : float, optional
-        Output spacing [s].
+        Output spacing [s], > 0 and at most a tenth of the run's duration.
 
     Returns
     -------
@@ -334,11 +347,30 @@ def compare(
     check_type("manoeuvre", manoeuvre, Manoeuvre)
     if not isinstance(controllers, dict) or not controllers:
         raise TypeError("controllers must be a non-empty dict of label -> controller")
-    V = float(check_nonzero("speed", speed))
-    if V <= 0:
-        raise ValueError(f"speed must be > 0 m/s for a manoeuvre, got {speed!r}")
+    V = check_scalar("speed", speed)
+    if not _MIN_SPEED <= V <= _MAX_SPEED:
+        raise ValueError(
+            f"speed must be in [{_MIN_SPEED:g}, {_MAX_SPEED:g}] m/s for a "
+            f"manoeuvre (walking pace to 360 km/h), got {speed!r}"
+        )
     path = manoeuvre.path
-    offset = float(check_finite("offset", offset))
+    offset = check_scalar("offset", offset)
+    if abs(offset) > _MAX_OFFSET:
+        # beyond a few lane widths the start projects onto another part of
+        # the course (or nowhere unique)
+        raise ValueError(
+            f"offset must be within +-{_MAX_OFFSET:g} m of the centre line, "
+            f"got {offset!r}"
+        )
+    if actuator_time_constant is not None:
+        tau = check_scalar("actuator_time_constant", actuator_time_constant)
+        if tau < _MIN_TIME_CONSTANT:
+            # a faster actuator is none: the stiff lag then breaks the solver
+            # (1e-300 s: "Factor is exactly singular"); None models none
+            raise ValueError(
+                f"actuator_time_constant must be None or >= {_MIN_TIME_CONSTANT:g} "
+                f"s, got {actuator_time_constant!r}"
+            )
     # Start at the first gate's entry (the approach is straight, so a delay's
     # held initial history is the straight-road command) and stop once R has
     # passed the last gate: the run covers the course and nothing else.
@@ -346,6 +378,13 @@ def compare(
     initial_state = (x0, offset, 0.0)
     span = (manoeuvre.end_x - x0) if manoeuvre.gates else float(path.length)
     duration = 1.1 * span / V + 0.5  # the path is longer than its x-span
+    dt = check_scalar("dt", dt)
+    if not 0.0 < dt <= duration / 10.0:
+        # the metrics need samples over the course
+        raise ValueError(
+            f"dt must be > 0 and <= duration/10 = {duration / 10.0:.3g} s for "
+            f"this course and speed, got {dt!r}"
+        )
     labels, results = [], []
     for label, c in controllers.items():
         if not isinstance(c, (SteeringGains, LateralController)):

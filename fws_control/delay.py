@@ -255,6 +255,33 @@ def _quasi(cp: AffinePolynomial, k1, k2, delay, s):
     return d + e * q, dd + e * (dq - delay * q)
 
 
+#: Delays [s] the Chebyshev discretisation of :func:`rightmost_roots` takes.
+_MIN_CHEB_DELAY, _MAX_CHEB_DELAY = 1.0e-6, 1.0e3
+#: Most roots asked for, and most starting nodes: the discretisation doubles
+#: the nodes up to five times (100 nodes: 3200, an eigenproblem of 6400 x
+#: 6400 for two states, about 0.3 GB of memory).
+_MAX_ROOTS, _MAX_NODES = 1000, 100
+#: Most frequency points of the phase grid of :func:`unstable_root_count`
+#: (it grows with delay times the frequency bound).
+_MAX_PHASE_POINTS = 200_000
+
+
+def _check_count(name: str, value, minimum: int, maximum: int) -> int:
+    """An integer in [minimum, maximum], given as an int or an integral float."""
+    ok = (
+        not isinstance(value, (bool, np.bool_))
+        and isinstance(value, (int, np.integer, float, np.floating))
+        and math.isfinite(value)
+        and int(value) == value
+        and minimum <= value <= maximum
+    )
+    if not ok:
+        raise ValueError(
+            f"{name} must be an integer in [{minimum}, {maximum}], got {value!r}"
+        )
+    return int(value)
+
+
 def rightmost_roots(
     plant: Any,
     gains: SteeringGains,
@@ -284,12 +311,12 @@ def rightmost_roots(
     gains : SteeringGains
         Scalar gains.
     delay : float
-        Input delay :math:`\tau \ge 0` [s]; 0 gives the eigenvalues of the
-        undelayed closed loop.
+        Input delay :math:`\tau` [s]: 0 (the eigenvalues of the undelayed
+        closed loop) or in [1e-6, 1e3] s.
     n : int, optional
-        How many roots to return.
+        How many roots to return, 1 to 1000.
     nodes : int, optional
-        Chebyshev nodes of the first discretisation. The nodes are doubled
+        Chebyshev nodes of the first discretisation, 4 to 100. The nodes are doubled
         until the `n` rightmost eigenvalues agree (to 1e-6 relative) between
         two successive discretisations, at most five times.
     speed, curvature, model : optional
@@ -319,10 +346,15 @@ def rightmost_roots(
     """
     g = check_gains(gains, scalar=True)
     tau = check_delay(delay)
-    if isinstance(n, bool) or int(n) != n or n < 1:
-        raise ValueError(f"n must be an integer >= 1, got {n!r}")
-    if isinstance(nodes, bool) or int(nodes) != nodes or nodes < 4:
-        raise ValueError(f"nodes must be an integer >= 4, got {nodes!r}")
+    if tau != 0.0 and not (_MIN_CHEB_DELAY <= tau <= _MAX_CHEB_DELAY):
+        # the discretisation scales the Chebyshev matrix by 2/delay: 1e-300 s
+        # overflows it, 1e300 s leaves nothing of the plant in it (NaN roots)
+        raise ValueError(
+            f"delay must be 0 or in [{_MIN_CHEB_DELAY:g}, {_MAX_CHEB_DELAY:g}] s "
+            f"for the Chebyshev discretisation, got {delay!r}"
+        )
+    k = _check_count("n", n, 1, _MAX_ROOTS)
+    N = _check_count("nodes", nodes, 4, _MAX_NODES)
     p = as_plant(plant, speed=speed, curvature=curvature, model=model)
     lm = loop_matrices(p)
     A = np.asarray(lm.A, dtype=float)
@@ -332,7 +364,6 @@ def rightmost_roots(
     A1 = -np.outer(b, g.k1 * lm.c_e + g.k2 * lm.c_theta)
     cp = characteristic_coefficients(p, ratio=g.ratio)
     m = A.shape[0]
-    k = int(n)
     if tau == 0.0:
         lam = np.linalg.eigvals(A + A1)
         return lam[np.argsort(-lam.real, kind="stable")][:k]
@@ -346,7 +377,6 @@ def rightmost_roots(
         lam = np.linalg.eigvals(big)
         return lam[np.argsort(-lam.real, kind="stable")]
 
-    N = int(nodes)
     coarse = spectrum(N)
     for _ in range(5):
         fine = spectrum(2 * N)
@@ -407,7 +437,9 @@ def unstable_root_count(
     gains : SteeringGains
         Gains (arrays broadcast).
     delay : float, optional
-        Input delay :math:`\tau \ge 0` [s].
+        Input delay :math:`\tau \ge 0` [s]. Refused (ValueError) when the
+        phase grid it needs exceeds 200 000 frequency points (delay times
+        the frequency bound of the loop above about 78 500).
     speed, curvature, model : optional
         With a :class:`Vehicle` only, as in :func:`linearize`.
 
@@ -468,7 +500,17 @@ def unstable_root_count(
         raise RuntimeError("no frequency bound found")
     # Grid: resolve the delay's phase (tau*dw <= pi/8) and the polynomials'
     # time scales (geometric near 0).
-    m_lin = int(math.ceil(8.0 * tau * w_hi / math.pi)) + 64
+    m_lin = 8.0 * tau * w_hi / math.pi + 64.0
+    if m_lin > _MAX_PHASE_POINTS:
+        # the grid (and its memory) grows with the delay: refuse rather than
+        # run out of memory at delay = 1e300 s
+        raise ValueError(
+            f"delay={delay!r} s needs {m_lin:.3g} frequency points to resolve "
+            f"the phase up to {w_hi:.3g} rad/s (at most {_MAX_PHASE_POINTS}); "
+            f"delay must be <= {(_MAX_PHASE_POINTS - 64) * math.pi / (8 * w_hi):.4g} "
+            "s for these gains"
+        )
+    m_lin = int(math.ceil(m_lin))
     w = np.unique(
         np.concatenate(
             [[0.0], np.geomspace(1e-4 * w_hi, w_hi, 256), np.linspace(0.0, w_hi, m_lin)]

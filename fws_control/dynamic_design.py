@@ -34,7 +34,13 @@ from .dynamics import TYRES, require_dynamics
 from .gains import SteeringGains
 from .plant import LateralPlant, resolve_ratio
 from .reprs import summary_repr
-from .validation import check_finite, check_scalar, check_type
+from .validation import (
+    MAX_CURVATURE,
+    MAX_SPEED,
+    check_magnitude,
+    check_scalar,
+    check_type,
+)
 from .vehicle import Vehicle
 
 __all__ = [
@@ -55,9 +61,11 @@ DEFAULT_POLE_TOLERANCE = 0.25
 
 
 def _check_speed(speed) -> np.ndarray | float:
-    v = check_finite("speed", speed)
+    v = check_magnitude("speed", speed, MAX_SPEED, "m/s")
     if np.any(np.asarray(v) <= 0.0):
-        raise ValueError(f"speed must be finite and > 0 m/s, got {speed!r}")
+        raise ValueError(
+            f"speed must be finite and > 0 m/s (at most {MAX_SPEED:g}), got {speed!r}"
+        )
     return v
 
 
@@ -231,7 +239,9 @@ def steady_state_offset(
     require_dynamics(vehicle)
     check_type("gains", gains, SteeringGains)
     v = np.asarray(_check_speed(speed), dtype=float)
-    kappa = np.asarray(check_finite("curvature", curvature), dtype=float)
+    kappa = np.asarray(
+        check_magnitude("curvature", curvature, MAX_CURVATURE, "1/m"), dtype=float
+    )
     m, f = vehicle.mass, vehicle.wheelbase
     l_f, l_r = vehicle.front_to_cg, vehicle.rear_to_cg
     k1, k2, a = (np.asarray(x, dtype=float) for x in (gains.k1, gains.k2, gains.ratio))
@@ -494,7 +504,7 @@ def kinematic_design_limit(
     (17.2, inf)
     """
     require_dynamics(vehicle, tyre=tyre)
-    if tyre not in TYRES:
+    if not isinstance(tyre, str) or tyre not in TYRES:
         raise ValueError(f"tyre must be one of {TYRES}, got {tyre!r}")
     pole = check_scalar("pole", pole)
     if pole >= 0.0:
@@ -504,7 +514,9 @@ def kinematic_design_limit(
     if tolerance <= 0.0:
         raise ValueError(f"tolerance must be > 0, got {tolerance!r}")
     grid = DEFAULT_DESIGN_SPEEDS if speeds is None else speeds
-    grid = np.atleast_1d(np.asarray(check_finite("speeds", grid), dtype=float))
+    grid = np.atleast_1d(
+        np.asarray(check_magnitude("speeds", grid, MAX_SPEED, "m/s"), dtype=float)
+    )
     if (
         grid.ndim != 1
         or grid.size == 0
@@ -517,7 +529,16 @@ def kinematic_design_limit(
         )
     if not callable(ratio):
         ratio = check_scalar("ratio", ratio)
-    a, gains, poles, drift = _design_poles(vehicle, ratio, pole, curvature, tyre, grid)
+    try:
+        a, gains, poles, drift = _design_poles(
+            vehicle, ratio, pole, curvature, tyre, grid
+        )
+    except ValueError as exc:
+        # a grid speed at which no design or operating point exists (a speed
+        # of 1e-300 m/s, a curve the tyres cannot hold): say which argument
+        raise ValueError(
+            f"speeds: no kinematic design on the dynamic plant over {speeds!r}: {exc}"
+        ) from exc
 
     def at(speed):
         return _design_poles(vehicle, ratio, pole, curvature, tyre, np.array([speed]))

@@ -109,7 +109,7 @@ def require_dynamics(vehicle: Vehicle, *, tyre: str = "linear") -> Vehicle:
         is unknown, or if ``tyre="magic"`` and ``friction`` is missing.
     """
     check_type("vehicle", vehicle, Vehicle)
-    if tyre not in TYRES:
+    if not isinstance(tyre, str) or tyre not in TYRES:
         raise ValueError(f"tyre must be one of {TYRES}, got {tyre!r}")
     missing = [
         name

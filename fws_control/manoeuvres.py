@@ -45,7 +45,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .paths import Arc, Clothoid, Path, PathChain, Straight
-from .validation import check_finite, check_positive
+from .validation import check_finite, check_positive, check_scalar, check_type
 
 __all__ = [
     "Gate",
@@ -78,6 +78,19 @@ ISO3888_2_SECTIONS = (
 )
 
 
+def _check_name(name) -> None:
+    if not isinstance(name, str):
+        raise TypeError(f"name must be a str, got {name!r} ({type(name).__name__})")
+
+
+def _positive(name: str, value) -> float:
+    """A finite real scalar > 0."""
+    v = check_scalar(name, value)
+    if v <= 0.0:
+        raise ValueError(f"{name} must be finite and > 0 m, got {value!r}")
+    return v
+
+
 @dataclass(frozen=True)
 class Gate:
     """A lane section between two lines of cones.
@@ -104,6 +117,12 @@ class Gate:
     y_right: float
     y_left: float
     name: str = ""
+
+    def __post_init__(self) -> None:
+        # finite real scalars (issue 13: NaN, inf and bools were stored)
+        for f in ("x_start", "x_end", "y_right", "y_left"):
+            object.__setattr__(self, f, check_scalar(f, getattr(self, f)))
+        _check_name(self.name)
 
     @property
     def width(self) -> float:
@@ -216,6 +235,26 @@ class Manoeuvre:
     vehicle_width: float
     start_x: float = 0.0
 
+    def __post_init__(self) -> None:
+        _check_name(self.name)
+        check_type("path", self.path, Path, "a fws_control Path")
+        gates = self.gates
+        if not isinstance(gates, (tuple, list)) or not all(
+            isinstance(g, Gate) for g in gates
+        ):
+            raise TypeError(
+                f"gates must be a tuple of fws_control.manoeuvres.Gate, got {gates!r}"
+            )
+        object.__setattr__(self, "gates", tuple(gates))
+        # 0 for a course without cones (constant_radius)
+        width = check_scalar("vehicle_width", self.vehicle_width)
+        if width < 0.0:
+            raise ValueError(
+                f"vehicle_width must be finite and >= 0 m, got {self.vehicle_width!r}"
+            )
+        object.__setattr__(self, "vehicle_width", width)
+        object.__setattr__(self, "start_x", check_scalar("start_x", self.start_x))
+
     @property
     def end_x(self) -> float:
         """x of the last gate's exit [m] (the path's end for no gates)."""
@@ -292,9 +331,9 @@ def _course(name, sections, offsets, vehicle_width, approach, exit_length):
     `offsets[k](w, w1)` gives the right cone line of the k-th gate of width
     ``w`` (``w1``: the entry gate's width).
     """
-    b = float(check_positive("vehicle_width", vehicle_width))
-    approach = float(check_positive("approach", approach))
-    exit_length = float(check_positive("exit_length", exit_length))
+    b = _positive("vehicle_width", vehicle_width)
+    approach = _positive("approach", approach)
+    exit_length = _positive("exit_length", exit_length)
     w1 = sections[0][1][0] * b + sections[0][1][1]
     gates = []
     # lay out the gates first
@@ -319,7 +358,13 @@ def _course(name, sections, offsets, vehicle_width, approach, exit_length):
     for i, (length, width_rule) in enumerate(sections):
         if width_rule is None:
             nxt = centres[len([s for s in sections[:i] if s[1] is not None])]
-            segments += s_bend(nxt - y_prev, length)
+            try:
+                segments += s_bend(nxt - y_prev, length)
+            except ValueError as exc:
+                # the lane offsets grow with the width: a bend too sharp
+                raise ValueError(
+                    f"vehicle_width={b!r} m is too wide for this course: {exc}"
+                ) from exc
             y_prev = nxt
         else:
             segments.append(Straight(length=length))
@@ -452,12 +497,30 @@ def slalom(
     >>> m.cones()[:, 0].tolist()
     [30.0, 48.0, 66.0, 84.0]
     """
-    p = float(check_positive("pitch", pitch))
-    amp = float(check_positive("amplitude", amplitude))
-    if isinstance(cones, bool) or int(cones) != cones or cones < 2:
-        raise ValueError(f"cones must be an integer >= 2, got {cones!r}")
-    a = float(check_positive("approach", approach))
-    b = float(check_positive("vehicle_width", vehicle_width))
+    p = _positive("pitch", pitch)
+    amp = _positive("amplitude", amplitude)
+    if (
+        isinstance(cones, (bool, np.bool_))
+        or not isinstance(cones, (int, np.integer, float, np.floating))
+        or not math.isfinite(cones)
+        or int(cones) != cones
+        or not 2 <= cones <= 10_000
+    ):
+        raise ValueError(f"cones must be an integer in [2, 10000], got {cones!r}")
+    a = _positive("approach", approach)
+    b = _positive("vehicle_width", vehicle_width)
+    # the S-bends between cones: an offset 2 amplitude over the pitch must
+    # stay below half of it; the entry half-bend must fit the approach
+    if not amp < p / 4.0:
+        raise ValueError(
+            f"amplitude must be < pitch/4, got amplitude={amplitude!r} m, "
+            f"pitch={pitch!r} m"
+        )
+    if not p / 2.0 < a:
+        raise ValueError(
+            f"pitch must be < 2 approach, got pitch={pitch!r} m, "
+            f"approach={approach!r} m"
+        )
     n = int(cones)
     # enter with a half S-bend to +amplitude before the first cone
     segments: list[Path] = [Straight(length=a - p / 2)]
@@ -496,8 +559,8 @@ def constant_radius(*, radius: float = 40.0, turns: float = 1.0) -> Manoeuvre:
     >>> round(float(m.path.curvature(10.0)), 6), m.gates
     (0.025, ())
     """
-    r = float(check_positive("radius", radius))
-    t = float(check_positive("turns", turns))
+    r = _positive("radius", radius)
+    t = _positive("turns", turns)
     path = (
         Arc(curvature=1.0 / r) if t >= 1.0 else Arc(1.0 / r, length=2 * math.pi * r * t)
     )

@@ -36,7 +36,10 @@ from .dynamics import TYRES, dynamic_feedforward, path_jacobians, require_dynami
 from .models import STEERING_INPUTS, feedforward_steering
 from .reprs import summary_repr
 from .validation import (
+    MAX_CURVATURE,
+    MAX_SPEED,
     check_finite,
+    check_magnitude,
     check_model,
     check_nonzero,
     check_positive,
@@ -103,9 +106,11 @@ class LateralPlant:
     vehicle : Vehicle
         Geometry.
     speed : float or array_like
-        Speed :math:`V` [m/s], finite and nonzero (negative: reversing).
+        Speed :math:`V` [m/s], nonzero with magnitude <= ``MAX_SPEED``
+        (1e6 m/s; negative: reversing).
     curvature : float or array_like, optional
-        Path curvature :math:`\kappa_C` [1/m], default 0 (straight path).
+        Path curvature :math:`\kappa_C` [1/m], default 0 (straight path),
+        magnitude <= ``MAX_CURVATURE`` (1e6 1/m).
     model : {"exact", "paper", "dynamic"}, optional
         Linearisation, default ``"exact"``. ``"dynamic"`` needs the
         vehicle's mass, yaw inertia and cornering stiffnesses and a `speed`
@@ -169,7 +174,7 @@ class LateralPlant:
     def __post_init__(self) -> None:
         check_type("vehicle", self.vehicle, Vehicle)
         check_model(self.model)
-        if self.tyre not in TYRES:
+        if not isinstance(self.tyre, str) or self.tyre not in TYRES:
             raise ValueError(f"tyre must be one of {TYRES}, got {self.tyre!r}")
         if self.model == "dynamic":
             require_dynamics(self.vehicle, tyre=self.tyre)
@@ -188,8 +193,11 @@ class LateralPlant:
                 )
             pair = tuple(float(check_positive("steering_lag", v)) for v in pair)
             object.__setattr__(self, "steering_lag", pair)
+        # magnitudes bounded so that V^2 kappa^2 and the entries of A, B stay
+        # finite (validation.MAX_SPEED, MAX_CURVATURE)
         speed = check_nonzero("speed", self.speed)
-        curvature = check_finite("curvature", self.curvature)
+        speed = check_magnitude("speed", speed, MAX_SPEED, "m/s")
+        curvature = check_magnitude("curvature", self.curvature, MAX_CURVATURE, "1/m")
         try:
             np.broadcast_shapes(np.shape(speed), np.shape(curvature))
         except ValueError:

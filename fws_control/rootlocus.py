@@ -190,6 +190,10 @@ def gain_locus(
     loop = gain_loop(plant, gains, speed=speed, curvature=curvature, model=model)
     if scale is not None:
         scale = np.atleast_1d(check_finite("scale", scale))
+        if scale.ndim != 1 or scale.size == 0:
+            raise ValueError(
+                f"scale must be None or a non-empty 1-D array, got shape {scale.shape}"
+            )
     return ct.root_locus_map(loop, gains=scale)
 
 
@@ -359,7 +363,7 @@ def parameter_locus(
     g = check_gains(gains, scalar=True)
     p = as_plant(plant, speed=speed, curvature=curvature, model=model)
     _one_point(p)
-    if parameter not in LOCUS_PARAMETERS:
+    if not isinstance(parameter, str) or parameter not in LOCUS_PARAMETERS:
         raise ValueError(
             f"parameter must be one of {LOCUS_PARAMETERS}, got {parameter!r}"
         )
@@ -382,7 +386,11 @@ def parameter_locus(
     par = {"ratio": g.ratio, "k1": g.k1, "k2": g.k2}
     swept = p
     if parameter in ("speed", "curvature"):
-        swept = replace(p, **{parameter: vals})
+        try:
+            swept = replace(p, **{parameter: vals})
+        except ValueError as exc:
+            # the plant names its field (speed, curvature): say it came from values
+            raise ValueError(f"values (the swept {parameter}): {exc}") from exc
     else:
         par[parameter] = vals
     if redesign_pole is not None:

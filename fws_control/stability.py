@@ -34,7 +34,13 @@ from .gains import SteeringGains
 from .linear import AffinePolynomial, characteristic_coefficients, check_gains
 from .plant import LateralPlant, as_plant, resolve_ratio
 from .reprs import summary_repr
-from .validation import check_delay, check_finite
+from .validation import (
+    MAX_RATIO,
+    check_delay,
+    check_finite,
+    check_magnitude,
+    check_scalar,
+)
 
 __all__ = [
     "is_stable",
@@ -251,6 +257,16 @@ class StabilityBoundary:
     beta: float
     gamma: float
     condition: str
+
+    def __post_init__(self) -> None:
+        # finite real scalars and a text condition (issue 13: NaN and bools
+        # were stored)
+        for f in ("alpha", "beta", "gamma"):
+            object.__setattr__(self, f, check_scalar(f, getattr(self, f)))
+        if not isinstance(self.condition, str):
+            raise TypeError(
+                f"condition must be a str such as 'p0 > 0', got {self.condition!r}"
+            )
 
     @classmethod
     def from_coefficients(cls, alpha, beta, gamma, condition: str) -> StabilityBoundary:
@@ -648,7 +664,7 @@ def stability_boundaries(
     ('p0 > 0', ['p1 > 0', 'p0 > 0'])
     """
     p = as_plant(plant, speed=speed, curvature=curvature, model=model)
-    ratio = check_finite("ratio", resolve_ratio(p, ratio))
+    ratio = check_magnitude("ratio", resolve_ratio(p, ratio), MAX_RATIO)
     if np.ndim(ratio) or (isinstance(p, LateralPlant) and p.shape != ()):
         raise ValueError(
             "stability_boundaries needs one operating point and a scalar ratio"

@@ -37,7 +37,7 @@ import numpy as np
 
 from .models import check_steering
 from .reprs import summary_repr
-from .validation import check_finite
+from .validation import check_finite, check_scalar, check_type
 from .vehicle import Vehicle
 
 __all__ = [
@@ -120,6 +120,7 @@ def steady_turn(vehicle: Vehicle, delta_f, delta_r) -> TurningGeometry:
     >>> round(float(t.rear_axle), 4), round(float(t.cg), 4)  # f/(2 sin), f/(2 tan)
     (2.7, 2.3383)
     """
+    check_type("vehicle", vehicle, Vehicle)
     df = np.asarray(check_finite("delta_f", delta_f), dtype=float)
     dr = np.asarray(check_finite("delta_r", delta_r), dtype=float)
     check_steering(df)
@@ -190,6 +191,7 @@ def turning_radius(
     >>> r.rear_axle.round(3)
     array([4.677, 3.307, 2.7  ])
     """
+    check_type("vehicle", vehicle, Vehicle)
     a = np.asarray(check_finite("ratio", ratio), dtype=float)
     lim_f = vehicle.max_steer_front if max_steer_front is None else max_steer_front
     if lim_f is None:
@@ -203,16 +205,33 @@ def turning_radius(
             f"max_steer_front must be in (0, pi/2) rad, got {max_steer_front!r}"
         )
     lim_r = vehicle.max_steer_rear if max_steer_rear is None else max_steer_rear
-    df = np.broadcast_to(lim_f, np.broadcast_shapes(a.shape, lim_f.shape))
+    try:
+        shape = np.broadcast_shapes(a.shape, lim_f.shape)
+    except ValueError:
+        raise ValueError(
+            "ratio and max_steer_front must broadcast, got shapes "
+            f"{a.shape} and {lim_f.shape}"
+        ) from None
+    df = np.broadcast_to(lim_f, shape)
     dr = a * df
     if lim_r is not None:
-        lim_r = float(check_finite("max_steer_rear", lim_r))
+        lim_r = check_scalar("max_steer_rear", lim_r)
         if not 0 < lim_r < np.pi / 2:
             raise ValueError(
                 f"max_steer_rear must be in (0, pi/2) rad, got {max_steer_rear!r}"
             )
         dr = np.clip(dr, -lim_r, lim_r)
     return steady_turn(vehicle, df, dr)
+
+
+def _curve(name: str, value) -> np.ndarray:
+    """A non-empty 1-D array of finite numbers (a scalar: one element)."""
+    v = np.atleast_1d(np.asarray(check_finite(name, value), dtype=float))
+    if v.ndim != 1 or v.size == 0:
+        raise ValueError(
+            f"{name} must be a non-empty 1-D array, got shape {np.shape(value)}"
+        )
+    return v
 
 
 def plot_turning_radius(
@@ -259,10 +278,22 @@ def plot_turning_radius(
     """
     import matplotlib.pyplot as plt
 
+    # checked here, before any figure is made, with this function's names
+    check_type("vehicle", vehicle, Vehicle)
+    a = np.linspace(-3.0, 0.8, 381) if ratios is None else _curve("ratios", ratios)
+    if limits is None:
+        lims = np.radians([20.0, 30.0, 40.0])
+    else:
+        lims = _curve("limits", limits)
+        if np.any((lims <= 0.0) | (lims >= np.pi / 2)):
+            raise ValueError(f"limits must be in (0, pi/2) rad, got {limits!r}")
+    if max_steer_rear is not None:
+        max_steer_rear = check_scalar("max_steer_rear", max_steer_rear)
+    ylim = check_scalar("ylim", ylim)
+    if ylim <= 0.0:
+        raise ValueError(f"ylim must be finite and > 0 m, got {ylim!r}")
     if ax is None:
         _, ax = plt.subplots(figsize=(7, 4.8), layout="constrained")
-    a = np.linspace(-3.0, 0.8, 381) if ratios is None else np.asarray(ratios, float)
-    lims = np.radians([20.0, 30.0, 40.0]) if limits is None else limits
     for i, lim in enumerate(np.atleast_1d(lims)):
         geo = turning_radius(
             vehicle, ratio=a, max_steer_front=lim, max_steer_rear=max_steer_rear

@@ -24,10 +24,28 @@ __all__ = [
     "check_rate_limit",
     "check_delay",
     "check_optional_positive",
+    "check_magnitude",
     "MODELS",
+    "MAX_SPEED",
+    "MAX_CURVATURE",
+    "MAX_RATIO",
 ]
 
 MODELS = ("exact", "paper", "dynamic")
+
+#: Largest speed magnitude accepted by the plant models [m/s]. Far above any
+#: vehicle; it keeps products such as V^2 kappa^2 and m V^2 kappa finite in
+#: double precision (with |kappa| <= MAX_CURVATURE they stay below 1e30).
+MAX_SPEED = 1.0e6
+
+#: Largest curvature magnitude accepted by the plant models [1/m] (a radius
+#: of 1 micrometre); see :data:`MAX_SPEED`.
+MAX_CURVATURE = 1.0e6
+
+#: Largest rear-to-front ratio magnitude accepted where the characteristic
+#: coefficients are formed from it (stability lines, charts): |a| of a real
+#: four-wheel steering is below 10; 1e300 overflowed the coefficients.
+MAX_RATIO = 1.0e6
 
 
 def _short(value: Any) -> str:
@@ -253,6 +271,34 @@ def check_delay(delay: Any) -> float:
     if np.ndim(d) != 0 or d < 0:
         raise ValueError(f"delay must be a finite scalar >= 0 s, got {delay!r}")
     return float(d)
+
+
+def check_magnitude(
+    name: str, value: Any, limit: float, unit: str = ""
+) -> np.ndarray | float:
+    """Return `value` as float (array) if every element is finite, |x| <= limit.
+
+    A range check that keeps later products (squares of speeds and
+    curvatures) from overflowing to inf.
+
+    Examples
+    --------
+    >>> from fws_control.validation import check_magnitude
+    >>> check_magnitude("speed", 20, 1e6, "m/s")
+    20.0
+    >>> check_magnitude("speed", 1e300, 1e6, "m/s")
+    Traceback (most recent call last):
+        ...
+    ValueError: speed must be finite with magnitude <= 1e+06 m/s, got 1e+300
+    """
+    v = check_finite(name, value)
+    if np.any(np.abs(np.asarray(v)) > limit):
+        unit = f" {unit}" if unit else ""
+        raise ValueError(
+            f"{name} must be finite with magnitude <= {limit:g}{unit}, "
+            f"got {_short(value)}"
+        )
+    return v
 
 
 def check_optional_positive(name: str, value: Any, unit: str = "") -> float | None:

@@ -1066,3 +1066,133 @@ def test_saturate_respects_vehicle_limits():
 def test_bad_input_raises_naming_the_argument(make, exc, name):
     with pytest.raises(exc, match=name):
         make()
+
+
+@pytest.mark.parametrize(
+    "make, arg, exc",
+    [
+        (lambda: fws.Gate(math.nan, 5.0, -1.0, 1.0), "x_start", ValueError),
+        (lambda: fws.Gate(0.0, True, -1.0, 1.0), "x_end", TypeError),
+        (lambda: fws.Gate(0.0, 5.0, -1.0, math.inf), "y_left", ValueError),
+        (lambda: fws.Gate(0.0, 5.0, -1.0, 1.0, name=3), "name", TypeError),
+        (lambda: fws.Manoeuvre(None, fws.Straight(10.0), (), 1.8), "name", TypeError),
+        (lambda: fws.Manoeuvre("m", 1.0, (), 1.8), "path", TypeError),
+        (lambda: fws.Manoeuvre("m", fws.Straight(10.0), 1.0, 1.8), "gates", TypeError),
+        (
+            lambda: fws.Manoeuvre("m", fws.Straight(10.0), (), math.nan),
+            "vehicle_width",
+            ValueError,
+        ),  # fmt: skip
+        (
+            lambda: fws.Manoeuvre("m", fws.Straight(10.0), (), 1.8, start_x=math.inf),
+            "start_x",
+            ValueError,
+        ),  # fmt: skip
+        (
+            lambda: fws.double_lane_change(vehicle_width=1e300),
+            "vehicle_width",
+            ValueError,
+        ),  # fmt: skip
+        (
+            lambda: fws.obstacle_avoidance(exit_length=[1.0, 2.0]),
+            "exit_length",
+            ValueError,
+        ),  # fmt: skip
+        (lambda: fws.slalom(pitch=1e300), "pitch", ValueError),
+        (lambda: fws.slalom(pitch=1e-300), "pitch", ValueError),
+        (lambda: fws.slalom(cones="3"), "cones", ValueError),
+        (lambda: fws.constant_radius(turns=[1.0, 2.0]), "turns", ValueError),
+    ],
+)
+def test_issue13_manoeuvre_fields_checked(make, arg, exc):
+    # before: NaN/inf/bool fields stored, non-string names, and builders
+    # failing in s_bend/Straight without the argument's name
+    with pytest.raises(exc, match=rf"\b{arg}\b"):
+        make()
+
+
+def test_slalom_amplitude_bound_is_pitch_over_4():
+    # an S-bend of offset 2 A over the pitch p needs 2 A < p / 2: A < p/4
+    # (s_bend's own limit, offset below half the length)
+    assert fws.slalom(pitch=18.0, amplitude=4.49).gates[0].x_start == 30.0
+    with pytest.raises(ValueError, match="amplitude must be < pitch/4"):
+        fws.slalom(pitch=18.0, amplitude=4.5)
+    with pytest.raises(ValueError, match="offset must be below half"):
+        fws.manoeuvres.s_bend(2 * 4.5, 18.0)
+
+
+_P13 = fws.LateralPlant(fws.Vehicle(2.7, 1.35), speed=5.0, curvature=0.1)
+
+
+@pytest.mark.parametrize(
+    "make, arg, exc",
+    [
+        (
+            lambda: fws.saturate(fws.Vehicle(2.7, 1.35), math.nan, 0.0),
+            "delta_f",
+            ValueError,
+        ),  # fmt: skip
+        (
+            lambda: fws.saturate(fws.Vehicle(2.7, 1.35), 0.1, None),
+            "delta_r",
+            ValueError,
+        ),  # fmt: skip
+        (
+            lambda: fws.saturate(fws.Vehicle(2.7, 1.35), 0.1, np.array([True])),
+            "delta_r",
+            TypeError,
+        ),  # fmt: skip
+        (
+            lambda: fws.LQRController(_P13, Q=np.eye(2), R=np.eye(2), ratio=-1.0),
+            "R",
+            ValueError,
+        ),  # fmt: skip
+        (
+            lambda: fws.LQRController(_P13, Q=np.eye(2), R=1e300, ratio=-1.0),
+            "R",
+            ValueError,
+        ),  # fmt: skip
+        (
+            lambda: fws.LQRController(_P13, Q=np.eye(2), R=1.0, ratio=[1.0, 2.0]),
+            "ratio",
+            ValueError,
+        ),  # fmt: skip
+        (lambda: fws.Stanley(softening=[]), "softening", ValueError),
+        (
+            lambda: fws.as_controller(fws.Stanley(), feedforward=1j),
+            "feedforward",
+            TypeError,
+        ),  # fmt: skip
+    ],
+)
+def test_issue13_baseline_arguments_named(make, arg, exc):
+    # before: NaN/None passed through saturate, LinAlgError for R = 1e300, a
+    # reshape error for a matrix R, a complex feedforward read as true
+    with pytest.raises(exc, match=rf"\b{arg}\b"):
+        make()
+
+
+def test_saturate_keeps_nan_array_elements_in_place():
+    # documented: a non-finite element of an array is data (a stopped run)
+    veh = fws.Vehicle(2.7, 1.35, max_steer_front=0.5)
+    df, dr = fws.saturate(veh, np.array([0.7, np.nan, -0.2]), 0.0)
+    np.testing.assert_array_equal(df, [0.5, np.nan, -0.2])
+
+
+@pytest.mark.parametrize(
+    "kw, arg",
+    [
+        (dict(speed=1e-300), "speed"),
+        (dict(offset=[0.0, 1.0]), "offset"),
+        (dict(actuator_time_constant=1e-300), "actuator_time_constant"),
+        (dict(dt=1e300), "dt"),
+    ],
+)
+def test_issue13_compare_ranges_named(kw, arg):
+    # before: a 1e295 GiB output request, a singular actuator factor, NaN
+    # metrics for dt beyond the run: refused with the stated floor/range
+    veh = fws.Vehicle(2.7, 1.35)
+    m = fws.constant_radius(radius=40.0, turns=0.05)
+    g = {"4ws": fws.SteeringGains(0.1, 0.5, ratio=0.0)}
+    with pytest.raises(ValueError, match=rf"\b{arg} must be"):
+        fws.compare(veh, m, g, **{"speed": 5.0, "dt": 0.1, **kw})

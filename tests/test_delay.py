@@ -648,3 +648,43 @@ def test_rightmost_roots_refuses_bad_n_and_nodes(kwargs):
     name = next(iter(kwargs))
     with pytest.raises(ValueError, match=name):
         fws.rightmost_roots(PLANT, GAINS, delay=0.2, **kwargs)
+
+
+_P13 = fws.LateralPlant(VEH, speed=5.0, curvature=0.1)
+_G13 = fws.double_root_gains(_P13, ratio=-1.0, pole=-1.0)
+
+
+@pytest.mark.parametrize(
+    "kw, arg",
+    [
+        (dict(n=math.inf), "n"),
+        (dict(n=[1, 2]), "n"),
+        (dict(n="2"), "n"),
+        (dict(n=None), "n"),
+        (dict(nodes=1e300), "nodes"),
+        (dict(nodes=math.nan), "nodes"),
+        (dict(nodes=np.eye(2)), "nodes"),
+        (dict(delay=1e-300), "delay"),
+        (dict(delay=1e300), "delay"),
+    ],
+)
+def test_issue13_rightmost_roots_bad_counts_and_delays(kw, arg):
+    # before: OverflowError/TypeError without the name, a huge allocation
+    # for nodes=1e300, NaN roots at 1e300 s, a RuntimeError at 1e-300 s
+    with pytest.raises(ValueError, match=rf"\b{arg} must be"):
+        fws.rightmost_roots(_P13, _G13, **{"delay": 0.2, **kw})
+
+
+def test_issue13_unstable_root_count_long_delay_refused():
+    # before: 1e300 s asked numpy for a grid beyond memory; the refusal names
+    # the delay and the longest one the grid allows
+    for f in (fws.unstable_root_count, fws.is_stable):
+        with pytest.raises(
+            ValueError, match=r"delay=1e\+300 s needs .* delay must be <="
+        ):
+            f(_P13, _G13, delay=1e300)
+    # a delay under the stated bound is still answered, and agrees with the
+    # rightmost roots (independent Chebyshev discretisation)
+    r = fws.rightmost_roots(_P13, _G13, delay=0.2, n=2)
+    c = fws.unstable_root_count(_P13, _G13, delay=0.2)
+    assert int(c) == np.count_nonzero(r.real > 0)

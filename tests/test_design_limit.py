@@ -85,3 +85,20 @@ def test_schedule_plot_and_errors():
         fws.kinematic_design_limit(replace(veh, mass=None), ratio=0.0, pole=-1.0)
     with pytest.raises(TypeError):
         fws.kinematic_design_limit(veh, 0.0, -1.0)
+
+
+@pytest.mark.parametrize(
+    "kw, exc, arg",
+    [
+        (dict(speeds=[1e300]), ValueError, "speeds"),
+        (dict(speeds=[1e-300, 5.0]), ValueError, "speeds"),
+        (dict(tyre=np.array(["linear", "magic"])), ValueError, "tyre"),
+        (dict(tyre=None), ValueError, "tyre"),
+    ],
+)
+def test_bad_speeds_and_tyre_name_the_argument(kw, exc, arg):
+    # issue 13: these failed without the argument's name (NaN tyre force,
+    # an uncontrollable design at 1e-300 m/s, "truth value of an array")
+    veh = fws.vehicles.BMW_320I
+    with pytest.raises(exc, match=rf"\b{arg}\b"):
+        fws.kinematic_design_limit(veh, ratio=0.0, pole=-2.0, **kw)

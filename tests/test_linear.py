@@ -268,3 +268,22 @@ def test_as_plant_refuses_other_objects(veh):
     # a nonlinear system is told how to get a linear one
     with pytest.raises(TypeError, match="linearize"):
         fws.as_plant(nonlinear)
+
+
+@pytest.mark.parametrize(
+    "kw, arg",
+    [
+        (dict(speed=1e300, curvature=0.1), "speed"),
+        (dict(speed=-2e6, curvature=0.1), "speed"),
+        (dict(speed=5.0, curvature=1e300), "curvature"),
+        (dict(speed=5.0, curvature=-1e7), "curvature"),
+    ],
+)
+def test_extreme_speed_or_curvature_refused_with_range(veh, kw, arg):
+    # issue 13: V^2 kappa^2 overflowed to inf in A; now a range refusal
+    with pytest.raises(ValueError, match=rf"{arg} must be finite with magnitude"):
+        fws.LateralPlant(veh, **kw)
+    # at the bounds themselves A holds the hand values -V kappa^2 and V
+    V, k = fws.validation.MAX_SPEED, fws.validation.MAX_CURVATURE
+    A, _ = fws.LateralPlant(veh, speed=V, curvature=k).matrices()
+    assert A[1, 0] == pytest.approx(-V * k * k) and A[0, 1] == pytest.approx(V)

@@ -238,3 +238,37 @@ def test_uncontrollable_redesign_raises(veh):
             values=[0.5, 1.0],
             redesign_pole=-1.0,
         )
+
+
+_P13 = fws.LateralPlant(fws.Vehicle(2.7, 1.35), speed=5.0, curvature=0.1)
+_G13 = fws.double_root_gains(_P13, ratio=-1.0, pole=-1.0)
+
+
+@pytest.mark.parametrize(
+    "make, arg, exc",
+    [
+        (lambda: fws.gain_locus(_P13, _G13, scale=np.array([])), "scale", ValueError),
+        (
+            lambda: fws.parameter_locus(_P13, _G13, parameter=np.eye(2), values=[1.0]),
+            "parameter",
+            ValueError,
+        ),  # fmt: skip
+        (
+            lambda: fws.parameter_locus(_P13, _G13, parameter="speed", values=[0.0]),
+            "values",
+            ValueError,
+        ),  # fmt: skip
+        (
+            lambda: fws.parameter_locus(
+                _P13, _G13, parameter="curvature", values=[1e300]
+            ),
+            "values",
+            ValueError,
+        ),  # fmt: skip
+    ],
+)
+def test_issue13_locus_arguments_named(make, arg, exc):
+    # before: "need at least one array to concatenate", the truth value of
+    # an array, and a swept value refused under the plant's name only
+    with pytest.raises(exc, match=rf"\b{arg}\b"):
+        make()

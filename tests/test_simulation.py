@@ -506,3 +506,57 @@ def test_reversing_agrees_with_interconnected_reference(kappa):
     np.testing.assert_allclose(res.theta, ref["theta"], rtol=0, atol=1e-6)
     # the reversing design converges: |e| decays like exp(-0.8 t) * poly(t)
     assert abs(res.e[-1]) < 0.05 * abs(res.e[0])
+
+
+_G13 = fws.SteeringGains(0.1, 0.5, ratio=0.0)
+
+
+@pytest.mark.parametrize(
+    "func, kw, exc, arg",
+    [
+        (fws.simulate, dict(duration=[1.0, 2.0]), ValueError, "duration"),
+        (fws.simulate, dict(dt=np.eye(2)), ValueError, "dt"),
+        (
+            fws.simulate,
+            dict(actuator_time_constant=[0.1, 0.2]),
+            ValueError,
+            "actuator_time_constant",
+        ),  # fmt: skip
+        (fws.simulate, dict(delay=1e-300), ValueError, "delay"),
+        (fws.simulate_batch, dict(chunk_size=math.inf), ValueError, "chunk_size"),
+        (fws.simulate_batch, dict(chunk_size=math.nan), ValueError, "chunk_size"),
+        (fws.simulate_batch, dict(progress=1 + 2j), TypeError, "progress"),
+        (
+            fws.simulate_batch,
+            dict(progress=np.array([True, False])),
+            TypeError,
+            "progress",
+        ),  # fmt: skip
+        (fws.closed_loop_system, dict(delay=1e-300), ValueError, "delay"),
+        (
+            fws.closed_loop_system,
+            dict(actuator_time_constant=[0.1]),
+            ValueError,
+            "actuator_time_constant",
+        ),  # fmt: skip
+    ],
+)
+def test_issue13_bad_run_options_name_the_argument(func, kw, exc, arg):
+    # before: float() of an array, OverflowError for chunk_size=inf, a
+    # progress flag read by its truth value, a hang (simulate) or a
+    # ZeroDivisionError in control.pade (closed_loop_system) for 1e-300 s
+    base = dict(speed=5.0)
+    if func is not fws.closed_loop_system:
+        base.update(initial_state=(0.0, 1.0, 0.0), duration=2.0, dt=0.1)
+    with pytest.raises(exc, match=rf"\b{arg}\b"):
+        func(VEH, Straight(), _G13, **{**base, **kw})
+
+
+def test_delay_floor_is_duration_over_1e4():
+    # the floor is duration / 1e4 (each forced step costs about 1.7 ms of
+    # Python right-hand sides: 1e4 steps about 17 s): 2 s / 1e4 = 2e-4 s
+    kw = dict(speed=5.0, initial_state=(0.0, 1.0, 0.0), duration=2.0, dt=0.1)
+    with pytest.raises(
+        ValueError, match=r"delay must be 0 or >= duration/10000 = 0.0002 s"
+    ):
+        fws.simulate(VEH, Straight(), _G13, delay=1.9e-4, **kw)

@@ -10,6 +10,7 @@ import fws_control as fws
 from fws_control.stability import routh_hurwitz
 
 VEH = fws.Vehicle(2.7, 1.35)
+_P13 = fws.LateralPlant(VEH, speed=5.0, curvature=0.1)
 
 
 def _closed_loop_eigenvalues(veh, speed, curvature, k1, k2, ratio, model):
@@ -300,3 +301,55 @@ def test_routh_hurwitz_boundary_and_bad_input():
     assert routh_hurwitz([1.0, np.nan, 1.0]) is False
     with pytest.raises(ValueError, match="coefficients"):
         routh_hurwitz([1.0])
+
+
+@pytest.mark.parametrize(
+    "make, arg, exc",
+    [
+        (
+            lambda: fws.StabilityBoundary(np.nan, 0.0, -0.5, "p0 > 0"),
+            "alpha",
+            ValueError,
+        ),  # fmt: skip
+        (lambda: fws.StabilityBoundary(1.0, True, -0.5, "p0 > 0"), "beta", TypeError),
+        (
+            lambda: fws.StabilityBoundary(1.0, 0.0, -np.inf, "p0 > 0"),
+            "gamma",
+            ValueError,
+        ),  # fmt: skip
+        (lambda: fws.StabilityBoundary(1.0, 0.0, -0.5, 0.0), "condition", TypeError),
+        (lambda: fws.stability_boundaries(_P13, ratio=1e300), "ratio", ValueError),
+        (
+            lambda: fws.stability_chart(_P13, ratio=-1e300, pole=-1.0),
+            "ratio",
+            ValueError,
+        ),  # fmt: skip
+        (
+            lambda: fws.delay_margin_chart(_P13, ratio=1e300, pole=-1.0),
+            "ratio",
+            ValueError,
+        ),  # fmt: skip
+        (
+            lambda: fws.delay_margin_chart(_P13, ratio=0.0, pole=-1e300),
+            "pole",
+            ValueError,
+        ),  # fmt: skip
+    ],
+)
+def test_issue13_boundary_fields_and_extreme_ratio(make, arg, exc):
+    # before: NaN/bool coefficients stored, a number as condition, and a
+    # ratio of 1e300 overflowing the coefficients to non-finite lines
+    with pytest.raises(exc, match=rf"\b{arg}\b"):
+        make()
+
+
+def test_boundary_at_max_ratio_is_finite_and_matches_is_stable():
+    # at |a| = MAX_RATIO the lines are finite; a point on the stable side of
+    # both is stable by the Hurwitz test of is_stable (independent path)
+    a = -fws.validation.MAX_RATIO
+    b = fws.stability_boundaries(_P13, ratio=a)
+    for ln in b.lines:
+        assert np.isfinite([ln.alpha, ln.beta, ln.gamma]).all()
+    g = fws.double_root_gains(_P13, ratio=a, pole=-1.0)
+    inside = all(ln.satisfied(g.k1, g.k2) for ln in b.lines)
+    assert inside == bool(fws.is_stable(_P13, g))

@@ -140,3 +140,44 @@ def test_plot(veh):
     assert fws.plot_turning_radius(veh, ax=given).axes[0, 0] is given
     assert len(given.lines) > 0
     plt.close(fig)
+
+
+_V13 = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+
+
+@pytest.mark.parametrize(
+    "make, arg, exc",
+    [
+        (lambda: fws.steady_turn(None, 0.3, 0.0), "vehicle", TypeError),
+        (
+            lambda: fws.turning_radius("car", ratio=0.0, max_steer_front=0.5),
+            "vehicle",
+            TypeError,
+        ),  # fmt: skip
+        (
+            lambda: fws.turning_radius(
+                _V13, ratio=0.0, max_steer_front=0.5, max_steer_rear=[0.1, 0.2]
+            ),
+            "max_steer_rear",
+            ValueError,
+        ),  # fmt: skip
+        (
+            lambda: fws.turning_radius(_V13, ratio=[0.0, 1.0], max_steer_front=[]),
+            "max_steer_front",
+            ValueError,
+        ),  # fmt: skip
+        (lambda: fws.plot_turning_radius(1.0), "vehicle", TypeError),
+        (lambda: fws.plot_turning_radius(_V13, ratios=np.nan), "ratios", ValueError),
+        (lambda: fws.plot_turning_radius(_V13, limits=0.0), "limits", ValueError),
+        (lambda: fws.plot_turning_radius(_V13, limits=[2.0]), "limits", ValueError),
+        (lambda: fws.plot_turning_radius(_V13, ylim=np.inf), "ylim", ValueError),
+        (lambda: fws.plot_turning_radius(_V13, ylim=True), "ylim", TypeError),
+    ],
+)
+def test_issue13_turning_arguments_named(make, arg, exc):
+    # before: AttributeError for a non-Vehicle, the limits named as
+    # max_steer_front, matplotlib's "Axis limits cannot be NaN or Inf"
+    n_figs = len(plt.get_fignums())
+    with pytest.raises(exc, match=rf"\b{arg}\b"):
+        make()
+    assert len(plt.get_fignums()) == n_figs  # refused before drawing

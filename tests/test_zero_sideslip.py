@@ -115,3 +115,18 @@ def test_schedule_broadcasts_and_is_checked():
         fws.zero_sideslip_ratio(fws.Vehicle(2.7, 1.2), speed=5.0)
     with pytest.raises(ValueError, match="speed must be finite and > 0"):
         fws.zero_sideslip_ratio(VEH, speed=-1.0)
+
+
+def test_huge_speed_refused_with_range():
+    # issue 13: 1e300 m/s gave inf/inf = NaN; refused above MAX_SPEED
+    with pytest.raises(ValueError, match="speed must be finite with magnitude"):
+        fws.zero_sideslip_ratio(VEH, speed=1e300)
+    g = fws.SteeringGains(k1=0.02, k2=0.3, ratio=0.0)
+    with pytest.raises(ValueError, match="speed must be finite with magnitude"):
+        fws.steady_state_offset(VEH, g, speed=1e300, curvature=0.01)
+    with pytest.raises(ValueError, match="curvature must be finite with magnitude"):
+        fws.steady_state_offset(VEH, g, speed=20.0, curvature=-1e300)
+    # at the bound the ratio is its high-speed limit C_f l_f / (C_r l_r)
+    a = fws.zero_sideslip_ratio(VEH, speed=fws.validation.MAX_SPEED)
+    lim = VEH.cornering_front * VEH.front_to_cg / (VEH.cornering_rear * VEH.rear_to_cg)
+    assert a == pytest.approx(lim, rel=1e-9)

@@ -78,6 +78,11 @@ def projection_system(path: Path, *, name: str = "projection") -> ct.NonlinearIO
     )
 
 
+#: Shortest nonzero delay given a Pade block [s] (its coefficients scale as
+#: 1/delay**order; 1e-9 s keeps them finite for orders below 30).
+_MIN_PADE_DELAY = 1.0e-9
+
+
 def closed_loop_system(
     vehicle: Vehicle,
     path: Path,
@@ -162,6 +167,10 @@ def closed_loop_system(
     """
     check_type("vehicle", vehicle, Vehicle)
     speed = check_scalar("speed", check_nonzero("speed", speed))
+    if actuator_time_constant is not None:
+        actuator_time_constant = check_scalar(
+            "actuator_time_constant", actuator_time_constant
+        )
     tau = resolve_time_constant(vehicle, actuator_time_constant)
     model, tyre = check_model(vehicle, model, tyre)
     if model == "dynamic":
@@ -181,6 +190,12 @@ def closed_loop_system(
             name="controller",
         )
     delay = check_delay(delay)
+    if 0.0 < delay < _MIN_PADE_DELAY:
+        # the Pade coefficients grow as 1/delay**order: 1e-300 s divides by 0
+        raise ValueError(
+            f"delay must be 0 or >= {_MIN_PADE_DELAY:g} s for the Pade "
+            f"approximation, got {delay!r}"
+        )
     syslist = [veh_sys, proj, ctrl]
     connections = [
         ["projection.x", "vehicle.x"],

@@ -20,6 +20,7 @@ interactive terminals.
 from __future__ import annotations
 
 import dataclasses
+import math
 import sys
 import warnings
 from typing import Any
@@ -32,7 +33,13 @@ from ..controllers import check_feedforward
 from ..dynamics import require_dynamics
 from ..gains import SteeringGains
 from ..paths import Path
-from ..validation import check_delay, check_nonzero, check_type
+from ..validation import (
+    check_bool,
+    check_delay,
+    check_nonzero,
+    check_scalar,
+    check_type,
+)
 from ..vehicle import Vehicle
 from .engine import (
     PEAK_SIGNALS,
@@ -339,6 +346,10 @@ def _run_on_dask(client, bounds, args, keep, t_size, bar, run) -> None:
         )
 
 
+#: Most solver steps a delay may force over the run (duration / delay).
+_MAX_DELAY_STEPS = 1.0e4
+
+
 def _prepare(
     vehicle, path, gains, speed, initial_state, duration, dt, t_eval, tau, opts
 ):
@@ -353,6 +364,14 @@ def _prepare(
         # a controller carries its own parameters: no gains to record (NaN)
         fields = (np.full(ctrl.runs() or 1, np.nan),) * 3
     n_gains = fields[0].size
+    # scalars named here: the engine's float() of an array would not name them
+    for name, value in (("duration", duration), ("dt", dt)):
+        if value is not None and np.ndim(value) != 0:
+            raise ValueError(
+                f"{name} must be a scalar [s], got an array of shape {np.shape(value)}"
+            )
+    if tau is not None:
+        tau = check_scalar("actuator_time_constant", tau)
     speed_arr = np.atleast_1d(np.asarray(check_nonzero("speed", speed), dtype=float))
     if speed_arr.ndim != 1:
         raise ValueError(f"speed must be a scalar or 1-D, got shape {speed_arr.shape}")
@@ -378,6 +397,15 @@ def _prepare(
     samples = output_samples(duration, dt=dt, t_eval=t_eval)
     check_output_budget(n, samples, duration=duration, dt=dt, t_eval=t_eval)
     t = time_grid(duration, dt=dt, t_eval=t_eval)
+    span = float(t[-1] - t[0])
+    if 0.0 < opts["delay"] < span / _MAX_DELAY_STEPS:
+        # the method of steps takes steps no longer than the delay: a delay of
+        # 1e-300 s would never finish
+        raise ValueError(
+            f"delay must be 0 or >= duration/{_MAX_DELAY_STEPS:g} = "
+            f"{span / _MAX_DELAY_STEPS:.3g} s (the solver's steps are bounded by "
+            f"the delay), got {opts['delay']!r}"
+        )
     tau = resolve_time_constant(vehicle, tau)
     opts["rtol"], opts["atol"] = check_tolerances(opts["rtol"], opts["atol"])
     if isinstance(opts["method"], str) and opts["method"] == "auto":
@@ -780,6 +808,7 @@ def simulate_batch(
     if (
         isinstance(chunk_size, bool)
         or not isinstance(chunk_size, (int, np.integer, float))
+        or not math.isfinite(chunk_size)
         or int(chunk_size) != chunk_size
         or chunk_size < 1
     ):
@@ -788,6 +817,7 @@ def simulate_batch(
     bounds = [(i, min(i + chunk_size, n)) for i in range(0, n, chunk_size)]
     if progress is None:
         progress = _stderr_is_tty()
+    progress = check_bool("progress", progress)
 
     run = _run_isolated if engine == "numpy" else _run_compiled
 
