@@ -35,7 +35,7 @@ MODELS = ("exact", "paper", "dynamic")
 
 #: Largest speed magnitude accepted by the plant models [m/s]. Far above any
 #: vehicle; it keeps products such as V^2 kappa^2 and m V^2 kappa finite in
-#: double precision (with |kappa| <= MAX_CURVATURE they stay below 1e30).
+#: double precision (with ``abs(kappa) <= MAX_CURVATURE`` they stay below 1e30).
 MAX_SPEED = 1.0e6
 
 #: Largest curvature magnitude accepted by the plant models [1/m] (a radius
@@ -43,7 +43,7 @@ MAX_SPEED = 1.0e6
 MAX_CURVATURE = 1.0e6
 
 #: Largest rear-to-front ratio magnitude accepted where the characteristic
-#: coefficients are formed from it (stability lines, charts): |a| of a real
+#: coefficients are formed from it (stability lines, charts): ``abs(a)`` of a real
 #: four-wheel steering is below 10; 1e300 overflowed the coefficients.
 MAX_RATIO = 1.0e6
 
@@ -276,7 +276,7 @@ def check_delay(delay: Any) -> float:
 def check_magnitude(
     name: str, value: Any, limit: float, unit: str = ""
 ) -> np.ndarray | float:
-    """Return `value` as float (array) if every element is finite, |x| <= limit.
+    """Return `value` as float (array) if every element is finite, ``abs(x) <= limit``.
 
     A range check that keeps later products (squares of speeds and
     curvatures) from overflowing to inf.
