@@ -72,3 +72,55 @@ def gain_factor(wheelbase, curvature, model):
     if model == "paper":
         return np.ones_like(kappa)
     return 1.0 + (wheelbase * kappa) ** 2
+
+
+# Fuzz counts (tests/test_fuzz.py): calls tried and handled well per callable,
+# printed in the terminal summary. Kept on the config rather than in a
+# fixture's closure so that, under pytest-xdist, each worker can send its
+# counts to the controller, which prints the total.
+_FUZZ_COUNTS = pytest.StashKey[dict]()
+
+
+def _fuzz_counts_of(config) -> dict:
+    return config.stash.setdefault(_FUZZ_COUNTS, {})
+
+
+@pytest.fixture(scope="session")
+def fuzz_counts(request):
+    """``{callable name: Counter(tried=..., well=...)}`` of the fuzz suite."""
+    return _fuzz_counts_of(request.config)
+
+
+def pytest_sessionfinish(session):
+    # on an xdist worker: hand the counts to the controller
+    if hasattr(session.config, "workeroutput"):
+        counts = _fuzz_counts_of(session.config)
+        session.config.workeroutput["fws_fuzz_counts"] = {
+            name: dict(c) for name, c in counts.items()
+        }
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_testnodedown(node, error):
+    # on the xdist controller: add up what each worker counted
+    from collections import Counter
+
+    total = _fuzz_counts_of(node.config)
+    for name, c in getattr(node, "workeroutput", {}).get("fws_fuzz_counts", {}).items():
+        total.setdefault(name, Counter()).update(c)
+
+
+def pytest_terminal_summary(terminalreporter, config):
+    counts = _fuzz_counts_of(config)
+    if hasattr(config, "workeroutput") or not counts:
+        return
+    tried = sum(c["tried"] for c in counts.values())
+    well = sum(c["well"] for c in counts.values())
+    terminalreporter.write_line(
+        f"fuzz: {tried} calls tried, {well} handled well ({len(counts)} callables)"
+    )
+    for name, c in sorted(counts.items()):
+        if c["well"] < c["tried"]:
+            terminalreporter.write_line(
+                f"  {name}: {c['tried']} tried, {c['well']} handled well"
+            )

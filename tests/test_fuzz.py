@@ -714,34 +714,6 @@ def judge(case: Case, arg: str, value: Any) -> tuple[bool, str]:
     return (True, "") if ok else (False, "result fails its postconditions")
 
 
-@pytest.fixture(scope="session")
-def fuzz_counts(request):
-    """Calls tried and handled well per callable, printed at the end."""
-    counts: dict[str, Counter] = {}
-
-    def report():
-        tr = request.config.pluginmanager.get_plugin("terminalreporter")
-        if tr is None or not counts:
-            return
-        tried = sum(c["tried"] for c in counts.values())
-        well = sum(c["well"] for c in counts.values())
-        capman = request.config.pluginmanager.get_plugin("capturemanager")
-        with capman.global_and_fixture_disabled():
-            tr.write_line("")
-            tr.write_line(
-                f"fuzz: {tried} calls tried, {well} handled well "
-                f"({len(counts)} callables)"
-            )
-            for name, c in sorted(counts.items()):
-                if c["well"] < c["tried"]:
-                    tr.write_line(
-                        f"  {name}: {c['tried']} tried, {c['well']} handled well"
-                    )
-
-    request.addfinalizer(report)
-    return counts
-
-
 def _params():
     out = []
     for name in CASES:
