@@ -193,11 +193,11 @@ def _run_isolated(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts
 
 
 # Engines of simulate_batch (documented in its docstring).
-_ENGINES = ("numpy", "compiled")
+_ENGINES = ("auto", "numpy", "compiled")
 
 
-def _check_compiled(path, gains, *, delay, method, model, feedforward) -> None:
-    """Raise ValueError if ``engine="compiled"`` cannot run this case."""
+def _compiled_reason(path, gains, *, delay, method, model, feedforward):
+    """Why ``engine="compiled"`` cannot run this case, or None if it can."""
     # imported here: numba's import is paid only by those who use it
     from .compiled import compiled_support
 
@@ -206,6 +206,14 @@ def _check_compiled(path, gains, *, delay, method, model, feedforward) -> None:
         reason = f"only model='kinematic' is compiled, got model={model!r}"
     if reason is None and feedforward == "dynamic":
         reason = "feedforward='dynamic' is not compiled"
+    return reason
+
+
+def _check_compiled(path, gains, *, delay, method, model, feedforward) -> None:
+    """Raise ValueError if ``engine="compiled"`` cannot run this case."""
+    reason = _compiled_reason(
+        path, gains, delay=delay, method=method, model=model, feedforward=feedforward
+    )
     if reason is not None:
         raise ValueError(
             f"engine='compiled' cannot run this simulation: {reason}; use "
@@ -213,14 +221,44 @@ def _check_compiled(path, gains, *, delay, method, model, feedforward) -> None:
         )
 
 
-def _run_compiled(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl):
-    """:func:`_run_chunk` on the compiled engine (each run alone, no peaks).
+def _choose_engine(path, gains, *, delay, method, model, feedforward) -> str:
+    """The engine ``engine="auto"`` runs: compiled where it can, else numpy.
 
-    Same arguments and results (NaN peaks: the compiled engine keeps no
-    dense solution); module-level so that Dask can pickle it. A run's
-    solver, steps and stop are its own, so a failure needs no isolation.
+    `method` is already resolved (``"auto"`` became DOP853, or Radau for a
+    stiff actuator: then numpy, the compiled engine has no implicit method).
+    A path whose curvature table misses its tolerance goes to numpy too.
     """
-    from .compiled import compiled_outputs, curvature_table, integrate_compiled
+    try:
+        import numba  # noqa: F401  (the optional extra "fast")
+    except ImportError:
+        return "numpy"
+    if _compiled_reason(
+        path, gains, delay=delay, method=method, model=model, feedforward=feedforward
+    ):
+        return "numpy"
+    from .compiled import curvature_table
+
+    try:
+        curvature_table(path)
+    except ValueError:
+        return "numpy"
+    return "compiled"
+
+
+def _run_compiled(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl):
+    """:func:`_run_chunk` on the compiled engine (each run alone).
+
+    Same arguments and results, the peaks those of each run's own dense
+    output (:func:`~fws_control.simulation.compiled.compiled_peaks`);
+    module-level so that Dask can pickle it. A run's solver, steps and stop
+    are its own, so a failure needs no isolation.
+    """
+    from .compiled import (
+        compiled_outputs,
+        compiled_peaks,
+        curvature_table,
+        integrate_compiled,
+    )
 
     g = SteeringGains(k1, k2, a)
     table = curvature_table(path)  # once for the integration and the outputs
@@ -235,6 +273,7 @@ def _run_compiled(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts
         time_constant=tau,
         rtol=opts["rtol"],
         atol=opts["atol"],
+        solution=(solution := []),
     )
     signals = compiled_outputs(
         vehicle,
@@ -247,8 +286,19 @@ def _run_compiled(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts
         initial_heading=x0[:, 2],
         table=table,
     )
-    nan = np.full((speed.size, len(PEAK_SIGNALS)), np.nan)
-    return signals, status, message, t_stop, nan, nan.copy()
+    peaks, peak_times = compiled_peaks(
+        vehicle,
+        table,
+        g,
+        speed=speed,
+        feedforward=feedforward,
+        time_constant=tau,
+        solution=solution[0],
+        t_eval=t,
+        signals=signals,
+        t_stop=t_stop,
+    )
+    return signals, status, message, t_stop, peaks, peak_times
 
 
 def _lost_chunk(n: int, t_size: int, note: str):
@@ -455,7 +505,7 @@ def simulate(
     atol: float = 1e-12,
     model: str = "kinematic",
     tyre: str = "linear",
-    engine: str = "numpy",
+    engine: str = "auto",
 ) -> SimulationResult:
     r"""Simulate the closed loop (one run) with the fast path-frame engine.
 
@@ -545,22 +595,29 @@ def simulate(
     tyre : {"linear", "magic"}, optional
         Tyre model of ``model="dynamic"``: linear (default) or the
         saturating simplified magic formula (needs ``vehicle.friction``).
-    engine : {"numpy", "compiled"}, optional
-        ``"numpy"`` (default): the engine described above, for every case.
+    engine : {"auto", "numpy", "compiled"}, optional
         ``"compiled"``: the numba port of DOP853 of
         :mod:`fws_control.simulation.compiled` (extra ``fast``), each run
         with its own steps and stop, at compiled speed. It runs the paper's
         law (:class:`~fws_control.SteeringGains`) on the kinematic model
         without delay, with ``method="DOP853"`` or ``"auto"`` (which then
         means DOP853, even for a stiff actuator) and `feedforward` True or
-        False; any other case raises :class:`ValueError` (no fallback).
-        Its results agree with the numpy engine's to the solver tolerance
-        (the same method; angle and rate limits are switched as events, and
-        a run stops ``1e-3`` before a singularity: see that module). It
-        keeps no dense solution: the result's
-        :attr:`~fws_control.SimulationResult.peaks` are the maxima of the
-        output samples, marked ``exact=False``, and its ``engine`` is
-        ``"compiled"``.
+        False, on any path whose curvature it can tabulate; any other case
+        raises :class:`ValueError` (no fallback). Its results agree with the
+        numpy engine's to the solver tolerance (the same method; angle and
+        rate limits are switched as events, and a run stops ``1e-3`` before
+        a singularity: see that module), and its
+        :attr:`~fws_control.SimulationResult.peaks` are the exact peaks of
+        each run's own dense output
+        (:func:`~fws_control.simulation.compiled.compiled_peaks`).
+        ``"numpy"``: the engine described above, for every case.
+        ``"auto"`` (default): the compiled engine where numba is installed
+        and it runs the case, with `method` resolved first (``"auto"`` is
+        Radau for a stiff actuator, see
+        :func:`~fws_control.simulation.engine.choose_method`, and Radau runs
+        on the numpy engine); the numpy engine otherwise. The result's
+        ``engine`` says which ran, and is bitwise the result of asking for
+        that engine explicitly.
 
     Returns
     -------
@@ -664,7 +721,7 @@ def simulate_batch(
     atol: float = 1e-12,
     model: str = "kinematic",
     tyre: str = "linear",
-    engine: str = "numpy",
+    engine: str = "auto",
     chunk_size: int | None = None,
     client: Any = None,
     progress: bool | None = None,
@@ -707,11 +764,14 @@ def simulate_batch(
         Solver tolerances, as in :func:`simulate`.
     model, tyre : str, optional
         Vehicle and tyre model, as in :func:`simulate`.
-    engine : {"numpy", "compiled"}, optional
-        Integration engine, as in :func:`simulate`. With ``"compiled"`` each
-        run has its own steps, error norm and stop, so a run's result does
-        not depend on the other runs (nor on `chunk_size`); peaks come from
-        the samples (``exact=False``).
+    engine : {"auto", "numpy", "compiled"}, optional
+        Integration engine, as in :func:`simulate` (default ``"auto"``: the
+        compiled engine where numba is installed and it runs the case --
+        the paper's law, kinematic model, no delay, DOP853, not a stiff
+        actuator under ``method="auto"`` -- else the numpy engine). With
+        ``"compiled"`` each run has its own steps, error norm and stop, so a
+        run's result does not depend on the other runs (nor on
+        `chunk_size`).
     chunk_size : int, optional
         Runs per chunk (one solver; one Dask task); default
         :data:`DEFAULT_CHUNK_SIZE`. Smaller chunks decouple the step sizes of
@@ -759,7 +819,7 @@ def simulate_batch(
     >>> fws.tracking_metrics(res).peak_lateral_accel.round(2).tolist()
     [2.0, 1.91, 1.73, 1.19]
     """
-    if isinstance(engine, bool) or engine not in _ENGINES:
+    if not isinstance(engine, str) or engine not in _ENGINES:
         raise ValueError(f"engine must be one of {_ENGINES}, got {engine!r}")
     if engine == "compiled" and isinstance(method, str) and method == "auto":
         method = "DOP853"  # the only compiled method (also for a stiff actuator)
@@ -794,6 +854,15 @@ def simulate_batch(
             )
     else:
         feedforward = bool(feedforward)
+    if engine == "auto":
+        engine = _choose_engine(
+            path,
+            SteeringGains(k1, k2, a) if ctrl is None else ctrl,
+            delay=opts["delay"],
+            method=opts["method"],
+            model=opts["model"],
+            feedforward=feedforward,
+        )
     if engine == "compiled":
         _check_compiled(
             path,
@@ -881,9 +950,8 @@ def simulate_batch(
         run_status=status.astype(str),
         run_message=tuple(str(m) for m in message),
         run_t_stop=t_stop,
-        # the compiled engine has no dense solution: sample peaks (exact=False)
-        run_peak=peak if engine == "numpy" else None,
-        run_peak_time=peak_time if engine == "numpy" else None,
+        run_peak=peak,
+        run_peak_time=peak_time,
         run_speed=V,
         run_k1=k1,
         run_k2=k2,
