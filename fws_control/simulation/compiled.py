@@ -143,7 +143,8 @@ _MESSAGES = {
     STATUS_SINGULAR_CURVATURE: "1 - curvature*e reached curvature_margin: the "
     "vehicle is at the path's centre of curvature and the projection is lost",
     STATUS_END_OF_PATH: "the projection point left the open path",
-    STATUS_FAILED: "the step size fell below 10 ulp of t (scipy's TOO_SMALL_STEP)",
+    STATUS_FAILED: "the ODE solver failed: the step size fell below 10 ulp of t "
+    "(scipy's TOO_SMALL_STEP)",
 }
 
 
@@ -165,7 +166,10 @@ def _jit(fn):
     # plain Python (importable, never called by integrate_compiled).
     if numba is None:  # pragma: no cover
         return fn
-    return numba.njit(cache=True, nogil=True)(fn)
+    # error_model="numpy": a division by zero gives inf or NaN as in numpy
+    # (and the solver then rejects the step or fails the run), instead of
+    # raising ZeroDivisionError out of the whole batch (e.g. V = 1e300).
+    return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
 
 
 # --------------------------------------------------------------------------
@@ -203,6 +207,9 @@ _NP = 8
 _NSIG = len(SIGNALS)
 _N_STOPS = 4
 _N_EVENTS = 8
+# Points of a step (fractions) where, with the dense output kept, the stop
+# conditions are checked too (engine._MARGIN_NODES without the step's end).
+_INNER_NODES = (0.25, 0.5, 0.75)
 #: Most clip switches per run (a guard against chattering).
 _MAX_SWITCHES = 100_000
 
@@ -842,8 +849,22 @@ def _run_impl(
         t_hit = np.inf
         j_hit = -1
         for j in range(_N_EVENTS):
+            lo_b, hi_b = t_old, t
             if j < _N_STOPS:
                 hit = g_old[j] >= 0 and g_new[j] <= 0  # solve_ivp, direction -1
+                if keep and not hit and g_old[j] >= 0:
+                    # with the dense output kept (the runners), also at three
+                    # points inside the step, as the numpy engine checks its
+                    # margins: a loose tolerance must not step across a
+                    # singular state and back
+                    for x in _INNER_NODES:
+                        tt = t_old + x * h
+                        if _event_at(tt, j, t_old, t, y_old, F, p, q, breaks,
+                                     coefs, ytmp, g_tmp) <= 0:  # fmt: skip
+                            hit = True
+                            hi_b = tt
+                            break
+                        lo_b = tt
             else:
                 # a clip's mode is wrong at the step's end: it switched in the
                 # step (g from > 0), or it was ~0 on the wrong side already at
@@ -861,7 +882,7 @@ def _run_impl(
                     nfev += 3
                     dense_ready = True
                 root = _brentq(
-                    j, t_old, t, t_old, t, y_old, F, p, q, breaks, coefs, ytmp, g_tmp
+                    j, lo_b, hi_b, t_old, t, y_old, F, p, q, breaks, coefs, ytmp, g_tmp
                 )
             if root < t_hit:
                 t_hit = root
