@@ -100,9 +100,7 @@ def test_tolerances_at_the_ends_of_their_ranges_are_accepted():
 
 @pytest.mark.parametrize("engine", ["numpy", "compiled"])
 @pytest.mark.parametrize(("rtol", "atol"), [(0.1, 1e-12), (0.1, 0.1), (1e-3, 0.1)])
-def test_loose_tolerances_still_stop_at_the_singular_steering_angle(
-    rtol, atol, engine
-):
+def test_loose_tolerances_still_stop_at_the_singular_steering_angle(rtol, atol, engine):
     # k2 < 0 feeds the heading back positively: delta_f runs to pi/2 near
     # t = 4.62 s (at the default tolerances). Before the margins were checked
     # inside every step, rtol = atol = 0.1 sampled |delta_f| = 1.997 > pi/2
