@@ -210,6 +210,7 @@ _N_EVENTS = 8
 # Points of a step (fractions) where, with the dense output kept, the stop
 # conditions are checked too (engine._MARGIN_NODES without the step's end).
 _INNER_NODES = (0.25, 0.5, 0.75)
+_N_INNER = len(_INNER_NODES)
 #: Most clip switches per run (a guard against chattering).
 _MAX_SWITCHES = 100_000
 
@@ -336,8 +337,8 @@ def closed_loop_rhs(t, y, p, q, breaks, coefs, out):
 
 
 @_jit
-def _events(y, p, q, breaks, coefs, g):
-    """Event functions: 0-3 stop a run, 4-7 switch a clip's mode (at <= 0)."""
+def _stop_events(y, p, q, breaks, coefs, g):
+    """The stop events 0-3 of :func:`_events` (into ``g[:4]``)."""
     s, e = y[0], y[1]
     kappa = _curvature(s, q, breaks, coefs)
     if q[_Q_TAU] > 0.0:
@@ -354,6 +355,12 @@ def _events(y, p, q, breaks, coefs, g):
     else:
         g[2] = np.inf
         g[3] = np.inf
+
+
+@_jit
+def _events(y, p, q, breaks, coefs, g):
+    """Event functions: 0-3 stop a run, 4-7 switch a clip's mode (at <= 0)."""
+    _stop_events(y, p, q, breaks, coefs, g)
     if q[_Q_SWITCH] == 0.0:
         for j in range(_N_STOPS, _N_EVENTS):
             g[j] = np.inf
@@ -742,6 +749,7 @@ def _run_impl(
     g_old = np.empty(_N_EVENTS)
     g_new = np.empty(_N_EVENTS)
     g_tmp = np.empty(_N_EVENTS)
+    g_inner = np.empty((_N_INNER, _N_EVENTS))
     t = t_eval[0]
     t_bound = t_eval[T - 1]
     y = y0.copy()
@@ -848,23 +856,25 @@ def _run_impl(
         code = 0
         t_hit = np.inf
         j_hit = -1
+        if keep:
+            # with the dense output kept (the runners), the stop conditions
+            # are also checked at three points inside the step, as the numpy
+            # engine checks its margins: a loose tolerance must not step
+            # across a singular state and back
+            for r in range(_N_INNER):
+                _dense_eval(t_old + _INNER_NODES[r] * h, t_old, t, y_old, F, ytmp)
+                _stop_events(ytmp, p, q, breaks, coefs, g_inner[r])
         for j in range(_N_EVENTS):
             lo_b, hi_b = t_old, t
             if j < _N_STOPS:
                 hit = g_old[j] >= 0 and g_new[j] <= 0  # solve_ivp, direction -1
                 if keep and not hit and g_old[j] >= 0:
-                    # with the dense output kept (the runners), also at three
-                    # points inside the step, as the numpy engine checks its
-                    # margins: a loose tolerance must not step across a
-                    # singular state and back
-                    for x in _INNER_NODES:
-                        tt = t_old + x * h
-                        if _event_at(tt, j, t_old, t, y_old, F, p, q, breaks,
-                                     coefs, ytmp, g_tmp) <= 0:  # fmt: skip
+                    for r in range(_N_INNER):
+                        if g_inner[r, j] <= 0:
                             hit = True
-                            hi_b = tt
+                            hi_b = t_old + _INNER_NODES[r] * h
                             break
-                        lo_b = tt
+                        lo_b = t_old + _INNER_NODES[r] * h
             else:
                 # a clip's mode is wrong at the step's end: it switched in the
                 # step (g from > 0), or it was ~0 on the wrong side already at
@@ -1132,14 +1142,15 @@ def _signals_batch(states, P, q, breaks, coefs, d_cg, pose, sig):
 # The numpy engine's search (engine.exact_peaks): 8 nodes per solver step,
 # the 3 largest local maxima of the nodes and the largest output sample
 # refined. The refinement here is Brent's bounded search (scipy's
-# fminbound: golden section with parabolic steps, absolute tolerance
-# sqrt(eps) |t| + _PEAK_XATOL / 3), converging in about a third of the
-# golden-section iterations; at a smooth maximum a time error dt moves the
-# value by f'' dt^2 / 2, about 1e-16 of it here.
+# fminbound: golden section with parabolic steps) to a time tolerance of
+# sqrt(eps) max(|t|, 1 s), converging in a fraction of the golden-section
+# iterations; at a smooth maximum a time error dt moves the value by
+# f'' dt^2 / 2: about (dt / tau)^2 of it for a signal of time scale tau,
+# below 1e-12 for tau >= 0.02 s and t <= 100 s.
 _PEAK_NODES = 8
 _PEAK_CAND = 3
-_PEAK_XATOL = 1e-10
 _PEAK_MAXFUN = 200
+_N_PROBES = 4
 _N_PEAK = 6
 # _peak_values computes these, in this order
 assert PEAK_SIGNALS == (
@@ -1149,8 +1160,8 @@ _PEAK_COLS = tuple(SIGNALS.index(name) for name in PEAK_SIGNALS)
 
 
 @_jit
-def _peak_values(tt, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, out):
-    """|signal| of the six peak signals at `tt` on the run's dense output."""
+def _state_at(tt, rec, n_pc, y0, m, ytmp):
+    """The run's state at `tt` from its dense output (`rec`: its pieces)."""
     if n_pc == 0:
         for i in range(m):
             ytmp[i] = y0[i]
@@ -1174,6 +1185,12 @@ def _peak_values(tt, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, out)
                 else:
                     v *= 1 - x
             ytmp[i] = v + row[2 + i]
+
+
+@_jit
+def _peak_values(tt, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, out):
+    """|signal| of the six peak signals at `tt` on the run's dense output."""
+    _state_at(tt, rec, n_pc, y0, m, ytmp)
     df_s, dr_s = 0.0, 0.0
     if m == 5:
         df_s, dr_s = ytmp[3], ytmp[4]
@@ -1198,6 +1215,31 @@ def _peak_values(tt, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, out)
 
 
 @_jit
+def _peak_value(tt, j, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals):
+    """|signal j| at `tt`: :func:`_peak_values` computing only what j needs."""
+    _state_at(tt, rec, n_pc, y0, m, ytmp)
+    if j == 0:
+        v = abs(ytmp[1])
+    elif j <= 2 and m == 5:
+        v = abs(ytmp[2 + j])  # the actuator's angles are states
+    elif j <= 2:
+        # the clipped commands, with the operations of _point_signals
+        kappa = _curvature(ytmp[0], q, br, co)
+        fb = -k1 * ytmp[1] - k2 * ytmp[2]
+        if j == 1:
+            raw = fb
+            if q[_Q_FF] != 0.0:
+                raw = fb + math.atan(q[_Q_WHEELBASE] * kappa)
+            v = abs(min(max(raw, -q[_Q_MAX_F]), q[_Q_MAX_F]))
+        else:
+            v = abs(min(max(a * fb, -q[_Q_MAX_R]), q[_Q_MAX_R]))
+    else:
+        _peak_values(tt, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals)
+        return vals[j]
+    return v if math.isfinite(v) else np.inf
+
+
+@_jit
 def _refine_peak(lo, hi, j, best, rec, n_pc, y0, m, V, k1, k2, a, q, br, co,
                  d_cg, ytmp, vals):  # fmt: skip
     """Brent's bounded search for the largest |signal j| in [lo, hi].
@@ -1214,15 +1256,14 @@ def _refine_peak(lo, hi, j, best, rec, n_pc, y0, m, V, k1, k2, a, q, br, co,
     rat = 0.0
     e = 0.0
     x = xf
-    _peak_values(x, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals)
-    fx = -vals[j]
+    fx = -_peak_value(x, j, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals)
     if -fx > best[0]:
         best[0], best[1] = -fx, x
     num = 1
     ffulc = fx
     fnfc = fx
     xm = 0.5 * (a_ + b_)
-    tol1 = sqrt_eps * abs(xf) + _PEAK_XATOL / 3.0
+    tol1 = sqrt_eps * max(abs(xf), 1.0)
     tol2 = 2.0 * tol1
     while abs(xf - xm) > (tol2 - 0.5 * (b_ - a_)):
         golden_step = True
@@ -1257,8 +1298,9 @@ def _refine_peak(lo, hi, j, best, rec, n_pc, y0, m, V, k1, k2, a, q, br, co,
             rat = golden * e
         si = 1.0 if rat >= 0.0 else -1.0
         x = xf + si * max(abs(rat), tol1)
-        _peak_values(x, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals)
-        fu = -vals[j]
+        fu = -_peak_value(
+            x, j, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals
+        )
         if -fu > best[0]:
             best[0], best[1] = -fu, x
         num += 1
@@ -1281,10 +1323,35 @@ def _refine_peak(lo, hi, j, best, rec, n_pc, y0, m, V, k1, k2, a, q, br, co,
             elif (fu <= ffulc) or (fulc == xf) or (fulc == nfc):
                 fulc, ffulc = x, fu
         xm = 0.5 * (a_ + b_)
-        tol1 = sqrt_eps * abs(xf) + _PEAK_XATOL / 3.0
+        tol1 = sqrt_eps * max(abs(xf), 1.0)
         tol2 = 2.0 * tol1
         if num >= _PEAK_MAXFUN or not math.isfinite(fx):
             break
+
+
+@_jit
+def _falls_from_end(end, other, f_end, f_other, j, best, rec, n_pc, y0, m, V,
+                    k1, k2, a, q, br, co, d_cg, ytmp, vals):  # fmt: skip
+    """True if |signal j| falls monotonically from `end` towards `other`.
+
+    Checked at _N_PROBES interior points (5x finer than the nodes; updating
+    `best`). A bracket whose largest value is at its end and that falls at
+    every probe has its maximum at that end: a rise again between two
+    probes would be a feature of the solution 40x shorter than its solver
+    step, which the step's error control does not allow. Saves the search
+    (about 30 evaluations) converging to the end.
+    """
+    prev = f_end
+    for r in range(1, _N_PROBES + 1):
+        x = end + (r / (_N_PROBES + 1)) * (other - end)
+        v = _peak_value(x, j, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg,
+                        ytmp, vals)  # fmt: skip
+        if v > best[0]:
+            best[0], best[1] = v, x
+        if not v <= prev:
+            return False
+        prev = v
+    return f_other <= prev
 
 
 @_jit
@@ -1363,15 +1430,40 @@ def _peaks_batch(rec, offsets, Y0, P, q, br, co, d_cg, t_eval, signals, t_stop,
                 k = cand[c]
                 if k < 0 or not np.isfinite(cval[c]):
                     continue
-                lo = times_n[max(k - 1, 0)]
-                hi = times_n[min(k + 1, K - 1)]
-                if hi > lo:
-                    _refine_peak(lo, hi, j, best, pc, n_pc, Y0[i], m, V, k1, k2,
-                                 a, q, br, co, d_cg, ytmp, vals)  # fmt: skip
+                k_lo, k_hi = max(k - 1, 0), min(k + 1, K - 1)
+                lo, hi = times_n[k_lo], times_n[k_hi]
+                if not hi > lo:
+                    continue
+                # a local maximum at an end of the run: the end itself, unless
+                # the signal rises again inside the bracket
+                if k == 0 and _falls_from_end(
+                    lo, hi, node_v[0, j], node_v[k_hi, j], j, best, pc, n_pc,
+                    Y0[i], m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals,
+                ):  # fmt: skip
+                    continue
+                if k == K - 1 and _falls_from_end(
+                    hi, lo, node_v[k, j], node_v[k_lo, j], j, best, pc, n_pc,
+                    Y0[i], m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals,
+                ):  # fmt: skip
+                    continue
+                _refine_peak(lo, hi, j, best, pc, n_pc, Y0[i], m, V, k1, k2,
+                             a, q, br, co, d_cg, ytmp, vals)  # fmt: skip
             if ks >= 0 and np.isfinite(sv):
                 lo = t_eval[max(ks - 1, 0)]
                 hi = max(min(t_eval[min(ks + 1, T - 1)], ts), lo)
-                if hi > lo:
+                if not hi > lo:
+                    pass
+                elif t_eval[ks] == lo and _falls_from_end(
+                    lo, hi, sv, -np.inf, j, best, pc, n_pc, Y0[i], m, V, k1, k2,
+                    a, q, br, co, d_cg, ytmp, vals,
+                ):  # fmt: skip
+                    pass
+                elif t_eval[ks] == hi and _falls_from_end(
+                    hi, lo, sv, -np.inf, j, best, pc, n_pc, Y0[i], m, V, k1, k2,
+                    a, q, br, co, d_cg, ytmp, vals,
+                ):  # fmt: skip
+                    pass
+                else:
                     _refine_peak(lo, hi, j, best, pc, n_pc, Y0[i], m, V, k1, k2,
                                  a, q, br, co, d_cg, ytmp, vals)  # fmt: skip
             values[i, j] = best[0]
@@ -2035,7 +2127,7 @@ def compiled_peaks(
     local maxima of the nodes (between their neighbours) and the largest
     output sample (between its neighbours) are then refined by Brent's
     bounded search (scipy's ``fminbound`` algorithm, tolerance
-    :math:`\sqrt{\epsilon}\,|t| + 3\cdot 10^{-11}` s), keeping the best of
+    :math:`\sqrt{\epsilon}\max(|t|, 1\,\mathrm{s})`), keeping the best of
     all evaluations. A signal that is not finite where the state is has the
     peak ``inf`` there. The peaks do not depend on the output grid.
 

@@ -262,13 +262,16 @@ def _run_compiled(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts
 
     g = SteeringGains(k1, k2, a)
     table = curvature_table(path)  # once for the integration and the outputs
+    # each distinct initial pose projected once (a sweep often shares one):
+    # the same numbers as projecting every run
+    poses, inverse = np.unique(x0[:, :3], axis=0, return_inverse=True)
     states, status, message, t_stop, _ = integrate_compiled(
         vehicle,
         table,
         g,
         speed=speed,
         feedforward=feedforward,
-        path_state=initial_path_state(path, x0[:, :3]),
+        path_state=initial_path_state(path, poses)[inverse.ravel()],
         t_eval=t,
         time_constant=tau,
         rtol=opts["rtol"],
