@@ -54,14 +54,22 @@ that channel held at the limit (or free), so that the right-hand side is
 smooth within every step (``switching=False`` clips with min/max inside the
 right-hand side instead, as the numpy engine does).
 
+With ``integrate_compiled(..., solution=[])`` every run's dense output is
+kept (:class:`CompiledSolution`), and :func:`compiled_peaks` finds the
+exact peaks of each run's continuous solution on it, as
+:func:`~fws_control.simulation.engine.exact_peaks` does for the numpy
+engine; with it kept the stop conditions are also checked at three points
+inside every step (as the numpy engine checks its margins), so that a loose
+tolerance cannot step across a singular state and back.
+
 Not supported here (the numpy engine remains the general path;
-``simulate(..., engine="compiled")`` raises for these):
+``simulate(..., engine="compiled")`` raises for these, and the default
+``engine="auto"`` runs them on the numpy engine):
 :class:`~fws_control.LateralController` baselines, an input delay, other
-solvers than DOP853, the dense solution for exact peaks, and any model
-other than the kinematic one. A stiff actuator (small time
-constant) is detected with Hairer's test (``stiff`` in the statistics) but
-still integrated explicitly: the explicit step is then limited by stability
-to about :math:`6\,T` (see ``docs/performance.md``).
+solvers than DOP853, and any model other than the kinematic one. A stiff
+actuator (small time constant) is detected with Hairer's test (``stiff``
+in the statistics) but still integrated explicitly: the explicit step is
+then limited by stability to about :math:`6\,T` (see ``docs/performance.md``).
 
 numba is an optional dependency (extra ``fast``). Without it the module
 still imports; :func:`integrate_compiled` raises :class:`ImportError`.

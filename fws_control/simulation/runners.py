@@ -15,6 +15,13 @@ its samples after the stop are NaN. Large sweeps are split into chunks of
 ``distributed``) the chunks are submitted to the cluster; otherwise they run
 one after the other here. A tqdm progress bar over the chunks is shown on
 interactive terminals.
+
+That is the numpy engine. By default (``engine="auto"``) the runners use
+the compiled per-run engine of :mod:`~fws_control.simulation.compiled`
+instead wherever numba is installed and it covers the case (the paper's
+law on the kinematic model, no delay, DOP853): each run then has its own
+steps, error norm and stop, and its exact peaks come from its own dense
+output.
 """
 
 from __future__ import annotations
