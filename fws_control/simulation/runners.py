@@ -228,28 +228,29 @@ def _check_compiled(path, gains, *, delay, method, model, feedforward) -> None:
         )
 
 
-def _choose_engine(path, gains, *, delay, method, model, feedforward) -> str:
-    """The engine ``engine="auto"`` runs: compiled where it can, else numpy.
+def _choose_engine(path, gains, *, delay, method, model, feedforward):
+    """The engine ``engine="auto"`` runs, and the compiled engine's table.
 
-    `method` is already resolved (``"auto"`` became DOP853, or Radau for a
-    stiff actuator: then numpy, the compiled engine has no implicit method).
-    A path whose curvature table misses its tolerance goes to numpy too.
+    Returns ``("compiled", table)`` where the compiled engine can run the
+    case, else ``("numpy", None)``. `method` is already resolved
+    (``"auto"`` became DOP853, or Radau for a stiff actuator: then numpy,
+    the compiled engine has no implicit method). A path whose curvature
+    table misses its tolerance goes to numpy too.
     """
     try:
         import numba  # noqa: F401  (the optional extra "fast")
     except ImportError:
-        return "numpy"
+        return "numpy", None
     if _compiled_reason(
         path, gains, delay=delay, method=method, model=model, feedforward=feedforward
     ):
-        return "numpy"
+        return "numpy", None
     from .compiled import curvature_table
 
     try:
-        curvature_table(path)
+        return "compiled", curvature_table(path)
     except ValueError:
-        return "numpy"
-    return "compiled"
+        return "numpy", None
 
 
 def _run_compiled(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl):
@@ -268,7 +269,11 @@ def _run_compiled(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts
     )
 
     g = SteeringGains(k1, k2, a)
-    table = curvature_table(path)  # once for the integration and the outputs
+    # once per call (simulate_batch builds it), for the integration, the
+    # outputs and the peaks
+    table = opts.get("curvature_table")
+    if table is None:
+        table = curvature_table(path)
     # each distinct initial pose projected once (a sweep often shares one):
     # the same numbers as projecting every run
     poses, inverse = np.unique(x0[:, :3], axis=0, return_inverse=True)
@@ -864,8 +869,9 @@ def simulate_batch(
             )
     else:
         feedforward = bool(feedforward)
+    table = None
     if engine == "auto":
-        engine = _choose_engine(
+        engine, table = _choose_engine(
             path,
             SteeringGains(k1, k2, a) if ctrl is None else ctrl,
             delay=opts["delay"],
@@ -882,6 +888,11 @@ def simulate_batch(
             model=opts["model"],
             feedforward=feedforward,
         )
+        if table is None:
+            from .compiled import curvature_table
+
+            table = curvature_table(path)
+        opts["curvature_table"] = table  # built once, for every chunk
     if chunk_size is None:
         chunk_size = DEFAULT_CHUNK_SIZE
     if (
