@@ -274,16 +274,17 @@ def _run_compiled(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts
     table = opts.get("curvature_table")
     if table is None:
         table = curvature_table(path)
-    # each distinct initial pose projected once (a sweep often shares one):
-    # the same numbers as projecting every run
-    poses, inverse = np.unique(x0[:, :3], axis=0, return_inverse=True)
+    # each distinct initial pose projected once (a sweep often shares one);
+    # distinct by bit pattern, so the numbers are those of every run's own
+    rows = np.ascontiguousarray(x0[:, :3]).view(np.dtype((np.void, 24))).ravel()
+    _, first, inverse = np.unique(rows, return_index=True, return_inverse=True)
     states, status, message, t_stop, _ = integrate_compiled(
         vehicle,
         table,
         g,
         speed=speed,
         feedforward=feedforward,
-        path_state=initial_path_state(path, poses)[inverse.ravel()],
+        path_state=initial_path_state(path, x0[first, :3])[inverse.ravel()],
         t_eval=t,
         time_constant=tau,
         rtol=opts["rtol"],
