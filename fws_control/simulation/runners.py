@@ -843,6 +843,27 @@ def simulate_batch(
     progress : bool, optional
         Show a tqdm progress bar over the chunks. ``None`` (default): only if
         standard error is a terminal.
+    signals : None, sequence of str or "metrics", optional
+        The time series to keep, for sweeps too large to hold them all.
+        ``None`` (default): all of
+        :data:`~fws_control.simulation.SIGNALS`. A sequence of their names:
+        only those (held in the order of ``SIGNALS``; the result's
+        ``signal_names`` says which). ``"metrics"``: none. Each chunk
+        computes its signals, writes the kept ones into the preallocated
+        result and is freed, so the peak memory is the returned data and one
+        chunk's working set, and the budget
+        :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES` counts the
+        kept signals only (and one chunk's full signals). Whatever is kept,
+        the result holds per run the status, ``t_stop``, the peaks
+        (:attr:`~fws_control.SimulationResult.peaks`, computed before the
+        signals are dropped: exact on the numpy engine, of the samples on
+        the compiled one) and, when ``e`` or ``theta`` is dropped, the
+        horizon metrics of :func:`~fws_control.tracking_metrics` (settling
+        time, overshoot, RMS and steady-state errors, with its default
+        settings), so ``tracking_metrics(result)`` works on every result.
+        Reading a signal not kept (``result.theta``,
+        :meth:`~fws_control.SimulationResult.signal`, ``plot``) raises
+        :class:`~fws_control.SignalNotKeptError`.
 
     Returns
     -------
@@ -857,9 +878,11 @@ def simulate_batch(
     ------
     ValueError
         If the per-run arguments do not broadcast, for an invalid
-        `chunk_size`, or as in :func:`simulate`.
+        `chunk_size`, for `signals` naming an unknown or repeated signal,
+        empty or another str than ``"metrics"``, or as in :func:`simulate`.
     TypeError
-        If `gains` is not a SteeringGains or a sequence of them.
+        If `gains` is not a SteeringGains or a sequence of them, or
+        `signals` is not None, a str or a sequence of str.
 
     Examples
     --------
@@ -878,6 +901,23 @@ def simulate_batch(
     True
     >>> fws.tracking_metrics(res).peak_lateral_accel.round(2).tolist()
     [2.0, 1.91, 1.73, 1.19]
+
+    A large sweep keeps only what it needs: here the lateral error, or only
+    the metrics (the same values, computed before the signals are dropped):
+
+    >>> few = fws.simulate_batch(veh, fws.Straight(), g, speed=20.0,
+    ...                          initial_state=(0.0, 2.0, 0.0), duration=10.0,
+    ...                          feedforward=False, signals=("e",))
+    >>> few.signal_names, few.signals.shape, bool(np.all(few.e == res.e))
+    (('e',), (4, 1, 1001), True)
+    >>> none = fws.simulate_batch(veh, fws.Straight(), g, speed=20.0,
+    ...                           initial_state=(0.0, 2.0, 0.0), duration=10.0,
+    ...                           feedforward=False, signals="metrics")
+    >>> m = fws.tracking_metrics(none)
+    >>> m.peak_lateral_accel.round(2).tolist(), m.settling_time.round(2).tolist()
+    ([2.0, 1.91, 1.73, 1.19], [5.9, 5.88, 5.83, 5.69])
+    >>> bool(np.all(m.settling_time == fws.tracking_metrics(res).settling_time))
+    True
     """
     if isinstance(engine, bool) or engine not in _ENGINES:
         raise ValueError(f"engine must be one of {_ENGINES}, got {engine!r}")

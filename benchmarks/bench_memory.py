@@ -1,0 +1,146 @@
+"""Peak memory of a 10^5-run sweep that keeps a few signals or only metrics.
+
+The paper's curve scenario as in ``bench_engine.py`` (``curve_5``: V = 5
+m/s, curvature 1/10, R(0) = (0, -5 m), feedforward + feedback, 15 s; double
+root -1, ratios spread over [-1.5, 0.6]; DOP853, rtol 1e-10, atol 1e-12),
+``simulate_batch(..., engine="compiled")`` with
+
+(a) ``signals=("e", "lateral_accel")`` (default output step 0.02 s here:
+    two signals at 0.01 s over 10^5 runs are 2.4 GB, above the 2 GiB of
+    ``simulation.engine.MAX_OUTPUT_BYTES``, and refused -- printed below);
+(b) ``signals="metrics"``: no time series, the exact peaks... of the
+    engine, the status and the horizon metrics of ``tracking_metrics``.
+
+Each case runs in a fresh Python process (so that one case's freed memory
+does not hide the next one's): it imports, warms the numba cache up on a
+4-run batch, reads its resident set size (``VmRSS`` of
+``/proc/self/status``) just before the call, and its high-water mark
+(``resource.getrusage(RUSAGE_SELF).ru_maxrss``) just after. The peak above
+the baseline is the difference: an upper bound of what the call added (the
+high-water mark may also hold an earlier, higher peak of the imports). The
+returned data are the bytes of every array of the result (signals, time
+grid, per-run fields). Wall and CPU time (``time.process_time``, all
+threads) of the call, and the load average before and after, are printed.
+One measurement per case: the peak memory does not depend on the load, the
+times do (the wall time stretches with other jobs on the machine).
+
+Run: ``python benchmarks/bench_memory.py [--runs 100000]`` (about 1.5
+minutes at 10^5 runs on 2 cores).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+
+from timing import machine_line
+
+_CASE = r"""
+import dataclasses, json, os, resource, sys, time
+import numpy as np
+import fws_control as fws
+from fws_control.paper import PAPER_VEHICLE
+from fws_control.paper.scenarios import paper_scenario
+
+runs, dt, signals = int(sys.argv[1]), float(sys.argv[2]), json.loads(sys.argv[3])
+signals = tuple(signals) if isinstance(signals, list) else signals
+veh, sc = PAPER_VEHICLE, paper_scenario("curve_5")
+ratios = np.linspace(-1.5, 0.6, runs)
+g = fws.double_root_gains(veh, speed=sc.speed, curvature=sc.curvature,
+                          ratio=ratios, pole=-1.0)
+kw = dict(speed=sc.speed, initial_state=sc.initial_state, duration=sc.duration,
+          dt=dt, engine="compiled", progress=False, signals=signals)
+g4 = fws.SteeringGains(g.k1[:4], g.k2[:4], g.ratio[:4])
+fws.simulate_batch(veh, sc.path, g4, **{**kw, "duration": 1.0})  # numba cache
+
+
+def rss():
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) * 1024
+
+
+base = rss()
+load0 = os.getloadavg()[0]
+w0, c0 = time.perf_counter(), time.process_time()
+res = fws.simulate_batch(veh, sc.path, g, **kw)
+wall, cpu = time.perf_counter() - w0, time.process_time() - c0
+peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+data = sum(
+    getattr(res, f.name).nbytes
+    for f in dataclasses.fields(res)
+    if isinstance(getattr(res, f.name), np.ndarray)
+)
+print(json.dumps({
+    "signal_bytes": res.signals.nbytes, "data": data, "peak": peak - base,
+    "base": base, "wall": wall, "cpu": cpu, "load0": load0,
+    "load1": os.getloadavg()[0], "ok": int(np.sum(res.ok)),
+    "names": list(res.signal_names), "samples": int(res.t.size),
+}))
+"""
+
+
+def run_case(runs: int, dt: float, signals) -> dict:
+    out = subprocess.run(
+        [sys.executable, "-c", _CASE, str(runs), str(dt), json.dumps(signals)],
+        capture_output=True,
+        text=True,
+        check=True,
+        env=dict(os.environ),
+    )
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=100_000)
+    parser.add_argument("--dt", type=float, default=0.02)
+    args = parser.parse_args()
+    print(machine_line())
+
+    import numpy as np
+
+    import fws_control as fws
+    from fws_control.paper import PAPER_VEHICLE
+    from fws_control.paper.scenarios import paper_scenario
+
+    sc = paper_scenario("curve_5")
+    g = fws.double_root_gains(PAPER_VEHICLE, speed=sc.speed, curvature=sc.curvature,
+                              ratio=np.linspace(-1.5, 0.6, args.runs), pole=-1.0)  # fmt: skip
+    try:  # refused before any work: the budget counts the kept signals
+        fws.simulate_batch(PAPER_VEHICLE, sc.path, g, speed=sc.speed,
+                           initial_state=sc.initial_state, duration=sc.duration,
+                           engine="compiled", signals=("e", "lateral_accel"))  # fmt: skip
+        print("two signals at dt = 0.01 s: accepted")
+    except ValueError as exc:
+        print(f"two signals at dt = 0.01 s: refused ({str(exc)[:90]}...)")
+
+    cases = (
+        ("(a) e, lateral_accel", ["e", "lateral_accel"]),
+        ("(b) metrics only", "metrics"),
+    )
+    print(
+        f"\n{args.runs} runs of {sc.name}, engine='compiled', dt={args.dt} s; "
+        "peak = ru_maxrss after the call - VmRSS before it (fresh process)"
+    )
+    print(
+        f"{'case':22s} {'signals MB':>10s} {'returned MB':>11s} {'peak MB':>8s} "
+        f"{'peak/ret':>8s} {'wall s':>7s} {'CPU s':>7s}  load before/after  ok"
+    )
+    for label, signals in cases:
+        r = run_case(args.runs, args.dt, signals)
+        print(
+            f"{label:22s} {r['signal_bytes'] / 1e6:10.1f} {r['data'] / 1e6:11.1f} "
+            f"{r['peak'] / 1e6:8.1f} {r['peak'] / r['data']:8.3f} "
+            f"{r['wall']:7.1f} {r['cpu']:7.1f}  {r['load0']:.2f} / {r['load1']:.2f}"
+            f"  {r['ok']}/{args.runs}"
+        )
+    print(machine_line())
+
+
+if __name__ == "__main__":
+    main()
