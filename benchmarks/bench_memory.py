@@ -109,12 +109,24 @@ def main() -> None:
     from fws_control.paper.scenarios import paper_scenario
 
     sc = paper_scenario("curve_5")
-    g = fws.double_root_gains(PAPER_VEHICLE, speed=sc.speed, curvature=sc.curvature,
-                              ratio=np.linspace(-1.5, 0.6, args.runs), pole=-1.0)  # fmt: skip
+    g = fws.double_root_gains(
+        PAPER_VEHICLE,
+        speed=sc.speed,
+        curvature=sc.curvature,
+        ratio=np.linspace(-1.5, 0.6, args.runs),
+        pole=-1.0,
+    )
     try:  # refused before any work: the budget counts the kept signals
-        fws.simulate_batch(PAPER_VEHICLE, sc.path, g, speed=sc.speed,
-                           initial_state=sc.initial_state, duration=sc.duration,
-                           engine="compiled", signals=("e", "lateral_accel"))  # fmt: skip
+        fws.simulate_batch(
+            PAPER_VEHICLE,
+            sc.path,
+            g,
+            speed=sc.speed,
+            initial_state=sc.initial_state,
+            duration=sc.duration,
+            engine="compiled",
+            signals=("e", "lateral_accel"),
+        )
         print("two signals at dt = 0.01 s: accepted")
     except ValueError as exc:
         print(f"two signals at dt = 0.01 s: refused ({str(exc)[:90]}...)")
