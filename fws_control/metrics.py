@@ -455,6 +455,10 @@ def tracking_metrics(
     result : SimulationResult
         One run (squeezed: from :func:`~fws_control.simulate` or
         ``result[i]``) or a batch (from :func:`~fws_control.simulate_batch`).
+        A batch that kept only some signals (``signals=``) without ``e`` or
+        ``theta`` gives the horizon metrics it computed before dropping them
+        (:data:`HORIZON_METRICS`, with the default `band`, `fraction` and
+        `window`; other settings raise :class:`ValueError` then).
     band, fraction
         Settling band of the lateral error, see :func:`settling_time`.
     window : float, optional

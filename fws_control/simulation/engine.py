@@ -470,7 +470,9 @@ def resolve_time_constant(vehicle: Vehicle, value: float | None) -> float | None
 
 
 #: Budget of the output of one call [bytes]: the returned signals, ``runs x
-#: len(SIGNALS) x samples x 8`` bytes (float64), may not exceed it. 2 GiB is
+#: len(SIGNALS) x samples x 8`` bytes (float64), may not exceed it; with
+#: ``simulate_batch(..., signals=...)`` the kept signals only, and the full
+#: signals of one chunk (its working set) apart. 2 GiB is
 #: 24 million run-samples: 16,000 runs of the paper's 15 s scenario at the
 #: default output step, or one run with dt = 6e-7 s. The peak memory of a
 #: call is its output, the states (3/11 of it, 5/11 with an actuator) and a

@@ -784,6 +784,12 @@ class SimulationResult:
         Returns
         -------
         control.TimeResponseData
+            Its outputs are the kept signals (:attr:`signal_names`).
+
+        Raises
+        ------
+        SignalNotKeptError
+            For a result that keeps no time series (``signals="metrics"``).
 
         Examples
         --------
@@ -834,7 +840,8 @@ class SimulationResult:
         """Long-format :class:`pandas.DataFrame`, one row per run and sample.
 
         Columns ``run, t``, the signals of
-        :data:`~fws_control.simulation.SIGNALS`, then the per-run ``status,
+        :data:`~fws_control.simulation.SIGNALS` that the result keeps
+        (:attr:`signal_names`), then the per-run ``status,
         t_stop, speed, k1, k2, ratio, message`` and the batch's
         ``feedforward, method`` (repeated on each of the run's rows, so that
         a CSV file keeps them). A run's rows are its samples up to its stop;
@@ -850,6 +857,8 @@ class SimulationResult:
         ------
         ImportError
             If pandas is not installed.
+        SignalNotKeptError
+            For a result that keeps no time series (``signals="metrics"``).
 
         Examples
         --------
@@ -950,6 +959,10 @@ class SimulationResult:
         ------
         ValueError
             If `ax` does not hold 6 axes or `labels` not one label per run.
+        SignalNotKeptError
+            If a signal it draws (``x, y, s, e, theta, delta_f, delta_r,
+            lateral_accel``) was not kept (``simulate_batch(...,
+            signals=...)``).
 
         Examples
         --------
