@@ -332,10 +332,13 @@ def _reduce_chunk(out, rows, horizon, exact, args):
             run_peak=peak if exact else None,
             run_peak_time=peak_time if exact else None,
         )
-        if not exact:  # the maxima of the samples, while they exist
+        if not exact:  # the maxima of the samples, while they exist (once)
             p = chunk.peaks
             peak = np.stack([p[name].value for name in PEAK_SIGNALS], axis=1)
             peak_time = np.stack([p[name].time for name in PEAK_SIGNALS], axis=1)
+            chunk = dataclasses.replace(
+                chunk, run_peak=peak, run_peak_time=peak_time, peaks_exact=False
+            )
         if horizon:
             m = tracking_metrics(chunk)
             metrics = np.stack([getattr(m, k) for k in HORIZON_METRICS], axis=1)
