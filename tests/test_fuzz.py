@@ -563,6 +563,7 @@ CASES: dict[str, Case] = {
             atol=1e-9,
             chunk_size=None,
             progress=False,
+            signals=None,
         ),
         post=simulation_post,
         examples=FEW,
