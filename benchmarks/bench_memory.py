@@ -27,8 +27,10 @@ threads) of the call, and the load average before and after, are printed.
 One measurement per case: the peak memory does not depend on the load, the
 times do (the wall time stretches with other jobs on the machine).
 
-Run: ``python benchmarks/bench_memory.py [--runs 100000]`` (about 1.5
-minutes at 10^5 runs on 2 cores).
+Run: ``python benchmarks/bench_memory.py [--runs 100000]`` (two to three
+minutes at 10^5 runs on 2 cores); ``--engine numpy --runs 10000`` measures
+the numpy engine (exact peaks of the dense output; about 1 ms of CPU a
+run, so 10^4 runs).
 """
 
 from __future__ import annotations
@@ -49,13 +51,14 @@ from fws_control.paper import PAPER_VEHICLE
 from fws_control.paper.scenarios import paper_scenario
 
 runs, dt, signals = int(sys.argv[1]), float(sys.argv[2]), json.loads(sys.argv[3])
+engine = sys.argv[4]
 signals = tuple(signals) if isinstance(signals, list) else signals
 veh, sc = PAPER_VEHICLE, paper_scenario("curve_5")
 ratios = np.linspace(-1.5, 0.6, runs)
 g = fws.double_root_gains(veh, speed=sc.speed, curvature=sc.curvature,
                           ratio=ratios, pole=-1.0)
 kw = dict(speed=sc.speed, initial_state=sc.initial_state, duration=sc.duration,
-          dt=dt, engine="compiled", progress=False, signals=signals)
+          dt=dt, engine=engine, progress=False, signals=signals)
 g4 = fws.SteeringGains(g.k1[:4], g.k2[:4], g.ratio[:4])
 fws.simulate_batch(veh, sc.path, g4, **{**kw, "duration": 1.0})  # numba cache
 
@@ -97,9 +100,9 @@ print(json.dumps({
 """
 
 
-def run_case(runs: int, dt: float, signals) -> dict:
+def run_case(runs: int, dt: float, signals, engine: str) -> dict:
     out = subprocess.run(
-        [sys.executable, "-c", _CASE, str(runs), str(dt), json.dumps(signals)],
+        [sys.executable, "-c", _CASE, str(runs), str(dt), json.dumps(signals), engine],
         capture_output=True,
         text=True,
         check=True,
@@ -113,6 +116,12 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=100_000)
     parser.add_argument(
         "--dt", type=float, default=0.02, help="output step of case (a) [s]"
+    )
+    parser.add_argument(
+        "--engine",
+        choices=("compiled", "numpy"),
+        default="compiled",
+        help="numpy: about 1 ms of CPU per run, use --runs 10000",
     )
     args = parser.parse_args()
     print(machine_line())
@@ -142,7 +151,7 @@ def main() -> None:
                 speed=sc.speed,
                 initial_state=sc.initial_state,
                 duration=sc.duration,
-                engine="compiled",
+                engine=args.engine,
                 signals=("e", "lateral_accel"),
             )
             print("two signals at dt = 0.01 s: accepted")
@@ -153,14 +162,14 @@ def main() -> None:
         ("(a) e, lateral_accel", ["e", "lateral_accel"], args.dt),
         ("(b) metrics only", "metrics", 0.01),
     )
-    print(f"\n{args.runs} runs of {sc.name}, engine='compiled'")
+    print(f"\n{args.runs} runs of {sc.name}, engine={args.engine!r}")
     print(
         f"{'case':22s} {'dt s':>5s} {'signals MB':>10s} {'returned MB':>11s} "
         f"{'peak MB':>8s} {'peak/ret':>8s} {'wall s':>7s} {'CPU s':>7s}"
         "  load before/after  ok"
     )
     for label, signals, dt in cases:
-        r = run_case(args.runs, dt, signals)
+        r = run_case(args.runs, dt, signals, args.engine)
         print(
             f"{label:22s} {dt:5.2f} {r['signal_bytes'] / 1e6:10.1f} "
             f"{r['data'] / 1e6:11.1f} {r['peak'] / 1e6:8.1f} "
