@@ -227,7 +227,9 @@ def test_the_budget_counts_the_kept_signals_only(monkeypatch):
             VEH, PATH, g, signals=("e", "theta", "x"), chunk_size=1, **kw
         )
     # the working set of a chunk counts all its signals: 8 runs at once refused
-    with pytest.raises(ValueError, match=r"for each of 8 runs"):
+    with pytest.raises(
+        ValueError, match=r"chunk_size=8: a chunk computes all 15.*for each of 8 runs"
+    ):
         fws.simulate_batch(VEH, PATH, g, signals=("e", "theta"), chunk_size=8, **kw)
     # only the metrics: no signal bytes at all
     monkeypatch.setattr(engine, "MAX_OUTPUT_BYTES", one_run)

@@ -982,9 +982,16 @@ def simulate_batch(
     if kept != SIGNALS:
         # the working set: one chunk's full signals (the kept ones are counted
         # in _prepare)
-        check_output_budget(
-            min(chunk_size, n), t.size, duration=duration, dt=dt, t_eval=t_eval
-        )
+        try:
+            check_output_budget(
+                min(chunk_size, n), t.size, duration=duration, dt=dt, t_eval=t_eval
+            )
+        except ValueError as exc:
+            raise ValueError(
+                f"chunk_size={chunk_size}: a chunk computes all {len(SIGNALS)} "
+                f"signals before it keeps {len(kept)}, and {exc}; or a smaller "
+                "chunk_size"
+            ) from None
     bounds = [(i, min(i + chunk_size, n)) for i in range(0, n, chunk_size)]
     if progress is None:
         progress = _stderr_is_tty()
