@@ -935,10 +935,11 @@ def simulate_batch(
         kept signals only (and one chunk's full signals). Whatever is kept,
         the result holds per run the status, ``t_stop``, the peaks
         (:attr:`~fws_control.SimulationResult.peaks`, computed before the
-        signals are dropped: exact on either engine) and, when ``e`` or ``theta`` is dropped, the
-        horizon metrics of :func:`~fws_control.tracking_metrics` (settling
-        time, overshoot, RMS and steady-state errors, with its default
-        settings), so ``tracking_metrics(result)`` works on every result.
+        signals are dropped: exact on either engine) and, when ``e`` or
+        ``theta`` is dropped, the horizon metrics of
+        :func:`~fws_control.tracking_metrics` (settling time, overshoot, RMS
+        and steady-state errors, with its default settings), so
+        ``tracking_metrics(result)`` works on every result.
         Reading a signal not kept (``result.theta``,
         :meth:`~fws_control.SimulationResult.signal`, ``plot``) raises
         :class:`~fws_control.SignalNotKeptError`.
