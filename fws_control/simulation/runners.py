@@ -409,7 +409,8 @@ def _prepare(
     tau = resolve_time_constant(vehicle, tau)
     opts["rtol"], opts["atol"] = check_tolerances(opts["rtol"], opts["atol"])
     if isinstance(opts["method"], str) and opts["method"] == "auto":
-        opts["method"] = choose_method(tau, opts["rtol"])
+        # (the duration and the number of runs: see the long-run rule there)
+        opts["method"] = choose_method(tau, opts["rtol"], duration=span, runs=n)
     else:
         _warn_if_stiff(check_method(opts["method"]), tau, float(t[-1]))
     return k1, k2, a, V, x0, t, tau, ctrl
