@@ -254,7 +254,8 @@ def main() -> None:
     print(
         f"scenario {sc.name}, ratio a = {args.ratio}, pole -1, {D:g} s, output "
         f"step {DT_OUT} s; rtol {RTOL:g}, atol {ATOL:g}; reference: RK4, step "
-        f"{args.step:g} s and {args.step / 2:g} s (Richardson)"
+        f"{args.step:g} s and {args.step / 2:g} s (Richardson; <= T/40 in the "
+        "first second)"
     )
 
     def vehicle(rate):
@@ -292,8 +293,8 @@ def main() -> None:
             ok_ref = bool(np.all(own < 0.1 * tol))
             print(
                 f"\n{name}: reference self-error {np.array2string(own, precision=1)}"
-                f" ({'<' if ok_ref else 'NOT <'} 0.1 tolerance); steps with a "
-                f"kink of the clip: {kinks} (the limits bind where > 0)"
+                f" ({'<' if ok_ref else 'NOT <'} 0.1 tolerance); steps refined at "
+                f"a limit: {kinks} (0: the limits never bind)"
             )
         else:
             print(f"\n{name}:")

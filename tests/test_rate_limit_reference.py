@@ -187,3 +187,17 @@ def test_auto_long_run_rule_against_measured_step_counts(tau, duration):
         assert lsoda_steps > 3 * dop_steps, (lsoda_steps, dop_steps)
     # many stacked runs keep DOP853 (LSODA's dense Jacobian)
     assert choose_method(tau, 1e-10, duration=duration, runs=17) == "DOP853"
+
+
+def test_auto_long_run_rule_for_stacked_runs():
+    # the documented bar: 100 * sqrt(runs / 2) stability-bound steps, at most
+    # 16 runs; 0.05 s over 60 s is 187.5 steps, over 150 s 468.75
+    bar = {1: 100.0, 2: 100.0, 4: 100 * math.sqrt(2), 16: 100 * math.sqrt(8)}
+    for runs, b in bar.items():
+        for duration in (30.0, 60.0, 150.0):
+            steps = duration / (6.4 * 0.05)
+            expect = "LSODA" if steps > b else "DOP853"
+            got = choose_method(0.05, 1e-10, duration=duration, runs=runs)
+            assert got == expect, (runs, duration, got)
+    # without a duration: the old rule (DOP853 above the stiff time constant)
+    assert choose_method(0.05, 1e-10, runs=1) == "DOP853"

@@ -522,8 +522,9 @@ def simulate(
         "RK45", "RK23", "Radau", "BDF", "LSODA"`` or an OdeSolver class. The
         engine steps that solver itself, as :func:`scipy.integrate.solve_ivp`
         would, so that it can stop a run at a singular state. ``"auto"`` is
-        DOP853, or Radau when a fast actuator makes the loop stiff (rule and
-        measurements in
+        DOP853, or Radau when a fast actuator makes the loop stiff, or LSODA
+        for a run long enough that the actuator's stability bound would cost
+        DOP853 more than 100 steps (rule and measurements in
         :func:`~fws_control.simulation.engine.choose_method`); the result's
         ``method`` says which. An explicit method chosen for a stiff loop
         gives a :class:`RuntimeWarning`.
