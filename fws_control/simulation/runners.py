@@ -524,7 +524,7 @@ def simulate(
         would, so that it can stop a run at a singular state. ``"auto"`` is
         DOP853, or Radau when a fast actuator makes the loop stiff, or LSODA
         for a run long enough that the actuator's stability bound would cost
-        DOP853 more than 100 steps (rule and measurements in
+        DOP853 more than 10 steps (rule and measurements in
         :func:`~fws_control.simulation.engine.choose_method`); the result's
         ``method`` says which. An explicit method chosen for a stiff loop
         gives a :class:`RuntimeWarning`.
