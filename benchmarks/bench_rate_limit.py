@@ -9,8 +9,8 @@ actuator of :func:`fws_control.steering_actuator`:
 - no actuator (reference cost);
 - ``T = 0.05 s`` without rate limits ("unlimited"), with rate limits of
   0.5 rad/s and of 0.2 rad/s (both channels; whether they bind is shown by
-  the reference's steps with a kink of the clip and the compiled engine's
-  switch count);
+  the reference's steps refined at a limit and the compiled engine's switch
+  count);
 - ``T = 0.005 s`` (stiff) without and with 0.5 rad/s.
 
 Each case runs through :func:`fws_control.simulate` (output step 0.1 s, all
@@ -33,18 +33,20 @@ RK4 with the fixed step ``--step`` (default 1e-3 s; at most ``T / 40`` in the
 first second, the actuator's initial layer), compiled with numba,
 Kahan-compensated state sums (1.5e6 steps of ``s`` ~ 7500 m would otherwise
 lose ~1e-9 to rounding). The clip is min/max inside the right-hand side; a
-step whose stages see the clip in different modes (a kink inside the step,
-where RK4's local error is only O(h^2)) is redone as 32 substeps, and a
-substep with a kink as 32 more, so that the kinks cost ~1e-12. Its own
+step that may hold a kink of it (the gap ``|u| - r`` to a limit changes
+sign over the step's five evaluations, or comes closer to 0 than it varies
+over them; RK4's local error across a kink is only O(h^2)) is redone as 32
+substeps, and such a substep as 32 more, so that the kinks cost ~1e-12. Its own
 error is estimated by Richardson extrapolation from the step halved
 (``|y_h/2 - y_h| / 15``, RK4 being of order 4) and printed: it must be
 below a tenth of the tolerance being checked.
 
 With ``--methods`` the numpy engine also integrates the unlimited and the
 0.5 rad/s case at ``T = 0.05 s`` with each of DOP853, LSODA, BDF and Radau
-(best of 3 each; Radau takes ~7 s per run at 1500 s).
+(best of 3 each; DOP853 and BDF take ~5 s per run at 1500 s, Radau ~11 s).
 
-Run: ``python benchmarks/bench_rate_limit.py [--duration 1500] [--methods]``.
+Run: ``python benchmarks/bench_rate_limit.py [--duration 1500] [--methods]``
+(about a minute; with ``--methods`` about five).
 """
 
 from __future__ import annotations
