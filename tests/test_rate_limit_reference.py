@@ -113,10 +113,13 @@ def _cases():
     yield "numpy", "DOP853", "DOP853"  # min/max kinks inside its steps
     try:
         import numba  # noqa: F401
+
+        marks = ()
     except ImportError:
-        print("numba is not installed: the compiled engine is not checked")
-        return
-    yield "compiled", "auto", "DOP853"  # switched at located events
+        reason = "numba is not installed: the compiled engine (extra 'fast')"
+        marks = pytest.mark.skip(reason=reason)
+    # switched at located events
+    yield pytest.param("compiled", "auto", "DOP853", marks=marks)
 
 
 @pytest.mark.parametrize(("engine", "method", "expect"), list(_cases()))
