@@ -25,6 +25,7 @@ import control as ct
 import numpy as np
 
 from ..charts import delay_margin_chart
+from ..layout import grid_margins
 from ..plant import LateralPlant
 from ..vehicle import Vehicle
 from .data import (
@@ -152,7 +153,13 @@ def plot_actuator(
     from .scenarios import scenario_responses
 
     if ax is None:
-        fig, axes = plt.subplots(1, 3, figsize=(16, 4.8), layout="constrained")
+        size = (16, 4.8)
+        fig, axes = plt.subplots(
+            1,
+            3,
+            figsize=size,
+            gridspec_kw=grid_margins(size, ncols=3, left=0.65, top=0.95),
+        )
     else:
         axes = list(np.asarray(ax, dtype=object).ravel())
         if len(axes) != 3:
