@@ -341,7 +341,7 @@ def plot_paper_figure(
         # Fixed layout (fws_control.layout): Fig. 2 keeps room below the
         # panels for their legends.
         size, margins = (
-            ((15, 6.2), {"bottom": 1.3, "wgap": 1.0})
+            ((15, 6.2), {"bottom": 1.3, "right": 0.3, "wgap": 1.0})
             if n == 2
             else ((19, 9.5), {"left": 0.8, "right": 0.3, "wgap": 1.0})
         )
