@@ -762,7 +762,23 @@ def make_figure(name: str, *, model: str = "exact", quick: bool = False):
     check_model(model)
     if name not in FIGURES:
         raise ValueError(f"name must be one of {sorted(FIGURES)}, got {name!r}")
-    return FIGURES[name].make(model=model, quick=quick)
+    return _make(name, model, quick)
+
+
+def _make(name: str, model: str, quick: bool):
+    """``FIGURES[name].make`` with the titles at a fixed height.
+
+    Matplotlib lifts an axes title above top tick labels and a y offset
+    text ("1e-3"); to find them it measures every y axis once more before
+    each draw (a fifth of the drawing time of these figures). None of them
+    has either, so the titles stay at the top of their axes
+    (``axes.titley = 1``); tests/test_figures.py checks that no title
+    overlaps anything.
+    """
+    import matplotlib.pyplot as plt
+
+    with plt.rc_context({"axes.titley": 1.0}):
+        return FIGURES[name].make(model=model, quick=quick)
 
 
 def _fmt_poles(p) -> str:
@@ -920,6 +936,11 @@ def _progress(iterable, enabled, total=None, desc=None):
     )
 
 
+# zlib level 3 instead of PIL's 6: the same pixels, encoded in about 30 %
+# less time (0.42 s instead of 0.61 s for the twelve figures), files 8 %
+# larger (2.4 instead of 2.2 MB); measured on this machine with PIL.
+_PNG_OPTIONS = {"compress_level": 3}
+
 #: Largest resolution :func:`reproduce` accepts: at 600 dpi the widest figure
 #: (17 x 5.2 in) is 10200 x 3120 pixels, about 130 MB of RGBA while drawing.
 _MAX_DPI = 600
@@ -1000,11 +1021,11 @@ def reproduce(
         remove_stale_temporaries(out)
         written = []
         for name in _progress(names, progress, total=len(names), desc="figures"):
-            fig = FIGURES[name].make(model=model, quick=quick)
+            fig = _make(name, model, quick)
             path = out / f"{name}.png"
             try:
                 with atomic_write(path) as fh:
-                    fig.savefig(fh, format="png", dpi=int(dpi))
+                    fig.savefig(fh, format="png", dpi=int(dpi), pil_kwargs=_PNG_OPTIONS)
             finally:
                 plt.close(fig)
             written.append(path)
