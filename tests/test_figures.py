@@ -7,6 +7,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 from conftest import PAPER_VEHICLE
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import fws_control as fws
 from fws_control.layout import grid_margins
@@ -407,3 +409,50 @@ def test_actuator_responses_match_simulate_at_default_tolerance(panel, pole):
         if ref.status != "ok":  # pole -2 with delay and lag: the legend says so
             assert ref.status in line.get_label()
     plt.close(cplt.figure)
+
+
+@settings(derandomize=True, max_examples=25, deadline=None)
+@given(
+    w=st.floats(4.0, 20.0),
+    h=st.floats(3.0, 12.0),
+    nrows=st.integers(1, 3),
+    ncols=st.integers(1, 4),
+    margins=st.lists(st.floats(0.0, 0.9), min_size=6, max_size=6),
+)
+def test_grid_margins_gives_the_requested_inches(w, h, nrows, ncols, margins):
+    """matplotlib's GridSpec, fed the fractions, puts the axes where asked."""
+    from matplotlib.gridspec import GridSpec
+
+    left, right, bottom, top, wgap, hgap = margins
+    kw = grid_margins(
+        (w, h), nrows=nrows, ncols=ncols, left=left, right=right,
+        bottom=bottom, top=top, wgap=wgap, hgap=hgap,
+    )  # fmt: skip
+    fig = plt.figure(figsize=(w, h))
+    b, t, lft, rgt = GridSpec(nrows, ncols, figure=fig, **kw).get_grid_positions(fig)
+    plt.close(fig)
+    np.testing.assert_allclose(lft[0] * w, left, atol=1e-9)
+    np.testing.assert_allclose((1.0 - rgt[-1]) * w, right, atol=1e-9)
+    np.testing.assert_allclose(b[-1] * h, bottom, atol=1e-9)
+    np.testing.assert_allclose((1.0 - t[0]) * h, top, atol=1e-9)
+    np.testing.assert_allclose((lft[1:] - rgt[:-1]) * w, wgap, atol=1e-9)
+    np.testing.assert_allclose((b[:-1] - t[1:]) * h, hgap, atol=1e-9)
+    widths = (rgt - lft) * w
+    np.testing.assert_allclose(
+        widths, (w - left - right - (ncols - 1) * wgap) / ncols, rtol=1e-9
+    )
+
+
+def test_grid_margins_rejects_what_leaves_no_room():
+    with pytest.raises(ValueError, match="no room for the axes"):
+        grid_margins((4.0, 3.0), ncols=2, left=2.0, right=1.0, wgap=1.0)
+    with pytest.raises(ValueError, match=r"figsize\[0\] must be > 0"):
+        grid_margins((0.0, 3.0))
+    with pytest.raises(ValueError, match="figsize must be"):
+        grid_margins(5.0)
+    with pytest.raises(ValueError, match="ncols must be an int >= 1, got 0"):
+        grid_margins((4.0, 3.0), ncols=0)
+    with pytest.raises(ValueError, match="left must be >= 0 in, got -0.1"):
+        grid_margins((4.0, 3.0), left=-0.1)
+    with pytest.raises(ValueError, match="wgap"):
+        grid_margins((4.0, 3.0), wgap=float("nan"))
