@@ -90,6 +90,7 @@ if TYPE_CHECKING:  # static tools see the names; at run time __getattr__ loads t
     )
     from .exceptions import (
         AmbiguousProjectionError,
+        SignalNotKeptError,
         SingularStateError,
         UncontrollableError,
     )
@@ -249,6 +250,7 @@ __all__ += [
     "PathChain",
     "Projection",
     "AmbiguousProjectionError",
+    "SignalNotKeptError",
 ]
 # the dynamic single-track model (issue 10)
 __all__ += [
@@ -322,6 +324,7 @@ _EXPORTS = {
     ),
     "exceptions": (
         "AmbiguousProjectionError",
+        "SignalNotKeptError",
         "SingularStateError",
         "UncontrollableError",
     ),

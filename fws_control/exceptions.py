@@ -12,6 +12,7 @@ __all__ = [
     "UncontrollableError",
     "SingularStateError",
     "AmbiguousProjectionError",
+    "SignalNotKeptError",
 ]
 
 
@@ -70,4 +71,33 @@ class AmbiguousProjectionError(ValueError):
     ... except AmbiguousProjectionError as exc:
     ...     print("ambiguous")
     ambiguous
+    """
+
+
+class SignalNotKeptError(ValueError, AttributeError):
+    """A signal that the simulation did not keep was asked for.
+
+    :func:`~fws_control.simulate_batch` with ``signals=`` keeps only the
+    named time series (or none, ``signals="metrics"``); reading another one
+    (``result.e``, ``result.signal("e")``, a plot that needs it) raises
+    this error, naming the signal and the signals the result holds. It is
+    a :class:`ValueError` like every exception of the package, and an
+    :class:`AttributeError`, so that ``hasattr(result, "e")`` is False and
+    ``getattr(result, "e", None)`` gives None for a signal not kept.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> res = fws.simulate_batch(veh, fws.Straight(),
+    ...                          fws.SteeringGains(0.1, 0.5, 0.0), speed=5.0,
+    ...                          initial_state=(0.0, 1.0, 0.0), duration=1.0,
+    ...                          signals=("e",))
+    >>> try:
+    ...     res.theta
+    ... except fws.SignalNotKeptError:
+    ...     print("theta was not kept")
+    theta was not kept
+    >>> hasattr(res, "theta"), res.e.shape
+    (False, (1, 101))
     """

@@ -51,7 +51,22 @@ __all__ = [
     "steady_state",
     "TrackingMetrics",
     "tracking_metrics",
+    "HORIZON_METRICS",
 ]
+
+#: The fields of :class:`TrackingMetrics` that need the whole time series of
+#: ``e`` and ``theta`` (the others are peaks or the status). A result of
+#: :func:`~fws_control.simulate_batch` that keeps neither (``signals=``) holds
+#: them per run, in this order, in ``run_metrics``.
+HORIZON_METRICS = (
+    "settling_time",
+    "overshoot",
+    "rms_error",
+    "steady_state_error",
+    "steady_state_heading_error",
+)
+# the settings with which simulate_batch computes the stored ones
+_DEFAULT_SETTINGS = {"band": None, "fraction": 0.02, "window": 1.0}
 
 
 def _scalar(out):
@@ -440,6 +455,10 @@ def tracking_metrics(
     result : SimulationResult
         One run (squeezed: from :func:`~fws_control.simulate` or
         ``result[i]``) or a batch (from :func:`~fws_control.simulate_batch`).
+        A batch that kept only some signals (``signals=``) without ``e`` or
+        ``theta`` gives the horizon metrics it computed before dropping them
+        (:data:`HORIZON_METRICS`, with the default `band`, `fraction` and
+        `window`; other settings raise :class:`ValueError` then).
     band, fraction
         Settling band of the lateral error, see :func:`settling_time`.
     window : float, optional
@@ -465,7 +484,12 @@ def tracking_metrics(
     >>> m.status, round(m.peak_lateral_accel, 2), round(m.settling_time, 2)
     ('ok', 5.37, 6.23)
     """
-    if not all(hasattr(result, n) for n in ("t", "e", "theta", "status", "peaks")):
+    # (peaks looked up on the type: on a result without stored peaks the
+    # property computes them from the samples)
+    if not (
+        all(hasattr(result, n) for n in ("t", "status", "signals"))
+        and hasattr(type(result), "peaks")
+    ):
         raise TypeError(
             "result must be a fws_control.SimulationResult, got "
             f"{type(result).__name__}"
@@ -481,16 +505,22 @@ def tracking_metrics(
     def horizon(values):
         return _scalar(np.where(ok, values, np.nan))
 
-    e = np.asarray(result.e, dtype=float)
-    theta = np.asarray(result.theta, dtype=float)
-    if t.size >= 2:
-        settle = horizon(settling_time(t, e, band=band, fraction=fraction))
-        ovs = horizon(overshoot(e))
-        rms_e = horizon(rms(t, e))
-        ss_e = horizon(steady_state(t, e, window=window))
-        ss_th = horizon(steady_state(t, theta, window=window))
-    else:  # a run that stopped at t = 0
-        settle = ovs = rms_e = ss_e = ss_th = np.nan
+    kept = getattr(result, "signal_names", ("e", "theta"))
+    if "e" in kept and "theta" in kept:
+        e = np.asarray(result.e, dtype=float)
+        theta = np.asarray(result.theta, dtype=float)
+        if t.size >= 2:
+            settle = horizon(settling_time(t, e, band=band, fraction=fraction))
+            ovs = horizon(overshoot(e))
+            rms_e = horizon(rms(t, e))
+            ss_e = horizon(steady_state(t, e, window=window))
+            ss_th = horizon(steady_state(t, theta, window=window))
+        else:  # a run that stopped at t = 0
+            settle = ovs = rms_e = ss_e = ss_th = np.nan
+    else:
+        settle, ovs, rms_e, ss_e, ss_th = _stored_horizon(
+            result, kept, band=band, fraction=fraction, window=window
+        )
     peaks = result.peaks
     return TrackingMetrics(
         peak_lateral_accel=peaks.lateral_accel.value,
@@ -506,3 +536,30 @@ def tracking_metrics(
         status=status.item() if status.ndim == 0 else status,
         peak_error=peaks.e.value,
     )
+
+
+def _stored_horizon(result, kept, *, band, fraction, window):
+    """The horizon metrics a result without ``e`` or ``theta`` stores."""
+    missing = [name for name in ("e", "theta") if name not in kept]
+    stored = getattr(result, "run_metrics", None)
+    if stored is None:
+        raise ValueError(
+            f"result holds no {' and no '.join(missing)} (kept signals: "
+            f"{tuple(kept)}) and no stored metrics: simulate with signals= "
+            "including 'e' and 'theta', or signals='metrics'"
+        )
+    if (
+        band is not None
+        or np.any(np.asarray(fraction) != _DEFAULT_SETTINGS["fraction"])
+        or np.any(np.asarray(window) != _DEFAULT_SETTINGS["window"])
+    ):
+        raise ValueError(
+            f"band, fraction, window = {band!r}, {fraction!r}, {window!r}: the "
+            f"result holds no {' and no '.join(missing)} (signals={tuple(kept)}), "
+            "only the metrics simulate_batch computed with the defaults "
+            f"{_DEFAULT_SETTINGS}; keep signals=('e', 'theta') for other settings"
+        )
+    stored = np.asarray(stored, dtype=float)
+    if np.ndim(result.status) == 0:  # squeezed: one run
+        return tuple(float(v) for v in stored[0])
+    return tuple(stored[:, j].copy() for j in range(stored.shape[1]))

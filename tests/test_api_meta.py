@@ -155,6 +155,10 @@ POSITIONAL_EXCEPTIONS = {
         "alternate constructor from the data K (spec: SteeringGains.from_K(K))",
     ),
     "SteeringGains.steering": ({"e", "theta"}, "evaluates the law at errors"),
+    "SimulationResult.signal": (
+        {"name"},
+        "result.signal('e') is result.e by name: the name is the data",
+    ),
     "StabilityBoundary.satisfied": (
         {"k1", "k2"},
         "evaluates the boundary at gain points (the data, not options)",

@@ -42,7 +42,7 @@ Deliberately excluded (with the reason)
 * ``symbolic``: a module (sympy derivations), not a callable; ``dynamics``:
   a module too (the dynamic single-track core, not in ``__all__``).
 * ``SingularStateError``, ``UncontrollableError``,
-  ``AmbiguousProjectionError``: exception classes.
+  ``AmbiguousProjectionError``, ``SignalNotKeptError``: exception classes.
 * ``Path``, ``LateralController``: abstract base classes (not instantiable).
 * Result records built by the library and not meant to be built by hand --
   ``AffinePolynomial``, ``LoopMatrices``, ``StabilityBoundaries``,
@@ -88,6 +88,7 @@ EXCLUDED = {
     "SingularStateError": "exception class",
     "UncontrollableError": "exception class",
     "AmbiguousProjectionError": "exception class",
+    "SignalNotKeptError": "exception class",
     "Path": "abstract base class",
     "LateralController": "abstract base class",
     "AffinePolynomial": "result record",
@@ -563,6 +564,7 @@ CASES: dict[str, Case] = {
             atol=1e-9,
             chunk_size=None,
             progress=False,
+            signals=None,
         ),
         post=simulation_post,
         examples=FEW,

@@ -546,7 +546,9 @@ def resolve_time_constant(vehicle: Vehicle, value: float | None) -> float | None
 
 
 #: Budget of the output of one call [bytes]: the returned signals, ``runs x
-#: len(SIGNALS) x samples x 8`` bytes (float64), may not exceed it. 2 GiB is
+#: len(SIGNALS) x samples x 8`` bytes (float64), may not exceed it; with
+#: ``simulate_batch(..., signals=...)`` the kept signals only, and the full
+#: signals of one chunk (its working set) apart. 2 GiB is
 #: 24 million run-samples: 16,000 runs of the paper's 15 s scenario at the
 #: default output step, or one run with dt = 6e-7 s. The peak memory of a
 #: call is its output, the states (3/11 of it, 5/11 with an actuator) and a
@@ -578,7 +580,13 @@ def output_samples(duration: float, *, dt: float = 0.01, t_eval: Any = None) -> 
 
 
 def check_output_budget(
-    runs: int, samples: float, *, duration: float, dt: float, t_eval: Any = None
+    runs: int,
+    samples: float,
+    *,
+    duration: float,
+    dt: float,
+    t_eval: Any = None,
+    signals: int = len(SIGNALS),
 ) -> None:
     """Refuse a call whose signals would exceed :data:`MAX_OUTPUT_BYTES`.
 
@@ -586,6 +594,19 @@ def check_output_budget(
     only sets where the solution is sampled, not its accuracy, so a request
     for more samples than fit in memory is almost always meant as a finer
     solution, which the tolerances give.
+
+    Parameters
+    ----------
+    runs : int
+        Number of runs whose signals are held at once (a whole batch, or one
+        chunk for its working set).
+    samples : float
+        Output times per run (:func:`output_samples`).
+    duration, dt, t_eval
+        As given to the runner (named in the message).
+    signals : int, optional
+        Number of signals kept per run (``simulate_batch(...,
+        signals=...)``); default all of :data:`SIGNALS`.
 
     Raises
     ------
@@ -603,10 +624,10 @@ def check_output_budget(
     ...
     ValueError: dt=1e-09 over duration=15.0 asks for 1.5e+10 output samples ...
     """
-    nbytes = float(runs) * float(samples) * len(SIGNALS) * 8.0
+    nbytes = float(runs) * float(samples) * signals * 8.0
     if nbytes <= MAX_OUTPUT_BYTES:
         return
-    limit = MAX_OUTPUT_BYTES / (len(SIGNALS) * 8.0)
+    limit = MAX_OUTPUT_BYTES / (signals * 8.0)
     what = (
         f"t_eval of {int(samples)} times"
         if t_eval is not None
@@ -614,12 +635,14 @@ def check_output_budget(
     )
     raise ValueError(
         f"{what} asks for {samples:.4g} output samples for each of {runs} runs: "
-        f"{nbytes / 2**30:.4g} GiB of signals (runs x {len(SIGNALS)} signals x "
+        f"{nbytes / 2**30:.4g} GiB of signals (runs x {signals} signals x "
         f"samples x 8 bytes), more than the budget of "
         f"{MAX_OUTPUT_BYTES / 2**30:g} GiB (runs x samples <= {limit:.4g}). The "
         "solver chooses its own steps: dt only sets the output grid, not the "
         "accuracy (use rtol, atol). Ask for less output: a larger dt, t_eval "
-        "with only the times you need, a shorter duration, or fewer runs per call"
+        "with only the times you need, a shorter duration, fewer runs per call, "
+        "or (simulate_batch) fewer signals kept, signals=('e', ...) or "
+        "signals='metrics'"
     )
 
 

@@ -42,7 +42,9 @@ from typing import Any
 import control as ct
 import numpy as np
 
+from ..exceptions import SignalNotKeptError
 from ..gains import SteeringGains
+from ..metrics import HORIZON_METRICS
 from ..paths import Path
 from ..reprs import brief, html_table
 from ..vehicle import Vehicle
@@ -59,9 +61,6 @@ from .engine import (
 __all__ = ["Peak", "Peaks", "SimulationResult", "expand_runs"]
 
 _DEG = 180.0 / math.pi
-# A run has a state wherever its arclength is finite (the other signals may
-# be NaN at a valid sample, e.g. the lateral acceleration at |delta_f| = pi/2).
-_S = SIGNALS.index("s")
 
 
 class _Signal:
@@ -77,8 +76,19 @@ class _Signal:
     def __get__(self, obj: Any, objtype: type | None = None) -> Any:
         if obj is None:
             return self
-        values = obj.signals[:, self.index, :]
-        return values[0] if obj.squeeze else values
+        return obj.signal(self.name)
+
+
+def _not_kept(
+    name: str, kept: tuple[str, ...], what: str | None = None
+) -> SignalNotKeptError:
+    held = f"only {', '.join(kept)}" if kept else "no time series ('metrics')"
+    need = f" ({what} needs it)" if what else ""
+    return SignalNotKeptError(
+        f"signal {name!r} was not kept{need}: simulate_batch ran with "
+        f"signals= keeping {held}; run it with signals=None (all) or with "
+        f"{name!r} among them"
+    )
 
 
 @dataclass(frozen=True)
@@ -184,8 +194,9 @@ class SimulationResult:
     t : ndarray
         Output times [s], shape ``(time,)``.
     signals : ndarray
-        All signals, shape ``(runs, len(SIGNALS), time)`` in the order of
-        :data:`~fws_control.simulation.SIGNALS`; NaN after a run's stop.
+        The kept signals, shape ``(runs, len(signal_names), time)`` in the
+        order of `signal_names` (by default all of
+        :data:`~fws_control.simulation.SIGNALS`); NaN after a run's stop.
     run_status : ndarray of str
         Per run ``"ok"`` or why it stopped: ``"singular_steering"``,
         ``"singular_curvature"``, ``"end_of_path"``, ``"failed"`` or
@@ -228,6 +239,25 @@ class SimulationResult:
     engine : str, optional
         The engine that integrated the runs: ``"numpy"`` (default) or
         ``"compiled"`` (see :func:`~fws_control.simulate`).
+    signal_names : tuple of str, optional
+        The signals `signals` holds, a subset of
+        :data:`~fws_control.simulation.SIGNALS` in its order (default: all;
+        ``()`` for ``simulate_batch(..., signals="metrics")``). Reading
+        another one raises :class:`~fws_control.SignalNotKeptError`.
+    run_samples : ndarray of int, optional
+        Per run, the number of output samples up to its stop (the samples
+        after it are NaN). Default: counted from the signal ``s``, which
+        must then be kept.
+    run_metrics : ndarray, optional
+        Per run, the metrics of :data:`~fws_control.metrics.HORIZON_METRICS`
+        computed by :func:`~fws_control.simulate_batch` (with the default
+        settings of :func:`~fws_control.tracking_metrics`) before it dropped
+        ``e`` or ``theta``, shape ``(runs, len(HORIZON_METRICS))``; None
+        when the result keeps both.
+    peaks_exact : bool, optional
+        Whether `run_peak` holds the peaks of the continuous solution
+        (default) or of the output samples (``engine="compiled"`` with
+        signals dropped: computed before dropping them).
 
     Attributes
     ----------
@@ -300,6 +330,10 @@ class SimulationResult:
     model: str = "kinematic"
     tyre: str = "linear"
     engine: str = "numpy"
+    signal_names: tuple[str, ...] = SIGNALS
+    run_samples: np.ndarray | None = None
+    run_metrics: np.ndarray | None = None
+    peaks_exact: bool = True
 
     x = _Signal("Global x of the rear-axle centre R [m].")
     y = _Signal("Global y of the rear-axle centre R [m].")
@@ -323,12 +357,47 @@ class SimulationResult:
     def __post_init__(self) -> None:
         t = np.asarray(self.t, dtype=float)
         sig = np.asarray(self.signals, dtype=float)
-        if t.ndim != 1 or sig.ndim != 3 or sig.shape[1:] != (len(SIGNALS), t.size):
+        names = tuple(self.signal_names)
+        if any(not isinstance(k, str) for k in names) or names != tuple(
+            k for k in SIGNALS if k in names
+        ):
             raise ValueError(
-                f"signals must have shape (runs, {len(SIGNALS)}, {t.size}) for "
-                f"t of shape {t.shape}, got {sig.shape}"
+                f"signal_names must be distinct names of SIGNALS in its order "
+                f"{SIGNALS}, got {names!r}"
+            )
+        if t.ndim != 1 or sig.ndim != 3 or sig.shape[1:] != (len(names), t.size):
+            raise ValueError(
+                f"signals must have shape (runs, {len(names)}, {t.size}) for "
+                f"t of shape {t.shape} and {len(names)} signal_names, got "
+                f"{sig.shape}"
             )
         n = sig.shape[0]
+        if self.run_samples is None:
+            if "s" not in names:
+                raise ValueError(
+                    "run_samples must be given when signal 's' is not kept "
+                    f"(signal_names={names!r})"
+                )
+            count = np.count_nonzero(np.isfinite(sig[:, names.index("s"), :]), axis=1)
+        else:
+            count = np.array(self.run_samples)
+            if (
+                count.shape != (n,)
+                or not np.issubdtype(count.dtype, np.integer)
+                or np.any((count < 0) | (count > t.size))
+            ):
+                raise ValueError(
+                    f"run_samples must hold one integer in [0, {t.size}] per run, "
+                    f"shape ({n},), got {self.run_samples!r}"
+                )
+        if self.run_metrics is not None:
+            metrics = np.array(self.run_metrics, dtype=float)
+            if metrics.shape != (n, len(HORIZON_METRICS)):
+                raise ValueError(
+                    f"run_metrics must have shape ({n}, {len(HORIZON_METRICS)}) "
+                    f"(runs, HORIZON_METRICS), got {metrics.shape}"
+                )
+            object.__setattr__(self, "run_metrics", metrics)
         # Small per-run arrays are copied (they may be broadcast views).
         per_run = {
             "run_status": np.array(self.run_status, dtype=str),
@@ -386,6 +455,9 @@ class SimulationResult:
                 "dynamic" if self.feedforward == "dynamic" else bool(self.feedforward),
             ),
             ("squeeze", bool(self.squeeze)),
+            ("signal_names", names),
+            ("run_samples", count.astype(np.int64)),
+            ("peaks_exact", bool(self.peaks_exact)),
             ("method", None if self.method is None else str(self.method)),
             *per_run.items(),
         ):
@@ -408,8 +480,7 @@ class SimulationResult:
                 raise IndexError(f"run index {index} out of range for {n} runs")
             i = int(index) % n
             # Keep the samples up to the stop.
-            count = int(np.count_nonzero(np.isfinite(self.signals[i, _S])))
-            return self._select([i], count, squeeze=True)
+            return self._select([i], int(self.run_samples[i]), squeeze=True)
         if isinstance(index, slice):
             return self._select(np.arange(n)[index], self.t.size, squeeze=False)
         idx = np.asarray(index)
@@ -451,7 +522,61 @@ class SimulationResult:
             model=self.model,
             tyre=self.tyre,
             engine=self.engine,
+            signal_names=self.signal_names,
+            run_samples=np.minimum(self.run_samples[idx], count),
+            run_metrics=None if self.run_metrics is None else self.run_metrics[idx],
+            peaks_exact=self.peaks_exact,
         )
+
+    def signal(self, name: str) -> np.ndarray:
+        """The time series `name` of :data:`SIGNALS`, squeezed like ``result.e``.
+
+        Parameters
+        ----------
+        name : str
+            One of :data:`~fws_control.simulation.SIGNALS`.
+
+        Returns
+        -------
+        ndarray
+            Shape ``(time,)`` for a squeezed result, ``(runs, time)``
+            otherwise (a view of :attr:`signals`).
+
+        Raises
+        ------
+        ValueError
+            For a name that is not a signal.
+        SignalNotKeptError
+            For a signal the simulation did not keep (``signals=`` of
+            :func:`~fws_control.simulate_batch`).
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+        >>> res = fws.simulate_batch(veh, fws.Straight(),
+        ...                          fws.SteeringGains(0.1, 0.5, 0.0), speed=5.0,
+        ...                          initial_state=(0.0, 1.0, 0.0), duration=1.0,
+        ...                          signals=("e", "delta_f"))
+        >>> res.signal_names, res.signal("e").shape
+        (('e', 'delta_f'), (1, 101))
+        >>> res.signal("x")
+        Traceback (most recent call last):
+        ...
+        fws_control.exceptions.SignalNotKeptError: signal 'x' was not kept: ...
+        """
+        if not isinstance(name, str) or name not in SIGNALS:
+            raise ValueError(f"name must be one of {SIGNALS}, got {name!r}")
+        if name not in self.signal_names:
+            raise _not_kept(name, self.signal_names)
+        values = self.signals[:, self.signal_names.index(name), :]
+        return values[0] if self.squeeze else values
+
+    def _require(self, names: Any, what: str) -> None:
+        """Raise SignalNotKeptError if a signal `what` needs was not kept."""
+        for name in names:
+            if name not in self.signal_names:
+                raise _not_kept(name, self.signal_names, what)
 
     @property
     def peaks(self) -> Peaks:
@@ -463,9 +588,11 @@ class SimulationResult:
         ``exact=False``.
         """
         if self.run_peak is not None:
-            values, times, exact = self.run_peak, self.run_peak_time, True
+            values, times = self.run_peak, self.run_peak_time
+            exact = self.peaks_exact
         else:
-            rows = [SIGNALS.index(name) for name in PEAK_SIGNALS]
+            self._require(PEAK_SIGNALS, "peaks from the samples")
+            rows = [self.signal_names.index(name) for name in PEAK_SIGNALS]
             x = np.abs(self.signals[:, rows, :])
             valid = np.isfinite(x)
             filled = np.where(valid, x, -np.inf)
@@ -491,9 +618,10 @@ class SimulationResult:
         for s in self.run_status.tolist():
             counts[s] = counts.get(s, 0) + 1
         span = f"[{self.t[0]:g}, {self.t[-1]:g}] s" if self.t.size else "[]"
+        kept = "" if self.signal_names == SIGNALS else f"signals={self.signal_names}, "
         return (
             f"SimulationResult(runs={len(self)}, samples={self.t.size} over {span}, "
-            f"status={counts}, squeeze={self.squeeze})"
+            f"{kept}status={counts}, squeeze={self.squeeze})"
         )
 
     def _repr_html_(self) -> str:
@@ -514,7 +642,7 @@ class SimulationResult:
                 if self.model == "kinematic"
                 else f"{self.model} ({self.tyre} tyres)",
             ),
-            ("signals", ", ".join(SIGNALS)),
+            ("signals", ", ".join(self.signal_names) or "none (metrics only)"),
         ]
         return html_table("SimulationResult", rows)
 
@@ -657,6 +785,12 @@ class SimulationResult:
         Returns
         -------
         control.TimeResponseData
+            Its outputs are the kept signals (:attr:`signal_names`).
+
+        Raises
+        ------
+        SignalNotKeptError
+            For a result that keeps no time series (``signals="metrics"``).
 
         Examples
         --------
@@ -676,6 +810,8 @@ class SimulationResult:
             "ratio": self.ratio,
             "feedforward": self.feedforward,
         }
+        if not self.signal_names:
+            raise _not_kept(SIGNALS[0], (), "to_time_response")
         if self.squeeze:
             outputs = self.signals[0]
             trace_labels = None
@@ -689,7 +825,7 @@ class SimulationResult:
         return ct.TimeResponseData(
             self.t,
             outputs,
-            output_labels=list(SIGNALS),
+            output_labels=list(self.signal_names),
             issiso=False,
             multi_trace=not self.squeeze,
             trace_labels=trace_labels,
@@ -705,7 +841,8 @@ class SimulationResult:
         """Long-format :class:`pandas.DataFrame`, one row per run and sample.
 
         Columns ``run, t``, the signals of
-        :data:`~fws_control.simulation.SIGNALS`, then the per-run ``status,
+        :data:`~fws_control.simulation.SIGNALS` that the result keeps
+        (:attr:`signal_names`), then the per-run ``status,
         t_stop, speed, k1, k2, ratio, message`` and the batch's
         ``feedforward, method`` (repeated on each of the run's rows, so that
         a CSV file keeps them). A run's rows are its samples up to its stop;
@@ -721,6 +858,8 @@ class SimulationResult:
         ------
         ImportError
             If pandas is not installed.
+        SignalNotKeptError
+            For a result that keeps no time series (``signals="metrics"``).
 
         Examples
         --------
@@ -740,8 +879,13 @@ class SimulationResult:
         5    1  1.0  0.398119  0.2     ok
         """
         pd = _import_pandas()
+        if not self.signal_names:
+            raise _not_kept(SIGNALS[0], (), "to_pandas")
+        names = self.signal_names
         n = len(self)
-        rows_run, rows_k = np.nonzero(np.isfinite(self.signals[:, _S, :]))
+        # a run's samples up to its stop
+        have = np.arange(self.t.size)[None, :] < self.run_samples[:, None]
+        rows_run, rows_k = np.nonzero(have)
         # A run without samples keeps one row of NaN, so that it is not lost.
         empty = np.setdiff1d(np.arange(n), rows_run)
         run = np.concatenate([rows_run, empty])
@@ -749,13 +893,13 @@ class SimulationResult:
         values = np.concatenate(
             [
                 self.signals[rows_run, :, rows_k],
-                np.full((empty.size, len(SIGNALS)), np.nan),
+                np.full((empty.size, len(names)), np.nan),
             ]
         )
         order = np.argsort(run, kind="stable")
         run, t, values = run[order], t[order], values[order]
         data: dict[str, Any] = {"run": run, "t": t}
-        data.update({name: values[:, j] for j, name in enumerate(SIGNALS)})
+        data.update({name: values[:, j] for j, name in enumerate(names)})
         for name, per_run in (
             ("status", self.run_status),
             ("t_stop", self.run_t_stop),
@@ -816,6 +960,10 @@ class SimulationResult:
         ------
         ValueError
             If `ax` does not hold 6 axes or `labels` not one label per run.
+        SignalNotKeptError
+            If a signal it draws (``x, y, s, e, theta, delta_f, delta_r,
+            lateral_accel``) was not kept (``simulate_batch(...,
+            signals=...)``).
 
         Examples
         --------
@@ -832,6 +980,10 @@ class SimulationResult:
         """
         import matplotlib.pyplot as plt
 
+        self._require(
+            ("x", "y", "s", "e", "theta", "delta_f", "delta_r", "lateral_accel"),
+            "plot",
+        )
         names = self._labels(labels)
         if ax is None:
             fig = plt.figure(figsize=(11, 9), layout="constrained")
@@ -858,7 +1010,8 @@ class SimulationResult:
             (ax_dr, "delta_r", _DEG, "rear steering δr [deg]"),
             (ax_a, "lateral_accel", 1.0, "lateral acceleration of G [m/s²]"),
         )
-        index = {name: SIGNALS.index(name) for name in ("x", "y")}
+        row = self.signal_names.index
+        index = {name: row(name) for name in ("x", "y")}
         legend_needed = False
         for i in range(len(self)):
             status = self.run_status[i]
@@ -869,11 +1022,11 @@ class SimulationResult:
                 text = f"{text} ({status} at t={self.run_t_stop[i]:.3g} s)".strip()
             legend_needed |= bool(text)
             label = text or None
-            count = int(np.count_nonzero(np.isfinite(self.signals[i, _S])))
+            count = int(self.run_samples[i])
             t = self.t[:count]
             color = None
             for a, name, scale, _ in panels:
-                y = scale * self.signals[i, SIGNALS.index(name), :count]
+                y = scale * self.signals[i, row(name), :count]
                 (line,) = a.plot(t, y, label=label, color=color)
                 color = line.get_color()
                 if status != STATUS_OK and count:
@@ -883,7 +1036,7 @@ class SimulationResult:
             ax_xy.plot(xs, ys, color=color, label=label)
             if status != STATUS_OK and count:
                 ax_xy.plot(xs[-1], ys[-1], "x", color=color)
-        s = self.signals[:, _S, :]
+        s = self.signals[:, row("s"), :]
         if self.path is not None and np.any(np.isfinite(s)):
             s_lo, s_hi = float(np.nanmin(s)), float(np.nanmax(s))
             span = max(s_hi - s_lo, 1.0)
@@ -992,7 +1145,10 @@ def expand_runs(
     n = k1.size
     t = np.asarray(t, dtype=float)
     positions = np.asarray(positions, dtype=int).ravel()
-    signals = np.full((n, len(SIGNALS), t.size), np.nan)
+    names = SIGNALS if result is None else result.signal_names
+    signals = np.full((n, len(names), t.size), np.nan)
+    samples = np.zeros(n, dtype=np.int64)
+    metrics = None
     run_status = np.full(n, status, dtype=object)
     run_message = [str(message)] * n
     t_stop = np.full(n, np.nan)
@@ -1007,6 +1163,10 @@ def expand_runs(
                 f"{result.t.size} samples"
             )
         signals[positions] = result.signals
+        samples[positions] = result.run_samples
+        if result.run_metrics is not None:
+            metrics = np.full((n, result.run_metrics.shape[1]), np.nan)
+            metrics[positions] = result.run_metrics
         run_status[positions] = result.run_status
         for p, m in zip(positions, result.run_message, strict=True):
             run_message[p] = m
@@ -1039,4 +1199,8 @@ def expand_runs(
         run_peak_time=peak_time,
         method=None if result is None else result.method,
         engine="numpy" if result is None else result.engine,
+        signal_names=names,
+        run_samples=samples,
+        run_metrics=metrics,
+        peaks_exact=True if result is None else result.peaks_exact,
     )

@@ -20,6 +20,7 @@ interactive terminals.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import sys
 import warnings
@@ -32,6 +33,7 @@ from ..baselines import LateralController
 from ..controllers import check_feedforward
 from ..dynamics import require_dynamics
 from ..gains import SteeringGains
+from ..metrics import HORIZON_METRICS, tracking_metrics
 from ..paths import Path
 from ..validation import (
     check_bool,
@@ -251,6 +253,109 @@ def _run_compiled(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts
     return signals, status, message, t_stop, nan, nan.copy()
 
 
+#: The choice of ``signals="metrics"``: no time series, only per-run values.
+_METRICS_ONLY = "metrics"
+
+
+def _check_signals(signals: Any) -> tuple[str, ...]:
+    """The names of the kept signals, in the order of :data:`SIGNALS`."""
+    if signals is None:
+        return SIGNALS
+    if isinstance(signals, str):
+        if signals == _METRICS_ONLY:
+            return ()
+        raise ValueError(
+            f"signals must be None (all), 'metrics' (no time series) or a "
+            f"sequence of names of {SIGNALS}, got the str {signals!r}"
+            + (
+                f" (for one signal: signals=({signals!r},))"
+                if signals in SIGNALS
+                else ""
+            )
+        )
+    try:
+        names = list(signals)
+    except TypeError:
+        raise TypeError(
+            "signals must be None, 'metrics' or a sequence of signal names, got "
+            f"{type(signals).__name__} {signals!r}"
+        ) from None
+    if not names:
+        raise ValueError(
+            "signals must name at least one signal, got an empty sequence; use "
+            "signals='metrics' to keep no time series (only per-run metrics)"
+        )
+    for name in names:
+        if not isinstance(name, str):
+            raise TypeError(
+                f"signals must hold signal names (str), got {name!r} of type "
+                f"{type(name).__name__} in {signals!r}; valid names: {SIGNALS}"
+            )
+        if name not in SIGNALS:
+            raise ValueError(
+                f"signals: unknown signal {name!r}; valid names: {SIGNALS} "
+                "(or signals=None for all, 'metrics' for none)"
+            )
+    if len(set(names)) != len(names):
+        raise ValueError(f"signals must not repeat a name, got {signals!r}")
+    return tuple(k for k in SIGNALS if k in names)
+
+
+def _reduce_chunk(out, rows, horizon, exact, args):
+    """A chunk's outputs with only the kept signals and the per-run values.
+
+    `out` is what :func:`_run_chunk` returns; `rows` the indices of the
+    kept signals in :data:`SIGNALS`. Everything that needs the dropped
+    signals is computed here, from the chunk's full signals, before they
+    are freed: the number of samples up to each run's stop, the horizon
+    metrics of :func:`~fws_control.tracking_metrics` if `horizon` (``e``
+    or ``theta`` dropped), and the sample peaks if the engine gave no exact
+    ones (not `exact`). Returns ``(kept signals, status, message, t_stop,
+    peaks, peak_times, samples, metrics or None)``.
+    """
+    signals, status, message, t_stop, peak, peak_time = out
+    t = args[8]
+    samples = np.count_nonzero(np.isfinite(signals[:, SIGNALS.index("s"), :]), axis=1)
+    metrics = None
+    if horizon or not exact:
+        chunk = SimulationResult(
+            t=t,
+            signals=signals,
+            run_status=np.asarray(status).astype(str),
+            run_message=tuple(str(m) for m in message),
+            run_t_stop=t_stop,
+            run_speed=args[5],
+            run_k1=args[2],
+            run_k2=args[3],
+            run_ratio=args[4],
+            run_initial_state=args[7][:, :3],
+            run_peak=peak if exact else None,
+            run_peak_time=peak_time if exact else None,
+        )
+        if not exact:  # the maxima of the samples, while they exist (once)
+            p = chunk.peaks
+            peak = np.stack([p[name].value for name in PEAK_SIGNALS], axis=1)
+            peak_time = np.stack([p[name].time for name in PEAK_SIGNALS], axis=1)
+            chunk = dataclasses.replace(
+                chunk, run_peak=peak, run_peak_time=peak_time, peaks_exact=False
+            )
+        if horizon:
+            m = tracking_metrics(chunk)
+            metrics = np.stack([getattr(m, k) for k in HORIZON_METRICS], axis=1)
+        del chunk
+    kept = signals[:, rows, :]  # a copy of the kept rows only
+    return kept, status, message, t_stop, peak, peak_time, samples, metrics
+
+
+def _run_kept(run, rows, horizon, exact, *args):
+    """``run(*args)`` reduced by :func:`_reduce_chunk` where it ran.
+
+    Module-level so that Dask can pickle it: on a cluster the full signals
+    of a chunk stay on its worker, only the kept ones travel.
+    """
+    return _reduce_chunk(run(*args), rows, horizon, exact, args)
+
+
 def _lost_chunk(n: int, t_size: int, note: str):
     """The outputs of :func:`_run_chunk` for runs whose Dask task was lost."""
     nan = np.full((n, len(PEAK_SIGNALS)), np.nan)
@@ -351,7 +456,17 @@ _MAX_DELAY_STEPS = 1.0e4
 
 
 def _prepare(
-    vehicle, path, gains, speed, initial_state, duration, dt, t_eval, tau, opts
+    vehicle,
+    path,
+    gains,
+    speed,
+    initial_state,
+    duration,
+    dt,
+    t_eval,
+    tau,
+    opts,
+    kept=None,
 ):
     """Validate the arguments shared by both runners; broadcast the runs."""
     check_type("vehicle", vehicle, Vehicle)
@@ -395,7 +510,14 @@ def _prepare(
     x0 = np.broadcast_to(x0, (n, 5)).copy()
     # (before building the grid: dt = 1e-9 must not allocate 112 GiB first)
     samples = output_samples(duration, dt=dt, t_eval=t_eval)
-    check_output_budget(n, samples, duration=duration, dt=dt, t_eval=t_eval)
+    check_output_budget(
+        n,
+        samples,
+        duration=duration,
+        dt=dt,
+        t_eval=t_eval,
+        signals=len(SIGNALS) if kept is None else kept,
+    )
     t = time_grid(duration, dt=dt, t_eval=t_eval)
     span = float(t[-1] - t[0])
     if 0.0 < opts["delay"] < span / _MAX_DELAY_STEPS:
@@ -642,7 +764,7 @@ def simulate(
     )
     # batch[0] without copying the signals: the squeezed run's grid ends at
     # its last sample (a view of the batch's arrays).
-    count = int(np.count_nonzero(np.isfinite(batch.signals[0, SIGNALS.index("s")])))
+    count = int(batch.run_samples[0])
     return dataclasses.replace(
         batch, t=batch.t[:count], signals=batch.signals[:, :, :count], squeeze=True
     )
@@ -670,6 +792,7 @@ def simulate_batch(
     chunk_size: int | None = None,
     client: Any = None,
     progress: bool | None = None,
+    signals: Any = None,
 ) -> SimulationResult:
     r"""Simulate many closed loops at once on stacked numpy state.
 
@@ -725,6 +848,27 @@ def simulate_batch(
     progress : bool, optional
         Show a tqdm progress bar over the chunks. ``None`` (default): only if
         standard error is a terminal.
+    signals : None, sequence of str or "metrics", optional
+        The time series to keep, for sweeps too large to hold them all.
+        ``None`` (default): all of
+        :data:`~fws_control.simulation.SIGNALS`. A sequence of their names:
+        only those (held in the order of ``SIGNALS``; the result's
+        ``signal_names`` says which). ``"metrics"``: none. Each chunk
+        computes its signals, writes the kept ones into the preallocated
+        result and is freed, so the peak memory is the returned data and one
+        chunk's working set, and the budget
+        :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES` counts the
+        kept signals only (and one chunk's full signals). Whatever is kept,
+        the result holds per run the status, ``t_stop``, the peaks
+        (:attr:`~fws_control.SimulationResult.peaks`, computed before the
+        signals are dropped: exact on the numpy engine, of the samples on
+        the compiled one) and, when ``e`` or ``theta`` is dropped, the
+        horizon metrics of :func:`~fws_control.tracking_metrics` (settling
+        time, overshoot, RMS and steady-state errors, with its default
+        settings), so ``tracking_metrics(result)`` works on every result.
+        Reading a signal not kept (``result.theta``,
+        :meth:`~fws_control.SimulationResult.signal`, ``plot``) raises
+        :class:`~fws_control.SignalNotKeptError`.
 
     Returns
     -------
@@ -739,9 +883,11 @@ def simulate_batch(
     ------
     ValueError
         If the per-run arguments do not broadcast, for an invalid
-        `chunk_size`, or as in :func:`simulate`.
+        `chunk_size`, for `signals` naming an unknown or repeated signal,
+        empty or another str than ``"metrics"``, or as in :func:`simulate`.
     TypeError
-        If `gains` is not a SteeringGains or a sequence of them.
+        If `gains` is not a SteeringGains or a sequence of them, or
+        `signals` is not None, a str or a sequence of str.
 
     Examples
     --------
@@ -760,6 +906,23 @@ def simulate_batch(
     True
     >>> fws.tracking_metrics(res).peak_lateral_accel.round(2).tolist()
     [2.0, 1.91, 1.73, 1.19]
+
+    A large sweep keeps only what it needs: here the lateral error, or only
+    the metrics (the same values, computed before the signals are dropped):
+
+    >>> few = fws.simulate_batch(veh, fws.Straight(), g, speed=20.0,
+    ...                          initial_state=(0.0, 2.0, 0.0), duration=10.0,
+    ...                          feedforward=False, signals=("e",))
+    >>> few.signal_names, few.signals.shape, bool(np.all(few.e == res.e))
+    (('e',), (4, 1, 1001), True)
+    >>> none = fws.simulate_batch(veh, fws.Straight(), g, speed=20.0,
+    ...                           initial_state=(0.0, 2.0, 0.0), duration=10.0,
+    ...                           feedforward=False, signals="metrics")
+    >>> m = fws.tracking_metrics(none)
+    >>> m.peak_lateral_accel.round(2).tolist(), m.settling_time.round(2).tolist()
+    ([2.0, 1.91, 1.73, 1.19], [5.9, 5.88, 5.83, 5.69])
+    >>> bool(np.all(m.settling_time == fws.tracking_metrics(res).settling_time))
+    True
     """
     if isinstance(engine, bool) or engine not in _ENGINES:
         raise ValueError(f"engine must be one of {_ENGINES}, got {engine!r}")
@@ -773,6 +936,7 @@ def simulate_batch(
         "model": model,
         "tyre": tyre,
     }
+    kept = _check_signals(signals)
     k1, k2, a, V, x0, t, tau, ctrl = _prepare(
         vehicle,
         path,
@@ -784,6 +948,7 @@ def simulate_batch(
         t_eval,
         actuator_time_constant,
         opts,
+        kept=len(kept),
     )
     n = k1.size
     # False, True (eq. 26) or "dynamic" (dynamics.dynamic_feedforward)
@@ -816,12 +981,32 @@ def simulate_batch(
     ):
         raise ValueError(f"chunk_size must be an integer >= 1, got {chunk_size!r}")
     chunk_size = int(chunk_size)
+    if kept != SIGNALS:
+        # the working set: one chunk's full signals (the kept ones are counted
+        # in _prepare)
+        try:
+            check_output_budget(
+                min(chunk_size, n), t.size, duration=duration, dt=dt, t_eval=t_eval
+            )
+        except ValueError as exc:
+            raise ValueError(
+                f"chunk_size={chunk_size}: a chunk computes all {len(SIGNALS)} "
+                f"signals before it keeps {len(kept)}, and {exc}; or a smaller "
+                "chunk_size"
+            ) from None
     bounds = [(i, min(i + chunk_size, n)) for i in range(0, n, chunk_size)]
     if progress is None:
         progress = _stderr_is_tty()
     progress = check_bool("progress", progress)
 
     run = _run_isolated if engine == "numpy" else _run_compiled
+    # the compiled engine keeps no dense solution: sample peaks (exact=False)
+    exact = engine == "numpy"
+    reduce = kept != SIGNALS
+    if reduce:
+        rows = [SIGNALS.index(k) for k in kept]
+        horizon = not {"e", "theta"} <= set(kept)
+        run = functools.partial(_run_kept, run, rows, horizon, exact)
 
     def args(lo, hi):
         return (
@@ -844,28 +1029,33 @@ def simulate_batch(
     bar = tqdm(
         total=len(bounds), desc="simulate_batch", unit="chunk", disable=not progress
     )
-    # The chunks are written into the batch's arrays as they arrive (a
-    # single chunk is kept as it is), so no second copy of the signals
-    # builds up.
+    # The chunks are written into the batch's arrays of the kept signals as
+    # they arrive (a single chunk is kept as it is) and freed, so no second
+    # copy of the signals builds up: the peak memory is the result and one
+    # chunk's working set.
     single = len(bounds) == 1
-    signals = None if single else np.empty((n, len(SIGNALS), t.size))
+    data = None if single else np.empty((n, len(kept), t.size))
     status = np.empty(n, dtype=object)
     message = np.empty(n, dtype=object)
     t_stop = np.empty(n)
     peak = np.empty((n, len(PEAK_SIGNALS)))
     peak_time = np.empty((n, len(PEAK_SIGNALS)))
+    samples = np.empty(n, dtype=np.int64) if reduce else None
+    metrics = np.empty((n, len(HORIZON_METRICS))) if reduce and horizon else None
 
     def keep(j, chunk):
-        nonlocal signals
+        nonlocal data
         lo, hi = bounds[j]
+        if reduce and len(chunk) == 6:  # a lost Dask task: reduced here
+            chunk = _reduce_chunk(chunk, rows, horizon, exact, args(lo, hi))
         if single:
-            signals = chunk[0]
+            data = chunk[0]
         else:
-            signals[lo:hi] = chunk[0]
-        for whole, part in zip(
-            (status, message, t_stop, peak, peak_time), chunk[1:], strict=True
-        ):
-            whole[lo:hi] = part
+            data[lo:hi] = chunk[0]
+        parts = (status, message, t_stop, peak, peak_time, samples, metrics)
+        for whole, part in zip(parts, chunk[1:], strict=False):
+            if whole is not None:
+                whole[lo:hi] = part
 
     try:
         if client is None:
@@ -879,13 +1069,13 @@ def simulate_batch(
 
     return SimulationResult(
         t=t,
-        signals=signals,
+        signals=data,
         run_status=status.astype(str),
         run_message=tuple(str(m) for m in message),
         run_t_stop=t_stop,
-        # the compiled engine has no dense solution: sample peaks (exact=False)
-        run_peak=peak if engine == "numpy" else None,
-        run_peak_time=peak_time if engine == "numpy" else None,
+        # without the samples, the sample peaks were computed per chunk
+        run_peak=peak if exact or reduce else None,
+        run_peak_time=peak_time if exact or reduce else None,
         run_speed=V,
         run_k1=k1,
         run_k2=k2,
@@ -901,4 +1091,8 @@ def simulate_batch(
         model=opts["model"],
         tyre=opts["tyre"],
         engine=engine,
+        signal_names=kept,
+        run_samples=samples,
+        run_metrics=metrics,
+        peaks_exact=exact,
     )
