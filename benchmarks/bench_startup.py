@@ -15,8 +15,14 @@ With ``--baseline DIR`` (another checkout, e.g. ``main``) every command
 also runs from DIR, alternating with this checkout so that both see the same
 load, and the ratio this/baseline is printed.
 
+With ``--breakdown`` it also runs ``reproduce``'s work stage by stage in
+fresh interpreters and prints the best CPU time of each stage: the imports,
+then per figure its making (data and artists, ``make_figure``) and its
+``savefig`` (layout, drawing, PNG encoding, with ``reproduce``'s PNG options),
+then the summary.
+
 Run: ``python benchmarks/bench_startup.py [--repeat 3] [--no-reproduce]
-[--baseline DIR]``
+[--baseline DIR] [--only-reproduce] [--breakdown]``
 """
 
 from __future__ import annotations
@@ -68,12 +74,69 @@ def best_cpu(cmd: list[str], envs: list[dict], repeat: int) -> list[float]:
     return best
 
 
+# One in-process run of reproduce's stages; prints "stage seconds" lines.
+_STAGES = r"""
+import io, sys, time
+T = time.process_time
+t = T()
+import control, matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+from fws_control.paper.figures import FIGURES, make_figure, _summary_text
+print("imports", T() - t)
+for name in FIGURES:
+    t = T()
+    fig = make_figure(name)
+    print(name + ":make", T() - t)
+    t = T()
+    # reproduce's options: dpi 110, zlib level 3 (fws_control.paper.figures)
+    fig.savefig(io.BytesIO(), format="png", dpi=110,
+                pil_kwargs={"compress_level": 3})
+    print(name + ":savefig", T() - t)
+    plt.close(fig)
+from pathlib import Path
+t = T()
+_summary_text("exact", [Path(n + ".png") for n in FIGURES])
+print("summary", T() - t)
+"""
+
+
+def breakdown(env: dict, repeat: int) -> None:
+    """Best CPU time of each stage of ``reproduce`` over `repeat` runs."""
+    best: dict[str, float] = {}
+    cwd = env["PYTHONPATH"].split(os.pathsep)[0]
+    for _ in range(repeat):
+        out = subprocess.run(
+            [sys.executable, "-c", _STAGES], check=True, capture_output=True,
+            text=True, env=env, cwd=cwd, timeout=600,
+        ).stdout  # fmt: skip
+        for line in out.splitlines():
+            stage, sec = line.rsplit(" ", 1)
+            best[stage] = min(best.get(stage, float("inf")), float(sec))
+    make = sum(v for k, v in best.items() if k.endswith(":make"))
+    save = sum(v for k, v in best.items() if k.endswith(":savefig"))
+    print(f"reproduce by stage, in-process CPU seconds, best of {repeat}:")
+    print(f"  {'imports':34s} {best['imports']:7.3f} s")
+    for name in [k.split(":")[0] for k in best if k.endswith(":make")]:
+        print(
+            f"  {name:34s} make {best[name + ':make']:6.3f} s   "
+            f"savefig {best[name + ':savefig']:6.3f} s"
+        )
+    print(f"  {'all figures':34s} make {make:6.3f} s   savefig {save:6.3f} s")
+    print(f"  {'summary':34s} {best['summary']:7.3f} s")
+    total = best["imports"] + make + save + best["summary"]
+    print(f"  {'sum of the best stages':34s} {total:7.3f} s")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3, help="runs per command (3)")
     ap.add_argument("--no-reproduce", action="store_true", help="skip reproduce")
     ap.add_argument("--only-reproduce", action="store_true", help="time reproduce only")
     ap.add_argument("--baseline", type=Path, help="another checkout to compare with")
+    ap.add_argument(
+        "--breakdown", action="store_true", help="CPU of reproduce stage by stage"
+    )
     opts = ap.parse_args()
     if opts.repeat < 3:
         ap.error(f"--repeat must be >= 3 (best of at least 3), got {opts.repeat}")
@@ -108,6 +171,8 @@ def main() -> None:
         if base:
             tail += f"   baseline {base[0]:7.3f} s: this/baseline {t / base[0]:.2f}"
         print(f"  {label:34s} {t:7.3f} s{tail}")
+    if opts.breakdown:
+        breakdown(envs[0], opts.repeat)
     print(machine_line())
 
 

@@ -24,6 +24,7 @@ import control as ct
 import numpy as np
 
 from .gains import SteeringGains
+from .layout import grid_margins
 from .linear import check_gains, closed_loop
 from .models import feedforward_steering
 from .paths import Arc, Straight
@@ -162,8 +163,13 @@ class LinearNonlinearComparison:
         import matplotlib.pyplot as plt
 
         if ax is None:
-            fig = plt.figure(figsize=(12, 7.5), layout="constrained")
-            gs = fig.add_gridspec(2, 3)
+            size = (12, 7.5)
+            fig = plt.figure(figsize=size)
+            gs = fig.add_gridspec(
+                2,
+                3,
+                **grid_margins(size, nrows=2, ncols=3, left=0.65, top=0.5, hgap=0.55),
+            )
             axes = [
                 fig.add_subplot(gs[0, 0]),
                 fig.add_subplot(gs[0, 1]),

@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
+from .layout import grid_margins
 from .models import check_steering
 from .reprs import summary_repr
 from .validation import check_finite, check_scalar, check_type
@@ -293,7 +294,10 @@ def plot_turning_radius(
     if ylim <= 0.0:
         raise ValueError(f"ylim must be finite and > 0 m, got {ylim!r}")
     if ax is None:
-        _, ax = plt.subplots(figsize=(7, 4.8), layout="constrained")
+        size = (7, 4.8)
+        _, ax = plt.subplots(
+            figsize=size, gridspec_kw=grid_margins(size, left=0.6, top=0.45)
+        )
     for i, lim in enumerate(np.atleast_1d(lims)):
         geo = turning_radius(
             vehicle, ratio=a, max_steer_front=lim, max_steer_rear=max_steer_rear

@@ -7,8 +7,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 from conftest import PAPER_VEHICLE
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import fws_control as fws
+from fws_control.layout import grid_margins
 from fws_control.paper import FIGURES, gains_table, make_figure, reproduce
 from fws_control.paper.data import PAPER_VEHICLE as DATA_VEHICLE
 from fws_control.paper.figures import plot_root_loci
@@ -206,3 +209,250 @@ def test_root_loci_figure_panels_match_the_loci():
         np.testing.assert_allclose(ln.get_xdata(), -1.0, atol=1e-6)
         np.testing.assert_allclose(ln.get_ydata(), 0.0, atol=1e-6)
     plt.close(cplt.figure)
+
+
+# --------------------------------------------------------------------------
+# Fixed layouts (fws_control.layout): nothing overlaps, nothing is cut off.
+# The reference is computed from the drawn figure: the window extents that
+# matplotlib's renderer gives every tick label, axis label, title, legend
+# and figure title.
+
+
+def _in_view(axis, lim):
+    """The visible tick labels of `axis` whose ticks lie within `lim`."""
+    lo, hi = sorted(lim)
+    span = hi - lo
+    out = []
+    for ticks, locs in (
+        (axis.get_major_ticks(), axis.get_majorticklocs()),
+        (axis.get_minor_ticks(), axis.get_minorticklocs()),
+    ):
+        for tick, loc in zip(ticks, locs, strict=False):
+            if lo - 1e-9 * span <= loc <= hi + 1e-9 * span:
+                out += [tick.label1, tick.label2]
+    return out
+
+
+def _outer_texts(ax, renderer):
+    """(kind, bbox) of the labelled items of `ax` drawn outside its frame."""
+    items = []
+    if ax.axison:
+        for lab in _in_view(ax.xaxis, ax.get_xlim()):
+            items.append(("xtick", lab))
+        for lab in _in_view(ax.yaxis, ax.get_ylim()):
+            items.append(("ytick", lab))
+        items += [("xlabel", ax.xaxis.label), ("ylabel", ax.yaxis.label)]
+        items += [
+            ("offset", ax.xaxis.get_offset_text()),
+            ("offset", ax.yaxis.get_offset_text()),
+        ]
+    items.append(("title", ax.title))
+    out = [
+        (kind, t.get_window_extent(renderer))
+        for kind, t in items
+        if t.get_visible() and t.get_text().strip()
+    ]
+    frame = ax.get_window_extent(renderer)
+    leg = ax.get_legend()
+    if leg is not None:
+        box = leg.get_window_extent(renderer)
+        # A legend inside its own axes is part of the panel.
+        if not (
+            frame.contains(box.x0 + 1, box.y0 + 1)
+            and frame.contains(box.x1 - 1, box.y1 - 1)
+        ):
+            out.append(("legend", box))
+    return out
+
+
+def _overlap(a, b, tol=0.5):
+    """True if the boxes share more than `tol` pixels in both directions."""
+    return (
+        min(a.x1, b.x1) - max(a.x0, b.x0) > tol
+        and min(a.y1, b.y1) - max(a.y0, b.y0) > tol
+    )
+
+
+@pytest.mark.parametrize("name", sorted(FIGURES))
+def test_layout_nothing_overlaps_or_leaves_the_canvas(name):
+    fig = make_figure(name, quick=True)
+    fig.set_dpi(110)  # reproduce's default resolution
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    canvas = fig.bbox
+    axes = [ax for ax in fig.axes if ax.get_visible()]
+    texts = {ax: _outer_texts(ax, renderer) for ax in axes}
+    frames = {ax: ax.get_window_extent(renderer) for ax in axes}
+    figure_texts = [
+        t.get_window_extent(renderer)
+        for t in (fig._suptitle, fig._supxlabel)
+        if t is not None and t.get_text()
+    ]
+    problems = []
+    for ax in axes:
+        for kind, box in texts[ax]:
+            inside = (
+                box.x0 >= canvas.x0 - 0.5
+                and box.y0 >= canvas.y0 - 0.5
+                and box.x1 <= canvas.x1 + 0.5
+                and box.y1 <= canvas.y1 + 0.5
+            )
+            if not inside:
+                problems.append(f"{kind} of {ax.get_title()!r} leaves the canvas")
+            for other in axes:
+                if other is ax:
+                    continue
+                if _overlap(box, frames[other]):
+                    problems.append(
+                        f"{kind} of {ax.get_title()!r} overlaps the panel "
+                        f"{other.get_title()!r}"
+                    )
+                for kind2, box2 in texts[other]:
+                    if _overlap(box, box2):
+                        problems.append(
+                            f"{kind} of {ax.get_title()!r} overlaps {kind2} of "
+                            f"{other.get_title()!r}"
+                        )
+            for ftext in figure_texts:
+                if _overlap(box, ftext):
+                    problems.append(
+                        f"{kind} of {ax.get_title()!r} overlaps a figure title"
+                    )
+        # Within a panel: the axis labels and the title clear the tick labels.
+        own = texts[ax]
+        for kind, box in own:
+            for kind2, box2 in own:
+                pair = {kind, kind2}
+                if pair in (
+                    {"xlabel", "xtick"},
+                    {"ylabel", "ytick"},
+                    {"title", "xtick"},
+                    {"title", "ytick"},
+                    {"title", "ylabel"},
+                ) and _overlap(box, box2):
+                    problems.append(f"{kind} overlaps {kind2} in {ax.get_title()!r}")
+    for ftext in figure_texts:
+        for ax in axes:
+            if _overlap(ftext, frames[ax]):
+                problems.append(f"a figure title overlaps the panel {ax.get_title()!r}")
+        if not (
+            canvas.x0 - 0.5 <= ftext.x0
+            and ftext.x1 <= canvas.x1 + 0.5
+            and canvas.y0 - 0.5 <= ftext.y0
+            and ftext.y1 <= canvas.y1 + 0.5
+        ):
+            problems.append("a figure title leaves the canvas")
+    # Labelled axes and legends are there.
+    for ax in axes:
+        if ax.has_data():
+            assert ax.get_xlabel().strip() and ax.get_ylabel().strip(), ax.get_title()
+    legends = [ax.get_legend() for ax in axes if ax.get_legend() is not None]
+    assert legends and all(t.get_text() for leg in legends for t in leg.get_texts())
+    plt.close(fig)
+    assert not problems, "\n".join(sorted(set(problems)))
+
+
+def test_layout_check_detects_an_overlap():
+    """The check above fails for a layout that is too tight (it can fail)."""
+    fig, axs = plt.subplots(
+        1,
+        2,
+        figsize=(6, 3),
+        gridspec_kw=grid_margins((6, 3), ncols=2, wgap=0.05),
+    )
+    for ax in axs:
+        ax.plot([0, 1e4], [0, 1e4])
+        ax.set_ylabel("a long y label [m/s²]")
+    fig.set_dpi(110)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    right_labels = _outer_texts(axs[1], renderer)
+    left_frame = axs[0].get_window_extent(renderer)
+    assert any(_overlap(box, left_frame) for _, box in right_labels)
+    plt.close(fig)
+
+
+@pytest.mark.parametrize("panel, pole", [(1, -1.0), (2, -2.0)])
+def test_actuator_responses_match_simulate_at_default_tolerance(panel, pole):
+    """Panels (b), (c) (one batch, rtol 1e-8) agree with single runs at 1e-10."""
+    from fws_control.paper.actuator import plot_actuator
+
+    cplt = plot_actuator(quick=True)
+    ax = cplt.axes[0, panel]
+    veh = fws.Vehicle(2.7, 1.35)
+    g = fws.double_root_gains(veh, speed=20.0, curvature=0.01, ratio=0.5, pole=pole)
+    styles = {ln.get_linestyle(): ln for ln in ax.lines}
+    for style, act in (
+        ("--", {}),
+        ("-", {"delay": 0.24, "actuator_time_constant": 0.27}),
+    ):
+        line = styles[style]
+        ref = fws.simulate(
+            veh,
+            Arc(curvature=0.01),
+            g,
+            speed=20.0,
+            initial_state=(0.0, -10.0, 0.0),
+            duration=10.0,
+            feedforward=True,
+            dt=0.02,
+            **act,
+        )
+        y = np.asarray(line.get_ydata(), dtype=float)
+        e = np.asarray(ref.e, dtype=float)
+        n = min(y.size, e.size)  # a run that stops returns fewer samples alone
+        good = np.isfinite(y[:n]) & np.isfinite(e[:n])
+        assert good.sum() > 100
+        np.testing.assert_allclose(y[:n][good], e[:n][good], atol=1e-6)
+        # and the curve ends where the single run ends
+        assert np.isfinite(y).sum() == np.isfinite(e).sum()
+        if ref.status != "ok":  # pole -2 with delay and lag: the legend says so
+            assert ref.status in line.get_label()
+    plt.close(cplt.figure)
+
+
+@settings(derandomize=True, max_examples=25, deadline=None)
+@given(
+    w=st.floats(4.0, 20.0),
+    h=st.floats(3.0, 12.0),
+    nrows=st.integers(1, 3),
+    ncols=st.integers(1, 4),
+    margins=st.lists(st.floats(0.0, 0.9), min_size=6, max_size=6),
+)
+def test_grid_margins_gives_the_requested_inches(w, h, nrows, ncols, margins):
+    """matplotlib's GridSpec, fed the fractions, puts the axes where asked."""
+    from matplotlib.gridspec import GridSpec
+
+    left, right, bottom, top, wgap, hgap = margins
+    kw = grid_margins(
+        (w, h), nrows=nrows, ncols=ncols, left=left, right=right,
+        bottom=bottom, top=top, wgap=wgap, hgap=hgap,
+    )  # fmt: skip
+    fig = plt.figure(figsize=(w, h))
+    b, t, lft, rgt = GridSpec(nrows, ncols, figure=fig, **kw).get_grid_positions(fig)
+    plt.close(fig)
+    np.testing.assert_allclose(lft[0] * w, left, atol=1e-9)
+    np.testing.assert_allclose((1.0 - rgt[-1]) * w, right, atol=1e-9)
+    np.testing.assert_allclose(b[-1] * h, bottom, atol=1e-9)
+    np.testing.assert_allclose((1.0 - t[0]) * h, top, atol=1e-9)
+    np.testing.assert_allclose((lft[1:] - rgt[:-1]) * w, wgap, atol=1e-9)
+    np.testing.assert_allclose((b[:-1] - t[1:]) * h, hgap, atol=1e-9)
+    widths = (rgt - lft) * w
+    np.testing.assert_allclose(
+        widths, (w - left - right - (ncols - 1) * wgap) / ncols, rtol=1e-9
+    )
+
+
+def test_grid_margins_rejects_what_leaves_no_room():
+    with pytest.raises(ValueError, match="no room for the axes"):
+        grid_margins((4.0, 3.0), ncols=2, left=2.0, right=1.0, wgap=1.0)
+    with pytest.raises(ValueError, match=r"figsize\[0\] must be > 0"):
+        grid_margins((0.0, 3.0))
+    with pytest.raises(ValueError, match="figsize must be"):
+        grid_margins(5.0)
+    with pytest.raises(ValueError, match="ncols must be an int >= 1, got 0"):
+        grid_margins((4.0, 3.0), ncols=0)
+    with pytest.raises(ValueError, match="left must be >= 0 in, got -0.1"):
+        grid_margins((4.0, 3.0), left=-0.1)
+    with pytest.raises(ValueError, match="wgap"):
+        grid_margins((4.0, 3.0), wgap=float("nan"))

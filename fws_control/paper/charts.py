@@ -17,6 +17,7 @@ import numpy as np
 from ..charts import StabilityChart, stability_chart
 from ..design import double_root_gains
 from ..exceptions import UncontrollableError
+from ..layout import grid_margins
 from ..plant import LateralPlant
 from ..reprs import summary_repr
 from ..validation import check_model
@@ -337,8 +338,18 @@ def plot_paper_figure(
     )
     shape = (1, 3) if n == 2 else (2, 4)
     if ax is None:
-        size = (15, 6.2) if n == 2 else (19, 9.5)
-        fig, axs = plt.subplots(*shape, figsize=size, layout="constrained")
+        # Fixed layout (fws_control.layout): Fig. 2 keeps room below the
+        # panels for their legends.
+        size, margins = (
+            ((15, 6.2), {"bottom": 1.3, "right": 0.3, "wgap": 1.0})
+            if n == 2
+            else ((19, 9.5), {"left": 0.8, "right": 0.3, "wgap": 1.0})
+        )
+        fig, axs = plt.subplots(
+            *shape,
+            figsize=size,
+            gridspec_kw=grid_margins(size, nrows=shape[0], ncols=shape[1], **margins),
+        )
     else:
         axs = np.asarray(ax, dtype=object)
         if axs.size != shape[0] * shape[1]:

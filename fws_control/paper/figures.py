@@ -26,6 +26,7 @@ import numpy as np
 
 from ..design import UncontrollableError, double_root_gains
 from ..files import atomic_write, lock_folder, remove_stale_temporaries
+from ..layout import grid_margins
 from ..linear import closed_loop
 from ..plant import LateralPlant
 from ..turning import plot_turning_radius, turning_radius
@@ -136,7 +137,13 @@ def plot_root_loci(
 
     vehicle = PAPER_VEHICLE if vehicle is None else vehicle
     if ax is None:
-        fig, axes = plt.subplots(1, 3, figsize=(17, 5.2), layout="constrained")
+        size = (17, 5.2)
+        fig, axes = plt.subplots(
+            1,
+            3,
+            figsize=size,
+            gridspec_kw=grid_margins(size, ncols=3, top=0.95, wgap=0.65),
+        )
     else:
         axes = list(np.asarray(ax, dtype=object).ravel())
         if len(axes) != 3:
@@ -321,15 +328,20 @@ def plot_fig5(model: str = "exact", quick: bool = False):
     import matplotlib.pyplot as plt
 
     data = _fig5_data(model, quick)
-    fig, grid = plt.subplots(
-        4,
-        2,
-        figsize=(13, 10),
-        height_ratios=[0.16, 1.0, 0.16, 1.0],
-        sharex=True,
-        layout="constrained",
+    size = (13, 10)
+    fig = plt.figure(figsize=size)
+    # A fixed layout (fws_control.layout): 2 x 2 cells, each a strip above
+    # its panel, close together; the gap between the cells holds the panel's
+    # tick labels and x label and the next strip's title.
+    outer = fig.add_gridspec(
+        2, 2, **grid_margins(size, nrows=2, ncols=2, bottom=0.95, wgap=0.75, hgap=0.8)
     )
-    pairs = [(grid[r, c], grid[r + 1, c]) for r in (0, 2) for c in (0, 1)]
+    pairs = []
+    for r in (0, 1):
+        for c in (0, 1):
+            cell = outer[r, c].subgridspec(2, 1, height_ratios=[0.16, 1.0], hspace=0.04)
+            ax = fig.add_subplot(cell[1])
+            pairs.append((fig.add_subplot(cell[0], sharex=ax), ax))
     ratios_all = np.concatenate([sw.ratios for sw in data.values()])
     xpad = 0.06 * float(np.ptp(ratios_all))
     for (strip, ax), (panel, sweep) in zip(pairs, data.items(), strict=True):
@@ -439,7 +451,10 @@ def _responses_figure(n: int, model: str, quick: bool):
     res, sc = sr.result, sr.scenario
     curved = sc.curvature != 0.0
     if curved:
-        fig, axs = plt.subplots(2, 3, figsize=(16, 9), layout="constrained")
+        size = (16, 9)
+        fig, axs = plt.subplots(
+            2, 3, figsize=size, gridspec_kw=grid_margins(size, nrows=2, ncols=3)
+        )
         panels = [
             (axs[0, 0], "e", 1.0, "(a) lateral error e [m]"),
             (axs[0, 1], "theta", _DEG, "(b) yaw angle error θ [deg]"),
@@ -449,7 +464,13 @@ def _responses_figure(n: int, model: str, quick: bool):
             (axs[1, 2], "lateral_accel", 1.0, "(f) lateral acceleration [m/s²]"),
         ]
     else:
-        fig, axs = plt.subplots(2, 2, figsize=(13, 9), layout="constrained")
+        size = (13, 9)
+        fig, axs = plt.subplots(
+            2,
+            2,
+            figsize=size,
+            gridspec_kw=grid_margins(size, nrows=2, ncols=2, left=0.8, wgap=0.9),
+        )
         panels = [
             (axs[0, 0], "y", 1.0, "(a) lateral position $y_R$ [m]"),
             (axs[0, 1], "lateral_accel", 1.0, "(b) lateral acceleration [m/s²]"),
@@ -741,7 +762,23 @@ def make_figure(name: str, *, model: str = "exact", quick: bool = False):
     check_model(model)
     if name not in FIGURES:
         raise ValueError(f"name must be one of {sorted(FIGURES)}, got {name!r}")
-    return FIGURES[name].make(model=model, quick=quick)
+    return _make(name, model, quick)
+
+
+def _make(name: str, model: str, quick: bool):
+    """``FIGURES[name].make`` with the titles at a fixed height.
+
+    Matplotlib lifts an axes title above top tick labels and a y offset
+    text ("1e-3"); to find them it measures every y axis once more before
+    each draw (a fifth of the drawing time of these figures). None of them
+    has either, so the titles stay at the top of their axes
+    (``axes.titley = 1``); tests/test_figures.py checks that no title
+    overlaps anything.
+    """
+    import matplotlib.pyplot as plt
+
+    with plt.rc_context({"axes.titley": 1.0}):
+        return FIGURES[name].make(model=model, quick=quick)
 
 
 def _fmt_poles(p) -> str:
@@ -899,6 +936,11 @@ def _progress(iterable, enabled, total=None, desc=None):
     )
 
 
+# zlib level 3 instead of PIL's 6: the same pixels, encoded in about 30 %
+# less time (0.42 s instead of 0.61 s for the twelve figures), files 8 %
+# larger (2.4 instead of 2.2 MB); measured on this machine with PIL.
+_PNG_OPTIONS = {"compress_level": 3}
+
 #: Largest resolution :func:`reproduce` accepts: at 600 dpi the widest figure
 #: (17 x 5.2 in) is 10200 x 3120 pixels, about 130 MB of RGBA while drawing.
 _MAX_DPI = 600
@@ -979,11 +1021,11 @@ def reproduce(
         remove_stale_temporaries(out)
         written = []
         for name in _progress(names, progress, total=len(names), desc="figures"):
-            fig = FIGURES[name].make(model=model, quick=quick)
+            fig = _make(name, model, quick)
             path = out / f"{name}.png"
             try:
                 with atomic_write(path) as fh:
-                    fig.savefig(fh, format="png", dpi=int(dpi))
+                    fig.savefig(fh, format="png", dpi=int(dpi), pil_kwargs=_PNG_OPTIONS)
             finally:
                 plt.close(fig)
             written.append(path)

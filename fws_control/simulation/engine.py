@@ -67,6 +67,8 @@ __all__ = [
     "check_method",
     "check_tolerances",
     "choose_method",
+    "LONG_RUN_STEPS",
+    "LSODA_MAX_RUNS",
     "STIFF_TIME_CONSTANT",
     "MAX_STEPS",
     "RTOL_RANGE",
@@ -198,9 +200,24 @@ ATOL_RANGE = (1e-20, 0.1)
 #: :func:`choose_method`).
 STIFF_TIME_CONSTANT = 0.004
 
+#: Steps DOP853's stability bound forces on a run (``duration / (6.4 T)``)
+#: above which ``method="auto"`` integrates one run with LSODA; ``runs``
+#: stacked runs need ``runs`` times as many (see :func:`choose_method`).
+LONG_RUN_STEPS = 10
 
-def choose_method(time_constant: float | None, rtol: float) -> str:
-    r"""The solver ``method="auto"`` uses: ``"Radau"`` when the loop is stiff.
+#: Most runs integrated together for which ``method="auto"`` takes LSODA,
+#: whose Jacobian of the stacked runs is dense (measured up to 16 runs).
+LSODA_MAX_RUNS = 16
+
+
+def choose_method(
+    time_constant: float | None,
+    rtol: float,
+    *,
+    duration: float | None = None,
+    runs: int = 1,
+) -> str:
+    r"""The solver ``method="auto"`` uses: implicit when the loop is stiff.
 
     The steering actuator adds the eigenvalue :math:`-1/T` to the loop. An
     explicit method's step is then bounded by stability, not accuracy: DOP853
@@ -214,13 +231,55 @@ def choose_method(time_constant: float | None, rtol: float) -> str:
     = 5 and 20 m/s), the two cost the same near :math:`T = 0.004` s (Radau
     1.7x faster at 0.002 s, DOP853 2-3.5x faster at 0.01-0.02 s). Radau's
     accuracy step grows as :math:`rtol^{1/6}` while the stability bound does
-    not, so the rule is
+    not, so the first rule is
 
     .. math:: T < 0.004\,\mathrm{s}\cdot(\mathrm{rtol}/10^{-10})^{1/6}
-              \Rightarrow \text{Radau, else DOP853.}
+              \Rightarrow \text{Radau.}
 
-    Without an actuator (`time_constant` None) the loop is not stiff:
-    DOP853.
+    Once the transient has decayed, the stability bound caps DOP853's
+    step at about ``6.4 T`` whatever the accuracy asks: a run then costs
+    ``duration / (6.4 T)`` steps of 12 right-hand-side evaluations, and,
+    worse, DOP853's error estimate no longer bounds its error. Measured on
+    the paper's curve scenario at :math:`T` = 0.05 s against a fixed-step
+    reference (``tests/test_rate_limit_reference.py``,
+    ``benchmarks/bench_rate_limit.py``): DOP853's largest error is 1-4
+    tolerances over the first 1-3 s, 21-1900 tolerances from 5 s on (in the
+    actuator states, where the steps reach the bound), at every rtol; LSODA
+    (Adams steps, switching to BDF where the loop is stiff, stepping by
+    accuracy) stays within about 1 tolerance. One run costs about the same
+    either way from 6 to 47 such steps (0.09-0.22 s of CPU, within 21 %)
+    and LSODA wins beyond (at 1500 s: DOP853 4739 steps, 4.9 s; LSODA 744,
+    0.23 s; BDF 3015, 5.5 s; Radau 3506, 11 s). So, with the `duration`
+    given, a run of more than :data:`LONG_RUN_STEPS` (10) such steps
+    integrates with ``"LSODA"``.
+
+    LSODA estimates a dense Jacobian of the stacked state, so for ``runs``
+    stacked runs the bar is ``10 * runs`` steps, and above
+    :data:`LSODA_MAX_RUNS` (16) runs it is DOP853 (measured, T = 0.05 s,
+    simulate_batch, LSODA against DOP853: 4 runs, 15 s 0.23 against 0.21
+    s, 60 s 0.28 against 0.35 s; 16 runs, 15 s 0.56 against 0.23 s, 60 s
+    0.55 against 0.44 s, 150 s 0.63 against 0.87 s; 32 runs, 150 s 2.0
+    against 0.96 s; 64 runs, 1500 s 5.2 against 14.5 s).
+
+    Otherwise DOP853; without an actuator (`time_constant` None) the loop is
+    not stiff: DOP853.
+
+    Parameters
+    ----------
+    time_constant : float or None
+        Actuator lag :math:`T` [s]; None: no actuator.
+    rtol : float
+        Relative tolerance of the run.
+    duration : float, optional
+        Simulated time [s]; None (default): the rule without the long-run
+        case (DOP853 or Radau).
+    runs : int, optional
+        Runs integrated together in one stacked state (default 1).
+
+    Returns
+    -------
+    str
+        ``"DOP853"``, ``"Radau"`` or ``"LSODA"``.
 
     Examples
     --------
@@ -229,11 +288,28 @@ def choose_method(time_constant: float | None, rtol: float) -> str:
     ('DOP853', 'DOP853')
     >>> choose_method(1e-4, 1e-10), choose_method(0.01, 1e-4)
     ('Radau', 'Radau')
+    >>> choose_method(0.05, 1e-10, duration=2.0)  # 6 stability-bound steps
+    'DOP853'
+    >>> choose_method(0.05, 1e-10, duration=15.0)  # 47
+    'LSODA'
+    >>> choose_method(0.05, 1e-10, duration=15.0, runs=16)  # 47 < 160
+    'DOP853'
+    >>> choose_method(0.05, 1e-10, duration=1500.0, runs=100)
+    'DOP853'
     """
     if time_constant is None:
         return "DOP853"
     limit = STIFF_TIME_CONSTANT * (rtol / 1e-10) ** (1.0 / 6.0)
-    return "Radau" if time_constant < limit else "DOP853"
+    if time_constant < limit:
+        return "Radau"
+    if (
+        duration is not None
+        and runs <= LSODA_MAX_RUNS
+        # (stacked runs: LSODA's dense Jacobian costs more per run)
+        and duration / (6.4 * time_constant) > LONG_RUN_STEPS * runs
+    ):
+        return "LSODA"
+    return "DOP853"
 
 
 def check_tolerances(rtol: Any, atol: Any) -> tuple[float, float]:

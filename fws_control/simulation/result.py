@@ -230,7 +230,8 @@ class SimulationResult:
         ``exact=False``.
     method : str, optional
         The solver that integrated the runs (what ``method="auto"`` chose:
-        ``"DOP853"`` or, for a stiff actuator, ``"Radau"``); None if unknown.
+        ``"DOP853"`` or, for a stiff actuator, ``"Radau"`` or ``"LSODA"``); None
+        if unknown.
     model : str, optional
         The vehicle model simulated, ``"kinematic"`` (default) or
         ``"dynamic"`` (:data:`~fws_control.simulation.engine.MODELS`).

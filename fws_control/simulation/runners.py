@@ -597,7 +597,8 @@ def _prepare(
     tau = resolve_time_constant(vehicle, tau)
     opts["rtol"], opts["atol"] = check_tolerances(opts["rtol"], opts["atol"])
     if isinstance(opts["method"], str) and opts["method"] == "auto":
-        opts["method"] = choose_method(tau, opts["rtol"])
+        # (the duration and the number of runs: see the long-run rule there)
+        opts["method"] = choose_method(tau, opts["rtol"], duration=span, runs=n)
     else:
         _warn_if_stiff(check_method(opts["method"]), tau, float(t[-1]))
     return k1, k2, a, V, x0, t, tau, ctrl
@@ -709,8 +710,9 @@ def simulate(
         "RK45", "RK23", "Radau", "BDF", "LSODA"`` or an OdeSolver class. The
         engine steps that solver itself, as :func:`scipy.integrate.solve_ivp`
         would, so that it can stop a run at a singular state. ``"auto"`` is
-        DOP853, or Radau when a fast actuator makes the loop stiff (rule and
-        measurements in
+        DOP853, or Radau when a fast actuator makes the loop stiff, or LSODA
+        for a run long enough that the actuator's stability bound would cost
+        DOP853 more than 10 steps (rule and measurements in
         :func:`~fws_control.simulation.engine.choose_method`); the result's
         ``method`` says which. An explicit method chosen for a stiff loop
         gives a :class:`RuntimeWarning`.
