@@ -212,8 +212,12 @@ CURVE = dict(speed=5.0, initial_state=(0.0, -5.0, 0.0), duration=5.0)
     ("gains", "kwargs", "engine", "method"),
     [
         (None, {}, "compiled", "DOP853"),
-        (None, {"feedforward": False, "actuator_time_constant": 0.05}, "compiled",
-         "DOP853"),
+        # an actuator over few of DOP853's stability-bound steps (3 s / (6.4
+        # T) < 10, engine.LONG_RUN_STEPS): DOP853, compiled ...
+        (None, {"feedforward": False, "actuator_time_constant": 0.05,
+                "duration": 3.0}, "compiled", "DOP853"),
+        # ... over more (5 s): method="auto" picks LSODA: numpy runs it
+        (None, {"actuator_time_constant": 0.05}, "numpy", "LSODA"),
         (None, {"method": "DOP853", "actuator_time_constant": 0.001}, "compiled",
          "DOP853"),
         # method="auto" picks Radau for this stiff actuator: numpy runs it
@@ -225,10 +229,11 @@ CURVE = dict(speed=5.0, initial_state=(0.0, -5.0, 0.0), duration=5.0)
 )  # fmt: skip
 def test_auto_engine_rule_and_bitwise_results(gains, kwargs, engine, method):
     g = _gains(VEH) if gains is None else gains
+    kw = {**CURVE, **kwargs}
     for run in (fws.simulate, fws.simulate_batch):
-        auto = run(VEH, ARC, g, **CURVE, **kwargs)
+        auto = run(VEH, ARC, g, **kw)
         assert auto.engine == engine and auto.method == method
-        _same(auto, run(VEH, ARC, g, **CURVE, **kwargs, engine=engine))
+        _same(auto, run(VEH, ARC, g, **kw, engine=engine))
         assert auto.peaks.exact
 
 

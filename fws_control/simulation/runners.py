@@ -235,8 +235,8 @@ def _choose_engine(path, gains, *, delay, method, model, feedforward):
 
     Returns ``("compiled", table)`` where the compiled engine can run the
     case, else ``("numpy", None)``. `method` is already resolved
-    (``"auto"`` became DOP853, or Radau for a stiff actuator: then numpy,
-    the compiled engine has no implicit method). A path whose curvature
+    (``"auto"`` became DOP853, or Radau or LSODA for an actuator: then
+    numpy, the compiled engine has DOP853 only). A path whose curvature
     table misses its tolerance goes to numpy too.
     """
     try:
@@ -753,8 +753,9 @@ def simulate(
         ``"numpy"``: the engine described above, for every case.
         ``"auto"`` (default): the compiled engine where numba is installed
         and it runs the case, with `method` resolved first (``"auto"`` is
-        Radau for a stiff actuator, see
-        :func:`~fws_control.simulation.engine.choose_method`, and Radau runs
+        Radau or LSODA with an actuator that makes DOP853 step at its
+        stability bound, see
+        :func:`~fws_control.simulation.engine.choose_method`, and those run
         on the numpy engine); the numpy engine otherwise. The result's
         ``engine`` says which ran, and is bitwise the result of asking for
         that engine explicitly.
