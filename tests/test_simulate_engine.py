@@ -39,7 +39,7 @@ def _close(a, b, tol):
 @pytest.mark.parametrize("feedforward", [True, False])
 def test_compiled_equals_numpy_engine_on_the_curve(ratio, feedforward):
     g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=ratio, pole=-1.0)
-    ref = fws.simulate(VEH, ARC, g, **CURVE, feedforward=feedforward)
+    ref = fws.simulate(VEH, ARC, g, **CURVE, feedforward=feedforward, engine="numpy")
     got = fws.simulate(VEH, ARC, g, **CURVE, feedforward=feedforward, engine="compiled")
     assert got.engine == "compiled" and ref.engine == "numpy"
     assert got.status == ref.status == "ok"
@@ -71,7 +71,7 @@ def test_compiled_with_rate_limited_actuator_against_tight_reference():
     )
     g = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=-1.0, pole=-2.0)
     kw = dict(CURVE, initial_state=(0.0, -1.0, 0.0), actuator_time_constant=0.05)
-    ref = fws.simulate(veh, ARC, g, **kw, rtol=1e-13, atol=1e-15)
+    ref = fws.simulate(veh, ARC, g, **kw, rtol=1e-13, atol=1e-15, engine="numpy")
     got = fws.simulate(veh, ARC, g, **kw, engine="compiled")
     assert got.status == ref.status == "ok"
     # the limits bind (otherwise this would not test the switching)
@@ -86,18 +86,21 @@ def test_compiled_with_rate_limited_actuator_against_tight_reference():
     _close(got.signals[:, derived], ref.signals[:, derived], 1e-6)
 
 
-def test_peaks_are_the_sample_maxima_marked_inexact():
+def test_peaks_are_exact_and_at_least_the_sample_maxima():
+    """The compiled result carries exact peaks (tests/test_compiled_peaks.py
+    compares them with the numpy engine's on many cases): here the paper's
+    curve at the default output step, to 1e-9 of the numpy engine's, and
+    never below the largest sample."""
     g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
-    ref = fws.simulate(VEH, ARC, g, **CURVE)
+    ref = fws.simulate(VEH, ARC, g, **CURVE, engine="numpy")
     got = fws.simulate(VEH, ARC, g, **CURVE, engine="compiled")
-    assert ref.peaks.exact and not got.peaks.exact
+    assert ref.peaks.exact and got.peaks.exact
     for name in PEAK_SIGNALS:
         x = np.abs(got.signals[0, SIGNALS.index(name)])
-        k = int(np.argmax(x))
-        assert getattr(got.peaks, name).value == x[k]
-        assert getattr(got.peaks, name).time == got.t[k]
-        # a sample maximum cannot exceed the continuous one
-        assert x[k] <= getattr(ref.peaks, name).value + 1e-9
+        assert getattr(got.peaks, name).value >= np.max(x)
+        assert getattr(got.peaks, name).value == pytest.approx(
+            getattr(ref.peaks, name).value, rel=TOL
+        )
 
 
 def test_mixed_batch_runs_are_identical_to_runs_alone():
@@ -114,7 +117,7 @@ def test_mixed_batch_runs_are_identical_to_runs_alone():
     batch = fws.simulate_batch(VEH, ARC, gains, **kw)
     chunked = fws.simulate_batch(VEH, ARC, gains, **kw, chunk_size=2)
     np.testing.assert_array_equal(batch.signals, chunked.signals)
-    assert batch.engine == "compiled" and not batch.peaks.exact
+    assert batch.engine == "compiled" and batch.peaks.exact
     assert batch.status.tolist() == ["ok", "ok", "singular_steering", "ok", "ok"]
     for i, g in enumerate(gains):
         alone = fws.simulate(
@@ -129,7 +132,9 @@ def test_mixed_batch_runs_are_identical_to_runs_alone():
         assert batch.message[i] == alone.message
     # the stop is where the numpy engine stops too (the compiled engine stops
     # 1e-3 rad before |delta_f| = pi/2, about 1e-6 s earlier at this rate)
-    ref = fws.simulate(VEH, ARC, stops, speed=5.0, initial_state=x0[2], duration=15.0)
+    ref = fws.simulate(
+        VEH, ARC, stops, speed=5.0, initial_state=x0[2], duration=15.0, engine="numpy"
+    )
     assert ref.status == "singular_steering"
     assert batch.t_stop[2] == pytest.approx(ref.t_stop, abs=1e-4)
     assert batch.t_stop[2] <= ref.t_stop
@@ -161,7 +166,8 @@ def test_unsupported_cases_raise(vehicle, gains, kwargs, reason):
             vehicle, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0
         )
     kw = dict(CURVE, duration=1.0, **kwargs)
-    fws.simulate(vehicle, ARC, gains, **kw)  # the numpy engine runs it
+    # the default engine ("auto") runs it on the numpy engine
+    assert fws.simulate(vehicle, ARC, gains, **kw).engine == "numpy"
     for run in (fws.simulate, fws.simulate_batch):
         with pytest.raises(ValueError, match="engine='compiled'") as info:
             run(vehicle, ARC, gains, **kw, engine="compiled")
@@ -184,7 +190,7 @@ def test_indexing_keeps_the_engine():
         VEH, speed=5.0, curvature=0.1, ratio=np.array([-1.0, 0.0]), pole=-1.0
     )
     res = fws.simulate_batch(VEH, ARC, g, **CURVE, engine="compiled")
-    assert res[1].engine == "compiled" and res[1].peaks.exact is False
+    assert res[1].engine == "compiled" and res[1].peaks.exact is True
     with pytest.raises(ValueError, match="engine must be 'numpy' or 'compiled'"):
         import dataclasses
 

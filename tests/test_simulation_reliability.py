@@ -2,6 +2,7 @@
 (issue 13): no hang, no silent garbage, no lost run."""
 
 import contextlib
+import importlib.util
 import math
 import signal
 
@@ -98,26 +99,42 @@ def test_tolerances_at_the_ends_of_their_ranges_are_accepted():
 # Item 6 (simulation): a loose tolerance must not cross a singular state
 
 
+@pytest.mark.parametrize(
+    "engine",
+    [
+        "numpy",
+        pytest.param(
+            "compiled",
+            marks=pytest.mark.skipif(
+                importlib.util.find_spec("numba") is None,
+                reason="numba is not installed: engine='compiled' not tested",
+            ),
+        ),
+    ],
+)
 @pytest.mark.parametrize(("rtol", "atol"), [(0.1, 1e-12), (0.1, 0.1), (1e-3, 0.1)])
-def test_loose_tolerances_still_stop_at_the_singular_steering_angle(rtol, atol):
+def test_loose_tolerances_still_stop_at_the_singular_steering_angle(rtol, atol, engine):
     # k2 < 0 feeds the heading back positively: delta_f runs to pi/2 near
     # t = 4.62 s (at the default tolerances). Before the margins were checked
     # inside every step, rtol = atol = 0.1 sampled |delta_f| = 1.997 > pi/2
-    # before the stop.
+    # before the stop (both engines check them at 3 points inside each step).
+    # The numpy engine stops at |delta_f| = pi/2, the compiled one at its
+    # margin pi/2 - 1e-3.
+    stop = {"numpy": math.pi / 2, "compiled": math.pi / 2 - 1e-3}[engine]
     g = fws.SteeringGains(k1=0.1, k2=-0.5, ratio=0.0)
     kw = {"speed": 5.0, "initial_state": (0.0, 1.0, 0.0), "duration": 10.0}
-    kw.update(feedforward=False, dt=0.01)
+    kw.update(feedforward=False, dt=0.01, engine=engine)
     tight = fws.simulate(VEH, Straight(), g, **kw)
     res = fws.simulate(VEH, Straight(), g, **kw, rtol=rtol, atol=atol)
     assert tight.status == res.status == "singular_steering"
     # every sample before the stop is regular: the controller's own formula
-    # delta_f = -k1 e - k2 theta, evaluated here, stays below pi/2
+    # delta_f = -k1 e - k2 theta, evaluated here, stays below the stop angle
     df = -0.1 * res.e + 0.5 * res.theta
     np.testing.assert_allclose(res.delta_f, df, rtol=0, atol=1e-12)
-    assert np.all(np.abs(df) < math.pi / 2)
+    assert np.all(np.abs(df) < stop)
     assert res.t[-1] <= res.t_stop < res.t[-1] + 0.01 + 1e-12
-    # the stop is where |delta_f| = pi/2 on the solver's continuous solution
-    assert abs(res.peaks.delta_f.value - math.pi / 2) < 1e-6
+    # the stop is where |delta_f| reaches it on the solver's continuous solution
+    assert abs(res.peaks.delta_f.value - stop) < 1e-6
     assert abs(res.peaks.delta_f.time - res.t_stop) < 1e-6
     assert abs(res.t_stop - tight.t_stop) < 0.5
 
@@ -349,9 +366,12 @@ def test_max_steps_marks_a_run_failed_instead_of_running_on(monkeypatch):
 
     monkeypatch.setattr(engine, "MAX_STEPS", 30)
     # the 5 m/s run needs about a dozen steps; the 1e6 m/s run ~1e6 times more
+    # (MAX_STEPS is the numpy engine's budget: the compiled engine steps each
+    # run alone and has none)
     res = fws.simulate_batch(
-        VEH, Straight(), GAIN, speed=np.array([5.0, 1e6]), chunk_size=2, **BATCH
-    )
+        VEH, Straight(), GAIN, speed=np.array([5.0, 1e6]), chunk_size=2, **BATCH,
+        engine="numpy",
+    )  # fmt: skip
     assert res.status.tolist() == ["ok", "failed"]
     assert "more than 30 solver steps (MAX_STEPS)" in res.message[1]
 
@@ -406,12 +426,12 @@ def test_auto_keeps_dop853_for_a_slow_actuator_and_warns_for_explicit_stiff(
         assert choose_method(tau, rtol) == expect
     assert choose_method(None, 1e-10) == "DOP853"
     # an explicit method chosen for a stiff loop: told, not silently slow
-    # (~7,800 steps; cut short here by a small step budget)
+    # (~7,800 steps; cut short here by the numpy engine's step budget)
     monkeypatch.setattr(engine, "MAX_STEPS", 50)
     with pytest.warns(RuntimeWarning, match="stiff.*'Radau'"):
         res = fws.simulate(
             VEH, Arc(0.1), g, **{**kw, "duration": 0.5},
-            actuator_time_constant=1e-5, method="DOP853",
+            actuator_time_constant=1e-5, method="DOP853", engine="numpy",
         )  # fmt: skip
     assert res.method == "DOP853" and res.status == "failed"
     assert "MAX_STEPS" in res.message and "Radau" in res.message

@@ -54,14 +54,22 @@ that channel held at the limit (or free), so that the right-hand side is
 smooth within every step (``switching=False`` clips with min/max inside the
 right-hand side instead, as the numpy engine does).
 
+With ``integrate_compiled(..., solution=[])`` every run's dense output is
+kept (:class:`CompiledSolution`), and :func:`compiled_peaks` finds the
+exact peaks of each run's continuous solution on it, as
+:func:`~fws_control.simulation.engine.exact_peaks` does for the numpy
+engine; with it kept the stop conditions are also checked at three points
+inside every step (as the numpy engine checks its margins), so that a loose
+tolerance cannot step across a singular state and back.
+
 Not supported here (the numpy engine remains the general path;
-``simulate(..., engine="compiled")`` raises for these):
+``simulate(..., engine="compiled")`` raises for these, and the default
+``engine="auto"`` runs them on the numpy engine):
 :class:`~fws_control.LateralController` baselines, an input delay, other
-solvers than DOP853, the dense solution for exact peaks, and any model
-other than the kinematic one. A stiff actuator (small time
-constant) is detected with Hairer's test (``stiff`` in the statistics) but
-still integrated explicitly: the explicit step is then limited by stability
-to about :math:`6\,T` (see ``docs/performance.md``).
+solvers than DOP853, and any model other than the kinematic one. A stiff
+actuator (small time constant) is detected with Hairer's test (``stiff``
+in the statistics) but still integrated explicitly: the explicit step is
+then limited by stability to about :math:`6\,T` (see ``docs/performance.md``).
 
 numba is an optional dependency (extra ``fast``). Without it the module
 still imports; :func:`integrate_compiled` raises :class:`ImportError`.
@@ -70,6 +78,7 @@ still imports; :func:`integrate_compiled` raises :class:`ImportError`.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -86,6 +95,7 @@ from ..paths import Arc, Clothoid, Path, PathChain, Straight
 from ..validation import check_positive
 from ..vehicle import Vehicle
 from .engine import (
+    PEAK_SIGNALS,
     SIGNALS,
     STATUS_END_OF_PATH,
     STATUS_FAILED,
@@ -106,6 +116,8 @@ __all__ = [
     "compiled_support",
     "integrate_compiled",
     "compiled_outputs",
+    "compiled_peaks",
+    "CompiledSolution",
     "shared_parameters",
     "closed_loop_rhs",
     "dop853_step",
@@ -139,7 +151,8 @@ _MESSAGES = {
     STATUS_SINGULAR_CURVATURE: "1 - curvature*e reached curvature_margin: the "
     "vehicle is at the path's centre of curvature and the projection is lost",
     STATUS_END_OF_PATH: "the projection point left the open path",
-    STATUS_FAILED: "the step size fell below 10 ulp of t (scipy's TOO_SMALL_STEP)",
+    STATUS_FAILED: "the ODE solver failed: the step size fell below 10 ulp of t "
+    "(scipy's TOO_SMALL_STEP)",
 }
 
 
@@ -161,7 +174,10 @@ def _jit(fn):
     # plain Python (importable, never called by integrate_compiled).
     if numba is None:  # pragma: no cover
         return fn
-    return numba.njit(cache=True, nogil=True)(fn)
+    # error_model="numpy": a division by zero gives inf or NaN as in numpy
+    # (and the solver then rejects the step or fails the run), instead of
+    # raising ZeroDivisionError out of the whole batch (e.g. V = 1e300).
+    return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
 
 
 # --------------------------------------------------------------------------
@@ -199,6 +215,10 @@ _NP = 8
 _NSIG = len(SIGNALS)
 _N_STOPS = 4
 _N_EVENTS = 8
+# Points of a step (fractions) where, with the dense output kept, the stop
+# conditions are checked too (engine._MARGIN_NODES without the step's end).
+_INNER_NODES = (0.25, 0.5, 0.75)
+_N_INNER = len(_INNER_NODES)
 #: Most clip switches per run (a guard against chattering).
 _MAX_SWITCHES = 100_000
 
@@ -325,8 +345,8 @@ def closed_loop_rhs(t, y, p, q, breaks, coefs, out):
 
 
 @_jit
-def _events(y, p, q, breaks, coefs, g):
-    """Event functions: 0-3 stop a run, 4-7 switch a clip's mode (at <= 0)."""
+def _stop_events(y, p, q, breaks, coefs, g):
+    """The stop events 0-3 of :func:`_events` (into ``g[:4]``)."""
     s, e = y[0], y[1]
     kappa = _curvature(s, q, breaks, coefs)
     if q[_Q_TAU] > 0.0:
@@ -343,6 +363,12 @@ def _events(y, p, q, breaks, coefs, g):
     else:
         g[2] = np.inf
         g[3] = np.inf
+
+
+@_jit
+def _events(y, p, q, breaks, coefs, g):
+    """Event functions: 0-3 stop a run, 4-7 switch a clip's mode (at <= 0)."""
+    _stop_events(y, p, q, breaks, coefs, g)
     if q[_Q_SWITCH] == 0.0:
         for j in range(_N_STOPS, _N_EVENTS):
             g[j] = np.inf
@@ -705,8 +731,23 @@ def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):
     >>> code, t_stop, bool(abs(out[1, -1]) < 0.1)
     (0, 10.0, True)
     """
+    r = _run_impl(
+        y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace, np.empty((0, 0)),
+        0, False,
+    )  # fmt: skip
+    return r[0], r[1], r[2], r[3], r[4], r[5], r[6]
+
+
+@_jit
+def _run_impl(
+    y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace, rec, start, keep
+):
+    # solve_run; with keep, rows start, start + 1, ... of rec (grown when
+    # full, returned) receive each accepted step's (t_old, h, y_old, F):
+    # its DOP853 dense output, the piece [t_old, next row's t_old or t_stop]
     m = y0.size
     T = t_eval.size
+    n_rec = start
     n_trace = trace.size
     K = np.empty((_NSE, m))
     F = np.empty((_NPOW, m))
@@ -716,6 +757,7 @@ def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):
     g_old = np.empty(_N_EVENTS)
     g_new = np.empty(_N_EVENTS)
     g_tmp = np.empty(_N_EVENTS)
+    g_inner = np.empty((_N_INNER, _N_EVENTS))
     t = t_eval[0]
     t_bound = t_eval[T - 1]
     y = y0.copy()
@@ -749,11 +791,11 @@ def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):
     if g_old[worst] <= 0.0:
         for i in range(m):
             out[i, 0] = y[i]
-        return min(worst, 2) + 1, t, 0, 0, nfev, 0, 0
+        return min(worst, 2) + 1, t, 0, 0, nfev, 0, 0, rec, n_rec
     if T == 1 or t_bound == t:
         for i in range(m):
             out[i, 0] = y[i]
-        return 0, t, 0, 0, nfev, 0, 0
+        return 0, t, 0, 0, nfev, 0, 0, rec, n_rec
 
     h_abs = _select_initial_step(
         t, y, t_bound, f, rtol, atol, p, q, breaks, coefs, work
@@ -768,7 +810,7 @@ def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):
         nfev += _NS * (n_rej + 1)
         rejected_total += n_rej
         if not ok:
-            return 4, t, steps, rejected_total, nfev, stiff, switches
+            return 4, t, steps, rejected_total, nfev, stiff, switches, rec, n_rec
         # Hairer's stiffness detection (dop853.f): |h lambda| from the last
         # stage and f(y_new), both at t + h
         num = 0.0
@@ -799,14 +841,48 @@ def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):
             trace[steps] = t
         steps += 1
         dense_ready = False
+        if keep:
+            # the dense output of every accepted step, for the exact peaks
+            # (a step cut at a switch or a stop keeps its interpolant)
+            _dense_coefficients(t_old, h, y_old, y, f, K, p, q, breaks, coefs, F, ytmp)
+            nfev += 3
+            dense_ready = True
+            if n_rec == rec.shape[0]:
+                grown = np.empty((max(2 * n_rec, 16), rec.shape[1]))
+                grown[:n_rec] = rec[:n_rec]
+                rec = grown
+            row = rec[n_rec]
+            row[0] = t_old
+            row[1] = h
+            for i in range(m):
+                row[2 + i] = y_old[i]
+                for k in range(_NPOW):
+                    row[2 + m + k * m + i] = F[k, i]
+            n_rec += 1
         # ---- solve_ivp: events (direction -1: g from >= 0 to <= 0)
         _events(y, p, q, breaks, coefs, g_new)
         code = 0
         t_hit = np.inf
         j_hit = -1
+        if keep:
+            # with the dense output kept (the runners), the stop conditions
+            # are also checked at three points inside the step, as the numpy
+            # engine checks its margins: a loose tolerance must not step
+            # across a singular state and back
+            for r in range(_N_INNER):
+                _dense_eval(t_old + _INNER_NODES[r] * h, t_old, t, y_old, F, ytmp)
+                _stop_events(ytmp, p, q, breaks, coefs, g_inner[r])
         for j in range(_N_EVENTS):
+            lo_b, hi_b = t_old, t
             if j < _N_STOPS:
                 hit = g_old[j] >= 0 and g_new[j] <= 0  # solve_ivp, direction -1
+                if keep and not hit and g_old[j] >= 0:
+                    for r in range(_N_INNER):
+                        if g_inner[r, j] <= 0:
+                            hit = True
+                            hi_b = t_old + _INNER_NODES[r] * h
+                            break
+                        lo_b = t_old + _INNER_NODES[r] * h
             else:
                 # a clip's mode is wrong at the step's end: it switched in the
                 # step (g from > 0), or it was ~0 on the wrong side already at
@@ -824,7 +900,7 @@ def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):
                     nfev += 3
                     dense_ready = True
                 root = _brentq(
-                    j, t_old, t, t_old, t, y_old, F, p, q, breaks, coefs, ytmp, g_tmp
+                    j, lo_b, hi_b, t_old, t, y_old, F, p, q, breaks, coefs, ytmp, g_tmp
                 )
             if root < t_hit:
                 t_hit = root
@@ -845,7 +921,7 @@ def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):
                 out[i, k_out] = ytmp[i]
             k_out += 1
         if code != 0:
-            return code, t_hit, steps, rejected_total, nfev, stiff, switches
+            return code, t_hit, steps, rejected_total, nfev, stiff, switches, rec, n_rec
         if j_hit >= _N_STOPS:
             # a clip switches: restart at the switch with the new mode (the
             # rest of the step, integrated in the old mode, is discarded)
@@ -867,9 +943,19 @@ def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):
                 p[_P_MODE + site] = 1.0 if v[site] > 0 else -1.0
             switches += 1
             if switches > _MAX_SWITCHES:
-                return 4, t, steps, rejected_total, nfev, stiff, switches
+                return 4, t, steps, rejected_total, nfev, stiff, switches, rec, n_rec
             if t >= t_bound:
-                return 0, t_bound, steps, rejected_total, nfev, stiff, switches
+                return (
+                    0,
+                    t_bound,
+                    steps,
+                    rejected_total,
+                    nfev,
+                    stiff,
+                    switches,
+                    rec,
+                    n_rec,
+                )
             closed_loop_rhs(t, y, p, q, breaks, coefs, f)
             h_abs = _select_initial_step(
                 t, y, t_bound, f, rtol, atol, p, q, breaks, coefs, work
@@ -878,18 +964,27 @@ def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):
             _events(y, p, q, breaks, coefs, g_old)
             continue
         if t == t_bound:
-            return 0, t, steps, rejected_total, nfev, stiff, switches
+            return 0, t, steps, rejected_total, nfev, stiff, switches, rec, n_rec
         for j in range(_N_EVENTS):
             g_old[j] = g_new[j]
 
 
 @_jit
 def _solve_batch(
-    Y0, P, q, breaks, coefs, t_eval, rtol, atol, out, codes, t_stop, stats
-):
+    Y0, P, q, breaks, coefs, t_eval, rtol, atol, out, codes, t_stop, stats, rec,
+    offsets, keep,
+):  # fmt: skip
+    # with keep: run i's dense pieces are rows offsets[i]:offsets[i + 1] of the
+    # returned record (rec, grown as needed)
     empty = np.empty(0)
+    offsets[0] = 0
     for i in range(Y0.shape[0]):
-        r = solve_run(Y0[i], P[i], q, breaks, coefs, t_eval, rtol, atol, out[i], empty)
+        r = _run_impl(
+            Y0[i], P[i], q, breaks, coefs, t_eval, rtol, atol, out[i], empty, rec,
+            offsets[i], keep,
+        )  # fmt: skip
+        rec = r[7]
+        offsets[i + 1] = r[8]
         codes[i] = r[0]
         t_stop[i] = r[1]
         stats[i, 0] = r[2]
@@ -901,6 +996,7 @@ def _solve_batch(
         for k in range(t_eval.size):
             if t_eval[k] > r[1]:
                 out[i, :, k] = np.nan
+    return rec
 
 
 @_jit
@@ -920,6 +1016,61 @@ def _curvature_rate(s, q, breaks, coefs):
 
 
 @_jit
+def _point_signals(s, e, th, df_s, dr_s, V, k1, k2, a, q, breaks, coefs, d_cg):
+    """The signals of one state with the operations of compute_outputs.
+
+    Returns ``(delta_f, delta_r, their rates, lateral_accel, v_y, yaw_rate,
+    ok)``; ``ok`` is False where ``|delta_f| >= pi/2`` (the rates, the
+    acceleration, ``v_y`` and the yaw rate are then NaN in a result).
+    ``df_s, dr_s``: the actuator states (unused without an actuator).
+    """
+    f = q[_Q_WHEELBASE]
+    mf, mr = q[_Q_MAX_F], q[_Q_MAX_R]
+    tau = q[_Q_TAU]
+    ff = q[_Q_FF] != 0.0
+    kappa = _curvature(s, q, breaks, coefs)
+    fb = -k1 * e - k2 * th
+    raw_f = fb
+    if ff:
+        raw_f = fb + math.atan(f * kappa)
+    raw_r = a * fb
+    cf = min(max(raw_f, -mf), mf)
+    cr = min(max(raw_r, -mr), mr)
+    if tau > 0.0:
+        df, dr = df_s, dr_s
+    else:
+        df, dr = cf, cr
+    s_dot = V * math.cos(th + dr) / (1.0 - kappa * e)
+    e_dot = V * math.sin(th + dr)
+    sin_fr = math.sin(df - dr)
+    cos_f = math.cos(df)
+    psi_dot = V * sin_fr / (f * cos_f)
+    th_dot = -kappa * s_dot + psi_dot
+    if tau > 0.0:
+        rf = min(max((cf - df) / tau, -q[_Q_RATE_F]), q[_Q_RATE_F])
+        rr = min(max((cr - dr) / tau, -q[_Q_RATE_R]), q[_Q_RATE_R])
+    else:
+        # steering_command_rate: chain rule, 0 where an angle is clipped
+        fb_rate = -k1 * e_dot - k2 * th_dot
+        rf = fb_rate
+        if ff:
+            k_rate = _curvature_rate(s, q, breaks, coefs) * s_dot
+            rf = fb_rate + f * k_rate / (1.0 + (f * kappa) ** 2)
+        rr = a * fb_rate
+        if abs(raw_f) > mf:
+            rf = 0.0
+        if abs(raw_r) > mr:
+            rr = 0.0
+    if not abs(df) < 0.5 * math.pi:
+        return df, dr, rf, rr, np.nan, np.nan, psi_dot, False
+    psi_ddot = (V / f) * (math.cos(dr) / cos_f**2 * rf - math.cos(df - dr) / cos_f * rr)
+    lat = V * (psi_dot + rr) * math.cos(dr) + d_cg * psi_ddot
+    # G moves with R's velocity V (cos dr, sin dr) plus r x (l_r, 0)
+    vy = V * math.sin(dr) + d_cg * psi_dot
+    return df, dr, rf, rr, lat, vy, psi_dot, True
+
+
+@_jit
 def _signals_batch(states, P, q, breaks, coefs, d_cg, pose, sig):
     # sig (n, 15, T) in the order of engine.SIGNALS. Rows 3-14 -- s, e,
     # theta, delta_f, delta_r, their rates, the lateral acceleration of
@@ -930,10 +1081,7 @@ def _signals_batch(states, P, q, breaks, coefs, d_cg, pose, sig):
     # pose = (kind, x0, y0, psi0, kappa). psi = theta + psi0 + kappa * s is
     # continuous in time by construction (no unwrapping needed).
     n, m, T = states.shape
-    f = q[_Q_WHEELBASE]
-    mf, mr = q[_Q_MAX_F], q[_Q_MAX_R]
     tau = q[_Q_TAU]
-    ff = q[_Q_FF] != 0.0
     kind = int(pose[0])
     x0, y0, psi0, kp = pose[1], pose[2], pose[3], pose[4]
     c0, s0 = math.cos(psi0), math.sin(psi0)
@@ -949,56 +1097,23 @@ def _signals_batch(states, P, q, breaks, coefs, d_cg, pose, sig):
                 continue
             e = states[i, 1, k]
             th = states[i, 2, k]
-            kappa = _curvature(s, q, breaks, coefs)
-            fb = -k1 * e - k2 * th
-            raw_f = fb
-            fk_atan = 0.0
-            if ff:
-                fk_atan = math.atan(f * kappa)
-                raw_f = fb + fk_atan
-            raw_r = a * fb
-            cf = min(max(raw_f, -mf), mf)
-            cr = min(max(raw_r, -mr), mr)
             if tau > 0.0:
-                df = states[i, 3, k]
-                dr = states[i, 4, k]
+                df_s, dr_s = states[i, 3, k], states[i, 4, k]
             else:
-                df, dr = cf, cr
-            s_dot = V * math.cos(th + dr) / (1.0 - kappa * e)
-            e_dot = V * math.sin(th + dr)
-            sin_fr = math.sin(df - dr)
-            cos_f = math.cos(df)
-            psi_dot = V * sin_fr / (f * cos_f)
-            th_dot = -kappa * s_dot + psi_dot
-            if tau > 0.0:
-                rf = min(max((cf - df) / tau, -q[_Q_RATE_F]), q[_Q_RATE_F])
-                rr = min(max((cr - dr) / tau, -q[_Q_RATE_R]), q[_Q_RATE_R])
-            else:
-                # steering_command_rate: chain rule, 0 where an angle is clipped
-                fb_rate = -k1 * e_dot - k2 * th_dot
-                rf = fb_rate
-                if ff:
-                    k_rate = _curvature_rate(s, q, breaks, coefs) * s_dot
-                    rf = fb_rate + f * k_rate / (1.0 + (f * kappa) ** 2)
-                rr = a * fb_rate
-                if abs(raw_f) > mf:
-                    rf = 0.0
-                if abs(raw_r) > mr:
-                    rr = 0.0
+                df_s, dr_s = 0.0, 0.0
+            df, dr, rf, rr, lat, vy, psi_dot, ok = _point_signals(
+                s, e, th, df_s, dr_s, V, k1, k2, a, q, breaks, coefs, d_cg
+            )
             sig[i, 3, k] = s
             sig[i, 4, k] = e
             sig[i, 5, k] = th
             sig[i, 6, k] = df
             sig[i, 7, k] = dr
-            if abs(df) < 0.5 * math.pi:
-                psi_ddot = (V / f) * (
-                    math.cos(dr) / cos_f**2 * rf - math.cos(df - dr) / cos_f * rr
-                )
+            if ok:
                 sig[i, 8, k] = rf
                 sig[i, 9, k] = rr
-                sig[i, 10, k] = V * (psi_dot + rr) * math.cos(dr) + d_cg * psi_ddot
-                # G moves with R's velocity V (cos dr, sin dr) plus r x (l_r, 0)
-                sig[i, 11, k] = V * math.sin(dr) + d_cg * psi_dot
+                sig[i, 10, k] = lat
+                sig[i, 11, k] = vy
                 sig[i, 12, k] = psi_dot
                 sig[i, 13, k] = 0.0
                 sig[i, 14, k] = 0.0
@@ -1027,6 +1142,340 @@ def _signals_batch(states, P, q, breaks, coefs, d_cg, pose, sig):
             sig[i, 0, k] = px - e * sh
             sig[i, 1, k] = py + e * ch
             sig[i, 2, k] = th + h
+
+
+# --------------------------------------------------------------------------
+# Exact peaks on each run's own dense output (engine.exact_peaks, compiled)
+
+# The numpy engine's search (engine.exact_peaks): 8 nodes per solver step,
+# the 3 largest local maxima of the nodes and the largest output sample
+# refined. The refinement here is Brent's bounded search (scipy's
+# fminbound: golden section with parabolic steps) to a time tolerance of
+# sqrt(eps) max(|t|, 1 s), converging in a fraction of the golden-section
+# iterations; at a smooth maximum a time error dt moves the value by
+# f'' dt^2 / 2: about (dt / tau)^2 of it for a signal of time scale tau,
+# below 1e-12 for tau >= 0.02 s and t <= 100 s.
+_PEAK_NODES = 8
+_PEAK_CAND = 3
+_PEAK_MAXFUN = 200
+_N_PROBES = 4
+_N_PEAK = 6
+# _peak_values computes these, in this order
+assert PEAK_SIGNALS == (
+    "e", "delta_f", "delta_r", "delta_f_rate", "delta_r_rate", "lateral_accel"
+)  # fmt: skip
+_PEAK_COLS = tuple(SIGNALS.index(name) for name in PEAK_SIGNALS)
+
+
+@_jit
+def _state_at(tt, rec, n_pc, y0, m, ytmp):
+    """The run's state at `tt` from its dense output (`rec`: its pieces)."""
+    if n_pc == 0:
+        for i in range(m):
+            ytmp[i] = y0[i]
+    else:
+        # the piece that starts at or before tt (as engine._History.states_at)
+        lo, hi = 0, n_pc
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            if rec[mid, 0] <= tt:
+                lo = mid
+            else:
+                hi = mid
+        row = rec[lo]
+        x = (tt - row[0]) / row[1]
+        for i in range(m):
+            v = 0.0
+            for k in range(_NPOW):
+                v += row[2 + m + (_NPOW - 1 - k) * m + i]
+                if k % 2 == 0:
+                    v *= x
+                else:
+                    v *= 1 - x
+            ytmp[i] = v + row[2 + i]
+
+
+@_jit
+def _peak_values(tt, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, out):
+    """|signal| of the six peak signals at `tt` on the run's dense output."""
+    _state_at(tt, rec, n_pc, y0, m, ytmp)
+    df_s, dr_s = 0.0, 0.0
+    if m == 5:
+        df_s, dr_s = ytmp[3], ytmp[4]
+    df, dr, rf, rr, lat, _, _, ok = _point_signals(
+        ytmp[0], ytmp[1], ytmp[2], df_s, dr_s, V, k1, k2, a, q, br, co, d_cg
+    )
+    out[0] = abs(ytmp[1])
+    out[1] = abs(df)
+    out[2] = abs(dr)
+    if ok:
+        out[3] = abs(rf)
+        out[4] = abs(rr)
+        out[5] = abs(lat)
+    else:
+        out[3] = np.nan
+        out[4] = np.nan
+        out[5] = np.nan
+    # a signal not finite where the state is (it diverges there): inf
+    for j in range(_N_PEAK):
+        if not np.isfinite(out[j]):
+            out[j] = np.inf
+
+
+@_jit
+def _peak_value(tt, j, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals):
+    """|signal j| at `tt`: :func:`_peak_values` computing only what j needs."""
+    _state_at(tt, rec, n_pc, y0, m, ytmp)
+    if j == 0:
+        v = abs(ytmp[1])
+    elif j <= 2 and m == 5:
+        v = abs(ytmp[2 + j])  # the actuator's angles are states
+    elif j <= 2:
+        # the clipped commands, with the operations of _point_signals
+        kappa = _curvature(ytmp[0], q, br, co)
+        fb = -k1 * ytmp[1] - k2 * ytmp[2]
+        if j == 1:
+            raw = fb
+            if q[_Q_FF] != 0.0:
+                raw = fb + math.atan(q[_Q_WHEELBASE] * kappa)
+            v = abs(min(max(raw, -q[_Q_MAX_F]), q[_Q_MAX_F]))
+        else:
+            v = abs(min(max(a * fb, -q[_Q_MAX_R]), q[_Q_MAX_R]))
+    else:
+        _peak_values(tt, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals)
+        return vals[j]
+    return v if math.isfinite(v) else np.inf
+
+
+@_jit
+def _refine_peak(lo, hi, j, best, rec, n_pc, y0, m, V, k1, k2, a, q, br, co,
+                 d_cg, ytmp, vals):  # fmt: skip
+    """Brent's bounded search for the largest |signal j| in [lo, hi].
+
+    scipy.optimize.fminbound's algorithm on -|signal|; every evaluation
+    updates ``best = (value, time)`` (a 2-vector), as engine.exact_peaks
+    keeps the best of all its evaluations.
+    """
+    sqrt_eps = math.sqrt(2.2e-16)
+    golden = 0.5 * (3.0 - math.sqrt(5.0))
+    a_, b_ = lo, hi
+    fulc = a_ + golden * (b_ - a_)
+    nfc, xf = fulc, fulc
+    rat = 0.0
+    e = 0.0
+    x = xf
+    fx = -_peak_value(x, j, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals)
+    if -fx > best[0]:
+        best[0], best[1] = -fx, x
+    num = 1
+    ffulc = fx
+    fnfc = fx
+    xm = 0.5 * (a_ + b_)
+    tol1 = sqrt_eps * max(abs(xf), 1.0)
+    tol2 = 2.0 * tol1
+    while abs(xf - xm) > (tol2 - 0.5 * (b_ - a_)):
+        golden_step = True
+        if abs(e) > tol1:
+            golden_step = False
+            r = (xf - nfc) * (fx - ffulc)
+            qq = (xf - fulc) * (fx - fnfc)
+            pp = (xf - fulc) * qq - (xf - nfc) * r
+            qq = 2.0 * (qq - r)
+            if qq > 0.0:
+                pp = -pp
+            qq = abs(qq)
+            r = e
+            e = rat
+            if (
+                (abs(pp) < abs(0.5 * qq * r))
+                and (pp > qq * (a_ - xf))
+                and (pp < qq * (b_ - xf))
+            ):
+                rat = pp / qq
+                x = xf + rat
+                if ((x - a_) < tol2) or ((b_ - x) < tol2):
+                    si = 1.0 if xm - xf >= 0.0 else -1.0
+                    rat = tol1 * si
+            else:
+                golden_step = True
+        if golden_step:
+            if xf >= xm:
+                e = a_ - xf
+            else:
+                e = b_ - xf
+            rat = golden * e
+        si = 1.0 if rat >= 0.0 else -1.0
+        x = xf + si * max(abs(rat), tol1)
+        fu = -_peak_value(
+            x, j, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals
+        )
+        if -fu > best[0]:
+            best[0], best[1] = -fu, x
+        num += 1
+        if fu <= fx:
+            if x >= xf:
+                a_ = xf
+            else:
+                b_ = xf
+            fulc, ffulc = nfc, fnfc
+            nfc, fnfc = xf, fx
+            xf, fx = x, fu
+        else:
+            if x < xf:
+                a_ = x
+            else:
+                b_ = x
+            if (fu <= fnfc) or (nfc == xf):
+                fulc, ffulc = nfc, fnfc
+                nfc, fnfc = x, fu
+            elif (fu <= ffulc) or (fulc == xf) or (fulc == nfc):
+                fulc, ffulc = x, fu
+        xm = 0.5 * (a_ + b_)
+        tol1 = sqrt_eps * max(abs(xf), 1.0)
+        tol2 = 2.0 * tol1
+        if num >= _PEAK_MAXFUN or not math.isfinite(fx):
+            break
+
+
+@_jit
+def _falls_from_end(end, other, f_end, f_other, j, best, rec, n_pc, y0, m, V,
+                    k1, k2, a, q, br, co, d_cg, ytmp, vals):  # fmt: skip
+    """True if |signal j| falls monotonically from `end` towards `other`.
+
+    Checked at _N_PROBES interior points (5x finer than the nodes; updating
+    `best`). A bracket whose largest value is at its end and that falls at
+    every probe has its maximum at that end: a rise again between two
+    probes would be a feature of the solution 40x shorter than its solver
+    step, which the step's error control does not allow. Saves the search
+    (about 30 evaluations) converging to the end.
+    """
+    prev = f_end
+    for r in range(1, _N_PROBES + 1):
+        x = end + (r / (_N_PROBES + 1)) * (other - end)
+        v = _peak_value(x, j, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg,
+                        ytmp, vals)  # fmt: skip
+        if v > best[0]:
+            best[0], best[1] = v, x
+        if not v <= prev:
+            return False
+        prev = v
+    return f_other <= prev
+
+
+@_jit
+def _peaks_batch(rec, offsets, Y0, P, q, br, co, d_cg, t_eval, signals, t_stop,
+                 values, times):  # fmt: skip
+    n, m = Y0.shape
+    T = t_eval.size
+    ytmp = np.empty(m)
+    vals = np.empty(_N_PEAK)
+    best = np.empty(2)
+    for i in range(n):
+        V, k1, k2, a = P[i, _P_SPEED], P[i, _P_K1], P[i, _P_K2], P[i, _P_RATIO]
+        pc = rec[offsets[i] : offsets[i + 1]]
+        n_pc = pc.shape[0]
+        ts = t_stop[i]
+        # nodes: each piece split in _PEAK_NODES, the ones before the stop,
+        # then the stop (engine.exact_peaks)
+        times_n = np.empty(n_pc * _PEAK_NODES + 1)
+        K = 0
+        for k in range(n_pc):
+            b0 = pc[k, 0]
+            b1 = pc[k + 1, 0] if k + 1 < n_pc else ts
+            for jj in range(_PEAK_NODES):
+                tt = b0 + (jj / _PEAK_NODES) * (b1 - b0)
+                if tt < ts:
+                    times_n[K] = tt
+                    K += 1
+        times_n[K] = ts
+        K += 1
+        node_v = np.empty((K, _N_PEAK))
+        for k in range(K):
+            _peak_values(times_n[k], pc, n_pc, Y0[i], m, V, k1, k2, a, q, br, co,
+                         d_cg, ytmp, vals)  # fmt: skip
+            for j in range(_N_PEAK):
+                node_v[k, j] = vals[j]
+        for j in range(_N_PEAK):
+            # the best node (first of equals, as np.argmax) ...
+            kb = 0
+            for k in range(1, K):
+                if node_v[k, j] > node_v[kb, j]:
+                    kb = k
+            best[0], best[1] = node_v[kb, j], times_n[kb]
+            # ... or the largest output sample (inf where the signal is not
+            # finite but the state is; after the stop no sample)
+            row = _PEAK_COLS[j]
+            ks = -1
+            sv = -np.inf
+            for k in range(T):
+                if not np.isfinite(signals[i, 3, k]):
+                    continue
+                v = abs(signals[i, row, k])
+                if not np.isfinite(v):
+                    v = np.inf
+                if ks < 0 or v > sv:
+                    ks, sv = k, v
+            if sv > best[0]:
+                best[0], best[1] = sv, t_eval[ks]
+            # the largest local maxima of the nodes, refined between their
+            # neighbours (ties: the earlier node, as a stable sort)
+            cand = np.full(_PEAK_CAND, -1)
+            cval = np.full(_PEAK_CAND, -np.inf)
+            for k in range(K):
+                v = node_v[k, j]
+                if k > 0 and node_v[k - 1, j] > v:
+                    continue
+                if k + 1 < K and node_v[k + 1, j] > v:
+                    continue
+                if not v > cval[_PEAK_CAND - 1]:
+                    continue
+                c = _PEAK_CAND - 1
+                while c > 0 and v > cval[c - 1]:
+                    cand[c], cval[c] = cand[c - 1], cval[c - 1]
+                    c -= 1
+                cand[c], cval[c] = k, v
+            for c in range(_PEAK_CAND):
+                k = cand[c]
+                if k < 0 or not np.isfinite(cval[c]):
+                    continue
+                k_lo, k_hi = max(k - 1, 0), min(k + 1, K - 1)
+                lo, hi = times_n[k_lo], times_n[k_hi]
+                if not hi > lo:
+                    continue
+                # a local maximum at an end of the run: the end itself, unless
+                # the signal rises again inside the bracket
+                if k == 0 and _falls_from_end(
+                    lo, hi, node_v[0, j], node_v[k_hi, j], j, best, pc, n_pc,
+                    Y0[i], m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals,
+                ):  # fmt: skip
+                    continue
+                if k == K - 1 and _falls_from_end(
+                    hi, lo, node_v[k, j], node_v[k_lo, j], j, best, pc, n_pc,
+                    Y0[i], m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals,
+                ):  # fmt: skip
+                    continue
+                _refine_peak(lo, hi, j, best, pc, n_pc, Y0[i], m, V, k1, k2,
+                             a, q, br, co, d_cg, ytmp, vals)  # fmt: skip
+            if ks >= 0 and np.isfinite(sv):
+                lo = t_eval[max(ks - 1, 0)]
+                hi = max(min(t_eval[min(ks + 1, T - 1)], ts), lo)
+                if not hi > lo:
+                    pass
+                elif t_eval[ks] == lo and _falls_from_end(
+                    lo, hi, sv, -np.inf, j, best, pc, n_pc, Y0[i], m, V, k1, k2,
+                    a, q, br, co, d_cg, ytmp, vals,
+                ):  # fmt: skip
+                    pass
+                elif t_eval[ks] == hi and _falls_from_end(
+                    hi, lo, sv, -np.inf, j, best, pc, n_pc, Y0[i], m, V, k1, k2,
+                    a, q, br, co, d_cg, ytmp, vals,
+                ):  # fmt: skip
+                    pass
+                else:
+                    _refine_peak(lo, hi, j, best, pc, n_pc, Y0[i], m, V, k1, k2,
+                                 a, q, br, co, d_cg, ytmp, vals)  # fmt: skip
+            values[i, j] = best[0]
+            times[i, j] = best[1]
 
 
 # --------------------------------------------------------------------------
@@ -1343,6 +1792,7 @@ def integrate_compiled(
     curvature_margin: float = DEFAULT_MARGIN,
     switching: bool = True,
     out: np.ndarray | None = None,
+    solution: list | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate ``n`` runs, each with its own DOP853 steps and events.
 
@@ -1385,6 +1835,12 @@ def integrate_compiled(
         Preallocated ``(n, m, T)`` float array for the states (``m = 3``, or
         5 with an actuator), e.g. a slice of a larger result or a
         memory-mapped file; NaN after each run's stop.
+    solution : list, optional
+        If given, a :class:`CompiledSolution` (each run's dense output, for
+        :func:`compiled_peaks`) is appended to it, as
+        ``engine.integrate(..., solution=[])`` does. Keeping it costs the
+        dense output of the steps that hold no output time and about
+        ``8 (m + 1)`` floats per step.
 
     Returns
     -------
@@ -1470,10 +1926,20 @@ def integrate_compiled(
     codes = np.empty(n, dtype=np.int64)
     t_stop = np.empty(n)
     stats = np.empty((n, len(STAT_FIELDS)), dtype=np.int64)
-    _solve_batch(
+    keep = solution is not None
+    offsets = np.empty(n + 1, dtype=np.int64)
+    # (room for ~64 steps per run; the kernel doubles it when needed)
+    rec = np.empty((64 * n if keep else 0, 2 + (_NPOW + 1) * m))
+    rec = _solve_batch(
         Y0, P, q, table.breaks, table.coefs, t_eval, rtol, atol, out, codes, t_stop,
-        stats,
+        stats, rec, offsets, keep,
     )  # fmt: skip
+    if keep:
+        solution.append(
+            CompiledSolution(
+                records=rec[: offsets[-1]], offsets=offsets, initial_state=Y0
+            )  # fmt: skip
+        )
     status = np.array([STATUS_CODES[c] for c in codes], dtype=object)
     message = np.array(
         [
@@ -1605,3 +2071,141 @@ def compiled_outputs(
     shift = 2 * math.pi * np.round((psi0 - out[:, 2, 0]) / (2 * math.pi))
     out[:, 2] += np.nan_to_num(shift)[:, None]
     return out
+
+
+@dataclass(frozen=True)
+class CompiledSolution:
+    """Each run's continuous solution from :func:`integrate_compiled`.
+
+    Attributes
+    ----------
+    records : ndarray
+        One row per accepted step (or step cut at a switch or a stop):
+        ``t_old, h``, the state at ``t_old`` (``m`` values) and the ``7 m``
+        coefficients of DOP853's dense output (scipy's ``F``, row-major);
+        the row holds the solution from its ``t_old`` to the next row's
+        ``t_old`` (the run's ``t_stop`` for its last row).
+    offsets : ndarray
+        Run ``i`` owns rows ``offsets[i]:offsets[i + 1]``, shape ``(n + 1,)``.
+    initial_state : ndarray
+        The runs' initial states, shape ``(n, m)``.
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> from fws_control.simulation.compiled import integrate_compiled
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> sol = []
+    >>> _ = integrate_compiled(
+    ...     veh, fws.Straight(), fws.SteeringGains(0.1, 0.5, 0.0),
+    ...     speed=np.array([5.0]), feedforward=False,
+    ...     path_state=np.array([[0.0, 1.0, 0.0]]),
+    ...     t_eval=np.linspace(0.0, 1.0, 11), time_constant=None, solution=sol)
+    >>> sol[0].records.shape[1], sol[0].offsets.tolist() == [0, len(sol[0].records)]
+    (26, True)
+    """
+
+    records: np.ndarray
+    offsets: np.ndarray
+    initial_state: np.ndarray
+
+
+def compiled_peaks(
+    vehicle: Vehicle,
+    path: Path | CurvatureTable,
+    gains: SteeringGains,
+    *,
+    speed: np.ndarray,
+    feedforward: bool,
+    time_constant: float | None,
+    solution: CompiledSolution,
+    t_eval: np.ndarray,
+    signals: np.ndarray,
+    t_stop: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    r"""Peaks ``max |signal|`` of each run's continuous solution (compiled).
+
+    The compiled counterpart of
+    :func:`~fws_control.simulation.engine.exact_peaks`, with the same
+    definition: for each signal of
+    :data:`~fws_control.simulation.engine.PEAK_SIGNALS` the largest
+    absolute value over ``[t0, t_stop]`` of the run, found on the run's own
+    DOP853 dense output (its :class:`CompiledSolution`). The signals are
+    first evaluated at 8 nodes per step and at the stop; the 3 largest
+    local maxima of the nodes (between their neighbours) and the largest
+    output sample (between its neighbours) are then refined by Brent's
+    bounded search (scipy's ``fminbound`` algorithm, tolerance
+    :math:`\sqrt{\epsilon}\max(|t|, 1\,\mathrm{s})`), keeping the best of
+    all evaluations. A signal that is not finite where the state is has the
+    peak ``inf`` there. The peaks do not depend on the output grid.
+
+    Parameters
+    ----------
+    vehicle, path, gains, speed, feedforward, time_constant
+        As given to :func:`integrate_compiled` (`path` may be its table).
+    solution : CompiledSolution
+        From ``integrate_compiled(..., solution=[])``.
+    t_eval : ndarray
+        Its output times.
+    signals : ndarray
+        :func:`compiled_outputs` of its states, ``(n, len(SIGNALS), T)``.
+    t_stop : ndarray
+        Per run end time, from :func:`integrate_compiled`.
+
+    Returns
+    -------
+    values, times : ndarray
+        Shape ``(n, len(PEAK_SIGNALS))``: the peak of ``|signal|`` and the
+        time at which it occurs.
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> from fws_control.simulation.compiled import (
+    ...     compiled_outputs, compiled_peaks, integrate_compiled)
+    >>> from fws_control.simulation.engine import PEAK_SIGNALS
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> g = fws.SteeringGains(0.1, 0.5, 0.0)
+    >>> kw = dict(speed=np.array([5.0]), feedforward=False, time_constant=None)
+    >>> t, sol = np.linspace(0.0, 10.0, 11), []       # a coarse grid: 1 s
+    >>> states, _, _, t_stop, _ = integrate_compiled(
+    ...     veh, fws.Straight(), g, path_state=np.array([[0.0, 1.0, 0.0]]),
+    ...     t_eval=t, solution=sol, **kw)
+    >>> sig = compiled_outputs(veh, fws.Straight(), g, states=states,
+    ...                        initial_heading=np.zeros(1), **kw)
+    >>> val, when = compiled_peaks(veh, fws.Straight(), g, solution=sol[0],
+    ...                            t_eval=t, signals=sig, t_stop=t_stop, **kw)
+    >>> j = PEAK_SIGNALS.index("delta_f_rate")
+    >>> bool(0.0 < when[0, j] < 1.0)      # the rate peaks between samples
+    True
+    """
+    if numba is None:
+        raise ImportError("compiled_peaks needs numba: pip install fws-control[fast]")
+    table = path if isinstance(path, CurvatureTable) else curvature_table(path)
+    q = shared_parameters(
+        vehicle, table, feedforward=feedforward, time_constant=time_constant
+    )
+    speed = np.ascontiguousarray(speed, dtype=float).ravel()
+    n = speed.size
+    P = _run_parameters(gains, speed)
+    Y0 = np.ascontiguousarray(solution.initial_state, dtype=float)
+    m = 3 if time_constant is None else 5
+    if Y0.shape != (n, m) or solution.offsets.shape != (n + 1,):
+        raise ValueError(
+            f"solution must hold {n} runs of {m} states, got initial states of "
+            f"shape {Y0.shape}"
+        )
+    t_eval = np.ascontiguousarray(t_eval, dtype=float)
+    signals = np.asarray(signals, dtype=float)
+    if signals.shape != (n, _NSIG, t_eval.size):
+        raise ValueError(
+            f"signals must have shape {(n, _NSIG, t_eval.size)}, got {signals.shape}"
+        )
+    values = np.empty((n, _N_PEAK))
+    times = np.empty((n, _N_PEAK))
+    _peaks_batch(
+        np.ascontiguousarray(solution.records), solution.offsets, Y0, P, q,
+        table.breaks, table.coefs, float(vehicle.rear_to_cg), t_eval, signals,
+        np.ascontiguousarray(t_stop, dtype=float), values, times,
+    )  # fmt: skip
+    return values, times

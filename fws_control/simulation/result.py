@@ -106,12 +106,13 @@ class Peak:
 class Peaks:
     r"""Peaks ``max |signal|`` of a result's runs, one :class:`Peak` per signal.
 
-    With ``exact=True`` (every result of the runners' numpy engine) they are
-    the maxima of the continuous solution over each run's integrated
+    With ``exact=True`` (every result of the runners, either engine) they
+    are the maxima of the continuous solution over each run's integrated
     interval ``[0, t_stop]``, located on the solver's dense output (see
-    :func:`~fws_control.simulation.engine.exact_peaks`): they do not depend
-    on the output grid. ``exact=False`` (a result built from samples only,
-    or by ``engine="compiled"``) marks the maxima of the output samples. A
+    :func:`~fws_control.simulation.engine.exact_peaks` and
+    :func:`~fws_control.simulation.compiled.compiled_peaks`): they do not
+    depend on the output grid. ``exact=False`` (a result built from samples
+    only) marks the maxima of the output samples. A
     rate or the lateral acceleration of a run stopped at a singular state
     diverges there: its exact peak is ``inf``.
 
@@ -256,8 +257,7 @@ class SimulationResult:
         when the result keeps both.
     peaks_exact : bool, optional
         Whether `run_peak` holds the peaks of the continuous solution
-        (default) or of the output samples (``engine="compiled"`` with
-        signals dropped: computed before dropping them).
+        (default, every result of the runners) or of the output samples.
 
     Attributes
     ----------
@@ -583,8 +583,8 @@ class SimulationResult:
         """Peaks ``max |signal|`` per run, with their times (:class:`Peaks`).
 
         Exact maxima of the continuous solution for every result of the
-        runners' numpy engine; a result built without them (``run_peak=None``,
-        e.g. ``engine="compiled"``) gives the maxima of its samples, marked
+        runners (either engine); a result built without them
+        (``run_peak=None``) gives the maxima of its samples, marked
         ``exact=False``.
         """
         if self.run_peak is not None:

@@ -15,6 +15,13 @@ its samples after the stop are NaN. Large sweeps are split into chunks of
 ``distributed``) the chunks are submitted to the cluster; otherwise they run
 one after the other here. A tqdm progress bar over the chunks is shown on
 interactive terminals.
+
+That is the numpy engine. By default (``engine="auto"``) the runners use
+the compiled per-run engine of :mod:`~fws_control.simulation.compiled`
+instead wherever numba is installed and it covers the case (the paper's
+law on the kinematic model, no delay, DOP853): each run then has its own
+steps, error norm and stop, and its exact peaks come from its own dense
+output.
 """
 
 from __future__ import annotations
@@ -195,11 +202,11 @@ def _run_isolated(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts
 
 
 # Engines of simulate_batch (documented in its docstring).
-_ENGINES = ("numpy", "compiled")
+_ENGINES = ("auto", "numpy", "compiled")
 
 
-def _check_compiled(path, gains, *, delay, method, model, feedforward) -> None:
-    """Raise ValueError if ``engine="compiled"`` cannot run this case."""
+def _compiled_reason(path, gains, *, delay, method, model, feedforward):
+    """Why ``engine="compiled"`` cannot run this case, or None if it can."""
     # imported here: numba's import is paid only by those who use it
     from .compiled import compiled_support
 
@@ -208,6 +215,14 @@ def _check_compiled(path, gains, *, delay, method, model, feedforward) -> None:
         reason = f"only model='kinematic' is compiled, got model={model!r}"
     if reason is None and feedforward == "dynamic":
         reason = "feedforward='dynamic' is not compiled"
+    return reason
+
+
+def _check_compiled(path, gains, *, delay, method, model, feedforward) -> None:
+    """Raise ValueError if ``engine="compiled"`` cannot run this case."""
+    reason = _compiled_reason(
+        path, gains, delay=delay, method=method, model=model, feedforward=feedforward
+    )
     if reason is not None:
         raise ValueError(
             f"engine='compiled' cannot run this simulation: {reason}; use "
@@ -215,28 +230,68 @@ def _check_compiled(path, gains, *, delay, method, model, feedforward) -> None:
         )
 
 
-def _run_compiled(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl):
-    """:func:`_run_chunk` on the compiled engine (each run alone, no peaks).
+def _choose_engine(path, gains, *, delay, method, model, feedforward):
+    """The engine ``engine="auto"`` runs, and the compiled engine's table.
 
-    Same arguments and results (NaN peaks: the compiled engine keeps no
-    dense solution); module-level so that Dask can pickle it. A run's
-    solver, steps and stop are its own, so a failure needs no isolation.
+    Returns ``("compiled", table)`` where the compiled engine can run the
+    case, else ``("numpy", None)``. `method` is already resolved
+    (``"auto"`` became DOP853, or Radau or LSODA for an actuator: then
+    numpy, the compiled engine has DOP853 only). A path whose curvature
+    table misses its tolerance goes to numpy too.
     """
-    from .compiled import compiled_outputs, curvature_table, integrate_compiled
+    try:
+        import numba  # noqa: F401  (the optional extra "fast")
+    except ImportError:
+        return "numpy", None
+    if _compiled_reason(
+        path, gains, delay=delay, method=method, model=model, feedforward=feedforward
+    ):
+        return "numpy", None
+    from .compiled import curvature_table
+
+    try:
+        return "compiled", curvature_table(path)
+    except ValueError:
+        return "numpy", None
+
+
+def _run_compiled(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl):
+    """:func:`_run_chunk` on the compiled engine (each run alone).
+
+    Same arguments and results, the peaks those of each run's own dense
+    output (:func:`~fws_control.simulation.compiled.compiled_peaks`);
+    module-level so that Dask can pickle it. A run's solver, steps and stop
+    are its own, so a failure needs no isolation.
+    """
+    from .compiled import (
+        compiled_outputs,
+        compiled_peaks,
+        curvature_table,
+        integrate_compiled,
+    )
 
     g = SteeringGains(k1, k2, a)
-    table = curvature_table(path)  # once for the integration and the outputs
+    # once per call (simulate_batch builds it), for the integration, the
+    # outputs and the peaks
+    table = opts.get("curvature_table")
+    if table is None:
+        table = curvature_table(path)
+    # each distinct initial pose projected once (a sweep often shares one);
+    # distinct by bit pattern, so the numbers are those of every run's own
+    rows = np.ascontiguousarray(x0[:, :3]).view(np.dtype((np.void, 24))).ravel()
+    _, first, inverse = np.unique(rows, return_index=True, return_inverse=True)
     states, status, message, t_stop, _ = integrate_compiled(
         vehicle,
         table,
         g,
         speed=speed,
         feedforward=feedforward,
-        path_state=initial_path_state(path, x0[:, :3]),
+        path_state=initial_path_state(path, x0[first, :3])[inverse.ravel()],
         t_eval=t,
         time_constant=tau,
         rtol=opts["rtol"],
         atol=opts["atol"],
+        solution=(solution := []),
     )
     signals = compiled_outputs(
         vehicle,
@@ -249,8 +304,19 @@ def _run_compiled(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts
         initial_heading=x0[:, 2],
         table=table,
     )
-    nan = np.full((speed.size, len(PEAK_SIGNALS)), np.nan)
-    return signals, status, message, t_stop, nan, nan.copy()
+    peaks, peak_times = compiled_peaks(
+        vehicle,
+        table,
+        g,
+        speed=speed,
+        feedforward=feedforward,
+        time_constant=tau,
+        solution=solution[0],
+        t_eval=t,
+        signals=signals,
+        t_stop=t_stop,
+    )
+    return signals, status, message, t_stop, peaks, peak_times
 
 
 #: The choice of ``signals="metrics"``: no time series, only per-run values.
@@ -578,7 +644,7 @@ def simulate(
     atol: float = 1e-12,
     model: str = "kinematic",
     tyre: str = "linear",
-    engine: str = "numpy",
+    engine: str = "auto",
 ) -> SimulationResult:
     r"""Simulate the closed loop (one run) with the fast path-frame engine.
 
@@ -669,22 +735,30 @@ def simulate(
     tyre : {"linear", "magic"}, optional
         Tyre model of ``model="dynamic"``: linear (default) or the
         saturating simplified magic formula (needs ``vehicle.friction``).
-    engine : {"numpy", "compiled"}, optional
-        ``"numpy"`` (default): the engine described above, for every case.
+    engine : {"auto", "numpy", "compiled"}, optional
         ``"compiled"``: the numba port of DOP853 of
         :mod:`fws_control.simulation.compiled` (extra ``fast``), each run
         with its own steps and stop, at compiled speed. It runs the paper's
         law (:class:`~fws_control.SteeringGains`) on the kinematic model
         without delay, with ``method="DOP853"`` or ``"auto"`` (which then
         means DOP853, even for a stiff actuator) and `feedforward` True or
-        False; any other case raises :class:`ValueError` (no fallback).
-        Its results agree with the numpy engine's to the solver tolerance
-        (the same method; angle and rate limits are switched as events, and
-        a run stops ``1e-3`` before a singularity: see that module). It
-        keeps no dense solution: the result's
-        :attr:`~fws_control.SimulationResult.peaks` are the maxima of the
-        output samples, marked ``exact=False``, and its ``engine`` is
-        ``"compiled"``.
+        False, on any path whose curvature it can tabulate; any other case
+        raises :class:`ValueError` (no fallback). Its results agree with the
+        numpy engine's to the solver tolerance (the same method; angle and
+        rate limits are switched as events, and a run stops ``1e-3`` before
+        a singularity: see that module), and its
+        :attr:`~fws_control.SimulationResult.peaks` are the exact peaks of
+        each run's own dense output
+        (:func:`~fws_control.simulation.compiled.compiled_peaks`).
+        ``"numpy"``: the engine described above, for every case.
+        ``"auto"`` (default): the compiled engine where numba is installed
+        and it runs the case, with `method` resolved first (``"auto"`` is
+        Radau or LSODA with an actuator that makes DOP853 step at its
+        stability bound, see
+        :func:`~fws_control.simulation.engine.choose_method`, and those run
+        on the numpy engine); the numpy engine otherwise. The result's
+        ``engine`` says which ran, and is bitwise the result of asking for
+        that engine explicitly.
 
     Returns
     -------
@@ -788,7 +862,7 @@ def simulate_batch(
     atol: float = 1e-12,
     model: str = "kinematic",
     tyre: str = "linear",
-    engine: str = "numpy",
+    engine: str = "auto",
     chunk_size: int | None = None,
     client: Any = None,
     progress: bool | None = None,
@@ -832,11 +906,14 @@ def simulate_batch(
         Solver tolerances, as in :func:`simulate`.
     model, tyre : str, optional
         Vehicle and tyre model, as in :func:`simulate`.
-    engine : {"numpy", "compiled"}, optional
-        Integration engine, as in :func:`simulate`. With ``"compiled"`` each
-        run has its own steps, error norm and stop, so a run's result does
-        not depend on the other runs (nor on `chunk_size`); peaks come from
-        the samples (``exact=False``).
+    engine : {"auto", "numpy", "compiled"}, optional
+        Integration engine, as in :func:`simulate` (default ``"auto"``: the
+        compiled engine where numba is installed and it runs the case --
+        the paper's law, kinematic model, no delay, DOP853, not a stiff
+        actuator under ``method="auto"`` -- else the numpy engine). With
+        ``"compiled"`` each run has its own steps, error norm and stop, so a
+        run's result does not depend on the other runs (nor on
+        `chunk_size`).
     chunk_size : int, optional
         Runs per chunk (one solver; one Dask task); default
         :data:`DEFAULT_CHUNK_SIZE`. Smaller chunks decouple the step sizes of
@@ -861,11 +938,11 @@ def simulate_batch(
         kept signals only (and one chunk's full signals). Whatever is kept,
         the result holds per run the status, ``t_stop``, the peaks
         (:attr:`~fws_control.SimulationResult.peaks`, computed before the
-        signals are dropped: exact on the numpy engine, of the samples on
-        the compiled one) and, when ``e`` or ``theta`` is dropped, the
-        horizon metrics of :func:`~fws_control.tracking_metrics` (settling
-        time, overshoot, RMS and steady-state errors, with its default
-        settings), so ``tracking_metrics(result)`` works on every result.
+        signals are dropped: exact on either engine) and, when ``e`` or
+        ``theta`` is dropped, the horizon metrics of
+        :func:`~fws_control.tracking_metrics` (settling time, overshoot, RMS
+        and steady-state errors, with its default settings), so
+        ``tracking_metrics(result)`` works on every result.
         Reading a signal not kept (``result.theta``,
         :meth:`~fws_control.SimulationResult.signal`, ``plot``) raises
         :class:`~fws_control.SignalNotKeptError`.
@@ -924,7 +1001,7 @@ def simulate_batch(
     >>> bool(np.all(m.settling_time == fws.tracking_metrics(res).settling_time))
     True
     """
-    if isinstance(engine, bool) or engine not in _ENGINES:
+    if not isinstance(engine, str) or engine not in _ENGINES:
         raise ValueError(f"engine must be one of {_ENGINES}, got {engine!r}")
     if engine == "compiled" and isinstance(method, str) and method == "auto":
         method = "DOP853"  # the only compiled method (also for a stiff actuator)
@@ -961,6 +1038,16 @@ def simulate_batch(
             )
     else:
         feedforward = bool(feedforward)
+    table = None
+    if engine == "auto":
+        engine, table = _choose_engine(
+            path,
+            SteeringGains(k1, k2, a) if ctrl is None else ctrl,
+            delay=opts["delay"],
+            method=opts["method"],
+            model=opts["model"],
+            feedforward=feedforward,
+        )
     if engine == "compiled":
         _check_compiled(
             path,
@@ -970,6 +1057,11 @@ def simulate_batch(
             model=opts["model"],
             feedforward=feedforward,
         )
+        if table is None:
+            from .compiled import curvature_table
+
+            table = curvature_table(path)
+        opts["curvature_table"] = table  # built once, for every chunk
     if chunk_size is None:
         chunk_size = DEFAULT_CHUNK_SIZE
     if (
@@ -1000,8 +1092,9 @@ def simulate_batch(
     progress = check_bool("progress", progress)
 
     run = _run_isolated if engine == "numpy" else _run_compiled
-    # the compiled engine keeps no dense solution: sample peaks (exact=False)
-    exact = engine == "numpy"
+    # both engines give the exact peaks of the continuous solution (the
+    # compiled one on each run's own dense output)
+    exact = True
     reduce = kept != SIGNALS
     if reduce:
         rows = [SIGNALS.index(k) for k in kept]
