@@ -432,3 +432,22 @@ def test_plot_marks_stopped_and_unsimulated_runs():
         assert more.lines[0, 0][0].get_xdata().size == 0
     finally:
         plt.close("all")
+
+
+def test_expand_runs_keeps_the_model_and_tyre_of_the_simulated_runs():
+    # a dynamic batch expanded with an unsimulated run stays a dynamic result:
+    # its lateral acceleration and tyre model belong to the simulated runs
+    car = fws.vehicles.BMW_320I
+    g = fws.double_root_gains(car, speed=20.0, ratio=0.0, pole=-1.0)
+    sub = fws.simulate_batch(
+        car, Straight(), g, speed=20.0, initial_state=(0.0, 1.0, 0.0),
+        duration=2.0, dt=0.5, model="dynamic", tyre="magic",
+    )  # fmt: skip
+    full = expand_runs(
+        sub, positions=[1], k1=[np.nan, g.k1], k2=[np.nan, g.k2],
+        ratio=[1.0, 0.0], speed=[20.0, 20.0], initial_state=[(0, 1, 0)] * 2,
+        t=sub.t, feedforward=True, vehicle=car, path=Straight(),
+    )  # fmt: skip
+    assert (full.model, full.tyre) == (sub.model, sub.tyre) == ("dynamic", "magic")
+    np.testing.assert_array_equal(full.lateral_accel[1], sub.lateral_accel[0])
+    assert full.status.tolist() == ["uncontrollable", "ok"]

@@ -1199,6 +1199,9 @@ def expand_runs(
         run_peak_time=peak_time,
         method=None if result is None else result.method,
         engine="numpy" if result is None else result.engine,
+        # the simulated runs' model: a dynamic batch stays dynamic
+        model="kinematic" if result is None else result.model,
+        tyre="linear" if result is None else result.tyre,
         signal_names=names,
         run_samples=samples,
         run_metrics=metrics,
