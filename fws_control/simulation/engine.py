@@ -549,11 +549,12 @@ def resolve_time_constant(vehicle: Vehicle, value: float | None) -> float | None
 #: len(SIGNALS) x samples x 8`` bytes (float64), may not exceed it; with
 #: ``simulate_batch(..., signals=...)`` the kept signals only, and the full
 #: signals of one chunk (its working set) apart. 2 GiB is
-#: 24 million run-samples: 16,000 runs of the paper's 15 s scenario at the
-#: default output step, or one run with dt = 6e-7 s. The peak memory of a
-#: call is its output, the states (3/11 of it, 5/11 with an actuator) and a
-#: bounded block of about 12 MB of temporaries: measured 2.2 times the
-#: output at 13 MB, 1.45 times at 132 MB (it was 4.4 times). Larger requests
+#: 17.9 million run-samples of the 15 signals: 11,900 runs of the paper's
+#: 15 s scenario at the default output step, or one run with dt = 8.4e-7 s.
+#: The peak memory of a call is its output, the states (3/15 of it, 5/15 with
+#: an actuator) and a bounded block of about 12 MB of temporaries: measured
+#: 2.2 times the output at 13 MB, 1.45 times at 132 MB (with 11 signals; it
+#: was 4.4 times before the signals were computed in blocks). Larger requests
 #: are refused with the way to ask for less (see :func:`check_output_budget`).
 MAX_OUTPUT_BYTES = 2 * 2**30
 
