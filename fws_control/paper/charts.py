@@ -371,7 +371,16 @@ def plot_paper_figure(
         # The eighth slot holds the shared legend.
         spare = axes[-1]
         spare.axis("off")
-        spare.legend(handles=handles, loc="center", fontsize=10, title="legend")
+        # The legend is wider than its slot: anchored a little inside the
+        # figure's right edge (centred, it reached past the canvas with
+        # matplotlib 3.8's wider text), vertically centred on the slot.
+        from matplotlib.transforms import blended_transform_factory
+
+        to_edge = blended_transform_factory(fig.transFigure, spare.transAxes)
+        spare.legend(
+            handles=handles, loc="center right", bbox_to_anchor=(0.995, 0.5),
+            bbox_transform=to_edge, fontsize=10, title="legend",
+        )  # fmt: skip
         lines.flat[-1] = []
     V = {2: "5 and 20", 3: "5", 4: "20"}[n]
     fig.suptitle(
