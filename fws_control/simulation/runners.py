@@ -256,13 +256,16 @@ def _choose_engine(path, gains, *, delay, method, model, feedforward):
         return "numpy", None
 
 
-def _run_compiled(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl):
+def _run_compiled(
+    vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl, out=None
+):
     """:func:`_run_chunk` on the compiled engine (each run alone).
 
     Same arguments and results, the peaks those of each run's own dense
     output (:func:`~fws_control.simulation.compiled.compiled_peaks`);
     module-level so that Dask can pickle it. A run's solver, steps and stop
-    are its own, so a failure needs no isolation.
+    are its own, so a failure needs no isolation. `out`: the chunk's rows of
+    the batch's signals, written in place (then returned as the signals).
     """
     from .compiled import (
         compiled_outputs,
@@ -304,6 +307,7 @@ def _run_compiled(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts
         states=states,
         initial_heading=x0[:, 2],
         table=table,
+        out=out,
     )
     peaks, peak_times = compiled_peaks(
         vehicle,
@@ -1148,14 +1152,14 @@ def simulate_batch(
     samples = np.empty(n, dtype=np.int64) if reduce else None
     metrics = np.empty((n, len(HORIZON_METRICS))) if reduce and horizon else None
 
-    def keep(j, chunk):
+    def keep(j, chunk, written=False):
         nonlocal data
         lo, hi = bounds[j]
         if reduce and len(chunk) == 6:  # a lost Dask task: reduced here
             chunk = _reduce_chunk(chunk, rows, horizon, exact, args(lo, hi))
         if single:
             data = chunk[0]
-        else:
+        elif not written:
             data[lo:hi] = chunk[0]
         parts = (status, message, t_stop, peak, peak_time, samples, metrics)
         for whole, part in zip(parts, chunk[1:], strict=False):
@@ -1164,8 +1168,15 @@ def simulate_batch(
 
     try:
         if client is None:
+            # The compiled engine writes all signals straight into the
+            # batch's array: no chunk buffer to fill and copy (46 MB for 256
+            # runs of the paper's scenario; about 10 us of CPU per run).
+            direct = engine == "compiled" and not reduce and not single
             for j, (lo, hi) in enumerate(bounds):
-                keep(j, run(*args(lo, hi)))
+                if direct:
+                    keep(j, _run_compiled(*args(lo, hi), out=data[lo:hi]), True)
+                else:
+                    keep(j, run(*args(lo, hi)))
                 bar.update(1)
         else:
             _run_on_dask(client, bounds, args, keep, t.size, bar, run)
