@@ -259,3 +259,26 @@ def test_auto_rule_gives_a_run_its_own_accuracy_in_any_batch():
     np.testing.assert_array_equal(first16.e[0], batch.e[0])
     explicit = fws.simulate_batch(VEH, fws.Arc(KAPPA), g, method="DOP853", **kw)
     assert units(explicit) > AGREE
+
+
+def test_auto_rule_keeps_dop853_when_a_delay_bounds_the_steps():
+    # With an input delay the method of steps holds every step to the delay;
+    # 0.24 s < 6.4 T = 1.73 s keeps DOP853 off its stability bound over the
+    # 30 s (17 bound steps, where the long-run rule alone would take LSODA).
+    # DOP853 agrees with Radau at rtol 1e-12 (an implicit method stepping by
+    # accuracy) within its own tolerance.
+    assert choose_method(0.27, 1e-8, duration=30.0) == "LSODA"
+    assert choose_method(0.27, 1e-8, duration=30.0, delay=0.24) == "DOP853"
+    assert choose_method(0.27, 1e-8, duration=30.0, delay=2.0) == "LSODA"
+    g = fws.double_root_gains(VEH, speed=20.0, curvature=0.01, ratio=0.5, pole=-1.0)
+    kw = dict(speed=20.0, initial_state=(0.0, -10.0, 0.0), duration=30.0, dt=0.1,
+              delay=0.24, actuator_time_constant=0.27)  # fmt: skip
+    res = fws.simulate(VEH, fws.Arc(0.01), g, rtol=1e-8, atol=1e-10, **kw)
+    ref = fws.simulate(VEH, fws.Arc(0.01), g, method="Radau", rtol=1e-12,
+                       atol=1e-14, **kw)  # fmt: skip
+    assert res.method == "DOP853" and res.status == ref.status == "ok"
+    names = ("s", "e", "theta", "delta_f", "delta_r")
+    y = np.stack([getattr(res, k) for k in names])
+    y_ref = np.stack([getattr(ref, k) for k in names])
+    tol = 1e-10 + 1e-8 * np.max(np.abs(y_ref), axis=1)
+    assert np.all(np.max(np.abs(y - y_ref), axis=1) <= AGREE * tol)

@@ -604,7 +604,9 @@ def _prepare(
     if isinstance(opts["method"], str) and opts["method"] == "auto":
         # (the duration: see the long-run rule there; the same for every
         # run of a batch, so that a run's accuracy does not depend on it)
-        opts["method"] = choose_method(tau, opts["rtol"], duration=span)
+        opts["method"] = choose_method(
+            tau, opts["rtol"], duration=span, delay=opts["delay"]
+        )
     else:
         _warn_if_stiff(check_method(opts["method"]), tau, float(t[-1]))
     return k1, k2, a, V, x0, t, tau, ctrl
