@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import gc
 import math
 import os
 import re
@@ -46,6 +47,7 @@ from pathlib import Path
 
 __all__ = [
     "main",
+    "run",
     "build_parser",
     "BUDGETS",
     "COMPARE_MIN_SPEED",
@@ -1374,5 +1376,31 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 1
 
 
+def run() -> None:
+    """The ``fws-control`` console script: :func:`main`, then exit with its status.
+
+    Before the interpreter exits, everything still alive is frozen
+    (:func:`gc.freeze`), so that the interpreter's last garbage collection
+    does not traverse the hundreds of thousands of objects of python-control,
+    scipy and matplotlib only to free memory the operating system reclaims
+    at exit anyway: 0.6-0.7 s of CPU after ``reproduce`` (measured: 7.30
+    against 6.64 s for the whole process). Modules are still torn down and
+    ``atexit`` handlers still run; every file is closed by then (the
+    commands write through context managers). Library code and tests call
+    :func:`main`, which leaves the collector alone.
+
+    Examples
+    --------
+    >>> import subprocess, sys
+    >>> subprocess.run([sys.executable, "-c", "from fws_control.cli import run; "
+    ...                 "import sys; sys.argv = ['fws-control', '--version']; run()"],
+    ...                capture_output=True, text=True).returncode
+    0
+    """
+    status = main()
+    gc.freeze()
+    sys.exit(status)
+
+
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    run()

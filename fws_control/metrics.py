@@ -27,7 +27,7 @@ status alongside.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -39,9 +39,6 @@ from .validation import (
     check_real,
     check_scalar,
 )
-
-if TYPE_CHECKING:  # for the annotation only: metrics need no simulation code
-    from .simulation import SimulationResult
 
 __all__ = [
     "peak_abs",
@@ -441,8 +438,21 @@ class TrackingMetrics:
     peak_error: float | np.ndarray = np.nan
 
 
+class _Result(Protocol):
+    # What tracking_metrics reads of a fws_control.SimulationResult. A
+    # protocol rather than the class: the simulation package imports this
+    # module (for the batch's horizon metrics), so importing it back, even
+    # for an annotation, would make an import cycle.
+    t: Any
+    status: Any
+    signals: Any
+
+    @property
+    def peaks(self) -> Any: ...
+
+
 def tracking_metrics(
-    result: SimulationResult,
+    result: _Result,
     *,
     band=None,
     fraction: float = 0.02,

@@ -27,7 +27,7 @@ import numpy as np
 import pytest
 
 import fws_control as fws
-from fws_control.simulation.engine import SOLVERS, choose_method
+from fws_control.simulation.engine import LSODA_MAX_RUNS, SOLVERS, choose_method
 
 VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
 SPEED, KAPPA, E0 = 5.0, 0.1, -5.0  # the paper's curve scenario curve_5
@@ -191,8 +191,6 @@ def test_auto_long_run_rule_against_measured_step_counts(tau, duration):
         # (each costs the engine its margin checks and outputs)
         assert dop_steps > 3 * bound, (dop_steps, bound)
         assert lsoda_steps > 3 * dop_steps, (lsoda_steps, dop_steps)
-    # many stacked runs keep DOP853 (LSODA's dense Jacobian)
-    assert choose_method(tau, 1e-10, duration=duration, runs=17) == "DOP853"
 
 
 def test_auto_rule_follows_dop853s_error_at_its_stability_bound():
@@ -213,14 +211,74 @@ def test_auto_rule_follows_dop853s_error_at_its_stability_bound():
     assert errors[15.0, "LSODA"] <= AGREE, errors
 
 
-def test_auto_long_run_rule_for_stacked_runs():
-    # the documented bar: 10 * runs stability-bound steps, at most 16 runs;
-    # 0.05 s over 15 s is 46.9 steps, over 60 s 187.5, over 150 s 468.75
-    for runs in (1, 2, 4, 16):
-        for duration in (2.0, 15.0, 60.0, 150.0):
-            steps = duration / (6.4 * 0.05)
-            expect = "LSODA" if steps > 10 * runs else "DOP853"
-            got = choose_method(0.05, 1e-10, duration=duration, runs=runs)
-            assert got == expect, (runs, duration, got)
-    # without a duration: the old rule (DOP853 above the stiff time constant)
-    assert choose_method(0.05, 1e-10, runs=1) == "DOP853"
+def test_auto_rule_gives_a_run_its_own_accuracy_in_any_batch():
+    # The run of the curve scenario at T = 0.05 s over 15 s (47 stability-
+    # bound steps) alone and as the first of 20 runs with other ratios and
+    # poles (-0.2 and -5 alternating): auto takes LSODA for both, in chunks
+    # of at most LSODA_MAX_RUNS runs, and the run's error against the
+    # fixed-step reference stays within the tolerance (AGREE units). The
+    # stacked runs of a numpy chunk share LSODA's steps and error norm, so
+    # the error is not the run's alone (measured 2.0 against 0.72 units: the
+    # issue's 1.5x holds per run only on the compiled engine, or with
+    # chunk_size=1). DOP853 for the batch (the choice for more than 16 runs
+    # before) is far outside the tolerance.
+    tau, duration, rtol, atol = 0.05, 15.0, 1e-10, 1e-12
+    n = 20
+    ratios = np.concatenate([[RATIO], np.linspace(-1.0, 0.5, n - 1)])
+    poles = np.concatenate([[-1.0], np.where(np.arange(n - 1) % 2, -0.2, -5.0)])
+    g = fws.double_root_gains(VEH, speed=SPEED, curvature=KAPPA, ratio=ratios,
+                              pole=poles)  # fmt: skip
+    ref, tol = _check_reference(fws.SteeringGains(g.k1[0], g.k2[0], g.ratio[0]),
+                                tau, math.inf, duration, 1e-3, rtol, atol)  # fmt: skip
+    kw = dict(speed=SPEED, initial_state=(0.0, E0, 0.0), duration=duration,
+              dt=DT_OUT, actuator_time_constant=tau, rtol=rtol, atol=atol,
+              progress=False)  # fmt: skip
+
+    def units(res, i=0):
+        y = np.stack([res.s[i], res.e[i], res.theta[i], res.delta_f[i],
+                      res.delta_r[i]], axis=1)  # fmt: skip
+        return float(np.max(np.abs(y - ref) / tol))
+
+    def first(m):
+        return fws.SteeringGains(g.k1[:m], g.k2[:m], g.ratio[:m])
+
+    alone = fws.simulate_batch(VEH, fws.Arc(KAPPA), first(1), **kw)
+    batch = fws.simulate_batch(VEH, fws.Arc(KAPPA), g, **kw)
+    assert alone.method == batch.method == "LSODA"
+    # (the pole -5 runs stop at |delta_f| = pi/2 from the 5 m initial
+    # error: the chunks also hold stops)
+    assert batch.engine == "numpy" and batch.status[0] == "ok"
+    assert set(batch.status[1::2]) == {"singular_steering"}
+    assert units(alone) <= AGREE
+    assert units(batch) <= AGREE, (units(batch), units(alone))
+    one_by_one = fws.simulate_batch(VEH, fws.Arc(KAPPA), g, chunk_size=1, **kw)
+    np.testing.assert_array_equal(one_by_one.e[0], alone.e[0])
+    # the default chunking: the first 16 runs share one solver, the other 4
+    # another -- the first run is bitwise the same in a batch of 16
+    first16 = fws.simulate_batch(VEH, fws.Arc(KAPPA), first(LSODA_MAX_RUNS), **kw)
+    np.testing.assert_array_equal(first16.e[0], batch.e[0])
+    explicit = fws.simulate_batch(VEH, fws.Arc(KAPPA), g, method="DOP853", **kw)
+    assert units(explicit) > AGREE
+
+
+def test_auto_rule_keeps_dop853_when_a_delay_bounds_the_steps():
+    # With an input delay the method of steps holds every step to the delay;
+    # 0.24 s < 6.4 T = 1.73 s keeps DOP853 off its stability bound over the
+    # 30 s (17 bound steps, where the long-run rule alone would take LSODA).
+    # DOP853 agrees with Radau at rtol 1e-12 (an implicit method stepping by
+    # accuracy) within its own tolerance.
+    assert choose_method(0.27, 1e-8, duration=30.0) == "LSODA"
+    assert choose_method(0.27, 1e-8, duration=30.0, delay=0.24) == "DOP853"
+    assert choose_method(0.27, 1e-8, duration=30.0, delay=2.0) == "LSODA"
+    g = fws.double_root_gains(VEH, speed=20.0, curvature=0.01, ratio=0.5, pole=-1.0)
+    kw = dict(speed=20.0, initial_state=(0.0, -10.0, 0.0), duration=30.0, dt=0.1,
+              delay=0.24, actuator_time_constant=0.27)  # fmt: skip
+    res = fws.simulate(VEH, fws.Arc(0.01), g, rtol=1e-8, atol=1e-10, **kw)
+    ref = fws.simulate(VEH, fws.Arc(0.01), g, method="Radau", rtol=1e-12,
+                       atol=1e-14, **kw)  # fmt: skip
+    assert res.method == "DOP853" and res.status == ref.status == "ok"
+    names = ("s", "e", "theta", "delta_f", "delta_r")
+    y = np.stack([getattr(res, k) for k in names])
+    y_ref = np.stack([getattr(ref, k) for k in names])
+    tol = 1e-10 + 1e-8 * np.max(np.abs(y_ref), axis=1)
+    assert np.all(np.max(np.abs(y - y_ref), axis=1) <= AGREE * tol)

@@ -66,6 +66,24 @@ def test_scenario_gains_mark_only_a_equal_one_on_straight_roads():
             assert np.all(np.isnan(k1[~ok]))
 
 
+def test_scenario_gains_sweep_through_ratio_one_equals_one_design_per_ratio():
+    # the vectorised sweep (halved around refused designs) against one
+    # scalar double_root_gains per element, on a 2-D grid of ratios and
+    # poles that crosses ratio = 1 (and its refused neighbours) several times
+    ratios = np.linspace(0.9, 1.1, 41).reshape(-1, 1) + np.zeros((1, 3))
+    poles = np.array([-0.5, -1.0, -3.0])
+    plant = fws.LateralPlant(PAPER_VEHICLE, speed=5.0, curvature=0.0, model="exact")
+    k1, k2, ok = scenario_gains("straight_5", ratios, poles, "exact")
+    assert k1.shape == ratios.shape and 0 < (~ok).sum() < ok.size
+    for idx in np.ndindex(ratios.shape):
+        try:
+            g = fws.double_root_gains(plant, ratio=ratios[idx], pole=poles[idx[1]])
+        except fws.UncontrollableError:
+            assert not ok[idx] and np.isnan(k1[idx]) and np.isnan(k2[idx])
+            continue
+        assert ok[idx] and (k1[idx], k2[idx]) == (float(g.k1), float(g.k2))
+
+
 def test_scenario_responses_keep_uncontrollable_rows_and_match_simulate():
     r = scenario_responses(
         "straight_20", ratios=[-1.0, 1.0, 0.5], duration=4.0, dt=0.05

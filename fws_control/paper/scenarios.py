@@ -171,19 +171,31 @@ def scenario_gains(
         np.asarray(check_finite("ratios", ratios), dtype=float),
         np.asarray(check_finite("pole", pole), dtype=float),
     )
-    k1 = np.full(a.shape, np.nan)
-    k2 = np.full(a.shape, np.nan)
-    ok = np.ones(a.shape, dtype=bool)
-    for idx in np.ndindex(a.shape):
+    plant = LateralPlant(vehicle, speed=sc.speed, curvature=sc.curvature, model=model)
+    a_flat, lam_flat = a.ravel(), lam.ravel()
+    k1 = np.full(a_flat.shape, np.nan)
+    k2 = np.full(a_flat.shape, np.nan)
+    ok = np.ones(a_flat.shape, dtype=bool)
+
+    def design(idx: np.ndarray) -> None:
+        # One vectorised design for all of idx; double_root_gains refuses
+        # the whole array if one design is uncontrollable, so then halve it
+        # (a sweep through ratio = 1 on a straight road costs about
+        # 2 log2(n) calls instead of n).
         try:
-            plant = LateralPlant(
-                vehicle, speed=sc.speed, curvature=sc.curvature, model=model
-            )
-            g = double_root_gains(plant, ratio=a[idx], pole=lam[idx])
+            g = double_root_gains(plant, ratio=a_flat[idx], pole=lam_flat[idx])
         except UncontrollableError:
-            ok[idx] = False
-            continue
-        k1[idx], k2[idx] = float(g.k1), float(g.k2)
+            if idx.size == 1:
+                ok[idx] = False
+                return
+            for half in np.array_split(idx, 2):
+                design(half)
+            return
+        k1[idx], k2[idx] = g.k1, g.k2
+
+    if a_flat.size:
+        design(np.arange(a_flat.size))
+    k1, k2, ok = k1.reshape(a.shape), k2.reshape(a.shape), ok.reshape(a.shape)
     return k1, k2, ok
 
 

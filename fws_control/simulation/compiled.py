@@ -1000,8 +1000,9 @@ def _solve_batch(
 
 
 @_jit
-def _curvature_rate(s, q, breaks, coefs):
-    # d kappa / ds of the table, at s clipped or wrapped as in _curvature
+def _curvature_and_rate(s, q, breaks, coefs):
+    # kappa and d kappa / ds of the table from one lookup, at s clipped or
+    # wrapped as in _curvature (the same operations for kappa)
     period = q[_Q_PERIOD]
     if period > 0.0:
         s = s % period
@@ -1012,7 +1013,8 @@ def _curvature_rate(s, q, breaks, coefs):
     k = np.searchsorted(breaks, s, side="right") - 1
     k = min(max(k, 0), coefs.shape[0] - 1)
     d = s - breaks[k]
-    return coefs[k, 1] + d * (2.0 * coefs[k, 2] + d * 3.0 * coefs[k, 3])
+    kappa = coefs[k, 0] + d * (coefs[k, 1] + d * (coefs[k, 2] + d * coefs[k, 3]))
+    return kappa, coefs[k, 1] + d * (2.0 * coefs[k, 2] + d * 3.0 * coefs[k, 3])
 
 
 @_jit
@@ -1028,7 +1030,10 @@ def _point_signals(s, e, th, df_s, dr_s, V, k1, k2, a, q, breaks, coefs, d_cg):
     mf, mr = q[_Q_MAX_F], q[_Q_MAX_R]
     tau = q[_Q_TAU]
     ff = q[_Q_FF] != 0.0
-    kappa = _curvature(s, q, breaks, coefs)
+    if ff and not tau > 0.0:  # the feedforward's rate needs d kappa / ds
+        kappa, dkappa = _curvature_and_rate(s, q, breaks, coefs)
+    else:
+        kappa, dkappa = _curvature(s, q, breaks, coefs), 0.0
     fb = -k1 * e - k2 * th
     raw_f = fb
     if ff:
@@ -1040,9 +1045,13 @@ def _point_signals(s, e, th, df_s, dr_s, V, k1, k2, a, q, breaks, coefs, d_cg):
         df, dr = df_s, dr_s
     else:
         df, dr = cf, cr
+    # (sine and cosine of one angle next to each other: one sincos call)
     s_dot = V * math.cos(th + dr) / (1.0 - kappa * e)
     e_dot = V * math.sin(th + dr)
     sin_fr = math.sin(df - dr)
+    cos_fr = math.cos(df - dr)
+    sin_r = math.sin(dr)
+    cos_r = math.cos(dr)
     cos_f = math.cos(df)
     psi_dot = V * sin_fr / (f * cos_f)
     th_dot = -kappa * s_dot + psi_dot
@@ -1054,7 +1063,7 @@ def _point_signals(s, e, th, df_s, dr_s, V, k1, k2, a, q, breaks, coefs, d_cg):
         fb_rate = -k1 * e_dot - k2 * th_dot
         rf = fb_rate
         if ff:
-            k_rate = _curvature_rate(s, q, breaks, coefs) * s_dot
+            k_rate = dkappa * s_dot
             rf = fb_rate + f * k_rate / (1.0 + (f * kappa) ** 2)
         rr = a * fb_rate
         if abs(raw_f) > mf:
@@ -1063,10 +1072,10 @@ def _point_signals(s, e, th, df_s, dr_s, V, k1, k2, a, q, breaks, coefs, d_cg):
             rr = 0.0
     if not abs(df) < 0.5 * math.pi:
         return df, dr, rf, rr, np.nan, np.nan, psi_dot, False
-    psi_ddot = (V / f) * (math.cos(dr) / cos_f**2 * rf - math.cos(df - dr) / cos_f * rr)
-    lat = V * (psi_dot + rr) * math.cos(dr) + d_cg * psi_ddot
+    psi_ddot = (V / f) * (cos_r / cos_f**2 * rf - cos_fr / cos_f * rr)
+    lat = V * (psi_dot + rr) * cos_r + d_cg * psi_ddot
     # G moves with R's velocity V (cos dr, sin dr) plus r x (l_r, 0)
-    vy = V * math.sin(dr) + d_cg * psi_dot
+    vy = V * sin_r + d_cg * psi_dot
     return df, dr, rf, rr, lat, vy, psi_dot, True
 
 
@@ -1131,14 +1140,20 @@ def _signals_batch(states, P, q, breaks, coefs, d_cg, pose, sig):
                 sp = min(max(sp, q[_Q_S_LO]), q[_Q_S_HI])
             if kind == 1:
                 lx, ly = sp, 0.0
-            else:  # Arc._frame
-                ks = kp * sp
-                lx = math.sin(ks) / kp
-                ly = 2.0 * math.sin(0.5 * ks) ** 2 / kp
+                sh, ch = s0, c0  # the path's heading is psi0
+            else:  # Arc._frame, from one sincos of half the turned angle
+                half = 0.5 * (kp * sp)
+                sn, cs = math.sin(half), math.cos(half)
+                sin_ks = 2.0 * sn * cs
+                cos_ks = (cs - sn) * (cs + sn)
+                lx = sin_ks / kp
+                ly = 2.0 * sn * sn / kp
+                # sin, cos of the heading psi0 + kappa s by rotation
+                sh = s0 * cos_ks + c0 * sin_ks
+                ch = c0 * cos_ks - s0 * sin_ks
             px = x0 + c0 * lx - s0 * ly
             py = y0 + s0 * lx + c0 * ly
             h = psi0 + kp * s  # unwrapped heading of the path at s
-            sh, ch = math.sin(h), math.cos(h)
             sig[i, 0, k] = px - e * sh
             sig[i, 1, k] = py + e * ch
             sig[i, 2, k] = th + h

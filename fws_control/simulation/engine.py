@@ -201,12 +201,15 @@ ATOL_RANGE = (1e-20, 0.1)
 STIFF_TIME_CONSTANT = 0.004
 
 #: Steps DOP853's stability bound forces on a run (``duration / (6.4 T)``)
-#: above which ``method="auto"`` integrates one run with LSODA; ``runs``
-#: stacked runs need ``runs`` times as many (see :func:`choose_method`).
+#: above which ``method="auto"`` integrates a run with LSODA (see
+#: :func:`choose_method`).
 LONG_RUN_STEPS = 10
 
-#: Most runs integrated together for which ``method="auto"`` takes LSODA,
-#: whose Jacobian of the stacked runs is dense (measured up to 16 runs).
+#: Most runs :func:`~fws_control.simulate_batch` stacks in one chunk (by
+#: default) when the method is LSODA, whose Jacobian of the stacked runs is
+#: dense. Measured, CPU per run at T = 0.05 s on the curve scenario, for
+#: 1, 4, 8, 16 and 32 runs per chunk: over 15 s 156, 47, 27, 17.6 and 12.7
+#: ms; over 150 s 187, 60, 38, 28 and 39 ms.
 LSODA_MAX_RUNS = 16
 
 
@@ -215,7 +218,7 @@ def choose_method(
     rtol: float,
     *,
     duration: float | None = None,
-    runs: int = 1,
+    delay: float = 0.0,
 ) -> str:
     r"""The solver ``method="auto"`` uses: implicit when the loop is stiff.
 
@@ -253,13 +256,24 @@ def choose_method(
     given, a run of more than :data:`LONG_RUN_STEPS` (10) such steps
     integrates with ``"LSODA"``.
 
-    LSODA estimates a dense Jacobian of the stacked state, so for ``runs``
-    stacked runs the bar is ``10 * runs`` steps, and above
-    :data:`LSODA_MAX_RUNS` (16) runs it is DOP853 (measured, T = 0.05 s,
-    simulate_batch, LSODA against DOP853: 4 runs, 15 s 0.23 against 0.21
-    s, 60 s 0.28 against 0.35 s; 16 runs, 15 s 0.56 against 0.23 s, 60 s
-    0.55 against 0.44 s, 150 s 0.63 against 0.87 s; 32 runs, 150 s 2.0
-    against 0.96 s; 64 runs, 1500 s 5.2 against 14.5 s).
+    The rule is the same for every run of a batch, whatever their number:
+    a run's accuracy must not depend on the batch it sits in. (Batches of
+    more than 16 runs used to keep DOP853, for speed: measured on the curve
+    scenario at T = 0.05 s over 15 s against a fixed-step reference, a run
+    was then 330 tolerances off, while alone, with LSODA, it is 0.72 and in
+    a 16-run LSODA chunk 0.74.) :func:`~fws_control.simulate_batch`
+    integrates LSODA runs in chunks of :data:`LSODA_MAX_RUNS` (16) runs, its
+    Jacobian of the stacked runs being dense; the compiled engine has no
+    LSODA, so ``engine="auto"`` runs them on the numpy engine, at 17.6 ms of
+    CPU per run over 15 s against 0.5 ms for the compiled DOP853 (which
+    remains available as ``method="DOP853"``, with that error).
+
+    With an input `delay` the steps are at most the delay (the method of
+    steps), so if ``delay < 6.4 T`` DOP853 never reaches its stability
+    bound and its error estimate holds: no long-run rule then (LSODA, held
+    to the same steps, costs 6x more: measured 3.8 against 0.6 s for the
+    two 30 s runs of ``reproduce``'s actuator figure, T = 0.27 s, delay
+    0.24 s).
 
     Otherwise DOP853; without an actuator (`time_constant` None) the loop is
     not stiff: DOP853.
@@ -273,8 +287,8 @@ def choose_method(
     duration : float, optional
         Simulated time [s]; None (default): the rule without the long-run
         case (DOP853 or Radau).
-    runs : int, optional
-        Runs integrated together in one stacked state (default 1).
+    delay : float, optional
+        Input delay [s] of the run (default 0), which bounds its steps.
 
     Returns
     -------
@@ -292,9 +306,9 @@ def choose_method(
     'DOP853'
     >>> choose_method(0.05, 1e-10, duration=15.0)  # 47
     'LSODA'
-    >>> choose_method(0.05, 1e-10, duration=15.0, runs=16)  # 47 < 160
-    'DOP853'
-    >>> choose_method(0.05, 1e-10, duration=1500.0, runs=100)
+    >>> choose_method(0.05, 1e-10, duration=1500.0)  # 4688
+    'LSODA'
+    >>> choose_method(0.27, 1e-10, duration=30.0, delay=0.24)  # steps <= 0.24 s
     'DOP853'
     """
     if time_constant is None:
@@ -302,11 +316,11 @@ def choose_method(
     limit = STIFF_TIME_CONSTANT * (rtol / 1e-10) ** (1.0 / 6.0)
     if time_constant < limit:
         return "Radau"
+    bounded = 0.0 < delay < 6.4 * time_constant  # steps below the bound
     if (
         duration is not None
-        and runs <= LSODA_MAX_RUNS
-        # (stacked runs: LSODA's dense Jacobian costs more per run)
-        and duration / (6.4 * time_constant) > LONG_RUN_STEPS * runs
+        and not bounded
+        and duration / (6.4 * time_constant) > LONG_RUN_STEPS
     ):
         return "LSODA"
     return "DOP853"
