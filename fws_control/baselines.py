@@ -45,9 +45,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import control as ct
 import numpy as np
 
 from .controllers import FEEDFORWARDS
@@ -56,6 +55,11 @@ from .models import STEERING_INPUTS, check_inputs
 from .plant import LateralPlant, as_plant, loop_matrices
 from .validation import check_finite, check_positive, check_scalar, check_type
 from .vehicle import Vehicle
+
+if TYPE_CHECKING:
+    # python-control costs 0.7 s to import; a simulation of these
+    # controllers does not need it, so it is imported where it is used
+    import control as ct
 
 __all__ = [
     "LateralController",
@@ -291,6 +295,8 @@ class LateralController:
             df, dr = saturate(vehicle, df, dr)
             return np.array([float(np.ravel(df)[0]), float(np.ravel(dr)[0])])
 
+        import control as ct
+
         return ct.nlsys(
             None,
             output,
@@ -500,6 +506,8 @@ def LQRController(  # noqa: N802 - a constructor in the issue's naming
 
 def _lqr(A, B, Q, R, ratio):
     """control.lqr, its numerical failures named by the arguments."""
+    import control as ct
+
     try:
         K, _, _ = ct.lqr(A, B, Q, R)
     except (np.linalg.LinAlgError, ValueError) as exc:

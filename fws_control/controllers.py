@@ -35,8 +35,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
-import control as ct
 import numpy as np
 
 from .dynamics import dynamic_feedforward, dynamic_feedforward_derivative
@@ -44,6 +44,11 @@ from .gains import SteeringGains
 from .models import STEERING_INPUTS, check_inputs, check_result
 from .validation import check_positive, check_scalar, check_type
 from .vehicle import Vehicle
+
+if TYPE_CHECKING:
+    # python-control costs 0.7 s to import and the simulation engine, which
+    # calls this module's laws, does not need it: imported where it is used
+    import control as ct
 
 __all__ = [
     "steering_command",
@@ -408,6 +413,8 @@ def path_tracking_controller(
         )
         return np.array([float(df), float(dr)])
 
+    import control as ct
+
     return ct.nlsys(
         None,
         output,
@@ -570,6 +577,8 @@ def steering_actuator(
     def update(t, x, u, params):
         rf, rr = actuator_rate(vehicle, u, x, time_constant=tau)
         return np.array([float(rf), float(rr)])
+
+    import control as ct
 
     return ct.nlsys(
         update,

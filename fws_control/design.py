@@ -219,7 +219,10 @@ def double_root_gains(
         # det = -(V^3/f^2) * distance, distance = a^2 f^2 kappa^2 + (c - a)^2:
         # dimensionless, zero exactly at the uncontrollable design.
         V = np.asarray(p.speed, dtype=float)
-        distance = -det * p.vehicle.wheelbase**2 / V**3
+        # (V**3 underflows to 0 for speeds near 1e-300 m/s: a NaN distance,
+        # whose design is refused below by the working-precision check)
+        with np.errstate(all="ignore"):
+            distance = -det * p.vehicle.wheelbase**2 / V**3
         kappa = p.curvature
     else:
         scale = np.hypot(a1, a0) * np.hypot(b1, b0)

@@ -83,6 +83,57 @@ def test_make_figure_bad_name():
         make_figure("fig2", model="linear")
 
 
+@pytest.mark.parametrize("caller_froze", [False, True])
+@pytest.mark.parametrize("enabled", [True, False])
+def test_reproduce_restores_the_garbage_collector(tmp_path, monkeypatch, enabled,
+                                                 caller_froze):  # fmt: skip
+    """reproduce pauses the collector while drawing and leaves it as it was
+    (enabled or not, the caller's frozen objects still frozen), also when a
+    figure fails; during the figures the collector is off."""
+    import gc
+
+    import fws_control.paper.figures as figures
+
+    seen = []
+    make = figures._make
+
+    def spy(name, model, quick):
+        seen.append((gc.isenabled(), gc.get_freeze_count() > 0))
+        if name == "extra_turning_radius":
+            raise RuntimeError("figure failed")
+        return make(name, model, quick)
+
+    monkeypatch.setattr(figures, "_make", spy)
+    was = gc.isenabled()
+    try:
+        if caller_froze:
+            gc.freeze()
+        frozen = gc.get_freeze_count()
+        (gc.enable if enabled else gc.disable)()
+        reproduce(tmp_path / "ok", quick=True, progress=False, dpi=40,
+                  names=["fig2"])  # fmt: skip
+        # (frozen objects can still die: the count may only fall, not to 0)
+        assert gc.isenabled() == enabled
+        assert (
+            (0 < gc.get_freeze_count() <= frozen)
+            if caller_froze
+            else (gc.get_freeze_count() == 0)
+        )
+        with pytest.raises(RuntimeError, match="figure failed"):
+            reproduce(tmp_path / "bad", quick=True, progress=False, dpi=40,
+                      names=["fig2", "extra_turning_radius"])  # fmt: skip
+        assert gc.isenabled() == enabled
+        assert (
+            (0 < gc.get_freeze_count() <= frozen)
+            if caller_froze
+            else (gc.get_freeze_count() == 0)
+        )
+    finally:
+        gc.unfreeze()
+        (gc.enable if was else gc.disable)()
+    assert seen == [(False, True)] * 3
+
+
 def test_reproduce_subset_writes_pngs_and_summary(tmp_path):
     res = reproduce(
         tmp_path / "out",

@@ -194,3 +194,38 @@ def test_lazy_table_matches_type_checking_imports():
     lazy = {n: m for n, m in static.items() if n not in submodules}
     assert lazy == fws._ORIGIN
     assert set(static) == set(fws.__all__)
+
+
+@pytest.mark.parametrize("engine", ["auto", "numpy"])
+def test_simulation_without_python_control(engine):
+    """simulate and simulate_batch import neither python-control nor
+    matplotlib; the run's lateral error is python-control's reference
+    interconnection's (simulate_reference, in this process) to 1e-7 m."""
+    code = (
+        "import fws_control as fws\n"
+        "from fws_control.paths import Arc\n"
+        "veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)\n"
+        "g = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=-1.0,\n"
+        "                          pole=-1.0)\n"
+        "kw = dict(speed=5.0, initial_state=(0.0, -5.0, 0.0), duration=5.0,\n"
+        f"          dt=0.5, engine={engine!r})\n"
+        "r = fws.simulate(veh, Arc(curvature=0.1), g, **kw)\n"
+        "b = fws.simulate_batch(veh, Arc(curvature=0.1), g, **kw)\n"
+        "assert (b.e[0] == r.e).all()\n"
+        "import json\n"
+        "print(json.dumps(r.e.tolist()))\n" + _REPORT
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True,
+                         text=True, cwd=ROOT, timeout=300, check=False)  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    *_, text, report = out.stdout.strip().splitlines()
+    heavy = json.loads(report)["heavy"]
+    assert "control" not in heavy and "matplotlib" not in heavy, heavy
+    veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    g = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
+    ref = fws.simulation.simulate_reference(
+        veh, fws.Arc(curvature=0.1), g, speed=5.0, initial_state=(0.0, -5.0, 0.0),
+        duration=5.0, dt=0.5,
+    )  # fmt: skip
+    # outputs: x, y, psi, s, e, ...
+    np.testing.assert_allclose(json.loads(text), ref.outputs[4], atol=1e-7)

@@ -967,12 +967,17 @@ def _collector_per_figure():
     nothing). The collector's previous state is restored on exit.
     """
     was_enabled = gc.isenabled()
-    gc.freeze()
+    # gc.unfreeze thaws every frozen object: freeze only if the caller has
+    # frozen nothing (e.g. before forking workers), so as to thaw only ours
+    freeze = gc.get_freeze_count() == 0
+    if freeze:
+        gc.freeze()
     gc.disable()
     try:
         yield
     finally:
-        gc.unfreeze()
+        if freeze:
+            gc.unfreeze()
         if was_enabled:
             gc.enable()
 

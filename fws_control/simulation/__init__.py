@@ -21,6 +21,8 @@ becomes singular (``status`` :data:`STATUS_SINGULAR_STEERING`,
 (:data:`STATUS_END_OF_PATH`); the data up to that time are kept.
 """
 
+from typing import TYPE_CHECKING
+
 from .engine import (
     SIGNALS,
     STATUS_END_OF_PATH,
@@ -31,15 +33,43 @@ from .engine import (
     STATUS_UNCONTROLLABLE,
     STATUSES,
 )
-from .reference import (
-    DEFAULT_PADE_ORDER,
-    closed_loop_system,
-    projection_system,
-    reference_initial_state,
-    simulate_reference,
-)
 from .result import SimulationResult
 from .runners import DEFAULT_CHUNK_SIZE, simulate, simulate_batch
+
+if TYPE_CHECKING:
+    from .reference import (
+        DEFAULT_PADE_ORDER,
+        closed_loop_system,
+        projection_system,
+        reference_initial_state,
+        simulate_reference,
+    )
+
+# The reference systems are python-control interconnections: importing them
+# costs python-control's import (0.7 s of CPU), which the engine and the
+# runners do not need, so they are loaded at first use (PEP 562).
+_REFERENCE = frozenset(
+    {
+        "DEFAULT_PADE_ORDER",
+        "closed_loop_system",
+        "projection_system",
+        "reference_initial_state",
+        "simulate_reference",
+    }
+)
+
+
+def __getattr__(name: str):
+    if name in _REFERENCE:
+        from . import reference
+
+        return getattr(reference, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | _REFERENCE)
+
 
 __all__ = [
     "simulate",

@@ -37,9 +37,8 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import control as ct
 import numpy as np
 
 from ..exceptions import SignalNotKeptError
@@ -57,6 +56,11 @@ from .engine import (
     STATUS_SINGULAR_STEERING,
     STATUS_UNCONTROLLABLE,
 )
+
+if TYPE_CHECKING:
+    # python-control costs 0.7 s to import; a result needs it only for
+    # to_time_response and plot, which import it
+    import control as ct
 
 __all__ = ["Peak", "Peaks", "SimulationResult", "expand_runs"]
 
@@ -822,6 +826,8 @@ class SimulationResult:
                 for i, lab in enumerate(self._default_labels())
             ]
         notes = [m for m in self.run_message if m]
+        import control as ct
+
         return ct.TimeResponseData(
             self.t,
             outputs,
@@ -1063,6 +1069,8 @@ class SimulationResult:
             # fig.suptitle, not ControlPlot.set_plot_title: the latter
             # switches a constrained layout to a tight one.
             fig.suptitle(title)
+        import control as ct
+
         return ct.ControlPlot(lines, axes, fig, legend=legend)
 
 
