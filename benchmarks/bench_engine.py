@@ -125,6 +125,51 @@ def first_call(cache_dir: str) -> tuple[float, float, float]:
     return tuple(float(v) for v in out.stdout.split())
 
 
+_FIRST_TOUCH = """
+import sys, time, numpy as np
+from numpy._core.multiarray import _set_madvise_hugepage
+_set_madvise_hugepage(sys.argv[1] == "1")  # numpy's advice for large arrays
+best = float("inf")
+for _ in range(3):
+    t0 = time.process_time()
+    a = np.empty(int(sys.argv[2]) // 8)
+    a.fill(1.0)
+    best = min(best, time.process_time() - t0)
+    del a
+    time.sleep(2.0)  # (freed memory goes back as it would between batches)
+print(best)
+"""
+
+
+def _anon_huge_pages() -> str:
+    """The kernel's count of transparent huge pages in use (Linux), or '?'."""
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("AnonHugePages:"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return "?"
+
+
+def first_touch(nbytes: int, hugepage: bool) -> float:
+    """CPU s to allocate and first write `nbytes` (best of 3, new process).
+
+    With and without numpy's ``MADV_HUGEPAGE`` advice for large arrays (a
+    private numpy switch, used here only to measure): the batch's result is
+    such a fresh array, and on a kernel that never grants huge pages the
+    advice makes every first touch dearer.
+    """
+    out = subprocess.run(
+        [sys.executable, "-c", _FIRST_TOUCH, "1" if hugepage else "0", str(nbytes)],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    return float(out.stdout)
+
+
 def scalar_rhs(k1, k2, a, V, f, kappa):
     """The closed loop of one run, from the formulas (math only)."""
 
@@ -385,6 +430,12 @@ def main() -> None:
           f"({idx.size} runs, states only)")  # fmt: skip
     print(f"  solve_ivp loop + compute_outputs  {t_loop_sig * us:9.1f} us "
           f"({idx.size} runs, the same 15 signals, no peaks)")  # fmt: skip
+    nbytes = n * len(SIGNALS) * t.size * 8
+    touch = {hp: first_touch(nbytes, hp) for hp in (True, False)}
+    print(f"  first touch of a fresh result of that size ({nbytes / 1e9:.2f} GB, "
+          f"new process): {touch[True] / n * us:.1f} us with numpy's huge-page "
+          f"advice, {touch[False] / n * us:.1f} us without "
+          f"(AnonHugePages {_anon_huge_pages()})")  # fmt: skip
     print("ratios:")
     print(f"  simulate_batch / reference (reused arrays) {t_batch / t_ref:6.2f}  "
           "(target <= 2)")  # fmt: skip
