@@ -280,6 +280,59 @@ def test_same_steps_dense_output_as_scipy(name):
     assert np.all(np.abs(out - ref.y) <= 0.1 * _scale(ref.y))
 
 
+def test_max_step_as_scipy_and_accurate_on_a_stiff_actuator():
+    """max_step as scipy's DOP853(max_step=): the same steps from the same
+    inputs, the same whole run; at half the actuator's stability bound
+    (3.2 T) the run agrees with a tight solve_ivp where the unbounded one,
+    stepping at the bound, does not."""
+    tau, max_step = 0.05, 3.2 * 0.05
+    g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=-0.5, pole=-1.0)
+    k1, k2, a = float(g.k1), float(g.k2), float(g.ratio)
+    kappa = _const(0.1)
+    rhs, command, _ = reference_rhs(VEH, kappa, k1, k2, a, 5.0, tau=tau)
+    y0 = np.array([0.0, -5.0, 0.0, *command(-5.0, 0.0, 0.1)])
+    tab = curvature_table(fws.Arc(curvature=0.1))
+    q = shared_parameters(VEH, tab, feedforward=True, time_constant=tau,
+                          max_step=max_step)  # fmt: skip
+    p = np.array([5.0, k1, k2, a])
+    K, y_new, ystage = np.empty((16, 5)), np.empty(5), np.empty(5)
+    solver = DOP853(rhs, 0.0, y0, 15.0, max_step=max_step, **TOL)
+    times = []
+    while solver.status == "running":
+        t, y, f, h_abs = solver.t, solver.y.copy(), solver.f.copy(), solver.h_abs
+        solver.step()
+        times.append(solver.t)
+        ok, t_new, *_, rejected = dop853_step(
+            t, y, f, h_abs, 15.0, TOL["rtol"], TOL["atol"], p, q, tab.breaks,
+            tab.coefs, K, y_new, ystage,
+        )  # fmt: skip
+        assert ok
+        if not rejected:
+            assert t_new == solver.t
+            assert t_new - t <= max_step * (1 + 1e-12)  # (t + h - t: rounding)
+            np.testing.assert_allclose(y_new, solver.y, rtol=1e-14, atol=1e-15)
+    steps = np.diff([0.0, *times])
+    assert np.max(steps) == pytest.approx(max_step)  # the cap binds
+    t_eval = np.linspace(0.0, 15.0, 31)
+    ref = solve_ivp(rhs, (0.0, 15.0), y0, method="Radau", t_eval=t_eval,
+                    rtol=1e-12, atol=1e-14).y  # fmt: skip
+    tol = TOL["atol"] + TOL["rtol"] * np.max(np.abs(ref), axis=1, keepdims=True)
+    units = {}
+    for cap in (max_step, math.inf):
+        qq = shared_parameters(VEH, tab, feedforward=True, time_constant=tau,
+                               max_step=cap)  # fmt: skip
+        out = np.full((5, t_eval.size), np.nan)
+        code, t_stop, n_steps, *_ = solve_run(
+            y0, p, qq, tab.breaks, tab.coefs, t_eval, TOL["rtol"], TOL["atol"],
+            out, np.empty(len(times) + 5),
+        )  # fmt: skip
+        assert (code, t_stop) == (0, 15.0)
+        if cap == max_step:
+            assert n_steps == len(times)
+        units[cap] = float(np.max(np.abs(out - ref) / tol))
+    assert units[max_step] <= 20.0 < 100.0 < units[math.inf], units
+
+
 def test_event_root_as_scipy_on_the_same_step():
     """brentq on the dense output: scipy's root on scipy's step, to 1e-12."""
     k1, k2 = 0.5, -2.0  # k2 < 0: |delta_f| grows to pi/2 - margin

@@ -216,12 +216,15 @@ CURVE = dict(speed=5.0, initial_state=(0.0, -5.0, 0.0), duration=5.0)
         # T) < 10, engine.LONG_RUN_STEPS): DOP853, compiled ...
         (None, {"feedforward": False, "actuator_time_constant": 0.05,
                 "duration": 3.0}, "compiled", "DOP853"),
-        # ... over more (5 s): method="auto" picks LSODA: numpy runs it
-        (None, {"actuator_time_constant": 0.05}, "numpy", "LSODA"),
+        # ... over more (5 s) the numpy engine would take LSODA, the compiled
+        # one runs DOP853 with its steps held to 3.2 T (runners._CAPPED_STEP)
+        (None, {"actuator_time_constant": 0.05}, "compiled", "DOP853"),
         (None, {"method": "DOP853", "actuator_time_constant": 0.001}, "compiled",
          "DOP853"),
-        # method="auto" picks Radau for this stiff actuator: numpy runs it
-        (None, {"actuator_time_constant": 0.001}, "numpy", "Radau"),
+        # Radau's range: capped DOP853 up to 1e5 steps (5 s / 3.2 ms) ...
+        (None, {"actuator_time_constant": 0.001}, "compiled", "DOP853"),
+        # ... beyond (5 s / 32 us = 156,250 steps) numpy's Radau
+        (None, {"actuator_time_constant": 1e-5}, "numpy", "Radau"),
         (None, {"delay": 0.1}, "numpy", "DOP853"),
         (None, {"method": "RK45"}, "numpy", "RK45"),
         (fws.PurePursuit(lookahead=5.0), {}, "numpy", "DOP853"),

@@ -211,54 +211,98 @@ def test_auto_rule_follows_dop853s_error_at_its_stability_bound():
     assert errors[15.0, "LSODA"] <= AGREE, errors
 
 
-def test_auto_rule_gives_a_run_its_own_accuracy_in_any_batch():
-    # The run of the curve scenario at T = 0.05 s over 15 s (47 stability-
-    # bound steps) alone and as the first of 20 runs with other ratios and
-    # poles (-0.2 and -5 alternating): auto takes LSODA for both, in chunks
-    # of at most LSODA_MAX_RUNS runs, and the run's error against the
-    # fixed-step reference stays within the tolerance (AGREE units). The
-    # stacked runs of a numpy chunk share LSODA's steps and error norm, so
-    # the error is not the run's alone (measured 2.0 against 0.72 units: the
-    # issue's 1.5x holds per run only on the compiled engine, or with
-    # chunk_size=1). DOP853 for the batch (the choice for more than 16 runs
-    # before) is far outside the tolerance.
-    tau, duration, rtol, atol = 0.05, 15.0, 1e-10, 1e-12
+def _numba() -> bool:
+    try:
+        import numba  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def _mixed_batch():
+    # the run of the curve scenario (ratio RATIO, pole -1) first, then 19
+    # runs with other ratios and poles -0.2 and -5 alternating (the -5 runs
+    # stop at |delta_f| = pi/2 from the 5 m initial error)
     n = 20
     ratios = np.concatenate([[RATIO], np.linspace(-1.0, 0.5, n - 1)])
     poles = np.concatenate([[-1.0], np.where(np.arange(n - 1) % 2, -0.2, -5.0)])
-    g = fws.double_root_gains(VEH, speed=SPEED, curvature=KAPPA, ratio=ratios,
-                              pole=poles)  # fmt: skip
+    return fws.double_root_gains(VEH, speed=SPEED, curvature=KAPPA, ratio=ratios,
+                                 pole=poles)  # fmt: skip
+
+
+def _batch_units(g, engine, tau=0.05, duration=15.0, rtol=1e-10, atol=1e-12, **kw):
+    """Error of run 0 against the reference [tolerances], alone and in `g`."""
     ref, tol = _check_reference(fws.SteeringGains(g.k1[0], g.k2[0], g.ratio[0]),
                                 tau, math.inf, duration, 1e-3, rtol, atol)  # fmt: skip
-    kw = dict(speed=SPEED, initial_state=(0.0, E0, 0.0), duration=duration,
-              dt=DT_OUT, actuator_time_constant=tau, rtol=rtol, atol=atol,
-              progress=False)  # fmt: skip
+    common = dict(speed=SPEED, initial_state=(0.0, E0, 0.0), duration=duration,
+                  dt=DT_OUT, actuator_time_constant=tau, rtol=rtol, atol=atol,
+                  progress=False, engine=engine, **kw)  # fmt: skip
 
-    def units(res, i=0):
-        y = np.stack([res.s[i], res.e[i], res.theta[i], res.delta_f[i],
-                      res.delta_r[i]], axis=1)  # fmt: skip
+    def units(res):
+        y = np.stack([res.s[0], res.e[0], res.theta[0], res.delta_f[0],
+                      res.delta_r[0]], axis=1)  # fmt: skip
         return float(np.max(np.abs(y - ref) / tol))
 
-    def first(m):
-        return fws.SteeringGains(g.k1[:m], g.k2[:m], g.ratio[:m])
+    one = fws.SteeringGains(g.k1[:1], g.k2[:1], g.ratio[:1])
+    alone = fws.simulate_batch(VEH, fws.Arc(KAPPA), one, **common)
+    batch = fws.simulate_batch(VEH, fws.Arc(KAPPA), g, **common)
+    assert batch.status[0] == "ok"
+    assert set(batch.status[1::2]) == {"singular_steering"}  # stops in the mix
+    return alone, batch, units(alone), units(batch)
 
-    alone = fws.simulate_batch(VEH, fws.Arc(KAPPA), first(1), **kw)
-    batch = fws.simulate_batch(VEH, fws.Arc(KAPPA), g, **kw)
+
+def test_numpy_auto_stacks_lsoda_16_runs_per_chunk_within_the_tolerance():
+    # T = 0.05 s over 15 s (47 stability-bound steps): the numpy engine's
+    # auto takes LSODA for the run alone and in the batch of 20, in chunks
+    # of LSODA_MAX_RUNS runs. The stacked runs of a chunk share LSODA's
+    # steps and error norm, so the error is not the run's alone (measured
+    # 2.0 against 0.72 units), but within the tolerance (AGREE); with
+    # chunk_size=1 it is bitwise the run alone. DOP853 for the batch (the
+    # choice for more than 16 runs before) is far outside the tolerance.
+    g = _mixed_batch()
+    alone, batch, u_alone, u_batch = _batch_units(g, "numpy")
     assert alone.method == batch.method == "LSODA"
-    # (the pole -5 runs stop at |delta_f| = pi/2 from the 5 m initial
-    # error: the chunks also hold stops)
-    assert batch.engine == "numpy" and batch.status[0] == "ok"
-    assert set(batch.status[1::2]) == {"singular_steering"}
-    assert units(alone) <= AGREE
-    assert units(batch) <= AGREE, (units(batch), units(alone))
+    assert u_alone <= AGREE and u_batch <= AGREE, (u_alone, u_batch)
+    kw = dict(speed=SPEED, initial_state=(0.0, E0, 0.0), duration=15.0,
+              dt=DT_OUT, actuator_time_constant=0.05, rtol=1e-10, atol=1e-12,
+              progress=False, engine="numpy")  # fmt: skip
     one_by_one = fws.simulate_batch(VEH, fws.Arc(KAPPA), g, chunk_size=1, **kw)
     np.testing.assert_array_equal(one_by_one.e[0], alone.e[0])
     # the default chunking: the first 16 runs share one solver, the other 4
     # another -- the first run is bitwise the same in a batch of 16
-    first16 = fws.simulate_batch(VEH, fws.Arc(KAPPA), first(LSODA_MAX_RUNS), **kw)
+    m = LSODA_MAX_RUNS
+    first16 = fws.simulate_batch(
+        VEH, fws.Arc(KAPPA), fws.SteeringGains(g.k1[:m], g.k2[:m], g.ratio[:m]), **kw
+    )
     np.testing.assert_array_equal(first16.e[0], batch.e[0])
-    explicit = fws.simulate_batch(VEH, fws.Arc(KAPPA), g, method="DOP853", **kw)
-    assert units(explicit) > AGREE
+    *_, u_dop = _batch_units(g, "numpy", method="DOP853")
+    assert u_dop > AGREE
+
+
+@pytest.mark.skipif(not _numba(), reason="numba is not installed: the compiled engine")
+def test_auto_capped_dop853_gives_each_run_its_own_accuracy():
+    # The default engine (compiled where numba is installed): DOP853 with
+    # its steps held to 3.2 T, half its stability bound, each run alone --
+    # the run's result in the batch of 20 is bitwise the run alone and
+    # within the tolerance; uncapped (the bound) it is not. The same with
+    # binding rate limits (0.2 rad/s, located switches).
+    g = _mixed_batch()
+    alone, batch, u_alone, u_batch = _batch_units(g, "auto")
+    assert batch.engine == "compiled" and batch.method == "DOP853"
+    np.testing.assert_array_equal(batch.signals[0], alone.signals[0])
+    assert u_alone == u_batch <= 10.0, u_alone
+    *_, u_bound = _batch_units(g, "compiled", method="DOP853")
+    assert u_bound > AGREE
+    veh = dataclasses.replace(VEH, max_steer_rate_front=0.2, max_steer_rate_rear=0.2)
+    g0 = fws.SteeringGains(g.k1[0], g.k2[0], g.ratio[0])
+    res = fws.simulate(veh, fws.Arc(KAPPA), g0, speed=SPEED, duration=15.0,
+                       initial_state=(0.0, E0, 0.0), dt=DT_OUT,
+                       actuator_time_constant=0.05)  # fmt: skip
+    assert res.engine == "compiled"
+    ref, tol = _check_reference(g0, 0.05, 0.2, 15.0, 1e-3, 1e-10, 1e-12)
+    assert np.max(np.abs(res.delta_f_rate)) == pytest.approx(0.2, rel=1e-9)
+    y = np.stack([res.s, res.e, res.theta, res.delta_f, res.delta_r], axis=1)
+    assert np.max(np.abs(y - ref) / tol) <= AGREE
 
 
 def test_auto_rule_keeps_dop853_when_a_delay_bounds_the_steps():

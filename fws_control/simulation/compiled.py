@@ -205,7 +205,8 @@ _Q_WHEELBASE, _Q_FF, _Q_MAX_F, _Q_MAX_R, _Q_TAU = 0, 1, 2, 3, 4
 _Q_RATE_F, _Q_RATE_R, _Q_STEER_MARGIN, _Q_CURV_MARGIN = 5, 6, 7, 8
 _Q_PERIOD, _Q_S_LO, _Q_S_HI, _Q_OPEN_LENGTH = 9, 10, 11, 12
 _Q_SWITCH = 13  # 1: clips as modes switched at located events; 0: min/max
-_NQ = 14
+_Q_MAX_STEP = 14  # scipy's max_step (inf: none)
+_NQ = 15
 # Layout of the per run parameter vector.
 _P_SPEED, _P_K1, _P_K2, _P_RATIO = 0, 1, 2, 3
 # modes of the four clips (front/rear angle, front/rear rate): -1, 0 or +1
@@ -420,7 +421,7 @@ def _select_initial_step(t0, y0, t_bound, f0, rtol, atol, p, q, br, co, work):
         h1 = max(1e-6, h0 * 1e-3)
     else:
         h1 = (0.01 / max(d1, d2)) ** (1.0 / (7 + 1))
-    return min(100 * h0, h1, interval_length, np.inf)
+    return min(100 * h0, h1, interval_length, q[_Q_MAX_STEP])
 
 
 @_jit
@@ -561,7 +562,9 @@ def dop853_step(
     """
     m = y.size
     min_step = 10 * abs(np.nextafter(t, np.inf) - t)
-    if h_abs < min_step:
+    if h_abs > q[_Q_MAX_STEP]:
+        h_abs = q[_Q_MAX_STEP]
+    elif h_abs < min_step:
         h_abs = min_step
     step_rejected = False
     rejected = 0
@@ -803,7 +806,7 @@ def _run_impl(
     nfev += 1
     k_out = 0
     while True:
-        # ---- RungeKutta._step_impl (direction +1, max_step inf)
+        # ---- RungeKutta._step_impl (direction +1, max_step q[_Q_MAX_STEP])
         ok, t_new, h, h_abs, n_rej = dop853_step(
             t, y, f, h_abs, t_bound, rtol, atol, p, q, breaks, coefs, K, y_new, ystage
         )
@@ -1686,6 +1689,7 @@ def shared_parameters(
     steer_margin: float = DEFAULT_MARGIN,
     curvature_margin: float = DEFAULT_MARGIN,
     switching: bool = False,
+    max_step: float = math.inf,
 ) -> np.ndarray:
     """The parameter vector shared by all runs of a call (for the kernels).
 
@@ -1705,11 +1709,13 @@ def shared_parameters(
         Locate the switches of the angle and rate clips as events and hold a
         clipped channel by its mode (then the per run parameter vectors have
         8 entries); default False: min/max in the right-hand side.
+    max_step : float, optional
+        Longest step [s], > 0, as scipy's ``max_step`` (default: none).
 
     Returns
     -------
     ndarray
-        Shape ``(14,)``.
+        Shape ``(15,)``.
 
     Examples
     --------
@@ -1726,6 +1732,8 @@ def shared_parameters(
     ):
         if not (isinstance(val, (int, float)) and 0.0 <= val < 1.0):
             raise ValueError(f"{name} must be a number in [0, 1), got {val!r}")
+    if not (isinstance(max_step, (int, float)) and max_step > 0.0):
+        raise ValueError(f"max_step must be a number > 0 [s], got {max_step!r}")
     q = np.empty(_NQ)
     q[_Q_WHEELBASE] = vehicle.wheelbase
     q[_Q_FF] = 1.0 if feedforward else 0.0
@@ -1745,6 +1753,7 @@ def shared_parameters(
         q[_Q_S_LO], q[_Q_S_HI] = -math.inf, math.inf
     q[_Q_OPEN_LENGTH] = table.open_length
     q[_Q_SWITCH] = 1.0 if switching else 0.0
+    q[_Q_MAX_STEP] = float(max_step)
     return q
 
 
@@ -1806,6 +1815,7 @@ def integrate_compiled(
     steer_margin: float = DEFAULT_MARGIN,
     curvature_margin: float = DEFAULT_MARGIN,
     switching: bool = True,
+    max_step: float = math.inf,
     out: np.ndarray | None = None,
     solution: list | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -1846,6 +1856,11 @@ def integrate_compiled(
         that the right-hand side is smooth within every step; False: clip
         with min/max inside the right-hand side, as the numpy engine does
         (its kinks then fall inside steps).
+    max_step : float, optional
+        Longest step [s], as scipy's ``max_step`` (default: none). Half the
+        actuator's stability bound, ``3.2 T``, keeps DOP853's error estimate
+        valid on a stiff loop (see
+        :func:`~fws_control.simulation.engine.choose_method`).
     out : ndarray, optional
         Preallocated ``(n, m, T)`` float array for the states (``m = 3``, or
         5 with an actuator), e.g. a slice of a larger result or a
@@ -1905,6 +1920,7 @@ def integrate_compiled(
         steer_margin=steer_margin,
         curvature_margin=curvature_margin,
         switching=switching,
+        max_step=max_step,
     )
     speed = np.ascontiguousarray(speed, dtype=float).ravel()
     n = speed.size
