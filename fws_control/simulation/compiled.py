@@ -120,6 +120,7 @@ __all__ = [
     "CompiledSolution",
     "shared_parameters",
     "closed_loop_rhs",
+    "closed_loop_jac",
     "dop853_step",
     "dense_output",
     "locate_event",
@@ -342,6 +343,108 @@ def closed_loop_rhs(t, y, p, q, breaks, coefs, out):
         else:
             out[3] = min(max(rf, -mf), mf)
             out[4] = min(max(rr, -mr), mr)
+
+
+@_jit
+def closed_loop_jac(t, y, p, q, breaks, coefs, out):
+    """Jacobian ``d(dy/dt)/dy`` of :func:`closed_loop_rhs`; writes into `out`.
+
+    Analytic, for the implicit Radau method (whose Newton iteration needs
+    it). Where a clip holds a channel (a mode set with ``q[13] = 1``, or
+    the min/max active without switching) that channel's derivative is 0,
+    as in the right-hand side between its switches. `out` is ``(n, n)``
+    with ``n = len(y)`` (5 with an actuator, 3 without).
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> from fws_control.simulation.compiled import closed_loop_jac, curvature_table
+    >>> from fws_control.simulation.compiled import shared_parameters
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> tab = curvature_table(fws.Straight())
+    >>> q = shared_parameters(veh, tab, feedforward=False, time_constant=0.05)
+    >>> p = np.zeros(8); p[:4] = 5.0, 0.1, 0.5, 0.0   # V, k1, k2, ratio
+    >>> J = np.empty((5, 5))
+    >>> closed_loop_jac(0.0, np.zeros(5), p, q, tab.breaks, tab.coefs, J)
+    >>> J[3].round(6).tolist()           # (cf - delta_f) / T, cf = -k1 e - k2 theta
+    [0.0, -2.0, -10.0, -20.0, 0.0]
+    """
+    s, e, th = y[0], y[1], y[2]
+    kappa, slope = _curvature_and_rate(s, q, breaks, coefs)
+    if q[_Q_PERIOD] <= 0.0 and (s < q[_Q_S_LO] or s > q[_Q_S_HI]):
+        slope = 0.0  # the open path's curvature is held outside its domain
+    cf, cr = _raw_command(e, th, kappa, p, q)
+    wheelbase = q[_Q_WHEELBASE]
+    # d(cf, cr)/d(s, e, theta)
+    cf_s = 0.0
+    if q[_Q_FF] != 0.0:
+        lk = wheelbase * kappa
+        cf_s = wheelbase * slope / (1.0 + lk * lk)
+    cf_e, cf_th = -p[_P_K1], -p[_P_K2]
+    a = p[_P_RATIO]
+    cr_s, cr_e, cr_th = 0.0, a * cf_e, a * cf_th
+    mf, mr = q[_Q_MAX_F], q[_Q_MAX_R]
+    switching = q[_Q_SWITCH] != 0.0
+    if (switching and p[_P_MODE] != 0.0) or (not switching and abs(cf) > mf):
+        cf_s, cf_e, cf_th = 0.0, 0.0, 0.0
+    if (switching and p[_P_MODE + 1] != 0.0) or (not switching and abs(cr) > mr):
+        cr_s, cr_e, cr_th = 0.0, 0.0, 0.0
+    tau = q[_Q_TAU]
+    n = y.shape[0]
+    for i in range(n):
+        for j in range(n):
+            out[i, j] = 0.0
+    # d(delta_f, delta_r)/d(s, e, theta) (0 with an actuator: own states)
+    df_x = np.zeros(3)
+    dr_x = np.zeros(3)
+    if tau > 0.0:
+        cf_c, cr_c = _command(e, th, kappa, p, q)
+        df, dr = y[3], y[4]
+    else:
+        cf_c, cr_c = _command(e, th, kappa, p, q)
+        df, dr = cf_c, cr_c
+        df_x[0], df_x[1], df_x[2] = cf_s, cf_e, cf_th
+        dr_x[0], dr_x[1], dr_x[2] = cr_s, cr_e, cr_th
+    V = p[_P_SPEED]
+    c, sn = math.cos(th + dr), math.sin(th + dr)
+    den = 1.0 - kappa * e
+    s_dot = V * c / den
+    cos_f = math.cos(df)
+    # partials in (s, e, theta, delta_f, delta_r) with delta_* held
+    sd = np.empty(5)
+    sd[0] = V * c * slope * e / (den * den)
+    sd[1] = V * c * kappa / (den * den)
+    sd[2] = -V * sn / den
+    sd[3] = 0.0
+    sd[4] = -V * sn / den
+    ed = np.empty(5)
+    ed[0], ed[1], ed[2], ed[3], ed[4] = 0.0, 0.0, V * c, 0.0, V * c
+    td = np.empty(5)
+    for j in range(5):
+        td[j] = -kappa * sd[j]
+    td[0] -= slope * s_dot
+    td[3] += V * math.cos(dr) / (wheelbase * cos_f * cos_f)
+    td[4] -= V * math.cos(df - dr) / (wheelbase * cos_f)
+    if tau > 0.0:
+        for j in range(5):
+            out[0, j], out[1, j], out[2, j] = sd[j], ed[j], td[j]
+        switching_rate_f = switching and p[_P_MODE + 2] != 0.0
+        switching_rate_r = switching and p[_P_MODE + 3] != 0.0
+        rf = (cf_c - df) / tau
+        rr = (cr_c - dr) / tau
+        if not (switching_rate_f or (not switching and abs(rf) > q[_Q_RATE_F])):
+            out[3, 0], out[3, 1], out[3, 2] = cf_s / tau, cf_e / tau, cf_th / tau
+            out[3, 3] = -1.0 / tau
+        if not (switching_rate_r or (not switching and abs(rr) > q[_Q_RATE_R])):
+            out[4, 0], out[4, 1], out[4, 2] = cr_s / tau, cr_e / tau, cr_th / tau
+            out[4, 4] = -1.0 / tau
+    else:
+        # chain rule through delta_f(s, e, theta), delta_r(s, e, theta)
+        rows = (sd, ed, td)
+        for i in range(3):
+            r = rows[i]
+            for j in range(3):
+                out[i, j] = r[j] + r[3] * df_x[j] + r[4] * dr_x[j]
 
 
 @_jit
