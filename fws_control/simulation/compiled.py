@@ -120,6 +120,8 @@ __all__ = [
     "CompiledSolution",
     "shared_parameters",
     "closed_loop_rhs",
+    "closed_loop_jac",
+    "radau_run",
     "dop853_step",
     "dense_output",
     "locate_event",
@@ -343,6 +345,108 @@ def closed_loop_rhs(t, y, p, q, breaks, coefs, out):
         else:
             out[3] = min(max(rf, -mf), mf)
             out[4] = min(max(rr, -mr), mr)
+
+
+@_jit
+def closed_loop_jac(t, y, p, q, breaks, coefs, out):
+    """Jacobian ``d(dy/dt)/dy`` of :func:`closed_loop_rhs`; writes into `out`.
+
+    Analytic, for the implicit Radau method (whose Newton iteration needs
+    it). Where a clip holds a channel (a mode set with ``q[13] = 1``, or
+    the min/max active without switching) that channel's derivative is 0,
+    as in the right-hand side between its switches. `out` is ``(n, n)``
+    with ``n = len(y)`` (5 with an actuator, 3 without).
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> from fws_control.simulation.compiled import closed_loop_jac, curvature_table
+    >>> from fws_control.simulation.compiled import shared_parameters
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> tab = curvature_table(fws.Straight())
+    >>> q = shared_parameters(veh, tab, feedforward=False, time_constant=0.05)
+    >>> p = np.zeros(8); p[:4] = 5.0, 0.1, 0.5, 0.0   # V, k1, k2, ratio
+    >>> J = np.empty((5, 5))
+    >>> closed_loop_jac(0.0, np.zeros(5), p, q, tab.breaks, tab.coefs, J)
+    >>> J[3].round(6).tolist()           # (cf - delta_f) / T, cf = -k1 e - k2 theta
+    [0.0, -2.0, -10.0, -20.0, 0.0]
+    """
+    s, e, th = y[0], y[1], y[2]
+    kappa, slope = _curvature_and_rate(s, q, breaks, coefs)
+    if q[_Q_PERIOD] <= 0.0 and (s < q[_Q_S_LO] or s > q[_Q_S_HI]):
+        slope = 0.0  # the open path's curvature is held outside its domain
+    cf, cr = _raw_command(e, th, kappa, p, q)
+    wheelbase = q[_Q_WHEELBASE]
+    # d(cf, cr)/d(s, e, theta)
+    cf_s = 0.0
+    if q[_Q_FF] != 0.0:
+        lk = wheelbase * kappa
+        cf_s = wheelbase * slope / (1.0 + lk * lk)
+    cf_e, cf_th = -p[_P_K1], -p[_P_K2]
+    a = p[_P_RATIO]
+    cr_s, cr_e, cr_th = 0.0, a * cf_e, a * cf_th
+    mf, mr = q[_Q_MAX_F], q[_Q_MAX_R]
+    switching = q[_Q_SWITCH] != 0.0
+    if (switching and p[_P_MODE] != 0.0) or (not switching and abs(cf) > mf):
+        cf_s, cf_e, cf_th = 0.0, 0.0, 0.0
+    if (switching and p[_P_MODE + 1] != 0.0) or (not switching and abs(cr) > mr):
+        cr_s, cr_e, cr_th = 0.0, 0.0, 0.0
+    tau = q[_Q_TAU]
+    n = y.shape[0]
+    for i in range(n):
+        for j in range(n):
+            out[i, j] = 0.0
+    # d(delta_f, delta_r)/d(s, e, theta) (0 with an actuator: own states)
+    df_x = np.zeros(3)
+    dr_x = np.zeros(3)
+    if tau > 0.0:
+        cf_c, cr_c = _command(e, th, kappa, p, q)
+        df, dr = y[3], y[4]
+    else:
+        cf_c, cr_c = _command(e, th, kappa, p, q)
+        df, dr = cf_c, cr_c
+        df_x[0], df_x[1], df_x[2] = cf_s, cf_e, cf_th
+        dr_x[0], dr_x[1], dr_x[2] = cr_s, cr_e, cr_th
+    V = p[_P_SPEED]
+    c, sn = math.cos(th + dr), math.sin(th + dr)
+    den = 1.0 - kappa * e
+    s_dot = V * c / den
+    cos_f = math.cos(df)
+    # partials in (s, e, theta, delta_f, delta_r) with delta_* held
+    sd = np.empty(5)
+    sd[0] = V * c * slope * e / (den * den)
+    sd[1] = V * c * kappa / (den * den)
+    sd[2] = -V * sn / den
+    sd[3] = 0.0
+    sd[4] = -V * sn / den
+    ed = np.empty(5)
+    ed[0], ed[1], ed[2], ed[3], ed[4] = 0.0, 0.0, V * c, 0.0, V * c
+    td = np.empty(5)
+    for j in range(5):
+        td[j] = -kappa * sd[j]
+    td[0] -= slope * s_dot
+    td[3] += V * math.cos(dr) / (wheelbase * cos_f * cos_f)
+    td[4] -= V * math.cos(df - dr) / (wheelbase * cos_f)
+    if tau > 0.0:
+        for j in range(5):
+            out[0, j], out[1, j], out[2, j] = sd[j], ed[j], td[j]
+        switching_rate_f = switching and p[_P_MODE + 2] != 0.0
+        switching_rate_r = switching and p[_P_MODE + 3] != 0.0
+        rf = (cf_c - df) / tau
+        rr = (cr_c - dr) / tau
+        if not (switching_rate_f or (not switching and abs(rf) > q[_Q_RATE_F])):
+            out[3, 0], out[3, 1], out[3, 2] = cf_s / tau, cf_e / tau, cf_th / tau
+            out[3, 3] = -1.0 / tau
+        if not (switching_rate_r or (not switching and abs(rr) > q[_Q_RATE_R])):
+            out[4, 0], out[4, 1], out[4, 2] = cr_s / tau, cr_e / tau, cr_th / tau
+            out[4, 4] = -1.0 / tau
+    else:
+        # chain rule through delta_f(s, e, theta), delta_r(s, e, theta)
+        rows = (sd, ed, td)
+        for i in range(3):
+            r = rows[i]
+            for j in range(3):
+                out[i, j] = r[j] + r[3] * df_x[j] + r[4] * dr_x[j]
 
 
 @_jit
@@ -1567,6 +1671,279 @@ class CurvatureTable:
             f"CurvatureTable(pieces={self.coefs.shape[0]}, period={self.period}, "
             f"open_length={self.open_length}, max_error={self.max_error:.3g})"
         )
+
+
+# --------------------------------------------------------------------------
+# Radau IIA (order 5), a port of scipy.integrate.Radau (no events yet)
+
+_S6 = 6**0.5
+_RC = np.array([(4 - _S6) / 10, (4 + _S6) / 10, 1.0])
+_RE = np.array([-13 - 7 * _S6, -13 + 7 * _S6, -1.0]) / 3
+_MU_REAL = 3 + 3 ** (2 / 3) - 3 ** (1 / 3)
+_MU_COMPLEX = (
+    3 + 0.5 * (3 ** (1 / 3) - 3 ** (2 / 3)) - 0.5j * (3 ** (5 / 6) + 3 ** (7 / 6))
+)
+_RT = np.array([
+    [0.09443876248897524, -0.14125529502095421, 0.03002919410514742],
+    [0.25021312296533332, 0.20412935229379994, -0.38294211275726192],
+    [1, 1, 0]])  # fmt: skip
+_RTI = np.array([
+    [4.17871859155190428, 0.32768282076106237, 0.52337644549944951],
+    [-4.17871859155190428, -0.32768282076106237, 0.47662355450055044],
+    [0.50287263494578682, -2.57192694985560522, 0.59603920482822492]])  # fmt: skip
+_RP = np.array([
+    [13/3 + 7*_S6/3, -23/3 - 22*_S6/3, 10/3 + 5 * _S6],
+    [13/3 - 7*_S6/3, -23/3 + 22*_S6/3, 10/3 - 5 * _S6],
+    [1/3, -8/3, 10/3]])  # fmt: skip
+_NEWTON_MAXITER = 6
+
+
+@_jit
+def _rms2(x):
+    return math.sqrt(np.sum(x * x) / x.size)
+
+
+@_jit
+def _predict_factor(h_abs, h_abs_old, error_norm, error_norm_old):
+    if error_norm_old < 0.0 or h_abs_old < 0.0 or error_norm == 0:
+        multiplier = 1.0
+    else:
+        multiplier = h_abs / h_abs_old * (error_norm_old / error_norm) ** 0.25
+    if error_norm == 0.0:
+        return np.inf
+    return min(1.0, multiplier) * error_norm**-0.25
+
+
+@_jit
+def radau_run(y0, p, q, breaks, coefs, t0, t_bound, h0, rtol, atol, ts, ys, qs):
+    """Integrate one run with Radau IIA order 5: a port of scipy's ``Radau``.
+
+    The same steps as :class:`scipy.integrate.Radau` given the first step
+    `h0` and the Jacobian :func:`closed_loop_jac` (simplified Newton with a
+    real and a complex system, scipy's step-size control and Jacobian/LU
+    reuse). Writes the accepted times into `ts` (``ts[0] = t0``), states
+    into `ys` and each step's dense-output matrix ``Q`` (scipy's
+    ``RadauDenseOutput.Q``, ``(n, 3)``) into `qs`; returns ``(steps,
+    status)``, status 0 when `t_bound` was reached, 1 out of room, -1 step
+    too small. Not used by the engines yet (no events: the clips must be
+    min/max, ``q[13] = 0``).
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> from fws_control.simulation.compiled import radau_run, curvature_table
+    >>> from fws_control.simulation.compiled import shared_parameters
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> tab = curvature_table(fws.Straight())
+    >>> q = shared_parameters(veh, tab, feedforward=False, time_constant=0.05)
+    >>> p = np.zeros(8); p[:4] = 5.0, 0.1, 0.5, 0.0
+    >>> m = 5000
+    >>> ts, ys, qs = np.empty(m), np.empty((m, 5)), np.empty((m, 5, 3))
+    >>> n, status = radau_run(np.array([0, 1.0, 0, 0, 0]), p, q, tab.breaks,
+    ...                       tab.coefs, 0.0, 30.0, 1e-3, 1e-8, 1e-10, ts, ys, qs)
+    >>> status, bool(abs(ys[n, 1]) < 0.05)
+    (0, True)
+    """
+    n = y0.size
+    tol_newton = max(10 * _EPS / rtol, min(0.03, rtol**0.5))
+    t = t0
+    y = y0.copy()
+    f = np.empty(n)
+    closed_loop_rhs(t, y, p, q, breaks, coefs, f)
+    J = np.empty((n, n))
+    closed_loop_jac(t, y, p, q, breaks, coefs, J)
+    current_jac = True
+    have_lu = False
+    M_real = np.empty((n, n))
+    M_complex = np.empty((n, n), dtype=np.complex128)
+    have_sol = False
+    Q = np.zeros((n, 3))
+    y_old = y.copy()
+    t_old = t
+    # scipy's stored h_abs, h_abs_old, error_norm_old (-1: None)
+    s_h_abs = h0
+    s_h_abs_old = -1.0
+    s_error_norm_old = -1.0
+    ts[0] = t
+    ys[0] = y
+    k_step = 0
+    Z = np.zeros((3, n))
+    F = np.empty((3, n))
+    dW = np.empty((3, n))
+    yst = np.empty(n)
+    fst = np.empty(n)
+    while t < t_bound:
+        if k_step + 1 >= ts.size:
+            return k_step, 1
+        min_step = 10 * abs(np.nextafter(t, np.inf) - t)
+        if s_h_abs < min_step:
+            h_abs = min_step
+            h_abs_old = -1.0
+            error_norm_old = -1.0
+        else:
+            h_abs = s_h_abs
+            h_abs_old = s_h_abs_old
+            error_norm_old = s_error_norm_old
+        rejected = False
+        accepted = False
+        n_iter = 0
+        rate = -1.0
+        error_norm = 0.0
+        safety = 0.0
+        t_new = t
+        h = 0.0
+        while not accepted:
+            if h_abs < min_step:
+                return k_step, -1
+            h = h_abs
+            t_new = t + h
+            if t_new - t_bound > 0:
+                t_new = t_bound
+            h = t_new - t
+            h_abs = abs(h)
+            Z0 = np.zeros((3, n))
+            if have_sol:
+                for i in range(3):
+                    x = (t + h * _RC[i] - t_old) / (t - t_old)
+                    x2 = x * x
+                    x3 = x2 * x
+                    for j in range(n):
+                        Z0[i, j] = (
+                            Q[j, 0] * x + Q[j, 1] * x2 + Q[j, 2] * x3 + y_old[j]
+                        ) - y[j]
+            scale = atol + np.abs(y) * rtol
+            converged = False
+            while not converged:
+                if not have_lu:
+                    for i in range(n):
+                        for j in range(n):
+                            eye = 1.0 if i == j else 0.0
+                            M_real[i, j] = _MU_REAL / h * eye - J[i, j]
+                            M_complex[i, j] = _MU_COMPLEX / h * eye - J[i, j]
+                    have_lu = True
+                # solve_collocation_system
+                Mr = _MU_REAL / h
+                Mc = _MU_COMPLEX / h
+                W = _RTI @ Z0
+                Z = Z0.copy()
+                dW_norm_old = -1.0
+                converged = False
+                rate = -1.0
+                finite = True
+                k = 0
+                for k in range(_NEWTON_MAXITER):
+                    for i in range(3):
+                        for j in range(n):
+                            yst[j] = y[j] + Z[i, j]
+                        closed_loop_rhs(t + h * _RC[i], yst, p, q, breaks, coefs,
+                                        fst)  # fmt: skip
+                        F[i] = fst
+                    if not np.all(np.isfinite(F)):
+                        finite = False
+                        break
+                    f_real = np.empty(n)
+                    f_complex = np.empty(n, dtype=np.complex128)
+                    for j in range(n):
+                        f_real[j] = (
+                            F[0, j] * _RTI[0, 0] + F[1, j] * _RTI[0, 1]
+                            + F[2, j] * _RTI[0, 2]
+                        ) - Mr * W[0, j]  # fmt: skip
+                        f_complex[j] = (
+                            F[0, j] * (_RTI[1, 0] + 1j * _RTI[2, 0])
+                            + F[1, j] * (_RTI[1, 1] + 1j * _RTI[2, 1])
+                            + F[2, j] * (_RTI[1, 2] + 1j * _RTI[2, 2])
+                        ) - Mc * (W[1, j] + 1j * W[2, j])  # fmt: skip
+                    dW_real = np.linalg.solve(M_real, f_real)
+                    dW_complex = np.linalg.solve(M_complex, f_complex)
+                    dW[0] = dW_real
+                    dW[1] = dW_complex.real
+                    dW[2] = dW_complex.imag
+                    sc = np.empty((3, n))
+                    for i in range(3):
+                        sc[i] = dW[i] / scale
+                    dW_norm = _rms2(sc)
+                    if dW_norm_old >= 0.0:
+                        rate = dW_norm / dW_norm_old
+                    if rate >= 0.0 and (
+                        rate >= 1
+                        or rate ** (_NEWTON_MAXITER - k) / (1 - rate) * dW_norm
+                        > tol_newton
+                    ):
+                        break
+                    W += dW
+                    Z = _RT @ W
+                    if dW_norm == 0 or (
+                        rate >= 0.0 and rate / (1 - rate) * dW_norm < tol_newton
+                    ):
+                        converged = True
+                        break
+                    dW_norm_old = dW_norm
+                if not finite:
+                    converged = False
+                n_iter = k + 1
+                if not converged:
+                    if current_jac:
+                        break
+                    closed_loop_jac(t, y, p, q, breaks, coefs, J)
+                    current_jac = True
+                    have_lu = False
+            if not converged:
+                h_abs *= 0.5
+                have_lu = False
+                continue
+            y_new = y + Z[2]
+            ZE = np.empty(n)
+            for j in range(n):
+                ZE[j] = (Z[0, j] * _RE[0] + Z[1, j] * _RE[1] + Z[2, j] * _RE[2]) / h
+            error = np.linalg.solve(M_real, f + ZE)
+            scale = atol + np.maximum(np.abs(y), np.abs(y_new)) * rtol
+            error_norm = _rms2(error / scale)
+            safety = 0.9 * (2 * _NEWTON_MAXITER + 1) / (2 * _NEWTON_MAXITER + n_iter)
+            if rejected and error_norm > 1:
+                closed_loop_rhs(t, y + error, p, q, breaks, coefs, fst)
+                error = np.linalg.solve(M_real, fst + ZE)
+                error_norm = _rms2(error / scale)
+            if error_norm > 1:
+                factor = _predict_factor(h_abs, h_abs_old, error_norm, error_norm_old)
+                h_abs *= max(_MIN_FACTOR, safety * factor)
+                have_lu = False
+                rejected = True
+            else:
+                accepted = True
+        recompute_jac = n_iter > 2 and rate > 1e-3
+        factor = _predict_factor(h_abs, h_abs_old, error_norm, error_norm_old)
+        factor = min(_MAX_FACTOR, safety * factor)
+        if not recompute_jac and factor < 1.2:
+            factor = 1.0
+        else:
+            have_lu = False
+        f_new = np.empty(n)
+        closed_loop_rhs(t_new, y_new, p, q, breaks, coefs, f_new)
+        if recompute_jac:
+            closed_loop_jac(t_new, y_new, p, q, breaks, coefs, J)
+            current_jac = True
+        else:
+            current_jac = False
+        # as scipy: the old step is the one this step was asked to try
+        s_h_abs_old = s_h_abs
+        s_error_norm_old = error_norm
+        s_h_abs = h_abs * factor
+        y_old = y
+        t_old = t
+        t = t_new
+        y = y_new
+        f = f_new
+        for j in range(n):
+            for m in range(3):
+                Q[j, m] = (
+                    Z[0, j] * _RP[0, m] + Z[1, j] * _RP[1, m] + Z[2, j] * _RP[2, m]
+                )
+        have_sol = True
+        k_step += 1
+        ts[k_step] = t
+        ys[k_step] = y
+        qs[k_step - 1] = Q
+    return k_step, 0
 
 
 def _exact_pieces(path) -> tuple[list[float], list[list[float]]] | None:
