@@ -89,19 +89,23 @@ def test_reproduce_restores_the_garbage_collector(tmp_path, monkeypatch, enabled
                                                  caller_froze):  # fmt: skip
     """reproduce pauses the collector while drawing and leaves it as it was
     (enabled or not, the caller's frozen objects still frozen), also when a
-    figure fails; during the figures the collector is off."""
+    figure fails; each closed figure is freed before the next is made."""
     import gc
+    import weakref
 
     import fws_control.paper.figures as figures
 
-    seen = []
+    seen, made = [], []
     make = figures._make
 
     def spy(name, model, quick):
-        seen.append((gc.isenabled(), gc.get_freeze_count() > 0))
+        # collector state, and how many earlier figures are still alive
+        seen.append((gc.isenabled(), sum(r() is not None for r in made)))
         if name == "extra_turning_radius":
             raise RuntimeError("figure failed")
-        return make(name, model, quick)
+        fig = make(name, model, quick)
+        made.append(weakref.ref(fig))
+        return fig
 
     monkeypatch.setattr(figures, "_make", spy)
     was = gc.isenabled()
@@ -111,7 +115,7 @@ def test_reproduce_restores_the_garbage_collector(tmp_path, monkeypatch, enabled
         frozen = gc.get_freeze_count()
         (gc.enable if enabled else gc.disable)()
         reproduce(tmp_path / "ok", quick=True, progress=False, dpi=40,
-                  names=["fig2"])  # fmt: skip
+                  names=["fig2", "fig6", "extra_root_loci"])  # fmt: skip
         # (frozen objects can still die: the count may only fall, not to 0)
         assert gc.isenabled() == enabled
         assert (
@@ -131,7 +135,7 @@ def test_reproduce_restores_the_garbage_collector(tmp_path, monkeypatch, enabled
     finally:
         gc.unfreeze()
         (gc.enable if was else gc.disable)()
-    assert seen == [(False, True)] * 3
+    assert seen == [(False, 0)] * 5
 
 
 def test_reproduce_subset_writes_pngs_and_summary(tmp_path):
