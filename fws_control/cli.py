@@ -1248,22 +1248,75 @@ class _Terminated(BaseException):
 
 
 @contextlib.contextmanager
-def _terminate_raises():
-    """Turn SIGTERM into :class:`_Terminated` for the duration of a command."""
+def _signals_raise():
+    """Turn SIGTERM and Ctrl-C into exceptions that cannot be lost.
+
+    A signal handler's exception is raised in whatever Python code runs
+    when the signal arrives. If that is a weak-reference callback or a
+    ``__del__`` method (matplotlib runs many while a figure is drawn and
+    closed), Python prints "Exception ignored" and carries on, and the
+    signal would be lost: ``reproduce`` then finished with status 0. So the
+    handler also records the signal; a swallowed exception is not printed
+    but the signal delivered again from another thread a millisecond later
+    (:func:`_thread.interrupt_main`), so that the handler runs again in the
+    interrupted code; and leaving the block normally with a signal recorded
+    raises it (:class:`_Terminated` for SIGTERM, ``KeyboardInterrupt`` for
+    SIGINT). SIGINT is taken over only from Python's default handler, so
+    an ignored SIGINT stays ignored.
+    """
+    import _thread
     import threading
 
     if threading.current_thread() is not threading.main_thread():
         yield
         return
 
-    def handler(signum, frame):
-        raise _Terminated
+    received: list[int] = []
+    in_hook = [False]
 
-    old = signal.signal(signal.SIGTERM, handler)
+    def exception_for(signum):
+        return _Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+
+    def deliver_later(signum):
+        # from another thread, 1 ms later: by then the hook has returned and
+        # the handler runs in the code the swallowing callback interrupted
+        timer = threading.Timer(0.001, _thread.interrupt_main, args=(signum,))
+        timer.daemon = True
+        timer.start()
+
+    def handler(signum, frame):
+        received.append(signum)
+        if in_hook[0]:  # raising here would be swallowed once more
+            deliver_later(signum)
+            return
+        raise exception_for(signum)
+
+    old_hook = sys.unraisablehook
+
+    def unraisable(info):
+        if received and isinstance(info.exc_value, (_Terminated, KeyboardInterrupt)):
+            # The handler ran inside a callback, which swallowed its
+            # exception: deliver the signal again. No traceback printed.
+            in_hook[0] = True
+            try:
+                deliver_later(received[-1])
+            finally:
+                in_hook[0] = False
+            return
+        old_hook(info)
+
+    old = {signal.SIGTERM: signal.signal(signal.SIGTERM, handler)}
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        old[signal.SIGINT] = signal.signal(signal.SIGINT, handler)
+    sys.unraisablehook = unraisable
     try:
         yield
+        if received:
+            raise exception_for(received[0])
     finally:
-        signal.signal(signal.SIGTERM, old)
+        sys.unraisablehook = old_hook
+        for signum, previous in old.items():
+            signal.signal(signum, previous)
 
 
 def _print_warnings(command: str, caught) -> None:
@@ -1319,7 +1372,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         # SIGTERM and Ctrl-C end in one line from here on, even while the
         # libraries are still being imported.
-        with _terminate_raises():
+        with _signals_raise():
             import logging
 
             # Agg for every figure, without importing matplotlib here (0.2 s
@@ -1383,8 +1436,9 @@ def run() -> None:
     (:func:`gc.freeze`), so that the interpreter's last garbage collection
     does not traverse the hundreds of thousands of objects of python-control,
     scipy and matplotlib only to free memory the operating system reclaims
-    at exit anyway: 0.6-0.7 s of CPU after ``reproduce`` (measured: 7.30
-    against 6.64 s for the whole process). Modules are still torn down and
+    at exit anyway: 0.6-0.7 s of CPU after ``reproduce`` (measured with
+    ``benchmarks/bench_startup.py``, alternating with the previous version:
+    7.46 against 6.63 s for the whole process, see docs/performance.md). Modules are still torn down and
     ``atexit`` handlers still run; every file is closed by then (the
     commands write through context managers). Library code and tests call
     :func:`main`, which leaves the collector alone.

@@ -14,8 +14,10 @@ import re
 import signal
 import subprocess
 import sys
+import threading
 import time
 import warnings
+import weakref
 
 import control as ct
 import matplotlib.image as mpimg
@@ -645,3 +647,68 @@ def test_fuzz_gains_one_line_or_a_checked_design(pairs):
     poles = [complex(p.strip().replace(" ", "")) for p in got[1].split(",")]
     for p in poles:
         assert abs(p - ns.pole) <= 2e-3 * abs(ns.pole) + 2e-6, (argv, poles)
+
+
+class _Dropped:
+    """An object whose weak-reference callback sends a signal to this process."""
+
+
+def _signal_inside_a_callback(sig):
+    """Send ``sig`` from a weak-reference callback, as matplotlib's run."""
+    obj = _Dropped()
+
+    def callback(_):
+        os.kill(os.getpid(), sig)
+        sum(range(10))  # Python code: the handler runs here, in the callback
+
+    ref = weakref.ref(obj, callback)
+    del obj
+    return ref
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
+@pytest.mark.parametrize(
+    "sig, exc", [(signal.SIGTERM, cli._Terminated), (signal.SIGINT, KeyboardInterrupt)]
+)
+def test_a_signal_inside_a_callback_is_not_lost(sig, exc, capsys):
+    # The CI run that found it: SIGTERM arrived in a WeakKeyDictionary
+    # callback of matplotlib, Python printed "Exception ignored" and
+    # reproduce finished every figure with status 0.
+    assert threading.current_thread() is threading.main_thread()
+    before = signal.getsignal(sig)
+    reached = []
+    with pytest.raises(exc):
+        with cli._signals_raise():
+            _signal_inside_a_callback(sig)
+            t0 = time.monotonic()
+            while time.monotonic() < t0 + 5:  # the signal comes again here
+                pass
+            reached.append("after the callback")
+    assert reached == []  # raised in the interrupted code, within 5 s
+    assert "Exception ignored" not in capsys.readouterr().err
+    assert signal.getsignal(sig) is before
+
+    # the control: a handler that only raises loses the same signal
+    def plain(signum, frame):
+        raise exc()
+
+    old = signal.signal(sig, plain)
+    try:
+        _signal_inside_a_callback(sig)
+        reached.append("after the callback")
+    finally:
+        signal.signal(sig, old)
+    assert reached == ["after the callback"]
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+def test_an_ignored_ctrl_c_stays_ignored():
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        with cli._signals_raise():
+            assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+            assert signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGINT, old)

@@ -131,3 +131,50 @@ def test_bad_delay_is_refused(bad):
             VEH, fws.Straight(), fws.SteeringGains(0.1, 0.5, 0.0), speed=5.0,
             initial_state=(0.0, 1.0, 0.0), duration=1.0, delay=bad,
         )  # fmt: skip
+
+
+def test_batch_command_follows_each_runs_delayed_samples_also_after_a_stop():
+    # Three runs at different speeds on an open 40 m straight: the fastest
+    # reaches its end (a stop) first. Every applied angle after the delay is
+    # -k1 e(t - tau) - k2 theta(t - tau) read off that run's own samples, and
+    # its rate the central difference of the angle: the delayed rows of all
+    # (run, time) pairs, evaluated together, against the formula per sample.
+    tau, dt = 0.5, 0.01
+    k1, k2 = np.array([0.1, 0.2, 0.05]), np.array([0.5, 0.8, 0.4])
+    g = fws.SteeringGains(k1, k2, ratio=np.array([0.0, -0.5, 0.5]))
+    res = fws.simulate_batch(
+        VEH, fws.Straight(length=40.0), g, speed=np.array([5.0, 8.0, 20.0]),
+        initial_state=(0.0, 1.0, 0.0), duration=4.0, delay=tau, dt=dt,
+        feedforward=False, engine="numpy",
+    )  # fmt: skip
+    assert res.status[2] == "end_of_path" and res.t_stop[2] < 2.5  # 40 m at 20 m/s
+    # the 8 m/s run is unstable with this delay and stops at the margin
+    # pi/2 - 1e-3 before the singular yaw rate (at pi/2 itself the step size
+    # collapsed first: 4455 steps, seconds of CPU)
+    assert res.status[1] == "singular_steering"
+    assert res.peaks.delta_f.value[1] == pytest.approx(np.pi / 2 - 1e-3, abs=1e-9)
+    lag = round(tau / dt)
+    for i in range(3):
+        e, th, df = res.e[i], res.theta[i], res.delta_f[i]
+        n = np.count_nonzero(np.isfinite(e))
+        want = -k1[i] * e[: n - lag] - k2[i] * th[: n - lag]
+        np.testing.assert_allclose(df[lag:n], want, rtol=0, atol=1e-9)
+        # (away from t = 2 tau, 3 tau, where the angle's second derivative
+        # jumps and the central difference is off by dt times the jump)
+        k = np.arange(lag + 1, n - 1)
+        k = k[np.abs((k + lag // 2) % lag - lag // 2) > 1]
+        fd = (df[k + 1] - df[k - 1]) / (2 * dt)
+        # central-difference error dt^2/6 |d3 delta_f/dt3|: below 2e-4 of the
+        # largest rate for these runs
+        rate = res.delta_f_rate[i][k]
+        np.testing.assert_allclose(rate, fd, atol=2e-4 * np.max(np.abs(rate)))
+        alone = fws.simulate(
+            VEH, fws.Straight(length=40.0),
+            fws.SteeringGains(k1[i], k2[i], ratio=g.ratio[i]), speed=res.speed[i],
+            initial_state=(0.0, 1.0, 0.0), duration=4.0, delay=tau, dt=dt,
+            feedforward=False, engine="numpy",
+        )  # fmt: skip
+        assert alone.t.size == n  # the run alone stops at the same sample
+        np.testing.assert_allclose(
+            alone.delta_f_rate, res.delta_f_rate[i][:n], atol=1e-8
+        )

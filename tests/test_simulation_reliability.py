@@ -118,9 +118,8 @@ def test_loose_tolerances_still_stop_at_the_singular_steering_angle(rtol, atol, 
     # t = 4.62 s (at the default tolerances). Before the margins were checked
     # inside every step, rtol = atol = 0.1 sampled |delta_f| = 1.997 > pi/2
     # before the stop (both engines check them at 3 points inside each step).
-    # The numpy engine stops at |delta_f| = pi/2, the compiled one at its
-    # margin pi/2 - 1e-3.
-    stop = {"numpy": math.pi / 2, "compiled": math.pi / 2 - 1e-3}[engine]
+    # Both engines stop at the margin |delta_f| = pi/2 - 1e-3.
+    stop = math.pi / 2 - 1e-3
     g = fws.SteeringGains(k1=0.1, k2=-0.5, ratio=0.0)
     kw = {"speed": 5.0, "initial_state": (0.0, 1.0, 0.0), "duration": 10.0}
     kw.update(feedforward=False, dt=0.01, engine=engine)

@@ -102,6 +102,7 @@ from .engine import (
     STATUS_OK,
     STATUS_SINGULAR_CURVATURE,
     STATUS_SINGULAR_STEERING,
+    STOP_MARGIN,
 )
 
 try:  # optional dependency (extra "fast")
@@ -143,8 +144,9 @@ STATUS_CODES = (
 #: Per run statistics returned by :func:`integrate_compiled` (columns).
 STAT_FIELDS = ("steps", "rejected", "rhs_evaluations", "stiff", "switches")
 
-#: Default stop margins ``steer_margin`` [rad] and ``curvature_margin`` [-].
-DEFAULT_MARGIN = 1e-3
+#: Default stop margins ``steer_margin`` [rad] and ``curvature_margin`` [-]:
+#: the numpy engine's :data:`~fws_control.simulation.engine.STOP_MARGIN`.
+DEFAULT_MARGIN = STOP_MARGIN
 
 _MESSAGES = {
     STATUS_SINGULAR_STEERING: "front steering angle reached |delta_f| = pi/2 - "
@@ -1255,7 +1257,8 @@ def _signals_batch(states, P, q, breaks, coefs, d_cg, pose, sig):
                 cos_ks = (cs - sn) * (cs + sn)
                 lx = sin_ks / kp
                 ly = 2.0 * sn * sn / kp
-                # sin, cos of the heading psi0 + kappa s by rotation
+                # sin, cos of the heading psi0 + kappa sp by rotation (sp is
+                # s wrapped to the lap: the same angle modulo 2 pi)
                 sh = s0 * cos_ks + c0 * sin_ks
                 ch = c0 * cos_ks - s0 * sin_ks
             px = x0 + c0 * lx - s0 * ly

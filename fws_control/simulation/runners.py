@@ -942,8 +942,8 @@ def simulate_batch(
         Runs per chunk (one solver; one Dask task); default
         :data:`DEFAULT_CHUNK_SIZE`, or
         :data:`~fws_control.simulation.engine.LSODA_MAX_RUNS` (16) when the
-        numpy engine integrates with LSODA (``method="auto"`` with a stiff
-        actuator over a long run). Smaller chunks decouple the step sizes of
+        numpy engine integrates with LSODA (``method="LSODA"``, or what
+        ``method="auto"`` picks for a stiff actuator over a long run). Smaller chunks decouple the step sizes of
         runs with very different dynamics.
     client : dask.distributed.Client, optional
         Submit the chunks to this Dask cluster (needs the extra
