@@ -1438,10 +1438,11 @@ def run() -> None:
     scipy and matplotlib only to free memory the operating system reclaims
     at exit anyway: 0.6-0.7 s of CPU after ``reproduce`` (measured with
     ``benchmarks/bench_startup.py``, alternating with the previous version:
-    7.46 against 6.63 s for the whole process, see docs/performance.md). Modules are still torn down and
-    ``atexit`` handlers still run; every file is closed by then (the
-    commands write through context managers). Library code and tests call
-    :func:`main`, which leaves the collector alone.
+    7.46 against 6.63 s for the whole process, see docs/performance.md).
+    Modules are still torn down and ``atexit`` handlers still run; every
+    file is closed by then (the commands write through context managers).
+    Library code and tests call :func:`main`, which leaves the collector
+    alone.
 
     Examples
     --------

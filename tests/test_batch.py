@@ -62,7 +62,9 @@ def test_batch_agrees_with_simulate_with_per_run_gains_speeds_and_states():
 #: When run 2 of _stopping_batch stops: it heads from e = 5 m straight at the
 #: centre (e = 10 m) at 5 m/s; 1 - e/10 = 0 at t = 1 s, and = 1e-3 (the
 #: compiled engine's margin) at e = 9.99 m, t = 0.998 s.
-_CENTRE_STOP = {"numpy": 1.0, "compiled": 0.998}
+# 5 m at 5 m/s to 1 - kappa e = 0 is t = 1 s; both engines stop at their
+# margin 1 - kappa e = 1e-3, 0.01 m earlier
+_CENTRE_STOP = 0.998
 
 
 def _stopping_batch():
@@ -100,9 +102,7 @@ def test_singular_runs_stop_and_the_others_continue():
     assert batch.singular.tolist() == [True, True, True, False]
     assert batch.t_stop[0] == 0.0
     assert 0.0 < batch.t_stop[1] < 6.0
-    # 5 m at 5 m/s to 1 - kappa e = 0 (numpy engine); the compiled engine
-    # (the default with numba) stops at 1 - kappa e = 1e-3, 0.01 m earlier
-    assert batch.t_stop[2] == pytest.approx(_CENTRE_STOP[batch.engine], abs=1e-9)
+    assert batch.t_stop[2] == pytest.approx(_CENTRE_STOP, abs=1e-9)
     assert batch.t_stop[3] == 6.0
     for i in range(3):
         after = batch.t > batch.t_stop[i]
@@ -419,8 +419,7 @@ def test_plot_marks_stopped_and_unsimulated_runs():
     try:
         texts = [t.get_text() for t in cplt.axes[0, 0].get_legend().get_texts()]
         assert texts[0] == "r0 (singular_steering at t=0 s)"
-        stop = {"numpy": "1", "compiled": "0.998"}[batch.engine]
-        assert texts[2] == f"r2 (singular_curvature at t={stop} s)"
+        assert texts[2] == "r2 (singular_curvature at t=0.998 s)"
         assert texts[3] == "r3"
         # a stopped run gets an 'x' at its last sample
         marks = [ln for ln in cplt.lines[0, 0] if ln.get_marker() == "x"]

@@ -305,24 +305,28 @@ def test_auto_capped_dop853_gives_each_run_its_own_accuracy():
     assert np.max(np.abs(y - ref) / tol) <= AGREE
 
 
-def test_auto_rule_keeps_dop853_when_a_delay_bounds_the_steps():
+@pytest.mark.parametrize(
+    "tau, method", [(0.27, "DOP853"), (0.075, "DOP853"), (0.04, "LSODA")]
+)
+def test_auto_rule_keeps_dop853_when_a_delay_bounds_the_steps(tau, method):
     # With an input delay the method of steps holds every step to the delay;
-    # 0.24 s < 6.4 T = 1.73 s keeps DOP853 off its stability bound over the
-    # 30 s (17 bound steps, where the long-run rule alone would take LSODA).
-    # DOP853 agrees with Radau at rtol 1e-12 (an implicit method stepping by
-    # accuracy) within its own tolerance.
-    assert choose_method(0.27, 1e-8, duration=30.0) == "LSODA"
-    assert choose_method(0.27, 1e-8, duration=30.0, delay=0.24) == "DOP853"
-    assert choose_method(0.27, 1e-8, duration=30.0, delay=2.0) == "LSODA"
+    # a delay of at most 3.2 T (half DOP853's stability bound; delay / T =
+    # 0.89 and 3.2 here) keeps its error estimate valid over the 30 s, where
+    # the long-run rule alone would take LSODA. At delay / T = 6, nearer the
+    # bound, DOP853 drifts (7.7 tolerances) and LSODA is taken. Either way
+    # the run agrees with Radau at rtol 1e-12 (an implicit method stepping
+    # by accuracy) within a few of its own tolerances.
+    assert choose_method(tau, 1e-8, duration=30.0) == "LSODA"
+    assert choose_method(tau, 1e-8, duration=30.0, delay=0.24) == method
     g = fws.double_root_gains(VEH, speed=20.0, curvature=0.01, ratio=0.5, pole=-1.0)
     kw = dict(speed=20.0, initial_state=(0.0, -10.0, 0.0), duration=30.0, dt=0.1,
-              delay=0.24, actuator_time_constant=0.27)  # fmt: skip
+              delay=0.24, actuator_time_constant=tau)  # fmt: skip
     res = fws.simulate(VEH, fws.Arc(0.01), g, rtol=1e-8, atol=1e-10, **kw)
     ref = fws.simulate(VEH, fws.Arc(0.01), g, method="Radau", rtol=1e-12,
                        atol=1e-14, **kw)  # fmt: skip
-    assert res.method == "DOP853" and res.status == ref.status == "ok"
+    assert res.method == method and res.status == ref.status == "ok"
     names = ("s", "e", "theta", "delta_f", "delta_r")
     y = np.stack([getattr(res, k) for k in names])
     y_ref = np.stack([getattr(ref, k) for k in names])
     tol = 1e-10 + 1e-8 * np.max(np.abs(y_ref), axis=1)
-    assert np.all(np.max(np.abs(y - y_ref), axis=1) <= AGREE * tol)
+    assert np.all(np.max(np.abs(y - y_ref), axis=1) <= 5.0 * tol)

@@ -69,6 +69,7 @@ __all__ = [
     "check_tolerances",
     "choose_method",
     "LONG_RUN_STEPS",
+    "SAFE_STEP",
     "LSODA_MAX_RUNS",
     "STIFF_TIME_CONSTANT",
     "MAX_STEPS",
@@ -208,6 +209,13 @@ STIFF_TIME_CONSTANT = 0.004
 #: :func:`choose_method`).
 LONG_RUN_STEPS = 10
 
+#: DOP853's largest step, in units of the actuator time constant T, at which
+#: its error estimate still bounds its error on the stiff loop: half its
+#: stability bound of about 6.4 T. Used by ``method="auto"`` for a delay
+#: (:func:`choose_method`) and for the compiled engine's capped steps
+#: (:func:`~fws_control.simulate_batch`).
+SAFE_STEP = 3.2
+
 #: Most runs :func:`~fws_control.simulate_batch` stacks in one chunk (by
 #: default) when the method is LSODA, whose Jacobian of the stacked runs is
 #: dense. Measured, CPU per run at T = 0.05 s on the curve scenario, for
@@ -274,11 +282,14 @@ def choose_method(
     :func:`~fws_control.simulate_batch`).
 
     With an input `delay` the steps are at most the delay (the method of
-    steps), so if ``delay < 6.4 T`` DOP853 never reaches its stability
-    bound and its error estimate holds: no long-run rule then (LSODA, held
-    to the same steps, costs 6x more: measured 3.8 against 0.6 s for the
-    two 30 s runs of ``reproduce``'s actuator figure, T = 0.27 s, delay
-    0.24 s).
+    steps), so if ``delay <= 3.2 T`` (:data:`SAFE_STEP`, half the stability
+    bound) DOP853's error estimate holds: no long-run rule then. Measured
+    on a 30 s delayed run (curve 1/100 at 20 m/s, delay 0.24 s, rtol 1e-8)
+    against Radau at rtol 1e-12, in tolerances, for delay / T = 0.89, 2,
+    3.2, 4, 5, 6, 6.3: DOP853 0.33, 0.38, 0.49, 1.19, 4.8, 7.7, 16; LSODA
+    (up to 6) 1.7, 3.9, 1.1, 1.1, 2.5, 2.2, at 1.14, 0.80, 0.82, 0.82, 0.56
+    and 0.60 times DOP853's CPU.
+    (``tests/test_rate_limit_reference.py``; the threshold was 6.4 T before.)
 
     Otherwise DOP853; without an actuator (`time_constant` None) the loop is
     not stiff: DOP853.
@@ -315,13 +326,15 @@ def choose_method(
     'LSODA'
     >>> choose_method(0.27, 1e-10, duration=30.0, delay=0.24)  # steps <= 0.24 s
     'DOP853'
+    >>> choose_method(0.04, 1e-10, duration=30.0, delay=0.24)  # 0.24 s > 3.2 T
+    'LSODA'
     """
     if time_constant is None:
         return "DOP853"
     limit = STIFF_TIME_CONSTANT * (rtol / 1e-10) ** (1.0 / 6.0)
     if time_constant < limit:
         return "Radau"
-    bounded = 0.0 < delay < 6.4 * time_constant  # steps below the bound
+    bounded = 0.0 < delay <= SAFE_STEP * time_constant  # steps held to half the bound
     if (
         duration is not None
         and not bounded

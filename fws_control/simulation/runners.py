@@ -53,6 +53,7 @@ from ..vehicle import Vehicle
 from .engine import (
     LSODA_MAX_RUNS,
     PEAK_SIGNALS,
+    SAFE_STEP,
     SIGNALS,
     STATUS_FAILED,
     check_method,
@@ -212,7 +213,7 @@ _ENGINES = ("auto", "numpy", "compiled")
 #: reference: 330 tolerances off at the bound, 5.7 with the cap (0.3 of the
 #: bound: 4.3; 0.8: 386), at 0.24 ms of CPU per run (numpy LSODA in chunks
 #: of 16: 17.3 ms).
-_CAPPED_STEP = 3.2
+_CAPPED_STEP = SAFE_STEP
 #: Up to this many capped steps (0.25 s of CPU per run) "auto" prefers the
 #: capped compiled DOP853 to the numpy engine's LSODA or Radau.
 _CAPPED_MAX_STEPS = 100_000
@@ -943,8 +944,9 @@ def simulate_batch(
         :data:`DEFAULT_CHUNK_SIZE`, or
         :data:`~fws_control.simulation.engine.LSODA_MAX_RUNS` (16) when the
         numpy engine integrates with LSODA (``method="LSODA"``, or what
-        ``method="auto"`` picks for a stiff actuator over a long run). Smaller chunks decouple the step sizes of
-        runs with very different dynamics.
+        ``method="auto"`` picks for a stiff actuator over a long run).
+        Smaller chunks decouple the step sizes of runs with very different
+        dynamics.
     client : dask.distributed.Client, optional
         Submit the chunks to this Dask cluster (needs the extra
         ``distributed``). The vehicle, path and arguments are pickled to the
