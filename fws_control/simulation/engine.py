@@ -832,7 +832,8 @@ class _History:
 
 
 #: Largest table of interpolation coefficients :class:`_Dop853Table` builds
-#: (a copy of the steps' own): beyond it, the steps are evaluated one by one.
+#: (it takes over the steps' own arrays): beyond it, the steps are evaluated
+#: one by one.
 _MAX_TABLE_BYTES = 256 * 2**20
 
 
@@ -874,6 +875,17 @@ class _Dop853Table:
         pos = np.arange(runs.size) - np.repeat(np.cumsum(widths) - widths, widths)
         t_old = np.array([d.t_old for _, d, _ in pieces])
         h = np.array([d.h for _, d, _ in pieces])
+        # The steps' coefficients move into the table and each step's
+        # interpolant keeps a view of its part: the same values, held once
+        # (the step's own arrays are freed one by one as they are copied).
+        F = np.empty((len(pieces[0][1].F), int(cols.sum())))
+        y_old = np.empty(F.shape[1])
+        lo = 0
+        for (_, d, _), c in zip(pieces, cols.tolist(), strict=True):
+            F[:, lo : lo + c] = d.F
+            y_old[lo : lo + c] = d.y_old
+            d.F, d.y_old = F[:, lo : lo + c], y_old[lo : lo + c]
+            lo += c
         return cls(
             m=m,
             keys=step * n_runs + runs,
@@ -881,8 +893,8 @@ class _Dop853Table:
             width=np.repeat(widths, widths),
             t_old=t_old[step],
             h=h[step],
-            F=np.concatenate([np.asarray(d.F) for _, d, _ in pieces], axis=1),
-            y_old=np.concatenate([d.y_old for _, d, _ in pieces]),
+            F=F,
+            y_old=y_old,
             n_runs=n_runs,
         )
 
