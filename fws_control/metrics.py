@@ -443,9 +443,19 @@ class _Result(Protocol):
     # protocol rather than the class: the simulation package imports this
     # module (for the batch's horizon metrics), so importing it back, even
     # for an annotation, would make an import cycle.
-    t: Any
-    status: Any
-    signals: Any
+    # (read-only attributes; optional ones, read with getattr:
+    # signal_names, run_metrics)
+    @property
+    def t(self) -> Any: ...
+
+    @property
+    def status(self) -> Any: ...
+
+    @property
+    def e(self) -> Any: ...
+
+    @property
+    def theta(self) -> Any: ...
 
     @property
     def peaks(self) -> Any: ...

@@ -178,3 +178,48 @@ def test_batch_command_follows_each_runs_delayed_samples_also_after_a_stop():
         np.testing.assert_allclose(
             alone.delta_f_rate, res.delta_f_rate[i][:n], atol=1e-8
         )
+
+
+@pytest.mark.parametrize("method", ["DOP853", "RK45"])
+def test_history_lookup_equals_each_steps_own_interpolant(method):
+    # The delayed rows and exact peaks read the solution at many (run, time)
+    # pairs at once: for DOP853 from one table of every step's interpolant,
+    # for other methods step by step. Reference: scipy's own dense output of
+    # the step that holds the run at that time, called pair by pair -- the
+    # latest step starting at or before t that integrated the run (a run
+    # that stopped is found in the step that ended at its stop).
+    from fws_control.simulation.engine import integrate
+
+    k1 = np.array([0.1, 0.2, 0.05])
+    g = fws.SteeringGains(k1, np.array([0.5, 0.8, 0.4]), np.array([0.0, -0.5, 0.5]))
+    sol = []
+    t = np.linspace(0.0, 4.0, 401)
+    _, status, _, t_stop = integrate(
+        VEH, fws.Straight(length=40.0), g, speed=np.array([5.0, 8.0, 20.0]),
+        feedforward=False, path_state=np.array([[0.0, 1.0, 0.0]] * 3), t_eval=t,
+        time_constant=None, method=method, delay=0.5, solution=sol,
+    )  # fmt: skip
+    assert set(status) == {"ok", "singular_steering", "end_of_path"}
+    hist = sol[0].history
+    assert (hist.table() is not None) == (method == "DOP853")
+    rng = np.random.default_rng(7)
+    runs = rng.integers(0, 3, 600)
+    times = rng.uniform(-0.5, 1.0, 600) * t_stop[runs]
+    times[:3] = t_stop  # each run at its stop
+    runs[:3] = [0, 1, 2]
+    got = hist.states_at(runs, times)
+    for j, (r, tt) in enumerate(zip(runs, times, strict=True)):
+        if tt <= hist.t0:
+            want = hist.y0[:, r]
+        else:
+            k = max(
+                i
+                for i, (start, (_, _, pr)) in enumerate(
+                    zip(hist.starts, hist.pieces, strict=True)
+                )
+                if start <= tt and r in pr
+            )
+            _, dense, pr = hist.pieces[k]
+            y = np.asarray(dense(tt)).reshape(hist.y0.shape[0], pr.size)
+            want = y[:, np.searchsorted(pr, r)]
+        np.testing.assert_allclose(got[:, j], want, rtol=1e-14, atol=1e-15)
