@@ -1273,14 +1273,24 @@ def _signals_raise():
 
     received: list[int] = []
     in_hook = [False]
+    # A delivery still pending when the command ends must not reach the
+    # caller's code (Python's own SIGINT handler is back by then): the
+    # timer delivers only while the command runs, checked under a lock.
+    active = [True]
+    lock = threading.Lock()
 
     def exception_for(signum):
         return _Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
 
+    def deliver(signum):
+        with lock:
+            if active[0]:
+                _thread.interrupt_main(signum)
+
     def deliver_later(signum):
         # from another thread, 1 ms later: by then the hook has returned and
         # the handler runs in the code the swallowing callback interrupted
-        timer = threading.Timer(0.001, _thread.interrupt_main, args=(signum,))
+        timer = threading.Timer(0.001, deliver, args=(signum,))
         timer.daemon = True
         timer.start()
 
@@ -1314,6 +1324,8 @@ def _signals_raise():
         if received:
             raise exception_for(received[0])
     finally:
+        with lock:
+            active[0] = False
         sys.unraisablehook = old_hook
         for signum, previous in old.items():
             signal.signal(signum, previous)

@@ -712,3 +712,19 @@ def test_an_ignored_ctrl_c_stays_ignored():
         assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
     finally:
         signal.signal(signal.SIGINT, old)
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
+def test_a_delivery_pending_when_the_command_ends_does_not_reach_the_caller():
+    # The command ends right after a callback swallowed Ctrl-C: it raises
+    # KeyboardInterrupt once (as main turns into status 130), and the
+    # delivery scheduled 1 ms later must not raise a second one in the
+    # caller's code, where Python's own SIGINT handler is back.
+    with pytest.raises(KeyboardInterrupt):
+        with cli._signals_raise():
+            _signal_inside_a_callback(signal.SIGINT)
+    t0 = time.monotonic()
+    while time.monotonic() < t0 + 0.2:  # well past the 1 ms timer
+        pass
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
