@@ -1530,6 +1530,8 @@ def _peaks_batch(rec, offsets, Y0, P, q, br, co, d_cg, t_eval, signals, t_stop,
     ytmp = np.empty(m)
     vals = np.empty(_N_PEAK)
     best = np.empty(2)
+    ks_all = np.empty(_N_PEAK, dtype=np.int64)
+    sv_all = np.empty(_N_PEAK)
     for i in range(n):
         V, k1, k2, a = P[i, _P_SPEED], P[i, _P_K1], P[i, _P_K2], P[i, _P_RATIO]
         pc = rec[offsets[i] : offsets[i + 1]]
@@ -1549,6 +1551,21 @@ def _peaks_batch(rec, offsets, Y0, P, q, br, co, d_cg, t_eval, signals, t_stop,
                     K += 1
         times_n[K] = ts
         K += 1
+        # the largest output sample of each signal, all six in one pass
+        # over the samples (inf where the signal is not finite but the
+        # state is; after the stop no sample)
+        for j in range(_N_PEAK):
+            ks_all[j] = -1
+            sv_all[j] = -np.inf
+        for k in range(T):
+            if not np.isfinite(signals[i, 3, k]):
+                continue
+            for j in range(_N_PEAK):
+                v = abs(signals[i, _PEAK_COLS[j], k])
+                if not np.isfinite(v):
+                    v = np.inf
+                if ks_all[j] < 0 or v > sv_all[j]:
+                    ks_all[j], sv_all[j] = k, v
         node_v = np.empty((K, _N_PEAK))
         for k in range(K):
             _peak_values(times_n[k], pc, n_pc, Y0[i], m, V, k1, k2, a, q, br, co,
@@ -1562,19 +1579,8 @@ def _peaks_batch(rec, offsets, Y0, P, q, br, co, d_cg, t_eval, signals, t_stop,
                 if node_v[k, j] > node_v[kb, j]:
                     kb = k
             best[0], best[1] = node_v[kb, j], times_n[kb]
-            # ... or the largest output sample (inf where the signal is not
-            # finite but the state is; after the stop no sample)
-            row = _PEAK_COLS[j]
-            ks = -1
-            sv = -np.inf
-            for k in range(T):
-                if not np.isfinite(signals[i, 3, k]):
-                    continue
-                v = abs(signals[i, row, k])
-                if not np.isfinite(v):
-                    v = np.inf
-                if ks < 0 or v > sv:
-                    ks, sv = k, v
+            # ... or the largest output sample
+            ks, sv = ks_all[j], sv_all[j]
             if sv > best[0]:
                 best[0], best[1] = sv, t_eval[ks]
             # the largest local maxima of the nodes, refined between their
