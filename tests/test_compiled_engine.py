@@ -185,6 +185,72 @@ def test_curvature_tables():
         curvature_table(spl, tol=0.0)
 
 
+def _bits(x: float) -> int:
+    return int(np.float64(x).view(np.int64))
+
+
+_PERIODS = st.floats(1e-6, 1e6)
+
+
+@settings(max_examples=300)
+@given(
+    period=_PERIODS,
+    s=st.one_of(
+        # the laps around 0, where the kernel avoids fmod, and their ends
+        st.floats(-3.0, 3.0).map(lambda u: ("laps", u)),
+        st.floats(allow_nan=True, allow_infinity=True).map(lambda x: ("any", x)),
+        st.sampled_from([-2.0, -1.0, 0.0, 1.0, 2.0]).map(lambda u: ("ends", u)),
+    ),
+    nudge=st.sampled_from([-1, 0, 1]),
+)
+def test_lap_wrap_is_python_modulo_bit_for_bit(period, s, nudge):
+    """The kernels' lap wrap is ``s % period`` of Python, sign of zero too."""
+    from fws_control.simulation import compiled
+
+    kind, u = s
+    x = u * period if kind in ("laps", "ends") else u
+    if nudge and math.isfinite(x):
+        x = math.nextafter(x, nudge * math.inf)
+    for value in (x, -x):
+        want = value % period  # the reference: CPython's float remainder
+        got = compiled._wrap_lap(value, period)
+        if math.isnan(want):
+            assert math.isnan(got)
+        else:
+            assert _bits(got) == _bits(want), (value, period, got, want)
+
+
+@pytest.mark.parametrize(
+    "path",
+    [
+        fws.Arc(curvature=0.1),
+        fws.Arc(curvature=-0.25, length=20.0),
+        fws.Straight(),
+        fws.Clothoid(0.02, -0.08, length=50.0),
+        fws.PathChain([fws.Arc(0.05, length=10.0), fws.Clothoid(0.05, 0.0, 20.0)]),
+    ],
+)
+def test_feedforward_angle_is_atan_bit_for_bit(path):
+    """The feedforward angle kept for the first piece is atan(f kappa)."""
+    from fws_control.simulation import compiled
+
+    tab = curvature_table(path)
+    q = shared_parameters(VEH, tab, feedforward=True, time_constant=None)
+    s = np.linspace(-5.0, 80.0, 1701)
+    kappa = np.concatenate([tab(s), [tab.coefs[0, 0], 0.0, 1e-3, -1e-3]])
+    for k in kappa:
+        want = math.atan(VEH.wheelbase * k)  # CPython's, the C library's atan
+        assert _bits(compiled._feedforward_angle(k, q)) == _bits(want), k
+    # through the public right-hand side: the paper's law with the angle
+    # recomputed by the reference formulas (test_rhs_matches_formulas)
+    y = np.array([3.0, 0.4, -0.1])
+    out = np.empty(3)
+    p = np.array([5.0, 0.2, 0.7, -0.4])
+    closed_loop_rhs(0.0, y, p, q, tab.breaks, tab.coefs, out)
+    rhs, _, _ = reference_rhs(VEH, lambda s: float(tab(s)), 0.2, 0.7, -0.4, 5.0)
+    np.testing.assert_allclose(out, rhs(0.0, y), rtol=1e-14, atol=1e-15)
+
+
 # --------------------------------------------------------------------------
 # The port against scipy's DOP853, step by step
 #

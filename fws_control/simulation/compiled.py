@@ -210,7 +210,10 @@ _Q_RATE_F, _Q_RATE_R, _Q_STEER_MARGIN, _Q_CURV_MARGIN = 5, 6, 7, 8
 _Q_PERIOD, _Q_S_LO, _Q_S_HI, _Q_OPEN_LENGTH = 9, 10, 11, 12
 _Q_SWITCH = 13  # 1: clips as modes switched at located events; 0: min/max
 _Q_MAX_STEP = 14  # scipy's max_step (inf: none)
-_NQ = 15
+# the first table piece's constant curvature and its feedforward angle
+# atan(f kappa0), computed once (see _feedforward_angle)
+_Q_KAPPA0, _Q_FF_ANGLE0 = 15, 16
+_NQ = 17
 # Layout of the per run parameter vector.
 _P_SPEED, _P_K1, _P_K2, _P_RATIO = 0, 1, 2, 3
 # modes of the four clips (front/rear angle, front/rear rate): -1, 0 or +1
@@ -233,10 +236,42 @@ _MAX_SWITCHES = 100_000
 
 
 @_jit
+def _wrap_lap(s, period):
+    """``s % period`` with Python's semantics (as np.mod), bit for bit.
+
+    Numba's float ``%`` (fmod, then CPython's sign fix-up) cost 17 ns per
+    call, a fifth of the output stage on a closed path. Within a lap and the
+    neighbouring ones the result is computed as Python does without fmod:
+    on [0, period) fmod(s, period) is s itself; on [period, 2 period) it is
+    s - period, which is exact (Sterbenz); on [-period, 0) Python adds
+    period to fmod(s, period) = s. A zero result is +0.0, as in Python.
+    """
+    if s >= 0.0:
+        if s < period:
+            return s if s != 0.0 else 0.0
+        if s < 2.0 * period:
+            return s - period
+    elif s >= -period:
+        return s + period
+    return s % period
+
+
+@_jit
+def _feedforward_angle(kappa, q):
+    """``atan(f kappa)``, the feedforward angle; for the first table
+    piece's constant curvature (an arc, a straight) the value computed once
+    in :func:`shared_parameters` with the same ``atan`` (16 ns a call, a
+    sixth of the output stage)."""
+    if kappa == q[_Q_KAPPA0]:
+        return q[_Q_FF_ANGLE0]
+    return math.atan(q[_Q_WHEELBASE] * kappa)
+
+
+@_jit
 def _curvature(s, q, breaks, coefs):
     period = q[_Q_PERIOD]
     if period > 0.0:
-        s = s % period  # Python semantics, as np.mod in Path._domain
+        s = _wrap_lap(s, period)  # Python semantics, as np.mod in Path._domain
         if s >= period:
             s = 0.0
     else:
@@ -253,7 +288,7 @@ def _raw_command(e, theta, kappa, p, q):
     fb = -p[_P_K1] * e - p[_P_K2] * theta
     cf = fb
     if q[_Q_FF] != 0.0:
-        cf = fb + math.atan(q[_Q_WHEELBASE] * kappa)
+        cf = fb + _feedforward_angle(kappa, q)
     return cf, p[_P_RATIO] * fb
 
 
@@ -1114,7 +1149,7 @@ def _curvature_and_rate(s, q, breaks, coefs):
     # wrapped as in _curvature (the same operations for kappa)
     period = q[_Q_PERIOD]
     if period > 0.0:
-        s = s % period
+        s = _wrap_lap(s, period)
         if s >= period:
             s = 0.0
     else:
@@ -1146,7 +1181,7 @@ def _point_signals(s, e, th, df_s, dr_s, V, k1, k2, a, q, breaks, coefs, d_cg):
     fb = -k1 * e - k2 * th
     raw_f = fb
     if ff:
-        raw_f = fb + math.atan(f * kappa)
+        raw_f = fb + _feedforward_angle(kappa, q)
     raw_r = a * fb
     cf = min(max(raw_f, -mf), mf)
     cr = min(max(raw_r, -mr), mr)
@@ -1242,7 +1277,7 @@ def _signals_batch(states, P, q, breaks, coefs, d_cg, pose, sig):
                 continue
             sp = s
             if period > 0.0:
-                sp = s % period
+                sp = _wrap_lap(s, period)
                 if sp >= period:
                     sp = 0.0
             else:
@@ -1362,7 +1397,7 @@ def _peak_value(tt, j, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, va
         if j == 1:
             raw = fb
             if q[_Q_FF] != 0.0:
-                raw = fb + math.atan(q[_Q_WHEELBASE] * kappa)
+                raw = fb + _feedforward_angle(kappa, q)
             v = abs(min(max(raw, -q[_Q_MAX_F]), q[_Q_MAX_F]))
         else:
             v = abs(min(max(a * fb, -q[_Q_MAX_R]), q[_Q_MAX_R]))
@@ -1495,6 +1530,8 @@ def _peaks_batch(rec, offsets, Y0, P, q, br, co, d_cg, t_eval, signals, t_stop,
     ytmp = np.empty(m)
     vals = np.empty(_N_PEAK)
     best = np.empty(2)
+    ks_all = np.empty(_N_PEAK, dtype=np.int64)
+    sv_all = np.empty(_N_PEAK)
     for i in range(n):
         V, k1, k2, a = P[i, _P_SPEED], P[i, _P_K1], P[i, _P_K2], P[i, _P_RATIO]
         pc = rec[offsets[i] : offsets[i + 1]]
@@ -1514,6 +1551,21 @@ def _peaks_batch(rec, offsets, Y0, P, q, br, co, d_cg, t_eval, signals, t_stop,
                     K += 1
         times_n[K] = ts
         K += 1
+        # the largest output sample of each signal, all six in one pass
+        # over the samples (inf where the signal is not finite but the
+        # state is; after the stop no sample)
+        for j in range(_N_PEAK):
+            ks_all[j] = -1
+            sv_all[j] = -np.inf
+        for k in range(T):
+            if not np.isfinite(signals[i, 3, k]):
+                continue
+            for j in range(_N_PEAK):
+                v = abs(signals[i, _PEAK_COLS[j], k])
+                if not np.isfinite(v):
+                    v = np.inf
+                if ks_all[j] < 0 or v > sv_all[j]:
+                    ks_all[j], sv_all[j] = k, v
         node_v = np.empty((K, _N_PEAK))
         for k in range(K):
             _peak_values(times_n[k], pc, n_pc, Y0[i], m, V, k1, k2, a, q, br, co,
@@ -1527,19 +1579,8 @@ def _peaks_batch(rec, offsets, Y0, P, q, br, co, d_cg, t_eval, signals, t_stop,
                 if node_v[k, j] > node_v[kb, j]:
                     kb = k
             best[0], best[1] = node_v[kb, j], times_n[kb]
-            # ... or the largest output sample (inf where the signal is not
-            # finite but the state is; after the stop no sample)
-            row = _PEAK_COLS[j]
-            ks = -1
-            sv = -np.inf
-            for k in range(T):
-                if not np.isfinite(signals[i, 3, k]):
-                    continue
-                v = abs(signals[i, row, k])
-                if not np.isfinite(v):
-                    v = np.inf
-                if ks < 0 or v > sv:
-                    ks, sv = k, v
+            # ... or the largest output sample
+            ks, sv = ks_all[j], sv_all[j]
             if sv > best[0]:
                 best[0], best[1] = sv, t_eval[ks]
             # the largest local maxima of the nodes, refined between their
@@ -2095,7 +2136,7 @@ def shared_parameters(
     Returns
     -------
     ndarray
-        Shape ``(15,)``.
+        Shape ``(17,)``.
 
     Examples
     --------
@@ -2134,7 +2175,18 @@ def shared_parameters(
     q[_Q_OPEN_LENGTH] = table.open_length
     q[_Q_SWITCH] = 1.0 if switching else 0.0
     q[_Q_MAX_STEP] = float(max_step)
+    # a curvature equal to the first piece's constant term (every s of an
+    # arc or a straight) takes its feedforward angle from here; the kernels'
+    # own atan, so the angle is the one they would compute
+    k0 = float(table.coefs[0, 0])
+    q[_Q_KAPPA0] = k0
+    q[_Q_FF_ANGLE0] = _atan(vehicle.wheelbase * k0)
     return q
+
+
+@_jit
+def _atan(x):
+    return math.atan(x)
 
 
 def compiled_support(
