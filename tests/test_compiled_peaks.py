@@ -154,6 +154,43 @@ def test_peak_between_samples_is_found(name):
     assert "e" in missed  # |e| peaks at 0.15-0.35 s, between the samples
 
 
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_fine_grid_samples_as_nodes_give_the_same_peaks(name):
+    """With output samples at least as dense as the 8 nodes of a step (here
+    0.01 s, steps of 0.1-0.4 s) the samples are the step's nodes: the
+    peaks are still the numpy engine's (its own nodes) and those of the
+    coarse grid, where every step has its 8 nodes."""
+    ref = _run(name, "numpy")
+    coarse = _run(name, "compiled")
+    fine = _run(name, "compiled", dt=0.01)
+    tol = TOL.get(name, 1e-9)
+    for sig in PEAK_SIGNALS:
+        p = getattr(fine.peaks, sig)
+        assert p.value == pytest.approx(getattr(ref.peaks, sig).value, rel=tol,
+                                        abs=1e-14), sig  # fmt: skip
+        # (the spline's delta_f peaks at a kink of its curvature table, where
+        # the search's time tolerance leaves 4e-9 relative; on main before
+        # the samples were nodes as well)
+        assert p.value == pytest.approx(getattr(coarse.peaks, sig).value,
+                                        rel=TOL.get(name, 1e-12),
+                                        abs=1e-14), sig  # fmt: skip
+        samples = np.abs(fine.signals[0, SIGNALS.index(sig)])
+        assert p.value >= np.max(samples[np.isfinite(samples)]) * (1 - 1e-15), sig
+    # samples dense in parts of steps only (where they leave a gap wider than
+    # the nodes' spacing the step keeps its own nodes)
+    t = np.unique(np.concatenate([np.linspace(0.0, 15.0, 16),
+                                  np.linspace(0.0, 0.5, 300),
+                                  np.linspace(3.0, 3.05, 40)]))  # fmt: skip
+    veh, path, g, kw = CASES[name]
+    kw = {k: v for k, v in kw.items() if k != "dt"}
+    mixed = fws.simulate(veh, path, g, speed=5.0, duration=15.0, t_eval=t, **kw,
+                         engine="compiled")  # fmt: skip
+    for sig in PEAK_SIGNALS:
+        assert getattr(mixed.peaks, sig).value == pytest.approx(
+            getattr(ref.peaks, sig).value, rel=tol, abs=1e-14
+        ), sig
+
+
 def test_singular_stop_peaks():
     """A run that diverges stops 1e-3 rad before |delta_f| = pi/2 (the
     compiled engine's margin): that is the peak of |delta_f|, at the stop;
