@@ -191,6 +191,32 @@ def test_fine_grid_samples_as_nodes_give_the_same_peaks(name):
         ), sig
 
 
+@settings(max_examples=25, deadline=None)
+@given(
+    dt=st.sampled_from([0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.37]),
+    ratio=st.floats(-1.5, 0.6),
+    pole=st.floats(-3.0, -0.3),
+    e0=st.floats(-5.0, 5.0),
+)
+def test_peaks_on_any_output_grid_as_numpy_engine(dt, ratio, pole, e0):
+    """Whether a step's nodes are its own or its output samples (fine
+    grids) -- or a mix -- the peaks are the numpy engine's, which always
+    uses its own nodes, and no output sample exceeds them."""
+    g = _gains(VEH, ratio=ratio, pole=pole)
+    kw = dict(speed=5.0, initial_state=(0.0, e0, 0.0), duration=8.0, dt=dt)
+    got = fws.simulate(VEH, ARC, g, **kw, engine="compiled")
+    ref = fws.simulate(VEH, ARC, g, **kw, engine="numpy")
+    assert got.status == ref.status
+    for sig in PEAK_SIGNALS:
+        p, r = getattr(got.peaks, sig), getattr(ref.peaks, sig)
+        # (abs: a run that starts on the path keeps |e| at the two
+        # integrations' own error, some 1e-11 m)
+        assert p.value == pytest.approx(r.value, rel=1e-9, abs=1e-9), sig
+        samples = np.abs(got.signals[0, SIGNALS.index(sig)])
+        samples = samples[np.isfinite(samples)]  # none: stopped at t = 0
+        assert samples.size == 0 or p.value >= np.max(samples) * (1 - 1e-15), sig
+
+
 def test_singular_stop_peaks():
     """A run that diverges stops 1e-3 rad before |delta_f| = pi/2 (the
     compiled engine's margin): that is the peak of |delta_f|, at the stop;
