@@ -1528,6 +1528,14 @@ def _falls_from_end(end, other, f_end, f_other, j, best, rec, n_pc, y0, m, V,
 
 
 @_jit
+def _sample_value(signals, i, j, k):
+    """|peak signal j| of run i at output sample k, with _peak_values' inf
+    where it is not finite (the state there is)."""
+    v = abs(signals[i, _PEAK_COLS[j], k])
+    return v if np.isfinite(v) else np.inf
+
+
+@_jit
 def _node_samples(signals, i, t_eval, k_s, b0, b1, ts):
     """End of the output samples that can serve as the nodes of a piece.
 
@@ -1617,19 +1625,15 @@ def _peaks_batch(rec, offsets, Y0, P, q, br, co, d_cg, t_eval, signals, t_stop,
             if not np.isfinite(signals[i, 3, k]):
                 continue
             for j in range(_N_PEAK):
-                v = abs(signals[i, _PEAK_COLS[j], k])
-                if not np.isfinite(v):
-                    v = np.inf
+                v = _sample_value(signals, i, j, k)
                 if ks_all[j] < 0 or v > sv_all[j]:
                     ks_all[j], sv_all[j] = k, v
         node_v = np.empty((K, _N_PEAK))
         for k in range(K):
             kk = sample_n[k]
             if kk >= 0:
-                # |signal| of the output sample, with _peak_values' inf
                 for j in range(_N_PEAK):
-                    v = abs(signals[i, _PEAK_COLS[j], kk])
-                    node_v[k, j] = v if np.isfinite(v) else np.inf
+                    node_v[k, j] = _sample_value(signals, i, j, kk)
                 continue
             _peak_values(times_n[k], pc, n_pc, Y0[i], m, V, k1, k2, a, q, br, co,
                          d_cg, ytmp, vals)  # fmt: skip
