@@ -30,12 +30,14 @@ Compile latency is measured in fresh processes: the first default
 filled (what every later process pays). Every time is the best of
 ``--repeat`` (>= 3) runs of the process's CPU time (the issue asks for CPU
 per run; on a shared machine the wall clock also counts the waits for a
-core); the machine load is printed before and after. Accuracy: the largest
+core); the machine load is printed before and after. The batch and the two
+loops are timed in turn, round after round, so that their ratios do not
+take up the drift of a virtual machine's speed over minutes. Accuracy: the largest
 state difference to the ``solve_ivp`` loop and to a 100x tighter
 ``solve_ivp`` reference on the loop's runs, and the largest difference of
 the default batch's peaks to the numpy engine's.
 
-Run: ``python benchmarks/bench_engine.py [--runs 10000] [--loop-runs 50]``
+Run: ``python benchmarks/bench_engine.py [--runs 10000] [--loop-runs 100]``
 (about two minutes at 10^4 runs).
 """
 
@@ -51,7 +53,7 @@ import time
 
 import numpy as np
 from scipy.integrate import solve_ivp
-from timing import machine_line
+from timing import best_of_interleaved, machine_line
 
 import fws_control as fws
 from fws_control.paper import PAPER_VEHICLE
@@ -204,7 +206,7 @@ def _rhs_loop(n, y0, p, q, breaks, coefs):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=10_000)
-    parser.add_argument("--loop-runs", type=int, default=50)
+    parser.add_argument("--loop-runs", type=int, default=100)
     parser.add_argument("--numpy-runs", type=int, default=500)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument(
@@ -304,7 +306,40 @@ def main() -> None:
     def batch():
         out_b["r"] = fws.simulate_batch(veh, sc.path, g, **batch_kw)
 
-    t_batch = best_of(batch, repeat=args.repeat) / n
+    # 3. loop of solve_ivp with a scalar right-hand side
+    idx = np.linspace(0, n - 1, min(args.loop_runs, n)).astype(int)
+    refs = {}
+
+    def loop():
+        for i in idx:
+            rhs = scalar_rhs(g.k1[i], g.k2[i], g.ratio[i], sc.speed,
+                             veh.wheelbase, sc.curvature)  # fmt: skip
+            refs[i] = solve_ivp(rhs, (0.0, sc.duration), z0[i], method="DOP853",
+                                t_eval=t, **TOL).y  # fmt: skip
+
+    def loop_signals():
+        # the same loop producing the same 15 signals: each run's states
+        # through the library's numpy compute_outputs (no peaks)
+        for i in idx:
+            rhs = scalar_rhs(g.k1[i], g.k2[i], g.ratio[i], sc.speed,
+                             veh.wheelbase, sc.curvature)  # fmt: skip
+            y = solve_ivp(rhs, (0.0, sc.duration), z0[i], method="DOP853",
+                          t_eval=t, **TOL).y  # fmt: skip
+            gi = fws.SteeringGains(g.k1[i : i + 1], g.k2[i : i + 1],
+                                   g.ratio[i : i + 1])  # fmt: skip
+            compute_outputs(veh, sc.path, gi, speed=V[:1], feedforward=True,
+                            time_constant=None, states=y[:, None, :],
+                            initial_heading=np.zeros(1))  # fmt: skip
+
+    # the batch and the loops in turn (timing.best_of_interleaved): their
+    # ratios are the issue's target, and this machine's speed drifts
+    best = best_of_interleaved(
+        {"batch": batch, "loop": loop, "loop_signals": loop_signals},
+        repeat=args.repeat,
+    )
+    t_batch = best["batch"] / n
+    t_loop = best["loop"] / idx.size
+    t_loop_sig = best["loop_signals"] / idx.size
     rb = out_b.pop("r")
     engine_used = rb.engine
     assert rb.peaks.exact
@@ -323,34 +358,6 @@ def main() -> None:
     d_peaks = float(np.max(np.abs(rb.run_peak[sel] - out_n["r"].run_peak)
                            / np.abs(out_n["r"].run_peak)))  # fmt: skip
 
-    # 3. loop of solve_ivp with a scalar right-hand side
-    idx = np.linspace(0, n - 1, min(args.loop_runs, n)).astype(int)
-    refs = {}
-
-    def loop():
-        for i in idx:
-            rhs = scalar_rhs(g.k1[i], g.k2[i], g.ratio[i], sc.speed,
-                             veh.wheelbase, sc.curvature)  # fmt: skip
-            refs[i] = solve_ivp(rhs, (0.0, sc.duration), z0[i], method="DOP853",
-                                t_eval=t, **TOL).y  # fmt: skip
-
-    t_loop = best_of(loop, repeat=args.repeat) / idx.size
-
-    def loop_signals():
-        # the same loop producing the same 15 signals: each run's states
-        # through the library's numpy compute_outputs (no peaks)
-        for i in idx:
-            rhs = scalar_rhs(g.k1[i], g.k2[i], g.ratio[i], sc.speed,
-                             veh.wheelbase, sc.curvature)  # fmt: skip
-            y = solve_ivp(rhs, (0.0, sc.duration), z0[i], method="DOP853",
-                          t_eval=t, **TOL).y  # fmt: skip
-            gi = fws.SteeringGains(g.k1[i : i + 1], g.k2[i : i + 1],
-                                   g.ratio[i : i + 1])  # fmt: skip
-            compute_outputs(veh, sc.path, gi, speed=V[:1], feedforward=True,
-                            time_constant=None, states=y[:, None, :],
-                            initial_heading=np.zeros(1))  # fmt: skip
-
-    t_loop_sig = best_of(loop_signals, repeat=args.repeat) / idx.size
     d_loop = max(float(np.max(np.abs(states[:, i, :] - refs[i]))) for i in idx)
     d_tight = 0.0
     for i in idx[:10]:

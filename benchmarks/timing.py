@@ -18,7 +18,7 @@ import platform
 import time
 from collections.abc import Callable
 
-__all__ = ["best_of", "machine_line"]
+__all__ = ["best_of", "best_of_interleaved", "machine_line"]
 
 
 def best_of(
@@ -42,6 +42,31 @@ def best_of(
         for _ in range(number):
             fn()
         best = min(best, (clock() - t0) / number)
+    return best
+
+
+def best_of_interleaved(
+    fns: dict[str, Callable[[], object]],
+    repeat: int = 3,
+    clock: Callable[[], float] = time.process_time,
+) -> dict[str, float]:
+    """Best time per call [s] of each of `fns`, timed in turn `repeat` times.
+
+    For a ratio of two timings: on a virtual machine whose speed drifts over
+    minutes (measured here: the same loop of ``solve_ivp`` 6.1 and 7.0 ms per
+    run in two blocks a few minutes apart), timing one function `repeat`
+    times and then the other puts the drift into their ratio; round after
+    round, each round times every function once, so that both see the same
+    spells of a fast and a slow machine.
+    """
+    if repeat < 3:
+        raise ValueError(f"repeat must be >= 3, got repeat={repeat}")
+    best = dict.fromkeys(fns, float("inf"))
+    for _ in range(repeat):
+        for name, fn in fns.items():
+            t0 = clock()
+            fn()
+            best[name] = min(best[name], clock() - t0)
     return best
 
 

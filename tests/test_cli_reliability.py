@@ -649,6 +649,25 @@ def test_fuzz_gains_one_line_or_a_checked_design(pairs):
         assert abs(p - ns.pole) <= 2e-3 * abs(ns.pole) + 2e-6, (argv, poles)
 
 
+@pytest.fixture
+def python_signal_handlers():
+    """Python's own SIGINT and the default SIGTERM for the test's duration.
+
+    A shell without job control starts background commands with SIGINT
+    ignored, and Python keeps an inherited SIG_IGN (so does the command
+    line: ``test_an_ignored_ctrl_c_stays_ignored``); the tests of a signal's
+    delivery need the handlers an interactive start gives.
+    """
+    old = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    try:
+        yield
+    finally:
+        for s, handler in old.items():
+            signal.signal(s, handler)
+
+
 class _Dropped:
     """An object whose weak-reference callback sends a signal to this process."""
 
@@ -671,7 +690,9 @@ def _signal_inside_a_callback(sig):
 @pytest.mark.parametrize(
     "sig, exc", [(signal.SIGTERM, cli._Terminated), (signal.SIGINT, KeyboardInterrupt)]
 )
-def test_a_signal_inside_a_callback_is_not_lost(sig, exc, capsys):
+def test_a_signal_inside_a_callback_is_not_lost(
+    sig, exc, capsys, python_signal_handlers
+):
     # The CI run that found it: SIGTERM arrived in a WeakKeyDictionary
     # callback of matplotlib, Python printed "Exception ignored" and
     # reproduce finished every figure with status 0.
@@ -716,7 +737,9 @@ def test_an_ignored_ctrl_c_stays_ignored():
 
 @pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
 @pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
-def test_a_delivery_pending_when_the_command_ends_does_not_reach_the_caller():
+def test_a_delivery_pending_when_the_command_ends_does_not_reach_the_caller(
+    python_signal_handlers,
+):
     # The command ends right after a callback swallowed Ctrl-C: it raises
     # KeyboardInterrupt once (as main turns into status 130), and the
     # delivery scheduled 1 ms later must not raise a second one in the
