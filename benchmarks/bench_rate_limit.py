@@ -16,7 +16,8 @@ actuator of :func:`fws_control.steering_actuator`:
 Each case runs through :func:`fws_control.simulate` (output step 0.1 s, all
 signals) on the numpy engine with its default ``method="auto"`` and on
 ``engine="compiled"``, at the default tolerances ``rtol = 1e-10``,
-``atol = 1e-12``. Printed per case: CPU time (best of ``--repeat`` >= 3),
+``atol = 1e-12``. Printed per case: CPU time (best of ``--repeat`` >= 3; all
+cases timed in turn, round after round, ``timing.best_of_interleaved``),
 the method, the solver steps (numpy: counted by a subclass of the chosen
 solver, in a separate untimed run; compiled: its statistics), the ratios
 rate-limited / unlimited (the issue's target is <= 2) and / no actuator, and
@@ -54,10 +55,9 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
-import time
 
 import numpy as np
-from timing import machine_line
+from timing import best_of, best_of_interleaved, machine_line
 
 import fws_control as fws
 from fws_control.paper import PAPER_VEHICLE
@@ -79,18 +79,6 @@ RTOL, ATOL = 1e-10, 1e-12
 AGREE = 100.0
 DT_OUT = 0.1
 STATES = ("s", "e", "theta", "delta_f", "delta_r")
-
-
-def best_of(fn, repeat: int = 3) -> float:
-    """Best CPU time of ``fn()`` [s] over `repeat` >= 3 calls."""
-    if repeat < 3:
-        raise ValueError(f"repeat must be >= 3, got {repeat}")
-    best = math.inf
-    for _ in range(repeat):
-        t0 = time.process_time()
-        fn()
-        best = min(best, time.process_time() - t0)
-    return best
 
 
 # --------------------------------------------------------------------------
@@ -287,7 +275,23 @@ def main() -> None:
         ("T=0.005 unlimited", 0.005, None),
         ("T=0.005 rate 0.5", 0.005, 0.5),
     ]
-    cost = {}
+    # every case on both engines first (a failure is reported below, not
+    # timed), then all timed in turn, round after round, so that the ratios
+    # rate-limited / unlimited do not take up the machine's drift
+    engines = ("numpy", "compiled")
+    runs, timers = {}, {}
+    for name, tau, rate in cases:
+        for engine in engines:
+            try:
+                runs[name, engine] = res = simulate(tau, rate, engine)
+            except Exception as exc:  # noqa: BLE001 - reported, not hidden
+                runs[name, engine] = exc
+                continue
+            if res.status == "ok":
+                timers[name, engine] = lambda tau=tau, rate=rate, engine=engine: (
+                    simulate(tau, rate, engine)
+                )
+    cost = best_of_interleaved(timers, args.repeat)
     for name, tau, rate in cases:
         if tau is not None:
             ref, own, kinks = reference(veh0, g, sc, tau, rate, D, args.step)
@@ -300,20 +304,15 @@ def main() -> None:
             )
         else:
             print(f"\n{name}:")
-        for engine in ("numpy", "compiled"):
-            try:
-                res = simulate(tau, rate, engine)
-            except Exception as exc:  # noqa: BLE001 - reported, not hidden
-                print(f"  {engine:8s}: {type(exc).__name__}: {exc}")
+        for engine in engines:
+            res = runs[name, engine]
+            if isinstance(res, Exception):
+                print(f"  {engine:8s}: {type(res).__name__}: {res}")
                 continue
             if res.status != "ok":
                 print(f"  {engine:8s}: {res.method} status {res.status}: {res.message}")
                 continue
-            cpu = best_of(
-                lambda tau=tau, rate=rate, engine=engine: simulate(tau, rate, engine),
-                args.repeat,
-            )
-            cost[name, engine] = cpu
+            cpu = cost[name, engine]
             if engine == "numpy":
                 steps = count_steps(
                     res.method,

@@ -14,7 +14,8 @@ designs (ratios spread over [-1.5, 0.6], pole -1, exact linearisation):
    equal accuracy. Building the interconnection is included, as in a user's
    loop.
 
-Each time is the best of three runs in CPU seconds (see ``timing.py``); the
+Each time is the best of three runs in CPU seconds, the three timed in turn
+round after round (``timing.best_of_interleaved``); the
 python-control loop, about 2 s per run, is timed on the first ``--ct-runs``
 designs (default 5) and extrapolated to ``--runs``. Prints the machine load,
 the times, the speed-up ratios (target >= 50x against python-control) and
@@ -29,7 +30,7 @@ import argparse
 
 import control as ct
 import numpy as np
-from timing import best_of, machine_line
+from timing import best_of_interleaved, machine_line
 
 import fws_control as fws
 from fws_control.paper import PAPER_VEHICLE
@@ -71,11 +72,6 @@ def main() -> None:
             veh, path, g, **kw, duration=sc.duration, t_eval=t, progress=False
         )
 
-    t_batch = best_of(run_batch)
-    batch = run_batch()
-    if not np.all(batch.ok):
-        raise SystemExit(f"unexpected stopped runs: {set(batch.status)}")
-
     def run_singles():
         return [
             fws.simulate(
@@ -88,9 +84,6 @@ def main() -> None:
             )
             for i in range(args.runs)
         ]
-
-    t_loop = best_of(run_singles)
-    singles = run_singles()
 
     def run_ct():
         refs = []
@@ -111,7 +104,16 @@ def main() -> None:
             refs.append(resp.outputs[sys.find_output("e")])
         return refs
 
-    t_ct = best_of(run_ct) * args.runs / args.ct_runs
+    # in turn, round after round: the ratios do not take up the machine's drift
+    best = best_of_interleaved(
+        {"batch": run_batch, "singles": run_singles, "ct": run_ct}
+    )
+    t_batch, t_loop = best["batch"], best["singles"]
+    t_ct = best["ct"] * args.runs / args.ct_runs
+    batch = run_batch()
+    if not np.all(batch.ok):
+        raise SystemExit(f"unexpected stopped runs: {set(batch.status)}")
+    singles = run_singles()
     refs = run_ct()
 
     e_loop = np.array([r.e for r in singles])

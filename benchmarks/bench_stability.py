@@ -13,10 +13,11 @@ closed-loop eigenvalues:
    the same subsample (the fastest eigenvalue route numpy offers),
    extrapolated likewise.
 
-Each time is the best of three runs, in CPU seconds (see ``timing.py``);
-the machine load is printed before and after. Prints the ratios (targets: >= 1000x
-against the loop for n = 2, >= 100x for n = 4) and the agreement of the
-verdicts on the subsample, away from the boundary.
+Each time is the best of three runs, in CPU seconds, the three computations
+timed in turn round after round (``timing.best_of_interleaved``); the
+machine load is printed before and after. Prints the ratios (targets:
+>= 1000x against the loop for n = 2, >= 100x for n = 4) and the agreement
+of the verdicts on the subsample, away from the boundary.
 
 Run: ``python benchmarks/bench_stability.py``
 """
@@ -25,7 +26,7 @@ from __future__ import annotations
 
 import control as ct
 import numpy as np
-from timing import best_of, machine_line
+from timing import best_of_interleaved, machine_line
 
 import fws_control as fws
 
@@ -57,7 +58,6 @@ def four_state_plant(speed: float, curvature: float) -> ct.StateSpace:
 def run(label: str, plant, ratio: float, n_grid: int, target: float) -> None:
     k1 = np.linspace(-1.0, 1.0, n_grid)
     k2 = np.linspace(-1.0, 2.0, n_grid)
-    t_chart = best_of(lambda: fws.stability_chart(plant, ratio=ratio, k1=k1, k2=k2))
     chart = fws.stability_chart(plant, ratio=ratio, k1=k1, k2=k2)
 
     lm = fws.loop_matrices(plant)
@@ -80,8 +80,17 @@ def run(label: str, plant, ratio: float, n_grid: int, target: float) -> None:
         return np.linalg.eigvals(M).real.max(axis=1)
 
     scale = n_grid * n_grid / SUBSAMPLE
-    t_loop = best_of(loop) * scale
-    t_stacked = best_of(stacked) * scale
+    # in turn, round after round: the ratios do not take up the machine's drift
+    best = best_of_interleaved(
+        {
+            "chart": lambda: fws.stability_chart(plant, ratio=ratio, k1=k1, k2=k2),
+            "loop": loop,
+            "stacked": stacked,
+        }
+    )
+    t_chart = best["chart"]
+    t_loop = best["loop"] * scale
+    t_stacked = best["stacked"] * scale
     re = stacked()
     far = np.abs(re) > 1e-6
     agree = np.mean((re < 0)[far] == chart.stable[idx[:, 0], idx[:, 1]][far])

@@ -16,7 +16,7 @@ from __future__ import annotations
 import os
 import platform
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Hashable, Mapping
 
 __all__ = ["best_of", "best_of_interleaved", "machine_line"]
 
@@ -46,15 +46,15 @@ def best_of(
 
 
 def best_of_interleaved(
-    fns: dict[str, Callable[[], object]],
+    fns: Mapping[Hashable, Callable[[], object]],
     repeat: int = 3,
     clock: Callable[[], float] = time.process_time,
-) -> dict[str, float]:
+) -> dict[Hashable, float]:
     """Best time per call [s] of each of `fns`, timed in turn `repeat` times.
 
     For a ratio of two timings: on a virtual machine whose speed drifts over
-    minutes (measured here: the same loop of ``solve_ivp`` 6.1 and 7.0 ms per
-    run in two blocks a few minutes apart), timing one function `repeat`
+    minutes (measured here: the same loop of ``solve_ivp`` 7.0 and 6.1 ms per
+    run in two runs of a script a few minutes apart), timing one function `repeat`
     times and then the other puts the drift into their ratio; round after
     round, each round times every function once, so that both see the same
     spells of a fast and a slow machine.
