@@ -214,7 +214,8 @@ _ENGINES = ("auto", "numpy", "compiled")
 #: bound: 4.3; 0.8: 386), at 0.24 ms of CPU per run (numpy LSODA in chunks
 #: of 16: 17.3 ms).
 _CAPPED_STEP = SAFE_STEP
-#: Up to this many capped steps (0.25 s of CPU per run) "auto" prefers the
+#: Up to this many capped steps (about 0.4 s of CPU per run with all signals
+#: and the exact peaks, benchmarks/bench_rate_limit.py) "auto" prefers the
 #: capped compiled DOP853 to the numpy engine's LSODA or Radau.
 _CAPPED_MAX_STEPS = 100_000
 
