@@ -2389,7 +2389,16 @@ def _atan(x):
 def compiled_method(method: Any) -> str | None:
     """The name in :data:`METHODS` of `method` (a name or scipy's class).
 
-    None where the compiled engine has no such method.
+    Parameters
+    ----------
+    method : str or scipy.integrate.OdeSolver
+        A method as :func:`~fws_control.simulate` takes it.
+
+    Returns
+    -------
+    str or None
+        ``"DOP853"`` or ``"Radau"``; None where the compiled engine has no
+        such method.
 
     Examples
     --------
