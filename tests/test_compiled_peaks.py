@@ -284,10 +284,14 @@ CURVE = dict(speed=5.0, initial_state=(0.0, -5.0, 0.0), duration=5.0)
         (None, {"actuator_time_constant": 0.05}, "compiled", "DOP853"),
         (None, {"method": "DOP853", "actuator_time_constant": 0.001}, "compiled",
          "DOP853"),
-        # Radau's range: capped DOP853 up to 1e5 steps (5 s / 3.2 ms) ...
+        # numpy's Radau range: capped DOP853 up to 2,500 steps (5 s / 3.2 ms:
+        # 1,562; runners._RADAU_FROM_STEPS) ...
         (None, {"actuator_time_constant": 0.001}, "compiled", "DOP853"),
-        # ... beyond (5 s / 32 us = 156,250 steps) numpy's Radau
-        (None, {"actuator_time_constant": 1e-5}, "numpy", "Radau"),
+        # ... beyond (5 s / 1.6 ms: 3,125 steps; 156,250) the compiled Radau
+        (None, {"actuator_time_constant": 0.0005}, "compiled", "Radau"),
+        (None, {"actuator_time_constant": 1e-5}, "compiled", "Radau"),
+        (None, {"method": "Radau", "actuator_time_constant": 0.05}, "compiled",
+         "Radau"),
         (None, {"delay": 0.1}, "numpy", "DOP853"),
         (None, {"method": "RK45"}, "numpy", "RK45"),
         (fws.PurePursuit(lookahead=5.0), {}, "numpy", "DOP853"),

@@ -16,7 +16,9 @@ with the limits: same step counts, agreement to 2e-6.
 
 import numpy as np
 import pytest
-from scipy.integrate import Radau
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.integrate import Radau, solve_ivp
 
 import fws_control as fws
 
@@ -26,9 +28,11 @@ numba = pytest.importorskip(
 )  # fmt: skip
 
 from fws_control.simulation.compiled import (  # noqa: E402
+    DEFAULT_MARGIN,
     closed_loop_jac,
     closed_loop_rhs,
     curvature_table,
+    integrate_compiled,
     radau_run,
     shared_parameters,
 )
@@ -81,3 +85,101 @@ def test_radau_port_takes_scipys_steps(tau, limited, rtol, duration):
     np.testing.assert_allclose(q_out[:steps] / scale[None, :, None],
                                np.array(Qs) / scale[None, :, None], rtol=0,
                                atol=2e-6)  # fmt: skip
+
+
+def _scipy_radau_run(veh, tab, g, tau, y0, t_eval, rtol, atol, events=None):
+    """scipy's Radau on the compiled right-hand side and Jacobian."""
+    q = shared_parameters(veh, tab, feedforward=True, time_constant=tau)
+    p = np.array([5.0, g.k1, g.k2, g.ratio, 0, 0, 0, 0.0], dtype=float)
+
+    def fun(t, y):
+        out = np.empty(5)
+        closed_loop_rhs(t, y, p, q, tab.breaks, tab.coefs, out)
+        return out
+
+    def jac(t, y):
+        out = np.empty((5, 5))
+        closed_loop_jac(t, y, p, q, tab.breaks, tab.coefs, out)
+        return out
+
+    return solve_ivp(fun, (t_eval[0], t_eval[-1]), y0, method="Radau", jac=jac,
+                     rtol=rtol, atol=atol, t_eval=t_eval, dense_output=True,
+                     events=events)  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("tau", "rtol", "duration"), [(0.05, 1e-8, 40.0), (0.001, 1e-10, 15.0)]
+)
+def test_engine_radau_takes_scipys_steps(tau, rtol, duration):
+    # integrate_compiled(method="Radau"): scipy's first step (its rule for
+    # order 3), the steps of _radau_step, the outputs from the collocation
+    # polynomial written in DOP853's form -- the same steps and outputs as
+    # solve_ivp's Radau given the same Jacobian
+    veh = fws.Vehicle(2.7, 1.35)
+    tab = curvature_table(fws.Arc(0.1))
+    g = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=-0.5, pole=-1.0)
+    t_eval = np.linspace(0.0, duration, 401)
+    atol = rtol * 1e-2
+    states, status, _, _, stats = integrate_compiled(
+        veh, tab, fws.SteeringGains(np.atleast_1d(g.k1), g.k2, g.ratio),
+        speed=np.array([5.0]), feedforward=True,
+        path_state=np.array([[0.0, -5.0, 0.0]]), t_eval=t_eval,
+        time_constant=tau, rtol=rtol, atol=atol, switching=False, method="Radau",
+    )  # fmt: skip
+    assert status[0] == "ok"
+    y = states[:, 0, :]
+    ref = _scipy_radau_run(veh, tab, g, tau, y[:, 0], t_eval, rtol, atol)
+    assert stats[0, 0] == ref.sol.ts.size - 1  # accepted steps
+    scale = np.max(np.abs(ref.y), axis=1) + atol
+    np.testing.assert_allclose(y / scale[:, None], ref.y / scale[:, None], rtol=0,
+                               atol=2e-6)  # fmt: skip
+
+
+def test_engine_radau_stops_where_scipys_event_does():
+    # diverging gains (k2 < 0): |delta_f| (the actuator state) reaches
+    # pi/2 - margin; the compiled Radau locates it on its dense output as
+    # scipy's terminal event does on its own
+    veh = fws.Vehicle(2.7, 1.35)
+    tab = curvature_table(fws.Arc(0.1))
+    g = fws.SteeringGains(0.2, -0.5, 0.0)
+    tau, rtol, atol = 0.05, 1e-10, 1e-12
+    t_eval = np.linspace(0.0, 20.0, 201)
+    states, status, _, t_stop, _ = integrate_compiled(
+        veh, tab, fws.SteeringGains(np.array([0.2]), -0.5, 0.0),
+        speed=np.array([5.0]), feedforward=True,
+        path_state=np.array([[0.0, -1.0, 0.0]]), t_eval=t_eval, time_constant=tau,
+        rtol=rtol, atol=atol, switching=False, method="Radau",
+    )  # fmt: skip
+    assert status[0] == "singular_steering"
+
+    def steer(t, y):
+        return (0.5 * np.pi - DEFAULT_MARGIN) - abs(y[3])
+
+    steer.terminal, steer.direction = True, -1
+    y0 = states[:, 0, 0]
+    ref = _scipy_radau_run(veh, tab, g, tau, y0, t_eval, rtol, atol, events=[steer])
+    assert ref.status == 1
+    assert t_stop[0] == pytest.approx(ref.t_events[0][0], rel=1e-9, abs=1e-9)
+    done = t_eval <= t_stop[0]
+    np.testing.assert_allclose(states[:, 0, done], ref.y, rtol=1e-7, atol=1e-9)
+    assert np.all(np.isnan(states[:, 0, ~done]))
+
+
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(
+    q=st.lists(st.floats(-1e3, 1e3), min_size=15, max_size=15),
+    x=st.floats(0.0, 1.0),
+)
+def test_radau_dense_output_in_dop853_form_is_scipys_polynomial(q, x):
+    # scipy's RadauDenseOutput: y_old + Q @ (x, x^2, x^3); the engine
+    # writes Q as DOP853's coefficients F and evaluates _dense_eval
+    from fws_control.simulation import compiled
+
+    Q = np.array(q).reshape(5, 3)
+    y_old = np.linspace(-1.0, 1.0, 5)
+    F = np.empty((7, 5))
+    compiled._radau_dense(Q, F)
+    out = np.empty(5)
+    compiled._dense_eval(2.0 + 0.5 * x, 2.0, 2.5, y_old, F, out)
+    want = y_old + Q @ np.array([x, x**2, x**3])
+    np.testing.assert_allclose(out, want, rtol=1e-12, atol=1e-9)

@@ -120,6 +120,8 @@ def _cases():
         marks = pytest.mark.skip(reason=reason)
     # switched at located events
     yield pytest.param("compiled", "auto", "DOP853", marks=marks)
+    # the compiled Radau: restarted at each located switch
+    yield pytest.param("compiled", "Radau", "Radau", marks=marks)
 
 
 @pytest.mark.parametrize(("engine", "method", "expect"), list(_cases()))
@@ -303,6 +305,36 @@ def test_auto_capped_dop853_gives_each_run_its_own_accuracy():
     assert np.max(np.abs(res.delta_f_rate)) == pytest.approx(0.2, rel=1e-9)
     y = np.stack([res.s, res.e, res.theta, res.delta_f, res.delta_r], axis=1)
     assert np.max(np.abs(y - ref) / tol) <= AGREE
+
+
+@pytest.mark.skipif(not _numba(), reason="numba is not installed: the compiled engine")
+def test_compiled_radau_gives_each_run_its_own_accuracy():
+    # The compiled Radau (what "auto" takes beyond 2,500 capped DOP853
+    # steps): the run in the batch of 20, where every other run stops at
+    # |delta_f| = pi/2 - margin, is bitwise the run alone and within the
+    # tolerance of the fixed-step reference; and its peaks, from Radau's own
+    # dense output, are those of the capped DOP853 run to 1e-9.
+    g = _mixed_batch()
+    alone, batch, u_alone, u_batch = _batch_units(g, "compiled", method="Radau")
+    assert batch.engine == "compiled" and batch.method == "Radau"
+    np.testing.assert_array_equal(batch.signals[0], alone.signals[0])
+    np.testing.assert_array_equal(batch.run_peak[0], alone.run_peak[0])
+    assert u_alone == u_batch <= 10.0, u_alone
+    capped = fws.simulate_batch(
+        VEH, fws.Arc(KAPPA), fws.SteeringGains(g.k1[:1], g.k2[:1], g.ratio[:1]),
+        speed=SPEED, initial_state=(0.0, E0, 0.0), duration=15.0, dt=DT_OUT,
+        actuator_time_constant=0.05, progress=False,
+    )  # fmt: skip
+    assert capped.method == "DOP853"
+    np.testing.assert_allclose(alone.run_peak[0], capped.run_peak[0], rtol=1e-9)
+    # the runs that stop, stop where the capped DOP853 runs stop
+    stop = batch.status == "singular_steering"
+    dop = fws.simulate_batch(
+        VEH, fws.Arc(KAPPA), g, speed=SPEED, initial_state=(0.0, E0, 0.0),
+        duration=15.0, dt=DT_OUT, actuator_time_constant=0.05, progress=False,
+    )  # fmt: skip
+    assert np.array_equal(dop.status == "singular_steering", stop)
+    np.testing.assert_allclose(batch.t_stop[stop], dop.t_stop[stop], rtol=1e-7)
 
 
 @pytest.mark.parametrize(

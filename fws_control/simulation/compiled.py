@@ -66,10 +66,13 @@ Not supported here (the numpy engine remains the general path;
 ``simulate(..., engine="compiled")`` raises for these, and the default
 ``engine="auto"`` runs them on the numpy engine):
 :class:`~fws_control.LateralController` baselines, an input delay, other
-solvers than DOP853, and any model other than the kinematic one. A stiff
-actuator (small time constant) is detected with Hairer's test (``stiff``
-in the statistics) but still integrated explicitly: the explicit step is
-then limited by stability to about :math:`6\,T` (see ``docs/performance.md``).
+solvers than DOP853 and Radau, and any model other than the kinematic one.
+A stiff actuator (small time constant) is detected with Hairer's test
+(``stiff`` in the statistics of DOP853, whose step is then limited by
+stability to about :math:`6\,T`); ``method="Radau"`` integrates it with
+scipy's implicit Radau IIA, ported like DOP853 (:func:`radau_run`, the
+same steps as scipy's given the analytic Jacobian :func:`closed_loop_jac`),
+whose steps follow the accuracy alone (see ``docs/performance.md``).
 
 numba is an optional dependency (extra ``fast``). Without it the module
 still imports; :func:`integrate_compiled` raises :class:`ImportError`.
@@ -86,7 +89,7 @@ import numpy as np
 # The tableau of scipy's DOP853 itself, so that the port takes exactly the
 # same steps (a private scipy module: the test suite checks the port step by
 # step against scipy.integrate.DOP853, so a change there cannot go unseen).
-from scipy.integrate import DOP853
+from scipy.integrate import DOP853, Radau
 from scipy.integrate._ivp import dop853_coefficients as _dop
 
 from ..controllers import steering_command
@@ -115,6 +118,7 @@ __all__ = [
     "CurvatureTable",
     "curvature_table",
     "compiled_support",
+    "compiled_method",
     "integrate_compiled",
     "compiled_outputs",
     "compiled_peaks",
@@ -130,6 +134,7 @@ __all__ = [
     "STATUS_CODES",
     "STAT_FIELDS",
     "DEFAULT_MARGIN",
+    "METHODS",
 ]
 
 #: Status of each integer code returned by the kernels.
@@ -143,6 +148,12 @@ STATUS_CODES = (
 
 #: Per run statistics returned by :func:`integrate_compiled` (columns).
 STAT_FIELDS = ("steps", "rejected", "rhs_evaluations", "stiff", "switches")
+
+#: Integration methods of the compiled engine: scipy's explicit ``DOP853``
+#: (with located clip switches and ``max_step``) and its implicit
+#: ``Radau`` (order 5, with the analytic :func:`closed_loop_jac`; no
+#: ``max_step``), for a loop made stiff by a fast actuator.
+METHODS = ("DOP853", "Radau")
 
 #: Default stop margins ``steer_margin`` [rad] and ``curvature_margin`` [-]:
 #: the numpy engine's :data:`~fws_control.simulation.engine.STOP_MARGIN`.
@@ -213,7 +224,8 @@ _Q_MAX_STEP = 14  # scipy's max_step (inf: none)
 # the first table piece's constant curvature and its feedforward angle
 # atan(f kappa0), computed once (see _feedforward_angle)
 _Q_KAPPA0, _Q_FF_ANGLE0 = 15, 16
-_NQ = 17
+_Q_METHOD = 17  # 0: DOP853, 1: Radau (see METHODS)
+_NQ = 18
 # Layout of the per run parameter vector.
 _P_SPEED, _P_K1, _P_K2, _P_RATIO = 0, 1, 2, 3
 # modes of the four clips (front/rear angle, front/rear rate): -1, 0 or +1
@@ -543,8 +555,9 @@ def _rms(x):
 
 
 @_jit
-def _select_initial_step(t0, y0, t_bound, f0, rtol, atol, p, q, br, co, work):
-    # scipy.integrate._ivp.common.select_initial_step, direction +1, order 7
+def _select_initial_step(t0, y0, t_bound, f0, rtol, atol, p, q, br, co, work, order):
+    # scipy.integrate._ivp.common.select_initial_step, direction +1, the
+    # method's error estimator order (DOP853 7, Radau 3)
     interval_length = abs(t_bound - t0)
     if interval_length == 0.0:
         return 0.0
@@ -564,7 +577,7 @@ def _select_initial_step(t0, y0, t_bound, f0, rtol, atol, p, q, br, co, work):
     if d1 <= 1e-15 and d2 <= 1e-15:
         h1 = max(1e-6, h0 * 1e-3)
     else:
-        h1 = (0.01 / max(d1, d2)) ** (1.0 / (7 + 1))
+        h1 = (0.01 / max(d1, d2)) ** (1.0 / (order + 1))
     return min(100 * h0, h1, interval_length, q[_Q_MAX_STEP])
 
 
@@ -911,6 +924,16 @@ def _run_impl(
     y_new = np.empty(m)
     f = np.empty(m)
     switches = 0
+    # Radau (q[_Q_METHOD] = 1): its state between steps (_radau_step)
+    radau = q[_Q_METHOD] == 1.0
+    order = 3 if radau else 7
+    rs = np.empty(_NRS)
+    J = np.empty((m, m))
+    M_real = np.empty((m, m))
+    M_complex = np.empty((m, m), dtype=np.complex128)
+    Q = np.zeros((m, 3))
+    y_prev = np.empty(m)
+    f_new = np.empty(m)
     if q[_Q_SWITCH] != 0.0:
         # initial modes: a channel beyond its limit starts held (angles
         # first: the actuator's rate depends on the held command)
@@ -945,36 +968,51 @@ def _run_impl(
         return 0, t, 0, 0, nfev, 0, 0, rec, n_rec
 
     h_abs = _select_initial_step(
-        t, y, t_bound, f, rtol, atol, p, q, breaks, coefs, work
+        t, y, t_bound, f, rtol, atol, p, q, breaks, coefs, work, order
     )
     nfev += 1
+    if radau:
+        _radau_start(t, y, h_abs, p, q, breaks, coefs, rs, J)
     k_out = 0
     while True:
-        # ---- RungeKutta._step_impl (direction +1, max_step q[_Q_MAX_STEP])
-        ok, t_new, h, h_abs, n_rej = dop853_step(
-            t, y, f, h_abs, t_bound, rtol, atol, p, q, breaks, coefs, K, y_new, ystage
-        )
-        nfev += _NS * (n_rej + 1)
-        rejected_total += n_rej
-        if not ok:
-            return 4, t, steps, rejected_total, nfev, stiff, switches, rec, n_rec
-        # Hairer's stiffness detection (dop853.f): |h lambda| from the last
-        # stage and f(y_new), both at t + h
-        num = 0.0
-        den = 0.0
-        for i in range(m):
-            num += (K[_NS, i] - K[_NS - 1, i]) ** 2
-            den += (y_new[i] - ystage[i]) ** 2
-        if den > 0.0:
-            if h * math.sqrt(num / den) > 6.1:
-                nonsti = 0
-                iasti += 1
-                if iasti == 15:
-                    stiff = 1
-            else:
-                nonsti += 1
-                if nonsti == 6:
-                    iasti = 0
+        if radau:
+            # ---- Radau._step_impl (its Jacobian: closed_loop_jac)
+            code_r, t_new, n_rej, nf = _radau_step(
+                t, y, f, t_bound, rtol, atol, p, q, breaks, coefs, rs, J, M_real,
+                M_complex, Q, y_prev, y_new, f_new,
+            )  # fmt: skip
+            nfev += nf
+            rejected_total += n_rej
+            if code_r != 0:
+                return 4, t, steps, rejected_total, nfev, stiff, switches, rec, n_rec
+            h = t_new - t
+        else:
+            # ---- RungeKutta._step_impl (direction +1, max_step q[_Q_MAX_STEP])
+            ok, t_new, h, h_abs, n_rej = dop853_step(
+                t, y, f, h_abs, t_bound, rtol, atol, p, q, breaks, coefs, K, y_new,
+                ystage,
+            )  # fmt: skip
+            nfev += _NS * (n_rej + 1)
+            rejected_total += n_rej
+            if not ok:
+                return 4, t, steps, rejected_total, nfev, stiff, switches, rec, n_rec
+            # Hairer's stiffness detection (dop853.f): |h lambda| from the
+            # last stage and f(y_new), both at t + h
+            num = 0.0
+            den = 0.0
+            for i in range(m):
+                num += (K[_NS, i] - K[_NS - 1, i]) ** 2
+                den += (y_new[i] - ystage[i]) ** 2
+            if den > 0.0:
+                if h * math.sqrt(num / den) > 6.1:
+                    nonsti = 0
+                    iasti += 1
+                    if iasti == 15:
+                        stiff = 1
+                else:
+                    nonsti += 1
+                    if nonsti == 6:
+                        iasti = 0
         # accepted: y_old = y, y = y_new, f = f_new
         # (buffers swapped: y_old is only overwritten by the next step)
         t_old = t
@@ -983,17 +1021,24 @@ def _run_impl(
         y_new = y_old
         t = t_new
         for i in range(m):
-            f[i] = K[_NS, i]
+            f[i] = f_new[i] if radau else K[_NS, i]
         if steps < n_trace:
             trace[steps] = t
         steps += 1
         dense_ready = False
+        if radau:
+            # its collocation polynomial, in the form _dense_eval reads
+            _radau_dense(Q, F)
+            dense_ready = True
         if keep:
             # the dense output of every accepted step, for the exact peaks
             # (a step cut at a switch or a stop keeps its interpolant)
-            _dense_coefficients(t_old, h, y_old, y, f, K, p, q, breaks, coefs, F, ytmp)
-            nfev += 3
-            dense_ready = True
+            if not dense_ready:
+                _dense_coefficients(
+                    t_old, h, y_old, y, f, K, p, q, breaks, coefs, F, ytmp
+                )
+                nfev += 3
+                dense_ready = True
             if n_rec == rec.shape[0]:
                 grown = np.empty((max(2 * n_rec, 16), rec.shape[1]))
                 grown[:n_rec] = rec[:n_rec]
@@ -1105,9 +1150,12 @@ def _run_impl(
                 )
             closed_loop_rhs(t, y, p, q, breaks, coefs, f)
             h_abs = _select_initial_step(
-                t, y, t_bound, f, rtol, atol, p, q, breaks, coefs, work
+                t, y, t_bound, f, rtol, atol, p, q, breaks, coefs, work, order
             )
             nfev += 2
+            if radau:
+                # a new solver at the switch, as for DOP853
+                _radau_start(t, y, h_abs, p, q, breaks, coefs, rs, J)
             _events(y, p, q, breaks, coefs, g_old)
             continue
         if t == t_bound:
@@ -1825,6 +1873,242 @@ def _predict_factor(h_abs, h_abs_old, error_norm, error_norm_old):
     return min(1.0, multiplier) * error_norm**-0.25
 
 
+# The state of a Radau run between steps (scipy's Radau attributes), in
+# rs: its stored h_abs, h_abs_old and error_norm_old (-1: None), whether
+# the Jacobian is current, whether M_real and M_complex are built for the
+# current h (scipy's LU_real is not None), whether a previous step's dense
+# output exists (scipy's sol), and that step's start t_old.
+_RS_H, _RS_H_OLD, _RS_ERR_OLD, _RS_CURRENT_JAC, _RS_HAVE_LU = 0, 1, 2, 3, 4
+_RS_HAVE_SOL, _RS_T_OLD = 5, 6
+_NRS = 7
+
+
+@_jit
+def _radau_start(t, y, h0, p, q, breaks, coefs, rs, J):
+    """Radau's state at a (re)start at ``(t, y)`` with first step `h0`."""
+    closed_loop_jac(t, y, p, q, breaks, coefs, J)
+    rs[_RS_H] = h0
+    rs[_RS_H_OLD] = -1.0
+    rs[_RS_ERR_OLD] = -1.0
+    rs[_RS_CURRENT_JAC] = 1.0
+    rs[_RS_HAVE_LU] = 0.0
+    rs[_RS_HAVE_SOL] = 0.0
+    rs[_RS_T_OLD] = t
+
+
+@_jit
+def _radau_step(
+    t, y, f, t_bound, rtol, atol, p, q, breaks, coefs, rs, J, M_real, M_complex,
+    Q, y_old, y_new, f_new,
+):  # fmt: skip
+    """One accepted step of scipy's ``Radau._step_impl`` from ``(t, y, f)``.
+
+    Writes the new state into `y_new` and its derivative into `f_new`; on
+    acceptance updates the state `rs` (see ``_RS_*``), the Jacobian `J`,
+    the dense-output matrix `Q` (scipy's ``RadauDenseOutput.Q`` of this
+    step) and `y_old` (the step's start, for the next step's predictor).
+    Returns ``(status, t_new, rejected, rhs_evaluations)``: status 0 on
+    acceptance, -1 when the step size falls below scipy's minimum.
+    """
+    n = y.size
+    tol_newton = max(10 * _EPS / rtol, min(0.03, rtol**0.5))
+    nfev = 0
+    n_rej = 0
+    min_step = 10 * abs(np.nextafter(t, np.inf) - t)
+    if rs[_RS_H] < min_step:
+        h_abs = min_step
+        h_abs_old = -1.0
+        error_norm_old = -1.0
+    else:
+        h_abs = rs[_RS_H]
+        h_abs_old = rs[_RS_H_OLD]
+        error_norm_old = rs[_RS_ERR_OLD]
+    current_jac = rs[_RS_CURRENT_JAC] != 0.0
+    have_lu = rs[_RS_HAVE_LU] != 0.0
+    have_sol = rs[_RS_HAVE_SOL] != 0.0
+    t_old = rs[_RS_T_OLD]
+    Z = np.zeros((3, n))
+    F = np.empty((3, n))
+    dW = np.empty((3, n))
+    yst = np.empty(n)
+    fst = np.empty(n)
+    rejected = False
+    accepted = False
+    n_iter = 0
+    rate = -1.0
+    error_norm = 0.0
+    safety = 0.0
+    t_new = t
+    h = 0.0
+    while not accepted:
+        if h_abs < min_step:
+            return -1, t, n_rej, nfev
+        h = h_abs
+        t_new = t + h
+        if t_new - t_bound > 0:
+            t_new = t_bound
+        h = t_new - t
+        h_abs = abs(h)
+        Z0 = np.zeros((3, n))
+        if have_sol:
+            for i in range(3):
+                x = (t + h * _RC[i] - t_old) / (t - t_old)
+                x2 = x * x
+                x3 = x2 * x
+                for j in range(n):
+                    Z0[i, j] = (
+                        Q[j, 0] * x + Q[j, 1] * x2 + Q[j, 2] * x3 + y_old[j]
+                    ) - y[j]
+        scale = atol + np.abs(y) * rtol
+        converged = False
+        while not converged:
+            if not have_lu:
+                for i in range(n):
+                    for j in range(n):
+                        eye = 1.0 if i == j else 0.0
+                        M_real[i, j] = _MU_REAL / h * eye - J[i, j]
+                        M_complex[i, j] = _MU_COMPLEX / h * eye - J[i, j]
+                have_lu = True
+            # solve_collocation_system
+            Mr = _MU_REAL / h
+            Mc = _MU_COMPLEX / h
+            W = _RTI @ Z0
+            Z = Z0.copy()
+            dW_norm_old = -1.0
+            converged = False
+            rate = -1.0
+            finite = True
+            k = 0
+            for k in range(_NEWTON_MAXITER):
+                for i in range(3):
+                    for j in range(n):
+                        yst[j] = y[j] + Z[i, j]
+                    closed_loop_rhs(t + h * _RC[i], yst, p, q, breaks, coefs,
+                                    fst)  # fmt: skip
+                    F[i] = fst
+                nfev += 3
+                if not np.all(np.isfinite(F)):
+                    finite = False
+                    break
+                f_real = np.empty(n)
+                f_complex = np.empty(n, dtype=np.complex128)
+                for j in range(n):
+                    f_real[j] = (
+                        F[0, j] * _RTI[0, 0] + F[1, j] * _RTI[0, 1]
+                        + F[2, j] * _RTI[0, 2]
+                    ) - Mr * W[0, j]  # fmt: skip
+                    f_complex[j] = (
+                        F[0, j] * (_RTI[1, 0] + 1j * _RTI[2, 0])
+                        + F[1, j] * (_RTI[1, 1] + 1j * _RTI[2, 1])
+                        + F[2, j] * (_RTI[1, 2] + 1j * _RTI[2, 2])
+                    ) - Mc * (W[1, j] + 1j * W[2, j])  # fmt: skip
+                dW_real = np.linalg.solve(M_real, f_real)
+                dW_complex = np.linalg.solve(M_complex, f_complex)
+                dW[0] = dW_real
+                dW[1] = dW_complex.real
+                dW[2] = dW_complex.imag
+                sc = np.empty((3, n))
+                for i in range(3):
+                    sc[i] = dW[i] / scale
+                dW_norm = _rms2(sc)
+                if dW_norm_old >= 0.0:
+                    rate = dW_norm / dW_norm_old
+                if rate >= 0.0 and (
+                    rate >= 1
+                    or rate ** (_NEWTON_MAXITER - k) / (1 - rate) * dW_norm > tol_newton
+                ):
+                    break
+                W += dW
+                Z = _RT @ W
+                if dW_norm == 0 or (
+                    rate >= 0.0 and rate / (1 - rate) * dW_norm < tol_newton
+                ):
+                    converged = True
+                    break
+                dW_norm_old = dW_norm
+            if not finite:
+                converged = False
+            n_iter = k + 1
+            if not converged:
+                if current_jac:
+                    break
+                closed_loop_jac(t, y, p, q, breaks, coefs, J)
+                current_jac = True
+                have_lu = False
+        if not converged:
+            h_abs *= 0.5
+            have_lu = False
+            n_rej += 1
+            continue
+        for j in range(n):
+            y_new[j] = y[j] + Z[2, j]
+        ZE = np.empty(n)
+        for j in range(n):
+            ZE[j] = (Z[0, j] * _RE[0] + Z[1, j] * _RE[1] + Z[2, j] * _RE[2]) / h
+        error = np.linalg.solve(M_real, f + ZE)
+        scale = atol + np.maximum(np.abs(y), np.abs(y_new)) * rtol
+        error_norm = _rms2(error / scale)
+        safety = 0.9 * (2 * _NEWTON_MAXITER + 1) / (2 * _NEWTON_MAXITER + n_iter)
+        if rejected and error_norm > 1:
+            closed_loop_rhs(t, y + error, p, q, breaks, coefs, fst)
+            nfev += 1
+            error = np.linalg.solve(M_real, fst + ZE)
+            error_norm = _rms2(error / scale)
+        if error_norm > 1:
+            factor = _predict_factor(h_abs, h_abs_old, error_norm, error_norm_old)
+            h_abs *= max(_MIN_FACTOR, safety * factor)
+            have_lu = False
+            rejected = True
+            n_rej += 1
+        else:
+            accepted = True
+    recompute_jac = n_iter > 2 and rate > 1e-3
+    factor = _predict_factor(h_abs, h_abs_old, error_norm, error_norm_old)
+    factor = min(_MAX_FACTOR, safety * factor)
+    if not recompute_jac and factor < 1.2:
+        factor = 1.0
+    else:
+        have_lu = False
+    closed_loop_rhs(t_new, y_new, p, q, breaks, coefs, f_new)
+    nfev += 1
+    if recompute_jac:
+        closed_loop_jac(t_new, y_new, p, q, breaks, coefs, J)
+        current_jac = True
+    else:
+        current_jac = False
+    # as scipy: the old step is the one this step was asked to try
+    rs[_RS_H_OLD] = rs[_RS_H]
+    rs[_RS_ERR_OLD] = error_norm
+    rs[_RS_H] = h_abs * factor
+    rs[_RS_CURRENT_JAC] = 1.0 if current_jac else 0.0
+    rs[_RS_HAVE_LU] = 1.0 if have_lu else 0.0
+    rs[_RS_HAVE_SOL] = 1.0
+    rs[_RS_T_OLD] = t
+    for j in range(n):
+        y_old[j] = y[j]
+        for m in range(3):
+            Q[j, m] = Z[0, j] * _RP[0, m] + Z[1, j] * _RP[1, m] + Z[2, j] * _RP[2, m]
+    return 0, t_new, n_rej, nfev
+
+
+@_jit
+def _radau_dense(Q, F):
+    """Radau's dense output ``Q @ (x, x^2, x^3)`` as DOP853's coefficients.
+
+    :func:`_dense_eval` computes ``y_old + x (F0 + (1 - x) (F1 + x (F2 +
+    ...)))``; the cubic ``Q0 x + Q1 x^2 + Q2 x^3`` is that form with ``F0 =
+    Q0 + Q1 + Q2``, ``F1 = -(Q1 + Q2)``, ``F2 = -Q2`` and the higher
+    coefficients 0, so the events, the outputs and the exact peaks read a
+    Radau step as they read a DOP853 step.
+    """
+    for i in range(Q.shape[0]):
+        F[0, i] = Q[i, 0] + Q[i, 1] + Q[i, 2]
+        F[1, i] = -(Q[i, 1] + Q[i, 2])
+        F[2, i] = -Q[i, 2]
+        for k in range(3, F.shape[0]):
+            F[k, i] = 0.0
+
+
 @_jit
 def radau_run(y0, p, q, breaks, coefs, t0, t_bound, h0, rtol, atol, ts, ys, qs):
     """Integrate one run with Radau IIA order 5: a port of scipy's ``Radau``.
@@ -1836,8 +2120,8 @@ def radau_run(y0, p, q, breaks, coefs, t0, t_bound, h0, rtol, atol, ts, ys, qs):
     into `ys` and each step's dense-output matrix ``Q`` (scipy's
     ``RadauDenseOutput.Q``, ``(n, 3)``) into `qs`; returns ``(steps,
     status)``, status 0 when `t_bound` was reached, 1 out of room, -1 step
-    too small. Not used by the engines yet (no events: the clips must be
-    min/max, ``q[13] = 0``).
+    too small. The engines step with :func:`_radau_step`, which this loop
+    drives (no events here: the clips must be min/max, ``q[13] = 0``).
 
     Examples
     --------
@@ -1856,200 +2140,34 @@ def radau_run(y0, p, q, breaks, coefs, t0, t_bound, h0, rtol, atol, ts, ys, qs):
     (0, True)
     """
     n = y0.size
-    tol_newton = max(10 * _EPS / rtol, min(0.03, rtol**0.5))
     t = t0
     y = y0.copy()
     f = np.empty(n)
     closed_loop_rhs(t, y, p, q, breaks, coefs, f)
+    rs = np.empty(_NRS)
     J = np.empty((n, n))
-    closed_loop_jac(t, y, p, q, breaks, coefs, J)
-    current_jac = True
-    have_lu = False
+    _radau_start(t, y, h0, p, q, breaks, coefs, rs, J)
     M_real = np.empty((n, n))
     M_complex = np.empty((n, n), dtype=np.complex128)
-    have_sol = False
     Q = np.zeros((n, 3))
     y_old = y.copy()
-    t_old = t
-    # scipy's stored h_abs, h_abs_old, error_norm_old (-1: None)
-    s_h_abs = h0
-    s_h_abs_old = -1.0
-    s_error_norm_old = -1.0
+    y_new = np.empty(n)
+    f_new = np.empty(n)
     ts[0] = t
     ys[0] = y
     k_step = 0
-    Z = np.zeros((3, n))
-    F = np.empty((3, n))
-    dW = np.empty((3, n))
-    yst = np.empty(n)
-    fst = np.empty(n)
     while t < t_bound:
         if k_step + 1 >= ts.size:
             return k_step, 1
-        min_step = 10 * abs(np.nextafter(t, np.inf) - t)
-        if s_h_abs < min_step:
-            h_abs = min_step
-            h_abs_old = -1.0
-            error_norm_old = -1.0
-        else:
-            h_abs = s_h_abs
-            h_abs_old = s_h_abs_old
-            error_norm_old = s_error_norm_old
-        rejected = False
-        accepted = False
-        n_iter = 0
-        rate = -1.0
-        error_norm = 0.0
-        safety = 0.0
-        t_new = t
-        h = 0.0
-        while not accepted:
-            if h_abs < min_step:
-                return k_step, -1
-            h = h_abs
-            t_new = t + h
-            if t_new - t_bound > 0:
-                t_new = t_bound
-            h = t_new - t
-            h_abs = abs(h)
-            Z0 = np.zeros((3, n))
-            if have_sol:
-                for i in range(3):
-                    x = (t + h * _RC[i] - t_old) / (t - t_old)
-                    x2 = x * x
-                    x3 = x2 * x
-                    for j in range(n):
-                        Z0[i, j] = (
-                            Q[j, 0] * x + Q[j, 1] * x2 + Q[j, 2] * x3 + y_old[j]
-                        ) - y[j]
-            scale = atol + np.abs(y) * rtol
-            converged = False
-            while not converged:
-                if not have_lu:
-                    for i in range(n):
-                        for j in range(n):
-                            eye = 1.0 if i == j else 0.0
-                            M_real[i, j] = _MU_REAL / h * eye - J[i, j]
-                            M_complex[i, j] = _MU_COMPLEX / h * eye - J[i, j]
-                    have_lu = True
-                # solve_collocation_system
-                Mr = _MU_REAL / h
-                Mc = _MU_COMPLEX / h
-                W = _RTI @ Z0
-                Z = Z0.copy()
-                dW_norm_old = -1.0
-                converged = False
-                rate = -1.0
-                finite = True
-                k = 0
-                for k in range(_NEWTON_MAXITER):
-                    for i in range(3):
-                        for j in range(n):
-                            yst[j] = y[j] + Z[i, j]
-                        closed_loop_rhs(t + h * _RC[i], yst, p, q, breaks, coefs,
-                                        fst)  # fmt: skip
-                        F[i] = fst
-                    if not np.all(np.isfinite(F)):
-                        finite = False
-                        break
-                    f_real = np.empty(n)
-                    f_complex = np.empty(n, dtype=np.complex128)
-                    for j in range(n):
-                        f_real[j] = (
-                            F[0, j] * _RTI[0, 0] + F[1, j] * _RTI[0, 1]
-                            + F[2, j] * _RTI[0, 2]
-                        ) - Mr * W[0, j]  # fmt: skip
-                        f_complex[j] = (
-                            F[0, j] * (_RTI[1, 0] + 1j * _RTI[2, 0])
-                            + F[1, j] * (_RTI[1, 1] + 1j * _RTI[2, 1])
-                            + F[2, j] * (_RTI[1, 2] + 1j * _RTI[2, 2])
-                        ) - Mc * (W[1, j] + 1j * W[2, j])  # fmt: skip
-                    dW_real = np.linalg.solve(M_real, f_real)
-                    dW_complex = np.linalg.solve(M_complex, f_complex)
-                    dW[0] = dW_real
-                    dW[1] = dW_complex.real
-                    dW[2] = dW_complex.imag
-                    sc = np.empty((3, n))
-                    for i in range(3):
-                        sc[i] = dW[i] / scale
-                    dW_norm = _rms2(sc)
-                    if dW_norm_old >= 0.0:
-                        rate = dW_norm / dW_norm_old
-                    if rate >= 0.0 and (
-                        rate >= 1
-                        or rate ** (_NEWTON_MAXITER - k) / (1 - rate) * dW_norm
-                        > tol_newton
-                    ):
-                        break
-                    W += dW
-                    Z = _RT @ W
-                    if dW_norm == 0 or (
-                        rate >= 0.0 and rate / (1 - rate) * dW_norm < tol_newton
-                    ):
-                        converged = True
-                        break
-                    dW_norm_old = dW_norm
-                if not finite:
-                    converged = False
-                n_iter = k + 1
-                if not converged:
-                    if current_jac:
-                        break
-                    closed_loop_jac(t, y, p, q, breaks, coefs, J)
-                    current_jac = True
-                    have_lu = False
-            if not converged:
-                h_abs *= 0.5
-                have_lu = False
-                continue
-            y_new = y + Z[2]
-            ZE = np.empty(n)
-            for j in range(n):
-                ZE[j] = (Z[0, j] * _RE[0] + Z[1, j] * _RE[1] + Z[2, j] * _RE[2]) / h
-            error = np.linalg.solve(M_real, f + ZE)
-            scale = atol + np.maximum(np.abs(y), np.abs(y_new)) * rtol
-            error_norm = _rms2(error / scale)
-            safety = 0.9 * (2 * _NEWTON_MAXITER + 1) / (2 * _NEWTON_MAXITER + n_iter)
-            if rejected and error_norm > 1:
-                closed_loop_rhs(t, y + error, p, q, breaks, coefs, fst)
-                error = np.linalg.solve(M_real, fst + ZE)
-                error_norm = _rms2(error / scale)
-            if error_norm > 1:
-                factor = _predict_factor(h_abs, h_abs_old, error_norm, error_norm_old)
-                h_abs *= max(_MIN_FACTOR, safety * factor)
-                have_lu = False
-                rejected = True
-            else:
-                accepted = True
-        recompute_jac = n_iter > 2 and rate > 1e-3
-        factor = _predict_factor(h_abs, h_abs_old, error_norm, error_norm_old)
-        factor = min(_MAX_FACTOR, safety * factor)
-        if not recompute_jac and factor < 1.2:
-            factor = 1.0
-        else:
-            have_lu = False
-        f_new = np.empty(n)
-        closed_loop_rhs(t_new, y_new, p, q, breaks, coefs, f_new)
-        if recompute_jac:
-            closed_loop_jac(t_new, y_new, p, q, breaks, coefs, J)
-            current_jac = True
-        else:
-            current_jac = False
-        # as scipy: the old step is the one this step was asked to try
-        s_h_abs_old = s_h_abs
-        s_error_norm_old = error_norm
-        s_h_abs = h_abs * factor
-        y_old = y
-        t_old = t
+        status, t_new, _, _ = _radau_step(
+            t, y, f, t_bound, rtol, atol, p, q, breaks, coefs, rs, J, M_real,
+            M_complex, Q, y_old, y_new, f_new,
+        )  # fmt: skip
+        if status != 0:
+            return k_step, -1
         t = t_new
-        y = y_new
-        f = f_new
-        for j in range(n):
-            for m in range(3):
-                Q[j, m] = (
-                    Z[0, j] * _RP[0, m] + Z[1, j] * _RP[1, m] + Z[2, j] * _RP[2, m]
-                )
-        have_sol = True
+        y, y_new = y_new, y
+        f, f_new = f_new, f
         k_step += 1
         ts[k_step] = t
         ys[k_step] = y
@@ -2178,6 +2296,7 @@ def shared_parameters(
     curvature_margin: float = DEFAULT_MARGIN,
     switching: bool = False,
     max_step: float = math.inf,
+    method: str = "DOP853",
 ) -> np.ndarray:
     """The parameter vector shared by all runs of a call (for the kernels).
 
@@ -2198,12 +2317,15 @@ def shared_parameters(
         clipped channel by its mode (then the per run parameter vectors have
         8 entries); default False: min/max in the right-hand side.
     max_step : float, optional
-        Longest step [s], > 0, as scipy's ``max_step`` (default: none).
+        Longest step [s], > 0, as scipy's ``max_step`` (default: none;
+        DOP853 only).
+    method : {"DOP853", "Radau"}, optional
+        Integration method (:data:`METHODS`).
 
     Returns
     -------
     ndarray
-        Shape ``(17,)``.
+        Shape ``(18,)``.
 
     Examples
     --------
@@ -2222,6 +2344,13 @@ def shared_parameters(
             raise ValueError(f"{name} must be a number in [0, 1), got {val!r}")
     if not (isinstance(max_step, (int, float)) and max_step > 0.0):
         raise ValueError(f"max_step must be a number > 0 [s], got {max_step!r}")
+    if not isinstance(method, str) or method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    if method == "Radau" and max_step != math.inf:
+        raise ValueError(
+            f"max_step applies to method='DOP853' only, got max_step={max_step!r} "
+            "with method='Radau'"
+        )
     q = np.empty(_NQ)
     q[_Q_WHEELBASE] = vehicle.wheelbase
     q[_Q_FF] = 1.0 if feedforward else 0.0
@@ -2242,6 +2371,7 @@ def shared_parameters(
     q[_Q_OPEN_LENGTH] = table.open_length
     q[_Q_SWITCH] = 1.0 if switching else 0.0
     q[_Q_MAX_STEP] = float(max_step)
+    q[_Q_METHOD] = float(METHODS.index(method))
     # a curvature equal to the first piece's constant term (every s of an
     # arc or a straight) takes its feedforward angle from here; the kernels'
     # own atan, so the angle is the one they would compute
@@ -2254,6 +2384,36 @@ def shared_parameters(
 @_jit
 def _atan(x):
     return math.atan(x)
+
+
+def compiled_method(method: Any) -> str | None:
+    """The name in :data:`METHODS` of `method` (a name or scipy's class).
+
+    Parameters
+    ----------
+    method : str or scipy.integrate.OdeSolver
+        A method as :func:`~fws_control.simulate` takes it.
+
+    Returns
+    -------
+    str or None
+        ``"DOP853"`` or ``"Radau"``; None where the compiled engine has no
+        such method.
+
+    Examples
+    --------
+    >>> from scipy.integrate import Radau
+    >>> from fws_control.simulation.compiled import compiled_method
+    >>> compiled_method(Radau), compiled_method("DOP853"), compiled_method("BDF")
+    ('Radau', 'DOP853', None)
+    """
+    if isinstance(method, str):
+        return method if method in METHODS else None
+    if method is DOP853:
+        return "DOP853"
+    if method is Radau:
+        return "Radau"
+    return None
 
 
 def compiled_support(
@@ -2271,7 +2431,8 @@ def compiled_support(
     delay : float, optional
         Input delay [s]: only 0 is compiled.
     method : str or scipy.integrate.OdeSolver, optional
-        Only ``"DOP853"`` (or the class) is compiled.
+        Only :data:`METHODS` (``"DOP853"``, ``"Radau"`` or their classes)
+        are compiled.
 
     Returns
     -------
@@ -2292,8 +2453,8 @@ def compiled_support(
         return "only the paper's law (SteeringGains) is compiled, not controllers"
     if delay != 0.0:
         return "an input delay (method of steps) is not compiled"
-    if method != "DOP853" and method is not DOP853:
-        return f"only method='DOP853' is compiled, got {method!r}"
+    if compiled_method(method) is None:
+        return f"only method={METHODS} is compiled, got {method!r}"
     if _exact_pieces(path) is None and not math.isfinite(float(path.length)):
         return "an unbounded path other than Straight has no curvature table"
     return None
@@ -2315,10 +2476,11 @@ def integrate_compiled(
     curvature_margin: float = DEFAULT_MARGIN,
     switching: bool = True,
     max_step: float = math.inf,
+    method: str = "DOP853",
     out: np.ndarray | None = None,
     solution: list | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Integrate ``n`` runs, each with its own DOP853 steps and events.
+    """Integrate ``n`` runs, each with its own steps and events.
 
     Same arguments and results as
     :func:`~fws_control.simulation.engine.integrate` (without ``method``,
@@ -2346,7 +2508,7 @@ def integrate_compiled(
         Actuator lag [s]; None: no actuator. The actuator states start at
         the initial command.
     rtol, atol : float, optional
-        Tolerances of DOP853 (scipy's meaning), > 0.
+        Tolerances of the method (scipy's meaning), > 0.
     steer_margin, curvature_margin : float, optional
         Stop margins, in [0, 1) (see the module notes).
     switching : bool, optional
@@ -2359,7 +2521,15 @@ def integrate_compiled(
         Longest step [s], as scipy's ``max_step`` (default: none). Half the
         actuator's stability bound, ``3.2 T``, keeps DOP853's error estimate
         valid on a stiff loop (see
-        :func:`~fws_control.simulation.engine.choose_method`).
+        :func:`~fws_control.simulation.engine.choose_method`). DOP853 only.
+    method : {"DOP853", "Radau"}, optional
+        :data:`METHODS`: scipy's ``DOP853`` (default) or its implicit
+        ``Radau`` with the analytic Jacobian :func:`closed_loop_jac`, the
+        same steps as :class:`scipy.integrate.Radau` given that Jacobian
+        (its first step from scipy's rule for order 3; a clip switch
+        restarts it like a new solver). Its dense output is the cubic
+        collocation polynomial, read by events, outputs and
+        :func:`compiled_peaks` as DOP853's.
     out : ndarray, optional
         Preallocated ``(n, m, T)`` float array for the states (``m = 3``, or
         5 with an actuator), e.g. a slice of a larger result or a
@@ -2420,6 +2590,7 @@ def integrate_compiled(
         curvature_margin=curvature_margin,
         switching=switching,
         max_step=max_step,
+        method=method,
     )
     speed = np.ascontiguousarray(speed, dtype=float).ravel()
     n = speed.size

@@ -278,8 +278,8 @@ def choose_method(
     15 s). The compiled engine has no LSODA: with numba, ``engine="auto"``
     runs such runs there with DOP853 held to ``3.2 T``, half its stability
     bound, where its error estimate holds again (5.7 tolerances off the
-    reference, 0.24 ms per run; see
-    :func:`~fws_control.simulate_batch`).
+    reference, 0.24 ms per run), up to 2,500 such steps, and with its port
+    of Radau beyond (see :func:`~fws_control.simulate`).
 
     With an input `delay` the steps are at most the delay (the method of
     steps), so if ``delay <= 3.2 T`` (:data:`SAFE_STEP`, half the stability

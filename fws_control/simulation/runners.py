@@ -214,10 +214,14 @@ _ENGINES = ("auto", "numpy", "compiled")
 #: bound: 4.3; 0.8: 386), at 0.24 ms of CPU per run (numpy LSODA in chunks
 #: of 16: 17.3 ms).
 _CAPPED_STEP = SAFE_STEP
-#: Up to this many capped steps (about 0.4 s of CPU per run with all signals
-#: and the exact peaks, benchmarks/bench_rate_limit.py) "auto" prefers the
-#: capped compiled DOP853 to the numpy engine's LSODA or Radau.
-_CAPPED_MAX_STEPS = 100_000
+#: Beyond this many capped steps "auto" on the compiled engine takes its
+#: Radau (implicit, stepping by accuracy: 9-13 ms of CPU per run of the
+#: curve scenario with all signals and exact peaks, whatever T and the
+#: duration) instead of the capped DOP853 (about 4.3 us per step, 1.0-1.4
+#: ms for the 15 s scenario at T = 0.27 and 0.05 s; 16.5 ms at 4,688 steps,
+#: 43 ms at 9,375 and 396 ms at 93,750). Measured with `simulate`, best of
+#: 3, output step 0.1 s: they cost the same near 2,300 steps.
+_RADAU_FROM_STEPS = 2500
 
 
 def _compiled_reason(path, gains, *, delay, method, model, feedforward):
@@ -250,9 +254,10 @@ def _choose_engine(path, gains, *, delay, method, model, feedforward):
 
     Returns ``("compiled", table)`` where the compiled engine can run the
     case, else ``("numpy", None)``. `method` is already resolved (DOP853
-    for a capped stiff run, see ``_CAPPED_STEP``; Radau or LSODA: numpy,
-    the compiled engine has DOP853 only). A path whose curvature table
-    misses its tolerance goes to numpy too.
+    for a stiff run under ``method="auto"``, which the compiled engine then
+    runs as capped DOP853 or Radau, see ``_RADAU_FROM_STEPS``; LSODA and
+    BDF: numpy). A path whose curvature table misses its tolerance goes to
+    numpy too.
     """
     try:
         import numba  # noqa: F401  (the optional extra "fast")
@@ -282,6 +287,7 @@ def _run_compiled(
     the batch's signals, written in place (then returned as the signals).
     """
     from .compiled import (
+        compiled_method,
         compiled_outputs,
         compiled_peaks,
         curvature_table,
@@ -310,6 +316,7 @@ def _run_compiled(
         rtol=opts["rtol"],
         atol=opts["atol"],
         max_step=opts.get("max_step", math.inf),
+        method=compiled_method(opts["method"]),
         solution=(solution := []),
     )
     signals = compiled_outputs(
@@ -769,14 +776,16 @@ def simulate(
         Tyre model of ``model="dynamic"``: linear (default) or the
         saturating simplified magic formula (needs ``vehicle.friction``).
     engine : {"auto", "numpy", "compiled"}, optional
-        ``"compiled"``: the numba port of DOP853 of
+        ``"compiled"``: the numba ports of DOP853 and Radau of
         :mod:`fws_control.simulation.compiled` (extra ``fast``), each run
         with its own steps and stop, at compiled speed. It runs the paper's
         law (:class:`~fws_control.SteeringGains`) on the kinematic model
-        without delay, with ``method="DOP853"`` or ``"auto"`` (which then
-        means DOP853; with an actuator of time constant T its steps held to
-        3.2 T, half its stability bound, where its error estimate bounds the
-        error again) and `feedforward` True or
+        without delay, with ``method="DOP853"``, ``"Radau"`` or ``"auto"``
+        (which then means DOP853; with an actuator of time constant T, its
+        steps held to 3.2 T, half its stability bound, where its error
+        estimate bounds the error again, up to 2,500 such steps, and Radau
+        beyond: 9-13 ms per run of the paper's curve scenario whatever T
+        and the duration) and `feedforward` True or
         False, on any path whose curvature it can tabulate; any other case
         raises :class:`ValueError` (no fallback). Its results agree with the
         numpy engine's to the solver tolerance (the same method; angle and
@@ -788,8 +797,7 @@ def simulate(
         ``"numpy"``: the engine described above, for every case.
         ``"auto"`` (default): the compiled engine where numba is installed
         and it runs the case (with ``method="auto"`` and an actuator: DOP853
-        held to 3.2 T, as above, up to 100,000 such steps; beyond, the
-        numpy engine's choice, Radau or LSODA, see
+        held to 3.2 T or Radau, as above; the numpy engine's own choice is
         :func:`~fws_control.simulation.engine.choose_method`); the numpy
         engine otherwise. The result's
         ``engine`` says which ran, and is bitwise the result of asking for
@@ -944,9 +952,8 @@ def simulate_batch(
     engine : {"auto", "numpy", "compiled"}, optional
         Integration engine, as in :func:`simulate` (default ``"auto"``: the
         compiled engine where numba is installed and it runs the case --
-        the paper's law, kinematic model, no delay, DOP853 or ``"auto"``
-        with an actuator of at most 100,000 steps of 3.2 T -- else the numpy
-        engine). With
+        the paper's law, kinematic model, no delay, DOP853, Radau or
+        ``"auto"`` -- else the numpy engine). With
         ``"compiled"`` each run has its own steps, error norm and stop, so a
         run's result does not depend on the other runs (nor on
         `chunk_size`).
@@ -1079,26 +1086,27 @@ def simulate_batch(
         feedforward = bool(feedforward)
     table = None
     # With an actuator, "auto" on the compiled engine is DOP853 with its steps
-    # held to half its stability bound (see _CAPPED_STEP), also where the
-    # numpy engine would take LSODA or Radau, up to _CAPPED_MAX_STEPS steps.
-    capped = (
-        auto_method
-        and tau is not None
-        and float(t[-1] - t[0]) <= _CAPPED_MAX_STEPS * _CAPPED_STEP * tau
-    )
+    # held to half its stability bound (see _CAPPED_STEP), or Radau beyond
+    # _RADAU_FROM_STEPS such steps, also where the numpy engine would take
+    # LSODA or Radau: the compiled engine runs every stiff case.
+    stiff_auto = auto_method and tau is not None
     if engine == "auto":
         engine, table = _choose_engine(
             path,
             SteeringGains(k1, k2, a) if ctrl is None else ctrl,
             delay=opts["delay"],
-            method="DOP853" if capped else opts["method"],
+            method="DOP853" if stiff_auto else opts["method"],
             model=opts["model"],
             feedforward=feedforward,
         )
     if engine == "compiled" and auto_method:
-        opts["method"] = "DOP853"  # the only compiled method
-        if tau is not None:
-            opts["max_step"] = _CAPPED_STEP * tau
+        duration_run = float(t[-1] - t[0])
+        if stiff_auto and duration_run > _RADAU_FROM_STEPS * _CAPPED_STEP * tau:
+            opts["method"] = "Radau"
+        else:
+            opts["method"] = "DOP853"
+            if tau is not None:
+                opts["max_step"] = _CAPPED_STEP * tau
     if engine == "compiled":
         _check_compiled(
             path,
