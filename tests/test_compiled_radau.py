@@ -38,6 +38,22 @@ from fws_control.simulation.compiled import (  # noqa: E402
 )
 
 
+def _fun_jac(p, q, tab):
+    """The compiled right-hand side and Jacobian of a 5-state run, for scipy."""
+
+    def fun(t, y):
+        out = np.empty(5)
+        closed_loop_rhs(t, y, p, q, tab.breaks, tab.coefs, out)
+        return out
+
+    def jac(t, y):
+        out = np.empty((5, 5))
+        closed_loop_jac(t, y, p, q, tab.breaks, tab.coefs, out)
+        return out
+
+    return fun, jac
+
+
 @pytest.mark.parametrize(
     ("tau", "limited", "rtol", "duration"),
     [(0.05, False, 1e-8, 40.0), (0.001, False, 1e-10, 15.0), (0.05, True, 1e-6, 40.0)],
@@ -52,17 +68,7 @@ def test_radau_port_takes_scipys_steps(tau, limited, rtol, duration):
     p = np.array([5.0, g.k1, g.k2, g.ratio, 0, 0, 0, 0.0])
     atol = rtol * 1e-2
     y0 = np.array([0.0, -5.0 if not limited else -0.5, 0.0, 0.0, 0.0])
-
-    def fun(t, y):
-        out = np.empty(5)
-        closed_loop_rhs(t, y, p, q, tab.breaks, tab.coefs, out)
-        return out
-
-    def jac(t, y):
-        out = np.empty((5, 5))
-        closed_loop_jac(t, y, p, q, tab.breaks, tab.coefs, out)
-        return out
-
+    fun, jac = _fun_jac(p, q, tab)
     h0 = 1e-4
     ref = Radau(fun, 0.0, y0, duration, rtol=rtol, atol=atol, jac=jac, first_step=h0)
     ts, ys, Qs = [0.0], [y0], []
@@ -91,17 +97,7 @@ def _scipy_radau_run(veh, tab, g, tau, y0, t_eval, rtol, atol, events=None):
     """scipy's Radau on the compiled right-hand side and Jacobian."""
     q = shared_parameters(veh, tab, feedforward=True, time_constant=tau)
     p = np.array([5.0, g.k1, g.k2, g.ratio, 0, 0, 0, 0.0], dtype=float)
-
-    def fun(t, y):
-        out = np.empty(5)
-        closed_loop_rhs(t, y, p, q, tab.breaks, tab.coefs, out)
-        return out
-
-    def jac(t, y):
-        out = np.empty((5, 5))
-        closed_loop_jac(t, y, p, q, tab.breaks, tab.coefs, out)
-        return out
-
+    fun, jac = _fun_jac(p, q, tab)
     return solve_ivp(fun, (t_eval[0], t_eval[-1]), y0, method="Radau", jac=jac,
                      rtol=rtol, atol=atol, t_eval=t_eval, dense_output=True,
                      events=events)  # fmt: skip
