@@ -225,6 +225,7 @@ _Q_MAX_STEP = 14  # scipy's max_step (inf: none)
 # atan(f kappa0), computed once (see _feedforward_angle)
 _Q_KAPPA0, _Q_FF_ANGLE0 = 15, 16
 _Q_METHOD = 17  # 0: DOP853, 1: Radau (see METHODS)
+_RADAU = 1  # q[_Q_METHOD] of Radau, and the constant of its drivers
 _NQ = 18
 # Layout of the per run parameter vector.
 _P_SPEED, _P_K1, _P_K2, _P_RATIO = 0, 1, 2, 3
@@ -898,248 +899,265 @@ def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):
     return r[0], r[1], r[2], r[3], r[4], r[5], r[6]
 
 
-@_jit
-def _run_impl(
-    y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace, rec, start, keep
-):
-    # solve_run; with keep, rows start, start + 1, ... of rec (grown when
-    # full, returned) receive each accepted step's (t_old, h, y_old, F):
-    # its DOP853 dense output, the piece [t_old, next row's t_old or t_stop]
-    m = y0.size
-    T = t_eval.size
-    n_rec = start
-    n_trace = trace.size
-    K = np.empty((_NSE, m))
-    F = np.empty((_NPOW, m))
-    ytmp = np.empty(m)
-    ystage = np.empty(m)
-    work = np.empty(m)
-    g_old = np.empty(_N_EVENTS)
-    g_new = np.empty(_N_EVENTS)
-    g_tmp = np.empty(_N_EVENTS)
-    g_inner = np.empty((_N_INNER, _N_EVENTS))
-    t = t_eval[0]
-    t_bound = t_eval[T - 1]
-    y = y0.copy()
-    y_new = np.empty(m)
-    f = np.empty(m)
-    switches = 0
-    # Radau (q[_Q_METHOD] = 1): its state between steps (_radau_step)
-    radau = q[_Q_METHOD] == 1.0
-    order = 3 if radau else 7
-    rs = np.empty(_NRS)
-    J = np.empty((m, m))
-    M_real = np.empty((m, m))
-    M_complex = np.empty((m, m), dtype=np.complex128)
-    Q = np.zeros((m, 3))
-    y_prev = np.empty(m)
-    f_new = np.empty(m)
-    if q[_Q_SWITCH] != 0.0:
-        # initial modes: a channel beyond its limit starts held (angles
-        # first: the actuator's rate depends on the held command)
-        v = np.empty(8)
-        for j in range(4):
-            p[_P_MODE + j] = 0.0
-        for j in range(4):
-            _clip_values(y, p, q, breaks, coefs, v)
-            if abs(v[j]) > v[4 + j]:
-                p[_P_MODE + j] = 1.0 if v[j] > 0 else -1.0
-    closed_loop_rhs(t, y, p, q, breaks, coefs, f)
-    nfev = 1
-    steps = 0
-    rejected_total = 0
-    iasti = 0
-    nonsti = 0
-    stiff = 0
+def _drivers(method):
+    """The per-run driver and the batch loop of one method, compiled apart.
 
-    # a run that starts at or beyond a stop condition stops at once
-    _events(y, p, q, breaks, coefs, g_old)
-    worst = 0
-    for j in range(_N_STOPS):
-        if g_old[j] < g_old[worst]:
-            worst = j
-    if g_old[worst] <= 0.0:
-        for i in range(m):
-            out[i, 0] = y[i]
-        return min(worst, 2) + 1, t, 0, 0, nfev, 0, 0, rec, n_rec
-    if T == 1 or t_bound == t:
-        for i in range(m):
-            out[i, 0] = y[i]
-        return 0, t, 0, 0, nfev, 0, 0, rec, n_rec
+    `method` (0: DOP853, :data:`_RADAU`) is a constant of the closures, so
+    numba prunes the other method's branches before compiling: a DOP853 run
+    never compiles Radau's linear algebra (with one driver for both the
+    first compilation took 34 instead of 18.6 s and loading the cached
+    kernels 0.1 s more in every process).
+    """
 
-    h_abs = _select_initial_step(
-        t, y, t_bound, f, rtol, atol, p, q, breaks, coefs, work, order
-    )
-    nfev += 1
-    if radau:
-        _radau_start(t, y, h_abs, p, q, breaks, coefs, rs, J)
-    k_out = 0
-    while True:
-        if radau:
-            # ---- Radau._step_impl (its Jacobian: closed_loop_jac)
-            code_r, t_new, n_rej, nf = _radau_step(
-                t, y, f, t_bound, rtol, atol, p, q, breaks, coefs, rs, J, M_real,
-                M_complex, Q, y_prev, y_new, f_new,
-            )  # fmt: skip
-            nfev += nf
-            rejected_total += n_rej
-            if code_r != 0:
-                return 4, t, steps, rejected_total, nfev, stiff, switches, rec, n_rec
-            h = t_new - t
-        else:
-            # ---- RungeKutta._step_impl (direction +1, max_step q[_Q_MAX_STEP])
-            ok, t_new, h, h_abs, n_rej = dop853_step(
-                t, y, f, h_abs, t_bound, rtol, atol, p, q, breaks, coefs, K, y_new,
-                ystage,
-            )  # fmt: skip
-            nfev += _NS * (n_rej + 1)
-            rejected_total += n_rej
-            if not ok:
-                return 4, t, steps, rejected_total, nfev, stiff, switches, rec, n_rec
-            # Hairer's stiffness detection (dop853.f): |h lambda| from the
-            # last stage and f(y_new), both at t + h
-            num = 0.0
-            den = 0.0
+    def run_impl(
+        y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace, rec, start, keep
+    ):
+        # solve_run; with keep, rows start, start + 1, ... of rec (grown when
+        # full, returned) receive each accepted step's (t_old, h, y_old, F):
+        # its DOP853 dense output, the piece [t_old, next row's t_old or t_stop]
+        m = y0.size
+        T = t_eval.size
+        n_rec = start
+        n_trace = trace.size
+        K = np.empty((_NSE, m))
+        F = np.empty((_NPOW, m))
+        ytmp = np.empty(m)
+        ystage = np.empty(m)
+        work = np.empty(m)
+        g_old = np.empty(_N_EVENTS)
+        g_new = np.empty(_N_EVENTS)
+        g_tmp = np.empty(_N_EVENTS)
+        g_inner = np.empty((_N_INNER, _N_EVENTS))
+        t = t_eval[0]
+        t_bound = t_eval[T - 1]
+        y = y0.copy()
+        y_new = np.empty(m)
+        f = np.empty(m)
+        switches = 0
+        # Radau (q[_Q_METHOD] = _RADAU): its state between steps (_radau_step)
+        radau = method == _RADAU
+        order = 3 if radau else 7
+        rs = np.empty(_NRS)
+        J = np.empty((m, m))
+        M_real = np.empty((m, m))
+        M_complex = np.empty((m, m), dtype=np.complex128)
+        Q = np.zeros((m, 3))
+        y_prev = np.empty(m)
+        f_new = np.empty(m)
+        if q[_Q_SWITCH] != 0.0:
+            # initial modes: a channel beyond its limit starts held (angles
+            # first: the actuator's rate depends on the held command)
+            v = np.empty(8)
+            for j in range(4):
+                p[_P_MODE + j] = 0.0
+            for j in range(4):
+                _clip_values(y, p, q, breaks, coefs, v)
+                if abs(v[j]) > v[4 + j]:
+                    p[_P_MODE + j] = 1.0 if v[j] > 0 else -1.0
+        closed_loop_rhs(t, y, p, q, breaks, coefs, f)
+        nfev = 1
+        steps = 0
+        rejected_total = 0
+        iasti = 0
+        nonsti = 0
+        stiff = 0
+
+        # a run that starts at or beyond a stop condition stops at once
+        _events(y, p, q, breaks, coefs, g_old)
+        worst = 0
+        for j in range(_N_STOPS):
+            if g_old[j] < g_old[worst]:
+                worst = j
+        if g_old[worst] <= 0.0:
             for i in range(m):
-                num += (K[_NS, i] - K[_NS - 1, i]) ** 2
-                den += (y_new[i] - ystage[i]) ** 2
-            if den > 0.0:
-                if h * math.sqrt(num / den) > 6.1:
-                    nonsti = 0
-                    iasti += 1
-                    if iasti == 15:
-                        stiff = 1
-                else:
-                    nonsti += 1
-                    if nonsti == 6:
-                        iasti = 0
-        # accepted: y_old = y, y = y_new, f = f_new
-        # (buffers swapped: y_old is only overwritten by the next step)
-        t_old = t
-        y_old = y
-        y = y_new
-        y_new = y_old
-        t = t_new
-        for i in range(m):
-            f[i] = f_new[i] if radau else K[_NS, i]
-        if steps < n_trace:
-            trace[steps] = t
-        steps += 1
-        dense_ready = False
+                out[i, 0] = y[i]
+            return min(worst, 2) + 1, t, 0, 0, nfev, 0, 0, rec, n_rec
+        if T == 1 or t_bound == t:
+            for i in range(m):
+                out[i, 0] = y[i]
+            return 0, t, 0, 0, nfev, 0, 0, rec, n_rec
+
+        h_abs = _select_initial_step(
+            t, y, t_bound, f, rtol, atol, p, q, breaks, coefs, work, order
+        )
+        nfev += 1
         if radau:
-            # its collocation polynomial, in the form _dense_eval reads
-            _radau_dense(Q, F)
-            dense_ready = True
-        if keep:
-            # the dense output of every accepted step, for the exact peaks
-            # (a step cut at a switch or a stop keeps its interpolant)
-            if not dense_ready:
-                _dense_coefficients(
-                    t_old, h, y_old, y, f, K, p, q, breaks, coefs, F, ytmp
-                )
-                nfev += 3
+            _radau_start(t, y, h_abs, p, q, breaks, coefs, rs, J)
+        k_out = 0
+        while True:
+            if radau:
+                # ---- Radau._step_impl (its Jacobian: closed_loop_jac)
+                code_r, t_new, n_rej, nf = _radau_step(
+                    t, y, f, t_bound, rtol, atol, p, q, breaks, coefs, rs, J, M_real,
+                    M_complex, Q, y_prev, y_new, f_new,
+                )  # fmt: skip
+                nfev += nf
+                rejected_total += n_rej
+                if code_r != 0:
+                    return (
+                        4,
+                        t,
+                        steps,
+                        rejected_total,
+                        nfev,
+                        stiff,
+                        switches,
+                        rec,
+                        n_rec,
+                    )
+                h = t_new - t
+            else:
+                # ---- RungeKutta._step_impl (direction +1, max_step q[_Q_MAX_STEP])
+                ok, t_new, h, h_abs, n_rej = dop853_step(
+                    t, y, f, h_abs, t_bound, rtol, atol, p, q, breaks, coefs, K, y_new,
+                    ystage,
+                )  # fmt: skip
+                nfev += _NS * (n_rej + 1)
+                rejected_total += n_rej
+                if not ok:
+                    return (
+                        4,
+                        t,
+                        steps,
+                        rejected_total,
+                        nfev,
+                        stiff,
+                        switches,
+                        rec,
+                        n_rec,
+                    )
+                # Hairer's stiffness detection (dop853.f): |h lambda| from the
+                # last stage and f(y_new), both at t + h
+                num = 0.0
+                den = 0.0
+                for i in range(m):
+                    num += (K[_NS, i] - K[_NS - 1, i]) ** 2
+                    den += (y_new[i] - ystage[i]) ** 2
+                if den > 0.0:
+                    if h * math.sqrt(num / den) > 6.1:
+                        nonsti = 0
+                        iasti += 1
+                        if iasti == 15:
+                            stiff = 1
+                    else:
+                        nonsti += 1
+                        if nonsti == 6:
+                            iasti = 0
+            # accepted: y_old = y, y = y_new, f = f_new
+            # (buffers swapped: y_old is only overwritten by the next step)
+            t_old = t
+            y_old = y
+            y = y_new
+            y_new = y_old
+            t = t_new
+            for i in range(m):
+                f[i] = f_new[i] if radau else K[_NS, i]
+            if steps < n_trace:
+                trace[steps] = t
+            steps += 1
+            dense_ready = False
+            if radau:
+                # its collocation polynomial, in the form _dense_eval reads
+                _radau_dense(Q, F)
                 dense_ready = True
-            if n_rec == rec.shape[0]:
-                grown = np.empty((max(2 * n_rec, 16), rec.shape[1]))
-                grown[:n_rec] = rec[:n_rec]
-                rec = grown
-            row = rec[n_rec]
-            row[0] = t_old
-            row[1] = h
-            for i in range(m):
-                row[2 + i] = y_old[i]
-                for k in range(_NPOW):
-                    row[2 + m + k * m + i] = F[k, i]
-            n_rec += 1
-        # ---- solve_ivp: events (direction -1: g from >= 0 to <= 0)
-        _events(y, p, q, breaks, coefs, g_new)
-        code = 0
-        t_hit = np.inf
-        j_hit = -1
-        if keep:
-            # with the dense output kept (the runners), the stop conditions
-            # are also checked at three points inside the step, as the numpy
-            # engine checks its margins: a loose tolerance must not step
-            # across a singular state and back
-            for r in range(_N_INNER):
-                _dense_eval(t_old + _INNER_NODES[r] * h, t_old, t, y_old, F, ytmp)
-                _stop_events(ytmp, p, q, breaks, coefs, g_inner[r])
-        for j in range(_N_EVENTS):
-            lo_b, hi_b = t_old, t
-            if j < _N_STOPS:
-                hit = g_old[j] >= 0 and g_new[j] <= 0  # solve_ivp, direction -1
-                if keep and not hit and g_old[j] >= 0:
-                    for r in range(_N_INNER):
-                        if g_inner[r, j] <= 0:
-                            hit = True
-                            hi_b = t_old + _INNER_NODES[r] * h
-                            break
-                        lo_b = t_old + _INNER_NODES[r] * h
-            else:
-                # a clip's mode is wrong at the step's end: it switched in the
-                # step (g from > 0), or it was ~0 on the wrong side already at
-                # a restart (then the switch is at the step's start)
-                hit = g_new[j] < 0 or (g_new[j] == 0 and g_old[j] > 0)
-            if not hit:
-                continue
-            if j >= _N_STOPS and not g_old[j] > 0:
-                root = t_old
-            else:
+            if keep:
+                # the dense output of every accepted step, for the exact peaks
+                # (a step cut at a switch or a stop keeps its interpolant)
                 if not dense_ready:
                     _dense_coefficients(
                         t_old, h, y_old, y, f, K, p, q, breaks, coefs, F, ytmp
                     )
                     nfev += 3
                     dense_ready = True
-                root = _brentq(
-                    j, lo_b, hi_b, t_old, t, y_old, F, p, q, breaks, coefs, ytmp, g_tmp
-                )
-            if root < t_hit:
-                t_hit = root
-                j_hit = j
-        if 0 <= j_hit < _N_STOPS:
-            code = min(j_hit, 2) + 1
-        upto = t if j_hit < 0 else t_hit
-        # ---- solve_ivp: outputs at t_eval <= upto from this step's dense output
-        while k_out < T and t_eval[k_out] <= upto:
-            if not dense_ready:
-                _dense_coefficients(
-                    t_old, h, y_old, y, f, K, p, q, breaks, coefs, F, ytmp
-                )
-                nfev += 3
-                dense_ready = True
-            _dense_eval(t_eval[k_out], t_old, t, y_old, F, ytmp)
-            for i in range(m):
-                out[i, k_out] = ytmp[i]
-            k_out += 1
-        if code != 0:
-            return code, t_hit, steps, rejected_total, nfev, stiff, switches, rec, n_rec
-        if j_hit >= _N_STOPS:
-            # a clip switches: restart at the switch with the new mode (the
-            # rest of the step, integrated in the old mode, is discarded)
-            if not dense_ready:
-                _dense_coefficients(
-                    t_old, h, y_old, y, f, K, p, q, breaks, coefs, F, ytmp
-                )
-                nfev += 3
-            _dense_eval(t_hit, t_old, t, y_old, F, ytmp)
-            for i in range(m):
-                y[i] = ytmp[i]
-            t = t_hit
-            site = j_hit - _N_STOPS
-            if p[_P_MODE + site] != 0.0:
-                p[_P_MODE + site] = 0.0
-            else:
-                v = np.empty(8)
-                _clip_values(y, p, q, breaks, coefs, v)
-                p[_P_MODE + site] = 1.0 if v[site] > 0 else -1.0
-            switches += 1
-            if switches > _MAX_SWITCHES:
-                return 4, t, steps, rejected_total, nfev, stiff, switches, rec, n_rec
-            if t >= t_bound:
+                if n_rec == rec.shape[0]:
+                    grown = np.empty((max(2 * n_rec, 16), rec.shape[1]))
+                    grown[:n_rec] = rec[:n_rec]
+                    rec = grown
+                row = rec[n_rec]
+                row[0] = t_old
+                row[1] = h
+                for i in range(m):
+                    row[2 + i] = y_old[i]
+                    for k in range(_NPOW):
+                        row[2 + m + k * m + i] = F[k, i]
+                n_rec += 1
+            # ---- solve_ivp: events (direction -1: g from >= 0 to <= 0)
+            _events(y, p, q, breaks, coefs, g_new)
+            code = 0
+            t_hit = np.inf
+            j_hit = -1
+            if keep:
+                # with the dense output kept (the runners), the stop conditions
+                # are also checked at three points inside the step, as the numpy
+                # engine checks its margins: a loose tolerance must not step
+                # across a singular state and back
+                for r in range(_N_INNER):
+                    _dense_eval(t_old + _INNER_NODES[r] * h, t_old, t, y_old, F, ytmp)
+                    _stop_events(ytmp, p, q, breaks, coefs, g_inner[r])
+            for j in range(_N_EVENTS):
+                lo_b, hi_b = t_old, t
+                if j < _N_STOPS:
+                    hit = g_old[j] >= 0 and g_new[j] <= 0  # solve_ivp, direction -1
+                    if keep and not hit and g_old[j] >= 0:
+                        for r in range(_N_INNER):
+                            if g_inner[r, j] <= 0:
+                                hit = True
+                                hi_b = t_old + _INNER_NODES[r] * h
+                                break
+                            lo_b = t_old + _INNER_NODES[r] * h
+                else:
+                    # a clip's mode is wrong at the step's end: it switched in the
+                    # step (g from > 0), or it was ~0 on the wrong side already at
+                    # a restart (then the switch is at the step's start)
+                    hit = g_new[j] < 0 or (g_new[j] == 0 and g_old[j] > 0)
+                if not hit:
+                    continue
+                if j >= _N_STOPS and not g_old[j] > 0:
+                    root = t_old
+                else:
+                    if not dense_ready:
+                        _dense_coefficients(
+                            t_old, h, y_old, y, f, K, p, q, breaks, coefs, F, ytmp
+                        )
+                        nfev += 3
+                        dense_ready = True
+                    root = _brentq(
+                        j,
+                        lo_b,
+                        hi_b,
+                        t_old,
+                        t,
+                        y_old,
+                        F,
+                        p,
+                        q,
+                        breaks,
+                        coefs,
+                        ytmp,
+                        g_tmp,
+                    )
+                if root < t_hit:
+                    t_hit = root
+                    j_hit = j
+            if 0 <= j_hit < _N_STOPS:
+                code = min(j_hit, 2) + 1
+            upto = t if j_hit < 0 else t_hit
+            # ---- solve_ivp: outputs at t_eval <= upto from this step's dense output
+            while k_out < T and t_eval[k_out] <= upto:
+                if not dense_ready:
+                    _dense_coefficients(
+                        t_old, h, y_old, y, f, K, p, q, breaks, coefs, F, ytmp
+                    )
+                    nfev += 3
+                    dense_ready = True
+                _dense_eval(t_eval[k_out], t_old, t, y_old, F, ytmp)
+                for i in range(m):
+                    out[i, k_out] = ytmp[i]
+                k_out += 1
+            if code != 0:
                 return (
-                    0,
-                    t_bound,
+                    code,
+                    t_hit,
                     steps,
                     rejected_total,
                     nfev,
@@ -1148,50 +1166,104 @@ def _run_impl(
                     rec,
                     n_rec,
                 )
-            closed_loop_rhs(t, y, p, q, breaks, coefs, f)
-            h_abs = _select_initial_step(
-                t, y, t_bound, f, rtol, atol, p, q, breaks, coefs, work, order
-            )
-            nfev += 2
-            if radau:
-                # a new solver at the switch, as for DOP853
-                _radau_start(t, y, h_abs, p, q, breaks, coefs, rs, J)
-            _events(y, p, q, breaks, coefs, g_old)
-            continue
-        if t == t_bound:
-            return 0, t, steps, rejected_total, nfev, stiff, switches, rec, n_rec
-        for j in range(_N_EVENTS):
-            g_old[j] = g_new[j]
+            if j_hit >= _N_STOPS:
+                # a clip switches: restart at the switch with the new mode (the
+                # rest of the step, integrated in the old mode, is discarded)
+                if not dense_ready:
+                    _dense_coefficients(
+                        t_old, h, y_old, y, f, K, p, q, breaks, coefs, F, ytmp
+                    )
+                    nfev += 3
+                _dense_eval(t_hit, t_old, t, y_old, F, ytmp)
+                for i in range(m):
+                    y[i] = ytmp[i]
+                t = t_hit
+                site = j_hit - _N_STOPS
+                if p[_P_MODE + site] != 0.0:
+                    p[_P_MODE + site] = 0.0
+                else:
+                    v = np.empty(8)
+                    _clip_values(y, p, q, breaks, coefs, v)
+                    p[_P_MODE + site] = 1.0 if v[site] > 0 else -1.0
+                switches += 1
+                if switches > _MAX_SWITCHES:
+                    return (
+                        4,
+                        t,
+                        steps,
+                        rejected_total,
+                        nfev,
+                        stiff,
+                        switches,
+                        rec,
+                        n_rec,
+                    )
+                if t >= t_bound:
+                    return (
+                        0,
+                        t_bound,
+                        steps,
+                        rejected_total,
+                        nfev,
+                        stiff,
+                        switches,
+                        rec,
+                        n_rec,
+                    )
+                closed_loop_rhs(t, y, p, q, breaks, coefs, f)
+                h_abs = _select_initial_step(
+                    t, y, t_bound, f, rtol, atol, p, q, breaks, coefs, work, order
+                )
+                nfev += 2
+                if radau:
+                    # a new solver at the switch, as for DOP853
+                    _radau_start(t, y, h_abs, p, q, breaks, coefs, rs, J)
+                _events(y, p, q, breaks, coefs, g_old)
+                continue
+            if t == t_bound:
+                return 0, t, steps, rejected_total, nfev, stiff, switches, rec, n_rec
+            for j in range(_N_EVENTS):
+                g_old[j] = g_new[j]
+
+    def solve_batch(
+        Y0, P, q, breaks, coefs, t_eval, rtol, atol, out, codes, t_stop, stats, rec,
+        offsets, keep,
+    ):  # fmt: skip
+        # with keep: run i's dense pieces are rows offsets[i]:offsets[i + 1] of the
+        # returned record (rec, grown as needed)
+        empty = np.empty(0)
+        offsets[0] = 0
+        for i in range(Y0.shape[0]):
+            if method == _RADAU:
+                r = _run_impl_radau(
+                    Y0[i], P[i], q, breaks, coefs, t_eval, rtol, atol, out[i], empty,
+                    rec, offsets[i], keep,
+                )  # fmt: skip
+            else:
+                r = _run_impl(
+                    Y0[i], P[i], q, breaks, coefs, t_eval, rtol, atol, out[i], empty,
+                    rec, offsets[i], keep,
+                )  # fmt: skip
+            rec = r[7]
+            offsets[i + 1] = r[8]
+            codes[i] = r[0]
+            t_stop[i] = r[1]
+            stats[i, 0] = r[2]
+            stats[i, 1] = r[3]
+            stats[i, 2] = r[4]
+            stats[i, 3] = r[5]
+            stats[i, 4] = r[6]
+            # NaN after the stop (the columns up to it are written by solve_run)
+            for k in range(t_eval.size):
+                if t_eval[k] > r[1]:
+                    out[i, :, k] = np.nan
+        return rec
+
+    return _jit(run_impl), _jit(solve_batch)
 
 
-@_jit
-def _solve_batch(
-    Y0, P, q, breaks, coefs, t_eval, rtol, atol, out, codes, t_stop, stats, rec,
-    offsets, keep,
-):  # fmt: skip
-    # with keep: run i's dense pieces are rows offsets[i]:offsets[i + 1] of the
-    # returned record (rec, grown as needed)
-    empty = np.empty(0)
-    offsets[0] = 0
-    for i in range(Y0.shape[0]):
-        r = _run_impl(
-            Y0[i], P[i], q, breaks, coefs, t_eval, rtol, atol, out[i], empty, rec,
-            offsets[i], keep,
-        )  # fmt: skip
-        rec = r[7]
-        offsets[i + 1] = r[8]
-        codes[i] = r[0]
-        t_stop[i] = r[1]
-        stats[i, 0] = r[2]
-        stats[i, 1] = r[3]
-        stats[i, 2] = r[4]
-        stats[i, 3] = r[5]
-        stats[i, 4] = r[6]
-        # NaN after the stop (the columns up to it are written by solve_run)
-        for k in range(t_eval.size):
-            if t_eval[k] > r[1]:
-                out[i, :, k] = np.nan
-    return rec
+_run_impl, _solve_batch = _drivers(0)
+_run_impl_radau, _solve_batch_radau = _drivers(_RADAU)
 
 
 @_jit
@@ -2631,7 +2703,8 @@ def integrate_compiled(
     offsets = np.empty(n + 1, dtype=np.int64)
     # (room for ~64 steps per run; the kernel doubles it when needed)
     rec = np.empty((64 * n if keep else 0, 2 + (_NPOW + 1) * m))
-    rec = _solve_batch(
+    solve = _solve_batch_radau if q[_Q_METHOD] == _RADAU else _solve_batch
+    rec = solve(
         Y0, P, q, table.breaks, table.coefs, t_eval, rtol, atol, out, codes, t_stop,
         stats, rec, offsets, keep,
     )  # fmt: skip
