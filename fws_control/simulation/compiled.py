@@ -991,20 +991,8 @@ def _drivers(method):
                     t, y, f, t_bound, rtol, atol, p, q, breaks, coefs, rs, J, M_real,
                     M_complex, Q, y_prev, y_new, f_new,
                 )  # fmt: skip
+                ok = code_r == 0
                 nfev += nf
-                rejected_total += n_rej
-                if code_r != 0:
-                    return (
-                        4,
-                        t,
-                        steps,
-                        rejected_total,
-                        nfev,
-                        stiff,
-                        switches,
-                        rec,
-                        n_rec,
-                    )
                 h = t_new - t
             else:
                 # ---- RungeKutta._step_impl (direction +1, max_step q[_Q_MAX_STEP])
@@ -1013,19 +1001,20 @@ def _drivers(method):
                     ystage,
                 )  # fmt: skip
                 nfev += _NS * (n_rej + 1)
-                rejected_total += n_rej
-                if not ok:
-                    return (
-                        4,
-                        t,
-                        steps,
-                        rejected_total,
-                        nfev,
-                        stiff,
-                        switches,
-                        rec,
-                        n_rec,
-                    )
+            rejected_total += n_rej
+            if not ok:
+                return (
+                    4,
+                    t,
+                    steps,
+                    rejected_total,
+                    nfev,
+                    stiff,
+                    switches,
+                    rec,
+                    n_rec,
+                )
+            if method != _RADAU:
                 # Hairer's stiffness detection (dop853.f): |h lambda| from the
                 # last stage and f(y_new), both at t + h
                 num = 0.0
