@@ -7,7 +7,9 @@ DOP853 with rtol 1e-10, atol 1e-12 everywhere:
 
 1. :func:`fws_control.simulate_batch` with its default engine (``"auto"``:
    the compiled per-run engine when numba is installed), all 15 signals and
-   the exact peaks -- the issue's subject;
+   the exact peaks -- the issue's subject; one more run's CPU split into
+   user and system time (the system share is chiefly the kernel providing
+   the fresh memory of the result, at its first touch);
 2. the compiled per-run reference producing the same signals:
    :func:`fws_control.simulation.compiled.integrate_compiled` followed by
    :func:`~fws_control.simulation.compiled.compiled_outputs`, into
@@ -46,6 +48,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -338,6 +341,13 @@ def main() -> None:
         repeat=args.repeat,
     )
     t_batch = best["batch"] / n
+    # one more batch with its CPU split: user (the engine) and system (the
+    # kernel, chiefly zeroing the fresh result's pages at their first touch)
+    ru0 = resource.getrusage(resource.RUSAGE_SELF)
+    batch()
+    ru1 = resource.getrusage(resource.RUSAGE_SELF)
+    split = ((ru1.ru_utime - ru0.ru_utime) / n, (ru1.ru_stime - ru0.ru_stime) / n,
+             ru1.ru_minflt - ru0.ru_minflt)  # fmt: skip
     t_loop = best["loop"] / idx.size
     t_loop_sig = best["loop_signals"] / idx.size
     rb = out_b.pop("r")
@@ -424,6 +434,10 @@ def main() -> None:
     print(f"\nCPU per run (best of {args.repeat}), {n} runs:")
     print(f"  simulate_batch, default engine ({engine_used}), 15 signals + "
           f"exact peaks {t_batch * us:9.1f} us")  # fmt: skip
+    print(f"    one more run, split: user {split[0] * us:.1f} us + system "
+          f"{split[1] * us:.1f} us ({split[2]} page faults: the kernel's first "
+          f"touch of the fresh {n * len(SIGNALS) * t.size * 8 / 1e9:.2f} GB "
+          "result)")  # fmt: skip
     print("  reference: integrate_compiled + compiled_outputs (15 signals)")
     print(f"    into reused arrays              {t_ref * us:9.1f} us "
           f"(states {t_comp * us:.1f} + outputs {t_cout * us:.1f})")  # fmt: skip

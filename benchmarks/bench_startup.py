@@ -13,7 +13,8 @@ reference row ``python -c pass`` is the interpreter alone, and
 
 With ``--baseline DIR`` (another checkout, e.g. ``main``) every command
 also runs from DIR, alternating with this checkout so that both see the same
-load, and the ratio this/baseline is printed.
+load (in flipping order: this, baseline, baseline, this, ...; each
+``reproduce`` into its own folder), and the ratio this/baseline is printed.
 
 With ``--breakdown`` it also runs ``reproduce``'s work stage by stage in
 fresh interpreters and prints the best CPU time of each stage: the imports,
@@ -65,12 +66,19 @@ def with_path(root: Path) -> dict:
 def best_cpu(cmd: list[str], envs: list[dict], repeat: int) -> list[float]:
     """Best CPU time of `repeat` runs of `cmd` in each environment [s].
 
-    The environments take turns, so that a change of load hits them alike.
+    The environments take turns, so that a change of load hits them alike,
+    and the order of the turns flips every round (A B, B A, A B, ...), so
+    that neither always runs first (after the other's output, in a
+    warmer or a colder page cache). A ``{env}`` in `cmd` is replaced by the
+    environment's index: ``reproduce`` writes into a folder of its own.
     """
     best = [float("inf")] * len(envs)
+    order = list(range(len(envs)))
     for _ in range(repeat):
-        for i, env in enumerate(envs):
-            best[i] = min(best[i], cpu_seconds(cmd, env))
+        for i in order:
+            own = [part.replace("{env}", str(i)) for part in cmd]
+            best[i] = min(best[i], cpu_seconds(own, envs[i]))
+        order.reverse()
     return best
 
 
@@ -159,7 +167,7 @@ def main() -> None:
         rows.append(
             (
                 "fws-control reproduce",
-                [*cli, "reproduce", "--out", str(out), "--no-progress"],
+                [*cli, "reproduce", "--out", str(out / "{env}"), "--no-progress"],
                 6.0,
             )
         )

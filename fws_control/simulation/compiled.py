@@ -1681,6 +1681,8 @@ def _peaks_batch(rec, offsets, Y0, P, q, br, co, d_cg, t_eval, signals, t_stop,
     best = np.empty(2)
     ks_all = np.empty(_N_PEAK, dtype=np.int64)
     sv_all = np.empty(_N_PEAK)
+    cand = np.empty(_PEAK_CAND, dtype=np.int64)
+    cval = np.empty(_PEAK_CAND)
     for i in range(n):
         V, k1, k2, a = P[i, _P_SPEED], P[i, _P_K1], P[i, _P_K2], P[i, _P_RATIO]
         pc = rec[offsets[i] : offsets[i + 1]]
@@ -1737,45 +1739,49 @@ def _peaks_batch(rec, offsets, Y0, P, q, br, co, d_cg, t_eval, signals, t_stop,
                 v = _sample_value(signals, i, j, k)
                 if ks_all[j] < 0 or v > sv_all[j]:
                     ks_all[j], sv_all[j] = k, v
-        node_v = np.empty((K, _N_PEAK))
+        # node values per signal, contiguous (the searches below run along
+        # one signal)
+        node_v = np.empty((_N_PEAK, K))
         for k in range(K):
             kk = sample_n[k]
             if kk >= 0:
                 for j in range(_N_PEAK):
-                    node_v[k, j] = _sample_value(signals, i, j, kk)
+                    node_v[j, k] = _sample_value(signals, i, j, kk)
                 continue
             _peak_values(times_n[k], pc, n_pc, Y0[i], m, V, k1, k2, a, q, br, co,
                          d_cg, ytmp, vals)  # fmt: skip
             for j in range(_N_PEAK):
-                node_v[k, j] = vals[j]
+                node_v[j, k] = vals[j]
         for j in range(_N_PEAK):
-            # the best node (first of equals, as np.argmax) ...
-            kb = 0
-            for k in range(1, K):
-                if node_v[k, j] > node_v[kb, j]:
-                    kb = k
-            best[0], best[1] = node_v[kb, j], times_n[kb]
-            # ... or the largest output sample
-            ks, sv = ks_all[j], sv_all[j]
-            if sv > best[0]:
-                best[0], best[1] = sv, t_eval[ks]
+            row = node_v[j]
             # the largest local maxima of the nodes, refined between their
-            # neighbours (ties: the earlier node, as a stable sort)
-            cand = np.full(_PEAK_CAND, -1)
-            cval = np.full(_PEAK_CAND, -np.inf)
+            # neighbours (ties: the earlier node, as a stable sort); the
+            # first is the best node (first of equals, as np.argmax): the
+            # values are never NaN, and the first largest node has no
+            # larger neighbour
+            for c in range(_PEAK_CAND):
+                cand[c], cval[c] = -1, -np.inf
             for k in range(K):
-                v = node_v[k, j]
-                if k > 0 and node_v[k - 1, j] > v:
-                    continue
-                if k + 1 < K and node_v[k + 1, j] > v:
-                    continue
+                v = row[k]
+                # (the three tests in the order that rejects most nodes
+                # first: one comparison for a node below the third largest)
                 if not v > cval[_PEAK_CAND - 1]:
+                    continue
+                if k > 0 and row[k - 1] > v:
+                    continue
+                if k + 1 < K and row[k + 1] > v:
                     continue
                 c = _PEAK_CAND - 1
                 while c > 0 and v > cval[c - 1]:
                     cand[c], cval[c] = cand[c - 1], cval[c - 1]
                     c -= 1
                 cand[c], cval[c] = k, v
+            kb = cand[0]
+            best[0], best[1] = row[kb], times_n[kb]
+            # ... or the largest output sample
+            ks, sv = ks_all[j], sv_all[j]
+            if sv > best[0]:
+                best[0], best[1] = sv, t_eval[ks]
             for c in range(_PEAK_CAND):
                 k = cand[c]
                 if k < 0 or not np.isfinite(cval[c]):
@@ -1787,12 +1793,12 @@ def _peaks_batch(rec, offsets, Y0, P, q, br, co, d_cg, t_eval, signals, t_stop,
                 # a local maximum at an end of the run: the end itself, unless
                 # the signal rises again inside the bracket
                 if k == 0 and _falls_from_end(
-                    lo, hi, node_v[0, j], node_v[k_hi, j], j, best, pc, n_pc,
+                    lo, hi, row[0], row[k_hi], j, best, pc, n_pc,
                     Y0[i], m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals,
                 ):  # fmt: skip
                     continue
                 if k == K - 1 and _falls_from_end(
-                    hi, lo, node_v[k, j], node_v[k_lo, j], j, best, pc, n_pc,
+                    hi, lo, row[k], row[k_lo], j, best, pc, n_pc,
                     Y0[i], m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals,
                 ):  # fmt: skip
                     continue
