@@ -2184,14 +2184,14 @@ def radau_run(y0, p, q, breaks, coefs, t0, t_bound, h0, rtol, atol, ts, ys, qs):
     `h0` and the Jacobian :func:`closed_loop_jac` (simplified Newton with a
     real and a complex system, scipy's step-size control and its decisions
     of when to recompute the Jacobian and rebuild the Newton matrices; each
-    solve factorises anew with ``np.linalg.solve``, LAPACK's ``gesv``, which
-    rounds as scipy's ``lu_factor`` and ``lu_solve``). Writes the accepted
-    times into `ts` (``ts[0] = t0``), states into `ys` and each step's
-    dense-output matrix ``Q`` (scipy's ``RadauDenseOutput.Q``, ``(n, 3)``)
-    into `qs`; returns ``(steps, status)``, status 0 when `t_bound` was
-    reached, 1 out of room, -1 step too small. The engines step with
-    :func:`_radau_step`, which this loop drives (no events here: the clips
-    must be min/max, ``q[13] = 0``).
+    solve factorises anew with ``np.linalg.solve``, LAPACK's ``gesv``: for
+    the real system bit for bit scipy's ``lu_factor`` and ``lu_solve``, for
+    the complex one within 1e-14). Writes the accepted times into `ts`
+    (``ts[0] = t0``), states into `ys` and each step's dense-output matrix
+    ``Q`` (scipy's ``RadauDenseOutput.Q``, ``(n, 3)``) into `qs`; returns
+    ``(steps, status)``, status 0 when `t_bound` was reached, 1 out of room,
+    -1 step too small. The engines step with :func:`_radau_step`, which this
+    loop drives (no events here: the clips must be min/max, ``q[13] = 0``).
 
     Examples
     --------
