@@ -1757,8 +1757,9 @@ def _peaks_batch(rec, offsets, Y0, P, q, br, co, d_cg, t_eval, signals, t_stop,
             # the largest local maxima of the nodes, refined between their
             # neighbours (ties: the earlier node, as a stable sort); the
             # first is the best node (first of equals, as np.argmax): the
-            # values are never NaN, and the first largest node has no
-            # larger neighbour
+            # values are never NaN or -inf (absolute values, inf where not
+            # finite), so the first largest node has no larger neighbour,
+            # beats every earlier value and no later one displaces it
             for c in range(_PEAK_CAND):
                 cand[c], cval[c] = -1, -np.inf
             for k in range(K):
