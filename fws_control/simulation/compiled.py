@@ -1757,8 +1757,9 @@ def _peaks_batch(rec, offsets, Y0, P, q, br, co, d_cg, t_eval, signals, t_stop,
             # the largest local maxima of the nodes, refined between their
             # neighbours (ties: the earlier node, as a stable sort); the
             # first is the best node (first of equals, as np.argmax): the
-            # values are never NaN, and the first largest node has no
-            # larger neighbour
+            # values are never NaN or -inf (absolute values, inf where not
+            # finite), so the first largest node has no larger neighbour,
+            # beats every earlier value and no later one displaces it
             for c in range(_PEAK_CAND):
                 cand[c], cval[c] = -1, -np.inf
             for k in range(K):
@@ -2182,13 +2183,16 @@ def radau_run(y0, p, q, breaks, coefs, t0, t_bound, h0, rtol, atol, ts, ys, qs):
 
     The same steps as :class:`scipy.integrate.Radau` given the first step
     `h0` and the Jacobian :func:`closed_loop_jac` (simplified Newton with a
-    real and a complex system, scipy's step-size control and Jacobian/LU
-    reuse). Writes the accepted times into `ts` (``ts[0] = t0``), states
-    into `ys` and each step's dense-output matrix ``Q`` (scipy's
-    ``RadauDenseOutput.Q``, ``(n, 3)``) into `qs`; returns ``(steps,
-    status)``, status 0 when `t_bound` was reached, 1 out of room, -1 step
-    too small. The engines step with :func:`_radau_step`, which this loop
-    drives (no events here: the clips must be min/max, ``q[13] = 0``).
+    real and a complex system, scipy's step-size control and its decisions
+    of when to recompute the Jacobian and rebuild the Newton matrices; each
+    solve factorises anew with ``np.linalg.solve``, LAPACK's ``gesv``: for
+    the real system bit for bit scipy's ``lu_factor`` and ``lu_solve``, for
+    the complex one within 1e-14). Writes the accepted times into `ts`
+    (``ts[0] = t0``), states into `ys` and each step's dense-output matrix
+    ``Q`` (scipy's ``RadauDenseOutput.Q``, ``(n, 3)``) into `qs`; returns
+    ``(steps, status)``, status 0 when `t_bound` was reached, 1 out of room,
+    -1 step too small. The engines step with :func:`_radau_step`, which this
+    loop drives (no events here: the clips must be min/max, ``q[13] = 0``).
 
     Examples
     --------
