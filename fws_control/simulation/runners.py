@@ -1027,10 +1027,12 @@ def simulate_batch(
         ``signals`` is a view of it (the same memory). Each chunk is written
         into it as it finishes. One array reused across sweeps of the same
         size spares the kernel's providing fresh memory for every result
-        (its first touch: a quarter of the compiled engine's cost per run
-        on the paper's scenario, see ``docs/performance.md``); a memory map
-        of a ``.npy`` file (:func:`numpy.lib.format.open_memmap`) streams a
-        sweep larger than memory to disk. The output budget
+        at its first touch (on the paper's scenario from next to nothing to
+        more than the compiled engine's own 300 us of CPU per run,
+        depending on the machine's memory: ``docs/performance.md``); a
+        memory map of a ``.npy`` file
+        (:func:`numpy.lib.format.open_memmap`) streams a sweep larger than
+        memory to disk. The output budget
         :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES` then counts
         one chunk's working set only. If the call raises, `out` may hold
         some runs' signals. Not with ``signals="metrics"``.
