@@ -222,3 +222,20 @@ def test_an_out_that_is_not_an_array_or_with_metrics_only_is_refused():
         fws.simulate_batch(
             VEH, PATH, GAINS, signals="metrics", out=np.empty((N, 0, T)), **KW
         )
+
+
+def test_out_on_dask_receives_the_chunks_of_the_cluster():
+    distributed = pytest.importorskip("dask.distributed")
+    local = fws.simulate_batch(VEH, PATH, GAINS, signals=("e", "theta"), **KW)
+    out = np.full((N, 2, T), 7.0)
+    with (
+        distributed.LocalCluster(
+            processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        res = fws.simulate_batch(
+            VEH, PATH, GAINS, signals=("e", "theta"), client=client, out=out, **KW
+        )
+    np.testing.assert_array_equal(out, local.signals)
+    assert np.shares_memory(res.signals, out)
