@@ -168,8 +168,9 @@ def first_touch(nbytes: int, hugepage: bool) -> float:
 
     With and without numpy's ``MADV_HUGEPAGE`` advice for large arrays (a
     private numpy switch, used here only to measure): the batch's result is
-    such a fresh array, and on a kernel that never grants huge pages the
-    advice makes every first touch dearer.
+    such a fresh array. On the project's virtual machine the kernel grants
+    the huge pages (``thp_fault_alloc`` in ``/proc/vmstat``, no fallback)
+    and still the advice makes the first touch dearer and far more variable.
     """
     out = subprocess.run(
         [sys.executable, "-c", _FIRST_TOUCH, "1" if hugepage else "0", str(nbytes)],
