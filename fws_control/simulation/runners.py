@@ -401,15 +401,18 @@ def _check_out(out: Any, shape: tuple[int, int, int]) -> None:
             "out must be None with signals='metrics' (no time series to write), "
             f"got {type(out).__name__}"
         )
-    if not isinstance(out, np.ndarray):
+    # other subclasses of ndarray carry state of their own that the chunks'
+    # writes would not update (a masked array's mask)
+    if type(out) is not np.ndarray and not isinstance(out, np.memmap):
         raise TypeError(
-            f"out must be a numpy array (e.g. numpy.empty({shape}) or a "
-            f"numpy.memmap), got {type(out).__name__}"
+            f"out must be a numpy.ndarray (e.g. numpy.empty({shape})) or a "
+            f"numpy.memmap, got {type(out).__name__}"
         )
     if out.dtype != np.float64 or out.shape != shape:
         raise ValueError(
-            f"out must be a float64 array of shape {shape} (runs, kept signals, "
-            f"output times), got {out.dtype} of shape {out.shape}"
+            f"out must be a float64 array (native byte order) of shape {shape} "
+            f"(runs, kept signals, output times), got {out.dtype} of shape "
+            f"{out.shape}"
         )
     if not out.flags.c_contiguous:
         raise ValueError(
@@ -1027,15 +1030,19 @@ def simulate_batch(
         ``signals`` is a view of it (the same memory). Each chunk is written
         into it as it finishes. One array reused across sweeps of the same
         size spares the kernel's providing fresh memory for every result
-        at its first touch (on the paper's scenario from next to nothing to
-        more than the compiled engine's own 300 us of CPU per run,
-        depending on the machine's memory: ``docs/performance.md``); a
+        at its first touch (measured on the paper's scenario: from next to
+        nothing to about 150 us of CPU per run in best-of-5 timings, and up
+        to 450 us of system time in single batches, next to the compiled
+        engine's own 300 us: ``docs/performance.md``); a
         memory map of a ``.npy`` file
         (:func:`numpy.lib.format.open_memmap`) streams a sweep larger than
         memory to disk. The output budget
         :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES` then counts
         one chunk's working set only. If the call raises, `out` may hold
-        some runs' signals. Not with ``signals="metrics"``.
+        some runs' signals. Not with ``signals="metrics"``. A result whose
+        `out` is written again (by another sweep) shows the new signals
+        next to its own per-run values: copy the signals of a result you
+        keep (``result.signals.copy()``).
 
     Returns
     -------
@@ -1217,10 +1224,12 @@ def simulate_batch(
                 min(chunk_size, n), t.size, duration=duration, dt=dt, t_eval=t_eval
             )
         except ValueError as exc:
+            where = f"keeps {len(kept)} of them"
+            if out is not None:
+                where = "writes them into out"
             raise ValueError(
                 f"chunk_size={chunk_size}: a chunk computes all {len(SIGNALS)} "
-                f"signals before it keeps {len(kept)} of them, and {exc}; or a smaller "
-                "chunk_size"
+                f"signals before it {where}, and {exc}; or a smaller chunk_size"
             ) from None
     bounds = [(i, min(i + chunk_size, n)) for i in range(0, n, chunk_size)]
     if progress is None:
