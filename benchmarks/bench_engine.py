@@ -9,7 +9,8 @@ DOP853 with rtol 1e-10, atol 1e-12 everywhere:
    the compiled per-run engine when numba is installed), all 15 signals and
    the exact peaks -- the issue's subject; one more run's CPU split into
    user and system time (the system share is chiefly the kernel providing
-   the fresh memory of the result, at its first touch);
+   the fresh memory of the result, at its first touch); and the same batch
+   into one result array reused from call to call (``out=``);
 2. the compiled per-run reference producing the same signals:
    :func:`fws_control.simulation.compiled.integrate_compiled` followed by
    :func:`~fws_control.simulation.compiled.compiled_outputs`, into
@@ -18,7 +19,11 @@ DOP853 with rtol 1e-10, atol 1e-12 everywhere:
    output's pages); also followed by the numpy
    :func:`~fws_control.simulation.engine.compute_outputs`;
 3. a loop of plain :func:`scipy.integrate.solve_ivp` with a scalar
-   right-hand side written here from the formulas (on ``--loop-runs`` runs);
+   right-hand side written here from the formulas (on ``--loop-runs`` runs):
+   the states only; and with the same 15 signals (the library's numpy
+   ``compute_outputs`` per run), kept as a user collects them (fresh memory
+   for every run, as the batch's fresh result) and dropped after each run
+   (memory reused, as the batch into a reused ``out``);
 4. the right-hand-side floor: the engine's own number of right-hand-side
    evaluations times the cost of one compiled evaluation in a tight loop
    (what any integrator needs for these steps, with no bookkeeping);
@@ -163,8 +168,9 @@ def first_touch(nbytes: int, hugepage: bool) -> float:
 
     With and without numpy's ``MADV_HUGEPAGE`` advice for large arrays (a
     private numpy switch, used here only to measure): the batch's result is
-    such a fresh array, and on a kernel that never grants huge pages the
-    advice makes every first touch dearer.
+    such a fresh array. On the project's virtual machine the kernel grants
+    the huge pages (``thp_fault_alloc`` in ``/proc/vmstat``, no fallback)
+    and still the advice makes the first touch dearer and far more variable.
     """
     out = subprocess.run(
         [sys.executable, "-c", _FIRST_TOUCH, "1" if hugepage else "0", str(nbytes)],
@@ -309,6 +315,11 @@ def main() -> None:
     def batch():
         out_b["r"] = fws.simulate_batch(veh, sc.path, g, **batch_kw)
 
+    reused = np.empty((n, len(SIGNALS), t.size))
+
+    def batch_out():
+        fws.simulate_batch(veh, sc.path, g, **batch_kw, out=reused)
+
     # 3. loop of solve_ivp with a scalar right-hand side
     idx = np.linspace(0, n - 1, min(args.loop_runs, n)).astype(int)
     refs = {}
@@ -320,9 +331,11 @@ def main() -> None:
             refs[i] = solve_ivp(rhs, (0.0, sc.duration), z0[i], method="DOP853",
                                 t_eval=t, **TOL).y  # fmt: skip
 
-    def loop_signals():
+    def loop_signals(keep):
         # the same loop producing the same 15 signals: each run's states
-        # through the library's numpy compute_outputs (no peaks)
+        # through the library's numpy compute_outputs (no peaks); kept (each
+        # run's signals in fresh memory) or dropped (malloc reuses it)
+        kept = []
         for i in idx:
             rhs = scalar_rhs(g.k1[i], g.k2[i], g.ratio[i], sc.speed,
                              veh.wheelbase, sc.curvature)  # fmt: skip
@@ -330,17 +343,27 @@ def main() -> None:
                           t_eval=t, **TOL).y  # fmt: skip
             gi = fws.SteeringGains(g.k1[i : i + 1], g.k2[i : i + 1],
                                    g.ratio[i : i + 1])  # fmt: skip
-            compute_outputs(veh, sc.path, gi, speed=V[:1], feedforward=True,
-                            time_constant=None, states=y[:, None, :],
-                            initial_heading=np.zeros(1))  # fmt: skip
+            sig_i = compute_outputs(veh, sc.path, gi, speed=V[:1], feedforward=True,
+                                    time_constant=None, states=y[:, None, :],
+                                    initial_heading=np.zeros(1))  # fmt: skip
+            if keep:
+                kept.append(sig_i)
+        return kept
 
-    # the batch and the loops in turn (timing.best_of_interleaved): their
+    # the batches and the loops in turn (timing.best_of_interleaved): their
     # ratios are the issue's target, and this machine's speed drifts
     best = best_of_interleaved(
-        {"batch": batch, "loop": loop, "loop_signals": loop_signals},
+        {
+            "batch": batch,
+            "batch_out": batch_out,
+            "loop": loop,
+            "loop_signals": lambda: loop_signals(True),
+            "loop_signals_dropped": lambda: loop_signals(False),
+        },
         repeat=args.repeat,
     )
     t_batch = best["batch"] / n
+    t_batch_out = best["batch_out"] / n
     rb = out_b.pop("r")
     # one more batch with its CPU split: user (the engine) and system (the
     # kernel, chiefly zeroing the fresh result's pages at their first touch);
@@ -354,6 +377,7 @@ def main() -> None:
              ru1.ru_minflt - ru0.ru_minflt)  # fmt: skip
     t_loop = best["loop"] / idx.size
     t_loop_sig = best["loop_signals"] / idx.size
+    t_loop_drop = best["loop_signals_dropped"] / idx.size
     engine_used = rb.engine
     assert rb.peaks.exact
     d_batch_states = float(np.max(np.abs(rb.e - states[1])))
@@ -441,6 +465,8 @@ def main() -> None:
           f"{split[1] * us:.1f} us ({split[2]} page faults: the kernel's first "
           f"touch of the fresh {n * len(SIGNALS) * t.size * 8 / 1e9:.2f} GB "
           "result)")  # fmt: skip
+    print(f"  simulate_batch into a reused out=   {t_batch_out * us:9.1f} us "
+          "(the same, no fresh memory)")  # fmt: skip
     print("  reference: integrate_compiled + compiled_outputs (15 signals)")
     print(f"    into reused arrays              {t_ref * us:9.1f} us "
           f"(states {t_comp * us:.1f} + outputs {t_cout * us:.1f})")  # fmt: skip
@@ -453,7 +479,9 @@ def main() -> None:
     print(f"  solve_ivp loop, scalar RHS        {t_loop * us:9.1f} us "
           f"({idx.size} runs, states only)")  # fmt: skip
     print(f"  solve_ivp loop + compute_outputs  {t_loop_sig * us:9.1f} us "
-          f"({idx.size} runs, the same 15 signals, no peaks)")  # fmt: skip
+          f"({idx.size} runs, the same 15 signals kept, no peaks)")  # fmt: skip
+    print(f"    each run's signals dropped      {t_loop_drop * us:9.1f} us "
+          "(memory reused)")  # fmt: skip
     nbytes = n * len(SIGNALS) * t.size * 8
     touch = {hp: first_touch(nbytes, hp) for hp in (True, False)}
     print(f"  first touch of a fresh result of that size ({nbytes / 1e9:.2f} GB, "
@@ -466,9 +494,12 @@ def main() -> None:
     print(f"  simulate_batch / reference (fresh arrays)  "
           f"{t_batch / t_ref_fresh:6.2f}")  # fmt: skip
     print(f"  solve_ivp loop / simulate_batch            {t_loop / t_batch:6.1f}  "
-          "(target >= 20; the loop gives states only)")  # fmt: skip
+          "(the loop gives states only)")  # fmt: skip
     print(f"  solve_ivp loop + outputs / simulate_batch  "
-          f"{t_loop_sig / t_batch:6.1f}  (the same signals)")  # fmt: skip
+          f"{t_loop_sig / t_batch:6.1f}  (target >= 20 with the same signals; "
+          "both in fresh memory)")  # fmt: skip
+    print(f"    dropped / into a reused out=             "
+          f"{t_loop_drop / t_batch_out:6.1f}  (both reusing memory)")  # fmt: skip
     print(f"  simulate_batch numpy / default engine      {t_numpy / t_batch:6.1f}")
     print(f"  integrate_compiled / RHS floor             {t_comp / t_floor:6.2f}")
     print(f"  accepted steps per run: mean {np.mean(stats[:, 0]):.0f}, "

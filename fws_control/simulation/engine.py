@@ -701,7 +701,9 @@ def time_grid(duration: float, *, dt: float = 0.01, t_eval: Any = None) -> np.nd
         samples = output_samples(duration, dt=dt)
         check_output_budget(1, samples, duration=duration, dt=dt)
         return np.linspace(0.0, duration, int(samples))
-    t = np.asarray(check_finite("t_eval", t_eval), dtype=float).ravel()
+    # a copy: the result's t must not change with the caller's array (nor
+    # with a simulate_batch(out=...) that shares its memory)
+    t = np.array(check_finite("t_eval", t_eval), dtype=float).ravel()
     if t.size < 1 or t[0] != 0.0 or np.any(np.diff(t) <= 0) or t[-1] > duration:
         got = f"{t.size} values" + (f" from {t[0]:g} to {t[-1]:g}" if t.size else "")
         raise ValueError(
