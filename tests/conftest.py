@@ -5,7 +5,9 @@ written out in the tests from the paper's equations, independent of the
 library code they check.
 """
 
+import gc
 import os
+import tracemalloc
 
 # One BLAS thread. The tests' matrices are small (at most a few hundred
 # rows): OpenBLAS threads gain nothing there and, on a busy 2-core machine,
@@ -124,3 +126,67 @@ def pytest_terminal_summary(terminalreporter, config):
             terminalreporter.write_line(
                 f"  {name}: {c['tried']} tried, {c['well']} handled well"
             )
+
+
+# --------------------------------------------------------------------------
+# Dask and memory helpers shared by the batch tests
+
+
+def dask_distributed():
+    """``dask.distributed``, or skip the test saying why (extra ``distributed``)."""
+    try:
+        from dask import distributed
+    except ImportError:  # pragma: no cover - depends on the environment
+        print("dask.distributed is not installed: Dask tests skipped")
+        pytest.skip("the extra 'distributed' (dask.distributed) is not installed")
+    return distributed
+
+
+@pytest.fixture(scope="module")
+def dask_client():
+    """A client of an in-process Dask cluster: one worker, one thread."""
+    distributed = dask_distributed()
+    with (
+        distributed.LocalCluster(
+            processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        yield client
+
+
+class LosingClient:
+    """A client whose tasks after the first are lost (cancelled) by the cluster."""
+
+    def __init__(self, client):
+        self.client = client
+        self.count = 0
+
+    def submit(self, *args, **kwargs):
+        fut = self.client.submit(*args, **kwargs)
+        self.count += 1
+        if self.count > 1:
+            fut.cancel()
+        return fut
+
+
+def traced_peak(fn):
+    """``(fn(), peak bytes traced by tracemalloc while it ran)``.
+
+    With Python's cyclic garbage collector paused: a memory bound must hold
+    by reference counting alone, not depend on when the collector happens
+    to run (it did: a chunk's solver cycles kept its dense output alive).
+    """
+    enabled = gc.isenabled()
+    gc.collect()
+    gc.disable()
+    tracemalloc.start()
+    try:
+        tracemalloc.reset_peak()
+        out = fn()
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+        if enabled:
+            gc.enable()
+    return out, peak

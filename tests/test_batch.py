@@ -170,10 +170,7 @@ def test_chunks_give_the_same_runs():
     np.testing.assert_allclose(split.e, one.e, rtol=0, atol=1e-6)
 
 
-def test_dask_local_cluster_matches_local_run():
-    distributed = pytest.importorskip(
-        "dask.distributed", reason="the extra 'distributed' is not installed"
-    )
+def test_dask_local_cluster_matches_local_run(dask_client):
     ratios = np.linspace(-1.0, 0.5, 5)
     g = _gains(5.0, 0.1, ratios)
     kw = {
@@ -184,13 +181,7 @@ def test_dask_local_cluster_matches_local_run():
         "chunk_size": 2,
     }
     local = fws.simulate_batch(VEH, Arc(0.1), g, **kw)
-    with (
-        distributed.LocalCluster(
-            processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None
-        ) as cluster,
-        distributed.Client(cluster) as client,
-    ):
-        remote = fws.simulate_batch(VEH, Arc(0.1), g, client=client, **kw)
+    remote = fws.simulate_batch(VEH, Arc(0.1), g, client=dask_client, **kw)
     # same chunks, same arithmetic: identical, and in the original run order
     np.testing.assert_array_equal(remote.e, local.e)
     np.testing.assert_array_equal(remote.ratio, ratios)

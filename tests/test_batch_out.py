@@ -10,13 +10,12 @@ in memory).
 
 from __future__ import annotations
 
-import gc
 import math
 import re
-import tracemalloc
 
 import numpy as np
 import pytest
+from conftest import LosingClient, traced_peak
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
@@ -119,23 +118,6 @@ def test_a_memory_map_streams_the_sweep_to_a_file(fresh, tmp_path):
     np.testing.assert_array_equal(res.e, fresh.e)
 
 
-def _traced_peak(fn):
-    # the cyclic collector paused: the bound must hold by reference counting
-    enabled = gc.isenabled()
-    gc.collect()
-    gc.disable()
-    tracemalloc.start()
-    try:
-        tracemalloc.reset_peak()
-        out = fn()
-        _, peak = tracemalloc.get_traced_memory()
-    finally:
-        tracemalloc.stop()
-        if enabled:
-            gc.enable()
-    return out, peak
-
-
 @pytest.mark.parametrize("engine_name", ENGINES)
 def test_a_sweep_into_a_memory_map_holds_one_chunk_in_memory(engine_name, tmp_path):
     # tracemalloc traces numpy's allocations, not the file's mapped pages:
@@ -148,11 +130,11 @@ def test_a_sweep_into_a_memory_map_holds_one_chunk_in_memory(engine_name, tmp_pa
     kw |= {"engine": engine_name, "progress": False}
     one = fws.SteeringGains(g.k1[:chunk], g.k2[:chunk], g.ratio[:chunk])
     fws.simulate_batch(VEH, PATH, one, **{**kw, "duration": 0.5})  # warm caches
-    _, chunk_peak = _traced_peak(lambda: fws.simulate_batch(VEH, PATH, one, **kw))
+    _, chunk_peak = traced_peak(lambda: fws.simulate_batch(VEH, PATH, one, **kw))
     disk = np.lib.format.open_memmap(
         tmp_path / "big.npy", mode="w+", shape=(n, len(SIGNALS), 501)
     )
-    res, peak = _traced_peak(
+    res, peak = traced_peak(
         lambda: fws.simulate_batch(VEH, PATH, g, chunk_size=chunk, out=disk, **kw)
     )
     assert res.ok.all()
@@ -238,19 +220,12 @@ def test_an_out_that_is_not_an_array_or_with_metrics_only_is_refused():
         )
 
 
-def test_out_on_dask_receives_the_chunks_of_the_cluster():
-    distributed = pytest.importorskip("dask.distributed")
+def test_out_on_dask_receives_the_chunks_of_the_cluster(dask_client):
     local = fws.simulate_batch(VEH, PATH, GAINS, signals=("e", "theta"), **KW)
     out = np.full((N, 2, T), 7.0)
-    with (
-        distributed.LocalCluster(
-            processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None
-        ) as cluster,
-        distributed.Client(cluster) as client,
-    ):
-        res = fws.simulate_batch(
-            VEH, PATH, GAINS, signals=("e", "theta"), client=client, out=out, **KW
-        )
+    res = fws.simulate_batch(
+        VEH, PATH, GAINS, signals=("e", "theta"), client=dask_client, out=out, **KW
+    )
     np.testing.assert_array_equal(out, local.signals)
     assert np.shares_memory(res.signals, out)
 
@@ -269,34 +244,13 @@ def test_an_out_that_holds_t_eval_gives_the_batch_and_its_times(fresh):
     assert not np.shares_memory(res.t, out)
 
 
-class _LosingClient:
-    """A client whose tasks after the first are lost (cancelled)."""
-
-    def __init__(self, client):
-        self.client, self.count = client, 0
-
-    def submit(self, *args, **kwargs):
-        fut = self.client.submit(*args, **kwargs)
-        self.count += 1
-        if self.count > 1:
-            fut.cancel()
-        return fut
-
-
-def test_lost_dask_tasks_leave_nan_in_out_not_stale_values():
-    distributed = pytest.importorskip("dask.distributed")
+def test_lost_dask_tasks_leave_nan_in_out_not_stale_values(dask_client):
     local = fws.simulate_batch(VEH, PATH, GAINS, signals=("e",), **KW)
     out = np.full((N, 1, T), 7.0)
-    with (
-        distributed.LocalCluster(
-            processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None
-        ) as cluster,
-        distributed.Client(cluster) as client,
-        pytest.warns(RuntimeWarning, match="2 runs of 1 lost"),
-    ):
+    with pytest.warns(RuntimeWarning, match="2 runs of 1 lost"):
         res = fws.simulate_batch(
-            VEH, PATH, GAINS, signals=("e",), client=_LosingClient(client), out=out,
-            **KW,
+            VEH, PATH, GAINS, signals=("e",), client=LosingClient(dask_client),
+            out=out, **KW,
         )  # fmt: skip
     np.testing.assert_array_equal(out[:4], local.signals[:4])
     assert np.all(np.isnan(out[4:])) and res.status.tolist()[4:] == ["failed"] * 2

@@ -8,12 +8,10 @@ alone (the working set that the batch may add to its result).
 
 from __future__ import annotations
 
-import gc
-import tracemalloc
-
 import matplotlib
 import numpy as np
 import pytest
+from conftest import LosingClient, traced_peak
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -239,25 +237,6 @@ def test_the_budget_counts_the_kept_signals_only(monkeypatch):
     ).ok.all()
 
 
-def _traced_peak(fn):
-    # with Python's cyclic garbage collector paused: the bound must hold by
-    # reference counting alone, not depend on when the collector happens to
-    # run (it did: a chunk's solver cycles kept its dense output alive)
-    enabled = gc.isenabled()
-    gc.collect()
-    gc.disable()
-    tracemalloc.start()
-    try:
-        tracemalloc.reset_peak()
-        out = fn()
-        _, peak = tracemalloc.get_traced_memory()
-    finally:
-        tracemalloc.stop()
-        if enabled:
-            gc.enable()
-    return out, peak
-
-
 def test_peak_memory_is_the_kept_data_and_one_chunk():
     n, chunk = 2000, 64
     g = fws.double_root_gains(
@@ -269,8 +248,8 @@ def test_peak_memory_is_the_kept_data_and_one_chunk():
     fws.simulate_batch(VEH, PATH, one, **{**kw, "duration": 0.5})  # warm caches
     # the working set of one chunk: the peak of simulating it alone with all
     # its signals (its full signals, states, dense solution, peaks)
-    _, chunk_peak = _traced_peak(lambda: fws.simulate_batch(VEH, PATH, one, **kw))
-    res, peak = _traced_peak(
+    _, chunk_peak = traced_peak(lambda: fws.simulate_batch(VEH, PATH, one, **kw))
+    res, peak = traced_peak(
         lambda: fws.simulate_batch(
             VEH, PATH, g, signals=("e", "lateral_accel"), chunk_size=chunk, **kw
         )
@@ -287,46 +266,18 @@ def test_peak_memory_is_the_kept_data_and_one_chunk():
 # Dask: reduced on the worker, same result
 
 
-def test_signals_on_dask_equal_the_local_run():
-    distributed = pytest.importorskip("dask.distributed")
+def test_signals_on_dask_equal_the_local_run(dask_client):
     local = fws.simulate_batch(VEH, PATH, GAINS, signals=("e",), **KW)
-    with (
-        distributed.LocalCluster(
-            processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None
-        ) as cluster,
-        distributed.Client(cluster) as client,
-    ):
-        res = fws.simulate_batch(VEH, PATH, GAINS, signals=("e",), client=client, **KW)
+    res = fws.simulate_batch(VEH, PATH, GAINS, signals=("e",), client=dask_client, **KW)
     np.testing.assert_array_equal(res.e, local.e)
     np.testing.assert_array_equal(res.run_metrics, local.run_metrics)
     np.testing.assert_array_equal(res.run_peak, local.run_peak)
 
 
-class _LosingClient:
-    """A client whose tasks after the first are lost (cancelled)."""
-
-    def __init__(self, client):
-        self.client, self.count = client, 0
-
-    def submit(self, *args, **kwargs):
-        fut = self.client.submit(*args, **kwargs)
-        self.count += 1
-        if self.count > 1:
-            fut.cancel()
-        return fut
-
-
-def test_lost_dask_tasks_keep_the_reduced_shape():
-    distributed = pytest.importorskip("dask.distributed")
-    with (
-        distributed.LocalCluster(
-            processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None
-        ) as cluster,
-        distributed.Client(cluster) as client,
-        pytest.warns(RuntimeWarning, match="2 runs of 1 lost"),
-    ):
+def test_lost_dask_tasks_keep_the_reduced_shape(dask_client):
+    with pytest.warns(RuntimeWarning, match="2 runs of 1 lost"):
         res = fws.simulate_batch(
-            VEH, PATH, GAINS, signals=("e",), client=_LosingClient(client), **KW
+            VEH, PATH, GAINS, signals=("e",), client=LosingClient(dask_client), **KW
         )
     local = fws.simulate_batch(VEH, PATH, GAINS, signals=("e",), **KW)
     assert res.signals.shape == (6, 1, local.t.size)

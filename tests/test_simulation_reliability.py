@@ -8,6 +8,7 @@ import signal
 
 import numpy as np
 import pytest
+from conftest import LosingClient, dask_distributed
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -186,27 +187,6 @@ def test_a_failing_run_takes_only_itself_out(chunk_size):
     _check_isolated(res, good, ref)
 
 
-def _dask():
-    try:
-        from dask import distributed
-    except ImportError:  # pragma: no cover - depends on the environment
-        print("dask.distributed is not installed: Dask reliability tests skipped")
-        pytest.skip("the extra 'distributed' (dask.distributed) is not installed")
-    return distributed
-
-
-@pytest.fixture(scope="module")
-def dask_client():
-    distributed = _dask()
-    with (
-        distributed.LocalCluster(
-            processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None
-        ) as cluster,
-        distributed.Client(cluster) as client,
-    ):
-        yield client
-
-
 def test_a_failing_run_takes_only_itself_out_on_dask(dask_client):
     good, ref = _good_runs_alone()
     with time_limit(60), np.errstate(all="ignore"):
@@ -217,28 +197,13 @@ def test_a_failing_run_takes_only_itself_out_on_dask(dask_client):
     _check_isolated(res, good, ref)
 
 
-class _LosingClient:
-    """A client whose tasks after the first are lost (cancelled) by the cluster."""
-
-    def __init__(self, client):
-        self.client = client
-        self.count = 0
-
-    def submit(self, *args, **kwargs):
-        fut = self.client.submit(*args, **kwargs)
-        self.count += 1
-        if self.count > 1:
-            fut.cancel()
-        return fut
-
-
 def test_lost_dask_tasks_are_marked_and_finished_chunks_kept(dask_client):
     speeds = np.array([5.0, 6.0, 7.0, 8.0, 9.0])
     local = fws.simulate_batch(VEH, Straight(), GAIN, speed=speeds, **BATCH)
     with time_limit(60), pytest.warns(RuntimeWarning, match="3 runs of 2 lost"):
         res = fws.simulate_batch(
             VEH, Straight(), GAIN, speed=speeds, chunk_size=2,
-            client=_LosingClient(dask_client), **BATCH,
+            client=LosingClient(dask_client), **BATCH,
         )  # fmt: skip
     assert res.status.tolist() == ["ok", "ok", "failed", "failed", "failed"]
     np.testing.assert_allclose(res.e[:2], local.e[:2], rtol=0, atol=1e-9)
@@ -248,7 +213,7 @@ def test_lost_dask_tasks_are_marked_and_finished_chunks_kept(dask_client):
 
 
 def test_a_closed_dask_client_raises_before_any_work():
-    distributed = _dask()
+    distributed = dask_distributed()
     with distributed.LocalCluster(
         processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None
     ) as cluster:
