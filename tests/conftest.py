@@ -190,3 +190,23 @@ def traced_peak(fn):
         if enabled:
             gc.enable()
     return out, peak
+
+
+#: A batch of the paper's curve scenario (Arc 1/10, 5 m/s, R(0) = (0, -5 m),
+#: 12 s at dt 0.05, two chunks): five double-root designs (ratios over
+#: [-1.5, 0.6], pole -1) and one that diverges (k2 < 0, front steering only),
+#: which stops at a singular state with a NaN tail.
+_SWEEP = fws.double_root_gains(
+    PAPER_VEHICLE, speed=5.0, curvature=0.1, ratio=np.linspace(-1.5, 0.6, 5), pole=-1.0
+)
+CURVE_GAINS_WITH_STOP = fws.SteeringGains(
+    np.append(_SWEEP.k1, 0.3), np.append(_SWEEP.k2, -2.0), np.append(_SWEEP.ratio, 0.0)
+)
+CURVE_BATCH_KW = {
+    "speed": 5.0,
+    "initial_state": (0.0, -5.0, 0.0),
+    "duration": 12.0,
+    "dt": 0.05,
+    "chunk_size": 4,  # two chunks
+    "progress": False,
+}

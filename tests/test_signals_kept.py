@@ -11,7 +11,7 @@ from __future__ import annotations
 import matplotlib
 import numpy as np
 import pytest
-from conftest import LosingClient, traced_peak
+from conftest import CURVE_BATCH_KW, CURVE_GAINS_WITH_STOP, LosingClient, traced_peak
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -24,22 +24,9 @@ matplotlib.use("Agg")
 
 VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
 PATH = Arc(0.1)
-# five designs of the paper's curve scenario and one that diverges (k2 < 0,
-# front steering only): it stops at a singular state, NaN tail
-_G = fws.double_root_gains(
-    VEH, speed=5.0, curvature=0.1, ratio=np.linspace(-1.5, 0.6, 5), pole=-1.0
-)
-GAINS = fws.SteeringGains(
-    np.append(_G.k1, 0.3), np.append(_G.k2, -2.0), np.append(_G.ratio, 0.0)
-)
-KW = {
-    "speed": 5.0,
-    "initial_state": (0.0, -5.0, 0.0),
-    "duration": 12.0,
-    "dt": 0.05,
-    "chunk_size": 4,  # two chunks
-    "progress": False,
-}
+# five designs of the paper's curve scenario and one that stops (conftest)
+GAINS = CURVE_GAINS_WITH_STOP
+KW = CURVE_BATCH_KW
 ENGINES = ["numpy", "compiled"]
 
 
