@@ -5,7 +5,10 @@ what the ``fws-control`` script does) and measures its CPU time, user +
 system, from ``resource.getrusage(RUSAGE_CHILDREN)``: CPU time is far less
 disturbed by other processes than wall time. Each figure is the best of
 ``--repeat`` runs (default 3); the machine load is printed before and after,
-and every time is printed with its ratio to the target.
+and every time is printed with its ratio to the target, and so is the
+simulation engine ``reproduce`` gets (the compiled one needs numba, the
+extra ``fast``; without it the numpy engine makes Fig. 5 and the responses,
+about 1.8 s more).
 
 Targets: ``--help`` 0.3 s, ``gains`` 0.5 s, ``reproduce`` 6 s of CPU. The
 reference row ``python -c pass`` is the interpreter alone, and
@@ -54,6 +57,20 @@ def cpu_seconds(cmd: list[str], env: dict) -> float:
     return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
+def engine_line(env: dict) -> str:
+    """Which simulation engine ``reproduce`` gets in `env` (numba or not)."""
+    probe = "import numba; print(numba.__version__)"
+    run = subprocess.run(
+        [sys.executable, "-c", probe], capture_output=True, text=True, env=env
+    )
+    if run.returncode == 0:
+        return (
+            f"engine: compiled (numba {run.stdout.strip()}, extra 'fast'; the "
+            "first run of a fresh install also compiles its kernels, once)"
+        )
+    return "engine: numpy (numba not installed: the compiled engine is off)"
+
+
 def with_path(root: Path) -> dict:
     """The environment with `root` first on PYTHONPATH."""
     env = dict(os.environ)
@@ -97,9 +114,11 @@ for name in FIGURES:
     fig = make_figure(name)
     print(name + ":make", T() - t)
     t = T()
-    # reproduce's options: dpi 110, zlib level 3 (fws_control.paper.figures)
-    fig.savefig(io.BytesIO(), format="png", dpi=110,
-                pil_kwargs={"compress_level": 3})
+    # reproduce's options: dpi 110, zlib level 3, text without hinting
+    # (fws_control.paper.figures)
+    with plt.rc_context({"text.hinting": "no_hinting"}):
+        fig.savefig(io.BytesIO(), format="png", dpi=110,
+                    pil_kwargs={"compress_level": 3})
     print(name + ":savefig", T() - t)
     plt.close(fig)
 from pathlib import Path
@@ -172,6 +191,7 @@ def main() -> None:
             )
         )
     print(machine_line())
+    print(engine_line(envs[0]))
     print(f"CPU seconds (user + sys), best of {opts.repeat} runs each:")
     for label, cmd, target in rows:
         t, *base = best_cpu(cmd, envs, opts.repeat)

@@ -158,6 +158,40 @@ def test_reproduce_subset_writes_pngs_and_summary(tmp_path):
         reproduce(tmp_path / "x", names=["fig99"], progress=False)
 
 
+def test_reproduce_draws_text_without_hinting(tmp_path):
+    """reproduce's PNG is the figure drawn with ``text.hinting =
+    "no_hinting"``: pixel for pixel the figure of make_figure saved under
+    that setting, and not the one saved under matplotlib's default hinting
+    (so the setting is what makes the difference)."""
+    import io
+
+    from PIL import Image
+
+    res = reproduce(
+        tmp_path / "out", quick=True, progress=False, dpi=60, names=["fig2"]
+    )
+    with Image.open(res.figures[0]) as im:
+        got = np.asarray(im)
+
+    def drawn(hinting):
+        fig = make_figure("fig2", quick=True)
+        buf = io.BytesIO()
+        try:
+            with plt.rc_context({"text.hinting": hinting}):
+                fig.savefig(buf, format="png", dpi=60)
+        finally:
+            plt.close(fig)
+        with Image.open(buf) as im:
+            return np.asarray(im)
+
+    unhinted, hinted = drawn("no_hinting"), drawn("default")
+    assert got.shape == unhinted.shape == hinted.shape
+    assert np.array_equal(got, unhinted)
+    # glyph edges only: a small share of the pixels, but some
+    changed = np.any(got != hinted, axis=-1).mean()
+    assert 0.0 < changed < 0.1
+
+
 def test_fig5_points_match_direct_simulation():
     fig = make_figure("fig5", quick=True)
     # Each panel has a strip above it (runs without a peak); the data axes are
