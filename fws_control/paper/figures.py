@@ -946,13 +946,13 @@ _PNG_OPTIONS = {"compress_level": 3}
 # Glyphs drawn without FreeType hinting, as every vector backend (PDF, SVG)
 # draws them: the text keeps its outlines' exact positions instead of
 # snapping them to the pixel grid. Matplotlib's default ("default": the
-# font's own hinting instructions) spends about a third of the drawing of
-# these figures' 1,100 texts running them. Measured on 2 cores with the
-# twelve figures made afresh each round, best of 4 interleaved rounds:
-# savefig 3.08 s with hinting, 2.69 s without (ratio 0.87). 2.3 % of the
-# pixels of Fig. 3 change, all of them in the antialiased edges of glyphs.
-# Applied to reproduce's own PNGs only: make_figure returns the figure and
-# leaves its drawing to the caller's settings.
+# font's native hinter, else FreeType's auto-hinter) hints every glyph it
+# draws. Measured on 2 cores with the twelve figures made afresh each
+# round, best of 4 interleaved rounds: savefig 3.08 s with hinting, 2.69 s
+# without (ratio 0.87). 2.3 % of the pixels of Fig. 3 change, all of them
+# in the antialiased edges of glyphs. Applied to reproduce's own PNGs only:
+# make_figure returns the figure and leaves its drawing to the caller's
+# settings.
 _DRAW_RC = {"text.hinting": "no_hinting"}
 
 #: Largest resolution :func:`reproduce` accepts: at 600 dpi the widest figure
