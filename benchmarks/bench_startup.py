@@ -59,11 +59,18 @@ def cpu_seconds(cmd: list[str], env: dict) -> float:
 
 def engine_line(env: dict) -> str:
     """Which simulation engine ``reproduce`` gets in `env` (numba or not)."""
-    probe = "import numba; print(numba.__version__)"
-    run = subprocess.run(
-        [sys.executable, "-c", probe], capture_output=True, text=True, env=env
+    # asked of the checkout under test, as the project decides it
+    probe = (
+        "from fws_control.simulation.compiled import available\n"
+        "if available():\n"
+        "    import numba; print(numba.__version__)"
     )
-    if run.returncode == 0:
+    cwd = env["PYTHONPATH"].split(os.pathsep)[0]
+    run = subprocess.run(
+        [sys.executable, "-c", probe],
+        capture_output=True, text=True, env=env, cwd=cwd, check=True,
+    )  # fmt: skip
+    if run.stdout.strip():
         return (
             f"engine: compiled (numba {run.stdout.strip()}, extra 'fast'; the "
             "first run of a fresh install also compiles its kernels, once)"

@@ -362,10 +362,8 @@ def _overlap(a, b, tol=0.5):
     )
 
 
-@pytest.mark.parametrize("name", sorted(FIGURES))
-def test_layout_nothing_overlaps_or_leaves_the_canvas(name):
-    fig = make_figure(name, quick=True)
-    fig.set_dpi(110)  # reproduce's default resolution
+def _layout_problems(fig) -> list[str]:
+    """What overlaps or leaves the canvas in `fig`, drawn as it is now."""
     fig.canvas.draw()
     renderer = fig.canvas.get_renderer()
     canvas = fig.bbox
@@ -431,6 +429,20 @@ def test_layout_nothing_overlaps_or_leaves_the_canvas(name):
             and ftext.y1 <= canvas.y1 + 0.5
         ):
             problems.append("a figure title leaves the canvas")
+    return problems
+
+
+@pytest.mark.parametrize("name", sorted(FIGURES))
+def test_layout_nothing_overlaps_or_leaves_the_canvas(name):
+    fig = make_figure(name, quick=True)
+    fig.set_dpi(110)  # reproduce's default resolution
+    # reproduce draws without hinting (figures._DRAW_RC), make_figure's
+    # callers with matplotlib's default: the text sizes differ slightly
+    problems = []
+    for hinting in ("default", "no_hinting"):
+        with plt.rc_context({"text.hinting": hinting}):
+            problems += [f"{hinting}: {p}" for p in _layout_problems(fig)]
+    axes = [ax for ax in fig.axes if ax.get_visible()]
     # Labelled axes and legends are there.
     for ax in axes:
         if ax.has_data():
@@ -458,6 +470,10 @@ def test_layout_check_detects_an_overlap():
     right_labels = _outer_texts(axs[1], renderer)
     left_frame = axs[0].get_window_extent(renderer)
     assert any(_overlap(box, left_frame) for _, box in right_labels)
+    # and the whole check reports it, with either hinting
+    for hinting in ("default", "no_hinting"):
+        with plt.rc_context({"text.hinting": hinting}):
+            assert any("overlaps the panel" in p for p in _layout_problems(fig))
     plt.close(fig)
 
 

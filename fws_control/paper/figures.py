@@ -950,9 +950,9 @@ _PNG_OPTIONS = {"compress_level": 3}
 # draws. Measured on 2 cores with the twelve figures made afresh each
 # round, best of 4 interleaved rounds: savefig 3.08 s with hinting, 2.69 s
 # without (ratio 0.87). 2.3 % of the pixels of Fig. 3 change, all of them
-# in the antialiased edges of glyphs. Applied to reproduce's own PNGs only:
-# make_figure returns the figure and leaves its drawing to the caller's
-# settings.
+# within the glyphs (stems and positions snap differently to the pixel
+# grid). Applied to reproduce's own PNGs only: make_figure returns the
+# figure and leaves its drawing to the caller's settings.
 _DRAW_RC = {"text.hinting": "no_hinting"}
 
 #: Largest resolution :func:`reproduce` accepts: at 600 dpi the widest figure
@@ -1036,8 +1036,9 @@ def reproduce(
     Text is drawn without FreeType hinting (``text.hinting =
     "no_hinting"``, as in PDF or SVG output; it costs about an eighth less
     drawing time, see the performance notes), so a PNG differs from
-    ``make_figure(name).savefig(...)`` under matplotlib's default only in
-    the antialiased edges of its glyphs.
+    ``make_figure(name).savefig(...)`` under matplotlib's default only
+    within its glyphs (their stems and positions snap differently to the
+    pixel grid).
 
     Examples
     --------
