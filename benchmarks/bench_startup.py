@@ -115,17 +115,17 @@ import control, matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 from fws_control.paper.figures import FIGURES, make_figure, _summary_text
+# reproduce's drawing and PNG options, taken from it so that they cannot drift
+from fws_control.paper.figures import _DRAW_RC, _PNG_OPTIONS
 print("imports", T() - t)
 for name in FIGURES:
     t = T()
     fig = make_figure(name)
     print(name + ":make", T() - t)
     t = T()
-    # reproduce's options: dpi 110, zlib level 3, text without hinting
-    # (fws_control.paper.figures)
-    with plt.rc_context({"text.hinting": "no_hinting"}):
-        fig.savefig(io.BytesIO(), format="png", dpi=110,
-                    pil_kwargs={"compress_level": 3})
+    # as reproduce saves it (its default dpi 110)
+    with plt.rc_context(_DRAW_RC):
+        fig.savefig(io.BytesIO(), format="png", dpi=110, pil_kwargs=_PNG_OPTIONS)
     print(name + ":savefig", T() - t)
     plt.close(fig)
 from pathlib import Path
