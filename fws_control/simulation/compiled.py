@@ -195,6 +195,29 @@ def _jit(fn):
     return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
 
 
+def _jit_inline(fn):
+    # As _jit, and numba inlines the kernel into every compiled caller (at
+    # numba-IR level; a direct call from Python still works). For the small
+    # kernels called once per right-hand side, output time or peak
+    # evaluation: LLVM did not inline these calls between numba functions
+    # (seen in the machine code), and each call passes every array as a
+    # struct and increments and decrements its reference count, two atomic
+    # operations per array that numba does not remove across a call. The
+    # same operations in the same order, so the results are bit for bit
+    # those of the calls (checked on arcs, a straight, a clothoid, angle
+    # and rate limits with an actuator under DOP853 and Radau, and stops).
+    # Measured on the paper's curve at 4000 runs (best of 5, interleaved
+    # with a copy of the package without it): a right-hand side 60 instead
+    # of 66 ns, the integration 0.86x, the output stage 0.94x, the exact
+    # peaks 0.87x, simulate_batch 0.91x. The cost: the first compilation
+    # (empty cache) of a default simulate took 23.5 instead of 16.4 s.
+    # Not for _curvature, _wrap_lap and _feedforward_angle: inlined into
+    # the right-hand side they made it slower (73 ns).
+    if numba is None:  # pragma: no cover
+        return fn
+    return numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")(fn)
+
+
 # --------------------------------------------------------------------------
 # DOP853 tableau (scipy's), as module constants frozen into the kernels
 
@@ -299,7 +322,7 @@ def _curvature(s, q, breaks, coefs):
     return coefs[k, 0] + d * (coefs[k, 1] + d * (coefs[k, 2] + d * coefs[k, 3]))
 
 
-@_jit
+@_jit_inline
 def _raw_command(e, theta, kappa, p, q):
     fb = -p[_P_K1] * e - p[_P_K2] * theta
     cf = fb
@@ -308,7 +331,7 @@ def _raw_command(e, theta, kappa, p, q):
     return cf, p[_P_RATIO] * fb
 
 
-@_jit
+@_jit_inline
 def _command(e, theta, kappa, p, q):
     """The paper's law, as controllers.steering_command (same operations).
 
@@ -347,7 +370,7 @@ def _clip_values(y, p, q, breaks, coefs, out):
         out[6], out[7] = np.inf, np.inf
 
 
-@_jit
+@_jit_inline
 def closed_loop_rhs(t, y, p, q, breaks, coefs, out):
     """Right-hand side of one run; writes ``dy/dt`` into `out`.
 
@@ -608,7 +631,7 @@ def _dense_coefficients(t_old, h, y_old, y, f, K, p, q, br, co, F, ytmp):
             F[3 + r, i] = h * acc
 
 
-@_jit
+@_jit_inline
 def _dense_eval(tt, t_old, t_new, y_old, F, out):
     # Dop853DenseOutput._call_impl at one time
     x = (tt - t_old) / (t_new - t_old)
@@ -1255,7 +1278,7 @@ _run_impl, _solve_batch = _drivers(0)
 _run_impl_radau, _solve_batch_radau = _drivers(_RADAU)
 
 
-@_jit
+@_jit_inline
 def _curvature_and_rate(s, q, breaks, coefs):
     # kappa and d kappa / ds of the table from one lookup, at s clipped or
     # wrapped as in _curvature (the same operations for kappa)
@@ -1273,7 +1296,7 @@ def _curvature_and_rate(s, q, breaks, coefs):
     return kappa, coefs[k, 1] + d * (2.0 * coefs[k, 2] + d * 3.0 * coefs[k, 3])
 
 
-@_jit
+@_jit_inline
 def _point_signals(s, e, th, df_s, dr_s, V, k1, k2, a, q, breaks, coefs, d_cg):
     """The signals of one state with the operations of compute_outputs.
 
@@ -1441,7 +1464,7 @@ assert PEAK_SIGNALS == (
 _PEAK_COLS = tuple(SIGNALS.index(name) for name in PEAK_SIGNALS)
 
 
-@_jit
+@_jit_inline
 def _state_at(tt, rec, n_pc, y0, m, ytmp):
     """The run's state at `tt` from its dense output (`rec`: its pieces)."""
     if n_pc == 0:
@@ -1469,7 +1492,7 @@ def _state_at(tt, rec, n_pc, y0, m, ytmp):
             ytmp[i] = v + row[2 + i]
 
 
-@_jit
+@_jit_inline
 def _peak_values(tt, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, out):
     """|signal| of the six peak signals at `tt` on the run's dense output."""
     _state_at(tt, rec, n_pc, y0, m, ytmp)
