@@ -199,7 +199,10 @@ def scalar_rhs(k1, k2, a, V, f, kappa):
     return rhs
 
 
-@numba.njit(cache=True)
+# Not cached: numba would reuse the cached loop after a change of the
+# library's kernels (it checks this file only), and the right-hand side,
+# inlined into the loop, takes the loop's error model: the engine's own.
+@numba.njit(error_model="numpy")
 def _rhs_loop(n, y0, p, q, breaks, coefs):
     # n evaluations on states that change (so nothing is hoisted)
     out = np.empty(3)

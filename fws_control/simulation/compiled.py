@@ -197,7 +197,9 @@ def _jit(fn):
 
 def _jit_inline(fn):
     # As _jit, and numba inlines the kernel into every compiled caller (at
-    # numba-IR level; a direct call from Python still works). For the small
+    # numba-IR level; a direct call from Python still works, with _jit's
+    # settings). Inlined, the kernel takes its caller's error_model and
+    # nogil: every caller here is compiled with _jit. For the small
     # kernels called once per right-hand side, output time or peak
     # evaluation: LLVM did not inline these calls between numba functions
     # (seen in the machine code), and each call passes every array as a
@@ -207,12 +209,12 @@ def _jit_inline(fn):
     # those of the calls (checked on arcs, a straight, a clothoid, angle
     # and rate limits with an actuator under DOP853 and Radau, and stops).
     # Measured on the paper's curve at 4000 runs (best of 5, interleaved
-    # with a copy of the package without it): a right-hand side 60 instead
-    # of 66 ns, the integration 0.86x, the output stage 0.94x, the exact
-    # peaks 0.87x, simulate_batch 0.91x. The cost: the first compilation
-    # (empty cache) of a default simulate took 23.5 instead of 16.4 s.
+    # with a copy of the package without it; docs/performance.md): the
+    # integration 0.86x, the output stage 0.94x, the exact peaks 0.87x,
+    # simulate_batch 0.91x. The cost: the first default simulate with an
+    # empty cache took 22.5-23.5 instead of 16.4-17.0 s of CPU.
     # Not for _curvature, _wrap_lap and _feedforward_angle: inlined into
-    # the right-hand side they made it slower (73 ns).
+    # the right-hand side as well, they made the integration 1.07x slower.
     if numba is None:  # pragma: no cover
         return fn
     return numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")(fn)
@@ -1522,12 +1524,16 @@ def _peak_values(tt, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, out)
 @_jit
 def _peak_value(tt, j, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals):
     """|signal j| at `tt`: :func:`_peak_values` computing only what j needs."""
+    if j > 2:
+        # (_peak_values finds the state itself)
+        _peak_values(tt, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals)
+        return vals[j]
     _state_at(tt, rec, n_pc, y0, m, ytmp)
     if j == 0:
         v = abs(ytmp[1])
-    elif j <= 2 and m == 5:
+    elif m == 5:
         v = abs(ytmp[2 + j])  # the actuator's angles are states
-    elif j <= 2:
+    else:
         # the clipped commands, with the operations of _point_signals
         kappa = _curvature(ytmp[0], q, br, co)
         fb = -k1 * ytmp[1] - k2 * ytmp[2]
@@ -1538,9 +1544,6 @@ def _peak_value(tt, j, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, va
             v = abs(min(max(raw, -q[_Q_MAX_F]), q[_Q_MAX_F]))
         else:
             v = abs(min(max(a * fb, -q[_Q_MAX_R]), q[_Q_MAX_R]))
-    else:
-        _peak_values(tt, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals)
-        return vals[j]
     return v if math.isfinite(v) else np.inf
 
 
