@@ -183,7 +183,7 @@ def available() -> bool:
     return numba is not None
 
 
-def _jit(fn):
+def _jit(fn, inline="never"):
     # cache=True: the compilation (seconds) is paid once per machine and
     # numba version, not once per process. Without numba the kernels stay
     # plain Python (importable, never called by integrate_compiled).
@@ -192,7 +192,7 @@ def _jit(fn):
     # error_model="numpy": a division by zero gives inf or NaN as in numpy
     # (and the solver then rejects the step or fails the run), instead of
     # raising ZeroDivisionError out of the whole batch (e.g. V = 1e300).
-    return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
+    return numba.njit(cache=True, nogil=True, error_model="numpy", inline=inline)(fn)
 
 
 def _jit_inline(fn):
@@ -215,9 +215,7 @@ def _jit_inline(fn):
     # empty cache took 22.5-23.5 instead of 16.4-17.0 s of CPU.
     # Not for _curvature, _wrap_lap and _feedforward_angle: inlined into
     # the right-hand side as well, they made the integration 1.07x slower.
-    if numba is None:  # pragma: no cover
-        return fn
-    return numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")(fn)
+    return _jit(fn, inline="always")
 
 
 # --------------------------------------------------------------------------
