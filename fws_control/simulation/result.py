@@ -177,7 +177,7 @@ def _import_pandas():
     except ImportError as exc:  # pragma: no cover - depends on the environment
         raise ImportError(
             "to_pandas() needs pandas; install it with `pip install pandas` "
-            "(or the extra `fws-control[test]`)"
+            "(or the extra `fws-control[pandas]`)"
         ) from exc
     return pd
 
