@@ -177,7 +177,9 @@ def gain_locus(
     Returns
     -------
     control.PoleZeroData
-        ``.loci`` of shape ``(len(scale), n)``, ``.gains`` the scales.
+        ``.loci`` of shape ``(len(scale), n)``, ``.gains`` the scales. Its
+        ``.plot()`` draws on a new figure (or on `ax`) and marks the roots of
+        the design itself, ``g = 1`` (``initial_gain=None``: no mark).
 
     Examples
     --------
@@ -194,7 +196,11 @@ def gain_locus(
             raise ValueError(
                 f"scale must be None or a non-empty 1-D array, got shape {scale.shape}"
             )
-    return ct.root_locus_map(loop, gains=scale)
+    rl = ct.root_locus_map(loop, gains=scale)
+    return _GainLocusData(
+        rl.poles, rl.zeros, gains=rl.gains, loci=rl.loci, dt=rl.dt,
+        sysname=rl.sysname, sys=rl.sys, sort_loci=False,
+    )  # fmt: skip
 
 
 def quadratic_roots(p1, p0) -> np.ndarray:
@@ -265,7 +271,41 @@ def polynomial_roots(coefficients) -> np.ndarray:
     return roots
 
 
-class _ParameterLocusData(ct.PoleZeroData):
+class _LocusData(ct.PoleZeroData):
+    """PoleZeroData whose ``plot()`` draws on a new figure unless given `ax`.
+
+    python-control draws a pole-zero or root-locus plot onto the current
+    figure when it has a single axes, to overlay loci; after a stability
+    chart (also a single axes, in the gain plane) that would draw s-plane
+    roots into the k1-k2 chart. Every ``.plot()`` of this package draws on a
+    new figure unless `ax` is given; pass ``ax=`` to overlay.
+    """
+
+    def plot(self, *args, **kwargs):
+        if kwargs.get("ax") is None:
+            import matplotlib.pyplot as plt  # not at import: CLI start-up
+
+            # an empty current figure: python-control creates the axes
+            # (with its grid) there instead of reusing the previous plot's
+            plt.figure()
+        return super().plot(*args, **kwargs)
+
+
+class _GainLocusData(_LocusData):
+    """Gain locus whose ``plot()`` marks the design, the scale ``g = 1``.
+
+    ``initial_gain=None`` leaves the mark out; another value marks the
+    roots at that scale.
+    """
+
+    def plot(self, *args, **kwargs):
+        kwargs.setdefault("initial_gain", 1.0)
+        if kwargs["initial_gain"] is not None and self.sys is None:
+            raise ValueError("this gain locus carries no system to mark gains on")
+        return super().plot(*args, **kwargs)
+
+
+class _ParameterLocusData(_LocusData):
     """PoleZeroData whose ``plot()`` frames the whole locus.
 
     python-control chooses root-locus limits for a gain locus (around the

@@ -272,3 +272,73 @@ def test_issue13_locus_arguments_named(make, arg, exc):
     # an array, and a swept value refused under the plant's name only
     with pytest.raises(exc, match=rf"\b{arg}\b"):
         make()
+
+
+def test_gain_locus_plot_draws_on_its_own_figure_and_marks_the_design(
+    veh,
+):
+    plant = fws.LateralPlant(veh, speed=5.0, curvature=0.1)
+    g = fws.double_root_gains(plant, ratio=-1.0, pole=-1.0)
+    grid = np.linspace(-1.0, 1.0, 21)
+    chart = fws.stability_chart(plant, ratio=-1.0, k1=grid, k2=grid).plot()
+    chart_lines = len(chart.axes[0, 0].lines)
+    try:
+        cplt = fws.gain_locus(plant, g).plot()
+        # not drawn into the k1-k2 chart (python-control would reuse a
+        # current figure with one axes)
+        assert cplt.figure is not chart.figure
+        assert len(chart.axes[0, 0].lines) == chart_lines
+        # the design's roots are marked: the marker points are the
+        # eigenvalues of the closed loop at scale g = 1
+        ax = cplt.axes[0, 0]
+        marked = [
+            complex(x, y)
+            for line in ax.lines
+            if line.get_marker() == "s"
+            for x, y in zip(line.get_xdata(), line.get_ydata(), strict=True)
+        ]
+        expected = fws.closed_loop(plant, g).poles()
+        assert len(marked) == len(expected) == 2
+        np.testing.assert_allclose(
+            sorted(marked, key=lambda z: (z.real, z.imag)),
+            sorted(expected, key=lambda z: (z.real, z.imag)),
+            atol=1e-6,
+        )
+        # no mark on request; ax= overlays on the given axes
+        bare = fws.gain_locus(plant, g).plot(initial_gain=None, ax=ax)
+        assert bare.figure is cplt.figure
+        before = len(marked)
+        assert sum(line.get_marker() == "s" for line in ax.lines) == before
+    finally:
+        plt.close("all")
+
+
+def test_parameter_locus_plot_draws_on_its_own_figure(veh):
+    plant = fws.LateralPlant(veh, speed=5.0, curvature=0.1)
+    g = fws.double_root_gains(plant, ratio=-1.0, pole=-1.0)
+    grid = np.linspace(-1.0, 1.0, 11)
+    try:
+        chart = fws.stability_chart(plant, ratio=-1.0, k1=grid, k2=grid).plot()
+        speeds = np.linspace(2.0, 10.0, 9)
+        cplt = fws.parameter_locus(plant, g, parameter="speed", values=speeds).plot()
+        assert cplt.figure is not chart.figure
+        # the drawn branches (python-control's columns: poles, zeros,
+        # loci) are the closed-loop eigenvalues at each speed
+        drawn = np.sort_complex(
+            np.concatenate(
+                [line.get_xdata() + 1j * line.get_ydata() for line in cplt.lines[0, 2]]
+            )
+        )
+        ref = np.sort_complex(
+            np.concatenate(
+                [
+                    fws.closed_loop(
+                        fws.LateralPlant(veh, speed=v, curvature=0.1), g
+                    ).poles()
+                    for v in speeds
+                ]
+            )
+        )
+        np.testing.assert_allclose(drawn, ref, atol=1e-9)
+    finally:
+        plt.close("all")
