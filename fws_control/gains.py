@@ -6,11 +6,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .reprs import value_repr
 from .validation import check_finite
 
 __all__ = ["SteeringGains"]
 
 
+@value_repr
 @dataclass(frozen=True)
 class SteeringGains:
     r"""Feedback gains with the rear gains tied to the front ones.

@@ -45,6 +45,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .paths import Arc, Clothoid, Path, PathChain, Straight
+from .reprs import value_repr
 from .validation import check_finite, check_positive, check_scalar, check_type
 
 __all__ = [
@@ -91,6 +92,7 @@ def _positive(name: str, value) -> float:
     return v
 
 
+@value_repr
 @dataclass(frozen=True)
 class Gate:
     """A lane section between two lines of cones.
@@ -201,6 +203,7 @@ def s_bend(offset: float, length: float) -> list[Clothoid]:
     return pieces(math.copysign(k_for(seg), offset), seg)
 
 
+@value_repr
 @dataclass(frozen=True, eq=False)
 class Manoeuvre:
     """A course: the path to track and its cone gates.

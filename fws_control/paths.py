@@ -61,6 +61,7 @@ from scipy.interpolate import CubicHermiteSpline, CubicSpline
 from scipy.spatial import cKDTree
 
 from .exceptions import AmbiguousProjectionError
+from .reprs import value_repr
 from .validation import check_real
 
 __all__ = [
@@ -834,6 +835,7 @@ class Path(ABC):
 # straight line
 
 
+@value_repr
 @dataclass(frozen=True)
 class Straight(Path):
     """Straight line (by default the x-axis).
@@ -1122,6 +1124,7 @@ class Arc(Path):
 # clothoid
 
 
+@value_repr
 @dataclass(frozen=True)
 class Clothoid(Path):
     """Clothoid (Euler spiral): curvature linear in arc length.
@@ -1543,6 +1546,7 @@ class Spline(Path):
 # chain
 
 
+@value_repr
 @dataclass(frozen=True)
 class PathChain(Path):
     """Segments joined end to start with continuous position and heading.

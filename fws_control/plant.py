@@ -34,7 +34,7 @@ import numpy as np
 
 from .dynamics import TYRES, dynamic_feedforward, path_jacobians, require_dynamics
 from .models import STEERING_INPUTS, feedforward_steering
-from .reprs import summary_repr
+from .reprs import summary_repr, value_repr
 from .validation import (
     MAX_CURVATURE,
     MAX_SPEED,
@@ -74,6 +74,7 @@ PLANT_KEYWORDS = ("speed", "curvature", "model")
 _DEFAULT_NAME = re.compile(r"^[uxy]\[\d+\]$")
 
 
+@value_repr
 @dataclass(frozen=True, eq=False)
 class LateralPlant:
     r"""The 4WS vehicle at an operating point (a plant).

@@ -4,6 +4,12 @@ Results hold arrays of thousands of values; the dataclass ``__repr__``
 would print all of them. :func:`summary_repr` replaces it by one line that
 gives scalars and short vectors, and the shape and dtype of other arrays,
 plus a small HTML table for notebooks (``_repr_html_``).
+
+Inputs a user writes (a vehicle, gains, a plant, a path, a manoeuvre) keep
+the form of a constructor call, :func:`value_repr`: the fields that differ
+from their defaults, floats to 12 significant digits (a computed gain
+prints as ``0.018``, not ``0.018000000000000002``), arrays and long nested
+values by their shape or type.
 """
 
 from __future__ import annotations
@@ -14,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["brief", "summary_repr", "html_table"]
+__all__ = ["brief", "summary_repr", "html_table", "value_repr"]
 
 _MAX = 60  # longest text kept for one field
 
@@ -118,4 +124,88 @@ def summary_repr(cls):
 
     cls.__repr__ = __repr__
     cls._repr_html_ = _repr_html_
+    return cls
+
+
+#: Significant digits of a float in :func:`value_repr`: round-off of a few
+#: ulp in a computed value (``0.1 + 0.2``) disappears, any value a person
+#: types survives.
+_DIGITS = 12
+
+#: Longest nested repr kept whole in :func:`value_repr`.
+_NESTED = 100
+
+
+def _value_text(value: Any) -> str:
+    if isinstance(value, (bool, np.bool_)):
+        return repr(bool(value))
+    if isinstance(value, (float, np.floating)):
+        return repr(float(f"{float(value):.{_DIGITS}g}"))
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    if isinstance(value, np.ndarray):
+        if value.ndim <= 1 and value.size <= 4 and value.dtype.kind in "biuf":
+            inner = ", ".join(_value_text(v) for v in value.tolist())
+            return f"array([{inner}])"
+        return f"<array {value.shape} {value.dtype}>"
+    if (
+        isinstance(value, tuple)
+        and len(value) <= 4
+        and all(isinstance(v, (int, float, np.number)) for v in value)
+    ):
+        inner = ", ".join(_value_text(v) for v in value)
+        return f"({inner},)" if len(value) == 1 else f"({inner})"
+    text = repr(value)
+    if len(text) <= _NESTED and "\n" not in text:
+        return text
+    return brief(value) if not isinstance(value, str) else text
+
+
+def _is_default(field: dataclasses.Field, value: Any) -> bool:
+    if field.default is not dataclasses.MISSING:
+        default = field.default
+    elif field.default_factory is not dataclasses.MISSING:
+        default = field.default_factory()
+    else:
+        return False
+    if isinstance(value, np.ndarray) or isinstance(default, np.ndarray):
+        return False
+    try:
+        return bool(value == default) and type(value) is type(default)
+    except (TypeError, ValueError):
+        return False
+
+
+def value_repr(cls):
+    """Class decorator: a short constructor-call ``__repr__`` of a dataclass.
+
+    Fields equal to their default are left out; floats print to 12
+    significant digits; arrays with more than four values, and nested values
+    whose repr is longer than 100 characters, print as their shape or type.
+
+    Examples
+    --------
+    >>> from dataclasses import dataclass
+    >>> from fws_control.reprs import value_repr
+    >>> @value_repr
+    ... @dataclass
+    ... class Point:
+    ...     x: float
+    ...     y: float = 0.0
+    ...     label: str | None = None
+    >>> Point(0.1 + 0.2)
+    Point(x=0.3)
+    >>> Point(1.0, 2.0, "p")
+    Point(x=1.0, y=2.0, label='p')
+    """
+
+    def __repr__(self) -> str:
+        parts = [
+            f"{f.name}={_value_text(getattr(self, f.name))}"
+            for f in dataclasses.fields(self)
+            if f.repr and not _is_default(f, getattr(self, f.name))
+        ]
+        return f"{type(self).__name__}({', '.join(parts)})"
+
+    cls.__repr__ = __repr__
     return cls

@@ -7,6 +7,7 @@ from dataclasses import KW_ONLY, dataclass
 
 import numpy as np
 
+from .reprs import value_repr
 from .validation import check_angle_limit, check_optional_positive, check_rate_limit
 
 __all__ = ["Vehicle"]
@@ -34,6 +35,7 @@ _DYNAMIC_FIELDS = {
 }
 
 
+@value_repr
 @dataclass(frozen=True)
 class Vehicle:
     r"""Geometry of a kinematic single-track (bicycle) vehicle with 4WS.

@@ -80,3 +80,41 @@ def test_short_repr_and_small_html(name):
     html = obj._repr_html_()
     assert html.startswith("<table>") and name in html
     assert len(html) < 4000, (name, len(html))
+
+
+# Inputs a user writes print as a short constructor call (value_repr)
+
+
+def test_computed_gains_print_without_float_noise():
+    g = fws.SteeringGains(0.1 + 0.2 - 0.282, 0.27, ratio=0.0)
+    assert repr(0.1 + 0.2 - 0.282) != "0.018"  # the noise is there ...
+    assert repr(g) == "SteeringGains(k1=0.018, k2=0.27, ratio=0.0)"  # ... not shown
+    # 12 significant digits: a typed value survives unchanged
+    assert eval(repr(fws.SteeringGains(0.123456789012, -2.5, 1.0)), vars(fws)) == (
+        fws.SteeringGains(0.123456789012, -2.5, 1.0)
+    )
+
+
+def test_vehicle_and_plant_reprs_leave_out_defaults():
+    veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    assert repr(veh) == "Vehicle(wheelbase=2.7, rear_to_cg=1.35)"
+    limited = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35, max_steer_front=0.5)
+    assert repr(limited) == (
+        "Vehicle(wheelbase=2.7, rear_to_cg=1.35, max_steer_front=0.5)"
+    )
+    assert eval(repr(limited), vars(fws)) == limited
+    plant = fws.LateralPlant(veh, speed=5.0, curvature=0.1)
+    assert repr(plant) == (
+        "LateralPlant(vehicle=Vehicle(wheelbase=2.7, rear_to_cg=1.35), "
+        "speed=5.0, curvature=0.1)"
+    )
+
+
+@pytest.mark.parametrize("make", [fws.slalom, fws.double_lane_change])
+def test_manoeuvre_repr_is_short_and_names_its_parts(make):
+    m = make()
+    text = repr(m)
+    assert text.startswith("Manoeuvre(name=") and "\n" not in text
+    assert len(text) < 300, len(text)
+    assert f"<tuple of {len(m.gates)}>" in text
+    assert f"<tuple of {len(m.path.segments)}>" in text
