@@ -31,7 +31,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from .reprs import summary_repr
+from .reprs import import_pandas, summary_repr
 from .validation import (
     check_bool,
     check_finite,
@@ -436,6 +436,45 @@ class TrackingMetrics:
     peak_delta_r_rate: float | np.ndarray
     status: str | np.ndarray
     peak_error: float | np.ndarray = np.nan
+
+    def to_pandas(self):
+        """A :class:`pandas.DataFrame` with one row per run.
+
+        Columns: ``run`` and every metric (the attributes above, in SI units
+        and radians); one row for the metrics of a single run.
+
+        Returns
+        -------
+        pandas.DataFrame
+
+        Raises
+        ------
+        ImportError
+            If pandas is not installed (extra ``fws-control[pandas]``).
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+        >>> g = fws.SteeringGains(k1=[0.1, 0.2], k2=0.5, ratio=0.0)
+        >>> batch = fws.simulate_batch(veh, fws.Straight(), g, speed=5.0,
+        ...                            initial_state=(0.0, 1.0, 0.0),
+        ...                            duration=10.0, signals="metrics")
+        >>> df = fws.tracking_metrics(batch).to_pandas()
+        >>> df[["run", "settling_time", "status"]].round(2)
+           run  settling_time status
+        0    0           8.54     ok
+        1    1           8.13     ok
+        """
+        pd = import_pandas()
+        columns = {
+            name: np.atleast_1d(np.asarray(getattr(self, name)))
+            for name in self.__dataclass_fields__
+        }
+        n = max(v.size for v in columns.values())
+        data: dict[str, Any] = {"run": np.arange(n)}
+        data.update({k: np.broadcast_to(v, (n,)) for k, v in columns.items()})
+        return pd.DataFrame(data)
 
 
 class _Result(Protocol):

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["brief", "summary_repr", "html_table", "value_repr"]
+__all__ = ["brief", "summary_repr", "html_table", "value_repr", "import_pandas"]
 
 _MAX = 60  # longest text kept for one field
 
@@ -209,3 +209,19 @@ def value_repr(cls):
 
     cls.__repr__ = __repr__
     return cls
+
+
+def import_pandas():
+    """The :mod:`pandas` module, or an ImportError naming the extra for it.
+
+    The ``to_pandas()`` methods call it: pandas is optional (the extra
+    ``fws-control[pandas]``).
+    """
+    try:
+        import pandas as pd
+    except ImportError as exc:  # pragma: no cover - depends on the environment
+        raise ImportError(
+            "to_pandas() needs pandas; install it with `pip install pandas` "
+            "(or the extra `fws-control[pandas]`)"
+        ) from exc
+    return pd

@@ -162,3 +162,46 @@ def test_tracking_metrics_checks_band_and_result_type():
         TypeError, match="result must be a fws_control.SimulationResult"
     ):
         fws.tracking_metrics(res.e)
+
+
+def _sweep(signals):
+    g = fws.SteeringGains(k1=[0.1, 0.2, -0.1], k2=[0.5, 0.5, 0.4], ratio=0.0)
+    return fws.simulate_batch(
+        VEH, Straight(), g, speed=5.0, initial_state=(0.0, 1.0, 0.0),
+        duration=10.0, dt=0.001, signals=signals,
+    )  # fmt: skip
+
+
+def test_metrics_table_has_one_row_per_run_with_each_runs_metrics():
+    pytest.importorskip("pandas", reason="to_pandas needs the extra pandas")
+    batch = _sweep(None)
+    df = fws.tracking_metrics(batch).to_pandas()
+    assert df["run"].tolist() == [0, 1, 2]
+    for i in range(3):
+        # reference: the metrics of the run alone
+        one = fws.tracking_metrics(batch[i])
+        for name in ("settling_time", "rms_error", "peak_error", "peak_delta_f"):
+            np.testing.assert_allclose(df[name][i], getattr(one, name), rtol=1e-12)
+        assert df["status"][i] == one.status == "ok"
+        # and from the samples: RMS of e by the trapezoid rule, written here
+        e, t = batch.e[i], batch.t
+        rms = math.sqrt(np.trapezoid(e**2, t) / (t[-1] - t[0]))
+        np.testing.assert_allclose(df["rms_error"][i], rms, rtol=1e-6)
+    # a single run's metrics: one row
+    assert len(fws.tracking_metrics(batch[1]).to_pandas()) == 1
+
+
+def test_a_metrics_only_sweep_tabulates_its_runs_and_exact_peaks():
+    pytest.importorskip("pandas", reason="to_pandas needs the extra pandas")
+    dense = _sweep(None)
+    df = _sweep("metrics").to_pandas()
+    assert df["run"].tolist() == [0, 1, 2]
+    np.testing.assert_array_equal(df["k1"], [0.1, 0.2, -0.1])
+    assert df["status"].tolist() == ["ok"] * 3
+    # reference: the largest sample of the 1 ms output of the same runs;
+    # the exact peak is at least that and within the samples' curvature
+    for name in ("e", "delta_f", "lateral_accel"):
+        sampled = np.nanmax(np.abs(getattr(dense, name)), axis=-1)
+        peak = df[f"peak_{name}"].to_numpy()
+        assert np.all(peak >= sampled - 1e-12)
+        np.testing.assert_allclose(peak, sampled, rtol=1e-5)

@@ -128,9 +128,11 @@ def test_a_dropped_signal_raises_naming_it_and_the_argument(full):
     with pytest.raises(ValueError, match="name must be one of"):
         res.signal("a_y")
     none = _batch(full, "metrics")
-    for call in (none.to_pandas, none.to_time_response, none.plot):
+    for call in (none.to_time_response, none.plot):
         with pytest.raises(fws.SignalNotKeptError, match="no time series"):
             call()
+    # (to_pandas of a metrics-only result is its table of runs:
+    # tests/test_metrics.py)
 
 
 def test_to_pandas_and_time_response_hold_the_kept_signals(full):

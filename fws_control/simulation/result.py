@@ -45,7 +45,7 @@ from ..exceptions import SignalNotKeptError
 from ..gains import SteeringGains
 from ..metrics import HORIZON_METRICS
 from ..paths import Path
-from ..reprs import brief, html_table
+from ..reprs import brief, html_table, import_pandas
 from ..vehicle import Vehicle
 from .engine import (
     MODELS,
@@ -169,17 +169,6 @@ class Peaks:
             for name in PEAK_SIGNALS
         ]
         return html_table(f"Peaks (exact={self.exact})", rows)
-
-
-def _import_pandas():
-    try:
-        import pandas as pd
-    except ImportError as exc:  # pragma: no cover - depends on the environment
-        raise ImportError(
-            "to_pandas() needs pandas; install it with `pip install pandas` "
-            "(or the extra `fws-control[pandas]`)"
-        ) from exc
-    return pd
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -860,12 +849,17 @@ class SimulationResult:
         -------
         pandas.DataFrame
 
+        A result that keeps no time series (``signals="metrics"``) gives
+        one row per run instead: ``run``, the per-run and batch columns
+        above, and the exact peaks ``peak_e, peak_delta_f, peak_delta_r,
+        peak_delta_f_rate, peak_delta_r_rate, peak_lateral_accel`` (see
+        :attr:`peaks`; :meth:`TrackingMetrics.to_pandas
+        <fws_control.TrackingMetrics.to_pandas>` adds the horizon metrics).
+
         Raises
         ------
         ImportError
             If pandas is not installed.
-        SignalNotKeptError
-            For a result that keeps no time series (``signals="metrics"``).
 
         Examples
         --------
@@ -884,9 +878,9 @@ class SimulationResult:
         4    1  0.5  0.806609  0.2     ok
         5    1  1.0  0.398119  0.2     ok
         """
-        pd = _import_pandas()
+        pd = import_pandas()
         if not self.signal_names:
-            raise _not_kept(SIGNALS[0], (), "to_pandas")
+            return self._runs_to_pandas(pd)
         names = self.signal_names
         n = len(self)
         # a run's samples up to its stop
@@ -919,6 +913,29 @@ class SimulationResult:
         # (as columns, not only in attrs: a CSV file keeps no attrs)
         data["feedforward"] = np.full(run.size, self.feedforward)
         data["method"] = np.full(run.size, self.method or "", dtype=object)
+        df = pd.DataFrame(data)
+        df.attrs["feedforward"] = self.feedforward
+        df.attrs["method"] = self.method
+        return df
+
+    def _runs_to_pandas(self, pd):
+        """One row per run: the run's data and its exact peaks."""
+        n = len(self)
+        data: dict[str, Any] = {
+            "run": np.arange(n),
+            "status": self.run_status,
+            "t_stop": self.run_t_stop,
+            "speed": self.run_speed,
+            "k1": self.run_k1,
+            "k2": self.run_k2,
+            "ratio": self.run_ratio,
+            "message": np.array(self.run_message, dtype=object),
+        }
+        peaks = self.peaks
+        for name in PEAK_SIGNALS:
+            data[f"peak_{name}"] = np.broadcast_to(peaks[name].value, (n,))
+        data["feedforward"] = np.full(n, self.feedforward)
+        data["method"] = np.full(n, self.method or "", dtype=object)
         df = pd.DataFrame(data)
         df.attrs["feedforward"] = self.feedforward
         df.attrs["method"] = self.method
