@@ -441,3 +441,49 @@ def test_expand_runs_keeps_the_model_and_tyre_of_the_simulated_runs():
     assert (full.model, full.tyre) == (sub.model, sub.tyre) == ("dynamic", "magic")
     np.testing.assert_array_equal(full.lateral_accel[1], sub.lateral_accel[0])
     assert full.status.tolist() == ["uncontrollable", "ok"]
+
+
+def test_plot_keeps_the_bulk_visible_when_a_stopped_run_diverges():
+    batch = _stopping_batch()
+    cplt = batch.plot()
+    try:
+        ax_a = cplt.axes.flat[5]  # lateral acceleration
+        lo, hi = ax_a.get_ylim()
+        a = batch.lateral_accel
+        ok = np.abs(a[3])
+        # the finished run is wholly visible ...
+        assert lo <= np.min(a[3]) and np.max(a[3]) <= hi
+        # ... and not squashed by run 1's divergent end (thousands of m/s^2)
+        assert np.nanmax(np.abs(a[1])) > 100 * ok.max()
+        assert hi - lo < 50 * ok.max()
+        # run 1's stop marker sits on the limit, pointing off the axes
+        marks = [m for m in ax_a.get_lines() if m.get_marker() in ("^", "v")]
+        assert len(marks) == 1
+        assert float(marks[0].get_ydata()[0]) in (lo, hi)
+    finally:
+        plt.close("all")
+
+
+def test_plot_of_a_straight_road_is_not_a_flat_line_and_overlays_one_path():
+    g = fws.SteeringGains(0.1, 0.5, 0.0)
+    res = fws.simulate(
+        VEH, Straight(), g, speed=5.0, initial_state=(0.0, 1.0, 0.0), duration=15.0
+    )
+    other = fws.simulate(
+        VEH, Straight(), g, speed=5.0, initial_state=(0.0, -1.0, 0.0), duration=15.0
+    )
+    cplt = res.plot(labels="e0 = 1 m")
+    try:
+        ax_xy = cplt.axes.flat[2]
+        lo, hi = ax_xy.get_ylim()
+        y_span = np.ptp(res.y)
+        x_span = np.ptp(res.x)
+        assert x_span > 50 * y_span  # 75 m along, 1 m across
+        # y drawn at its own scale, not stretched to the x span
+        assert hi - lo < 2 * y_span
+        assert "not to scale" in ax_xy.get_title()
+        other.plot(ax=cplt.axes, labels="e0 = -1 m")
+        texts = [t.get_text() for t in ax_xy.get_legend().get_texts()]
+        assert texts.count("path") == 1
+    finally:
+        plt.close("all")

@@ -1036,6 +1036,9 @@ class SimulationResult:
         row = self.signal_names.index
         index = {name: row(name) for name in ("x", "y")}
         legend_needed = False
+        # per panel: the stop markers, and the values that set its scale
+        stops: dict[Any, list] = {a: [] for a, *_ in panels}
+        bulk: dict[Any, list] = {a: [] for a, *_ in panels}
         for i in range(len(self)):
             status = self.run_status[i]
             text = names[i] or ""
@@ -1053,7 +1056,9 @@ class SimulationResult:
                 (line,) = a.plot(t, y, label=label, color=color)
                 color = line.get_color()
                 if status != STATUS_OK and count:
-                    a.plot(t[-1], y[-1], "x", color=color)
+                    (stop,) = a.plot(t[-1], y[-1], "x", color=color)
+                    stops[a].append(stop)
+                bulk[a].append(_bulk(y, stopped=status != STATUS_OK))
             xs = self.signals[i, index["x"], :count]
             ys = self.signals[i, index["y"], :count]
             ax_xy.plot(xs, ys, color=color, label=label)
@@ -1067,16 +1072,18 @@ class SimulationResult:
             if not self.path.closed:
                 ss = np.clip(ss, 0.0, self.path.length)
             px, py = self.path.position(ss)
-            ax_xy.plot(px, py, "k--", lw=1.0, label="path")
+            # one "path" entry when results are overlaid on these axes
+            drawn = any(line.get_label() == "path" for line in ax_xy.get_lines())
+            ax_xy.plot(px, py, "k--", lw=1.0, label="_path" if drawn else "path")
             ax_xy.legend(fontsize="small")
         for a, _, _, ylabel in panels:
             a.set_xlabel("time t [s]")
             a.set_ylabel(ylabel)
             a.grid(True, alpha=0.3)
+            _clip_spikes(a, bulk[a], stops[a])
         ax_xy.set_xlabel("x [m]")
         ax_xy.set_ylabel("y [m]")
-        ax_xy.set_title("trajectory of R")
-        ax_xy.set_aspect("equal", adjustable="datalim")
+        _trajectory_aspect(ax_xy)
         ax_xy.grid(True, alpha=0.3)
         legend = ax_e.legend(fontsize="small") if legend_needed else None
         lines = np.empty(axes.shape, dtype=object)
@@ -1089,6 +1096,66 @@ class SimulationResult:
         import control as ct
 
         return ct.ControlPlot(lines, axes, fig, legend=legend)
+
+
+#: A stopped run's last samples left out of a panel's scale: the steering
+#: and the lateral acceleration diverge at a singular stop.
+_STOP_TAIL = 0.1
+
+#: A panel whose values reach beyond this multiple of the scale set by the
+#: runs' bulk is clipped to that scale (the divergent end is marked).
+_SPIKE = 3.0
+
+#: Below this ratio of the y span to the x span the trajectory is drawn
+#: with its own y scale instead of equal axes (a straight road would be a
+#: flat line).
+_FLAT = 0.05
+
+
+def _bulk(y: np.ndarray, *, stopped: bool) -> tuple[float, float]:
+    """Range of a run's values without a stopped run's divergent end."""
+    if stopped:
+        y = y[: max(1, int(len(y) * (1.0 - _STOP_TAIL)))]
+    y = y[np.isfinite(y)]
+    return (float(y.min()), float(y.max())) if y.size else (np.nan, np.nan)
+
+
+def _clip_spikes(ax, bulk: list, stops: list) -> None:
+    """Scale a panel to its runs' bulk when a stopped run's end would squash it.
+
+    The stop markers outside the new limits move onto the limit and turn
+    into triangles pointing off the axes.
+    """
+    ranges = np.array(bulk, dtype=float).reshape(-1, 2)
+    if not stops or not np.isfinite(ranges).any():
+        return
+    lo, hi = np.nanmin(ranges[:, 0]), np.nanmax(ranges[:, 1])
+    ylo, yhi = ax.get_ylim()
+    span = max(hi - lo, 1e-12)
+    if (yhi - ylo) <= _SPIKE * span:
+        return
+    lo, hi = lo - 0.1 * span, hi + 0.1 * span
+    ax.set_ylim(max(ylo, lo), min(yhi, hi))
+    for stop in stops:
+        y = float(stop.get_ydata()[0])
+        if y > hi or y < lo:
+            stop.set_ydata([min(max(y, lo), hi)])
+            stop.set_marker("^" if y > hi else "v")
+    ax.text(
+        0.99, 0.98, "stopped runs' divergent ends off scale (triangles)",
+        transform=ax.transAxes, ha="right", va="top", fontsize="x-small",
+    )  # fmt: skip
+
+
+def _trajectory_aspect(ax) -> None:
+    """Equal axes, unless the trajectory is too flat to read with them."""
+    (x0, y0), (x1, y1) = ax.dataLim.get_points()
+    if (y1 - y0) >= _FLAT * (x1 - x0):
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_title("trajectory of R")
+    else:
+        ax.set_aspect("auto")
+        ax.set_title("trajectory of R (y not to scale)")
 
 
 def expand_runs(
