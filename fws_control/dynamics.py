@@ -606,8 +606,9 @@ def _axle_reach(vehicle: Vehicle, speed: float, tyre: str, front: bool) -> float
         beta = float(np.arctan(f * kappa)) if front else 0.0
         hi = min(rising, np.pi / 2 - beta)
         best = minimize_scalar(
-            lambda a: -float(tyre_force(a, stiffness=stiff, peak=peak))
-            * np.cos(beta + a),
+            lambda a: (
+                -float(tyre_force(a, stiffness=stiff, peak=peak)) * np.cos(beta + a)
+            ),
             bounds=(0.0, hi),
             method="bounded",
             options={"xatol": 1e-12},
