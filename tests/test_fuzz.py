@@ -15,6 +15,29 @@ Anything else -- another exception (``AttributeError``, ``OverflowError``,
 ``LinAlgError``, ``ZeroDivisionError``, ...), a message that does not name the
 argument, a NaN result, a call that runs past :data:`TIME_LIMIT` -- fails.
 
+Targeted categories
+-------------------
+Some bad input looks valid: a value that is right for its type and wrong
+only for that argument, or only in combination with the others. The
+categories of :data:`TARGETED` try such values once each (no sampling),
+with the other arguments set where the category needs it and a
+postcondition computed in the test where a result could be silent garbage:
+
+* extreme but finite speeds and curvatures of the steady-state functions
+  (a steady state must obey the force balance of the tyres);
+* an array of designs where one design is expected (must be refused);
+* huge finite angles in initial states (a heading whose neighbouring
+  doubles are more than 1e-6 rad apart names no direction);
+* a curve beyond the tyre's reach for the dynamic plant (the refusal must
+  name the curvature);
+* a closed course driven several times (the course's length, and
+  ``compare``'s completion judged from the swept angle of the positions);
+* non-finite entries in the A, B, C of a user StateSpace plant.
+
+Every command-line option given in degrees is tried with +-1e300
+(:func:`cli_angle_options`): the parser must refuse it with one error line
+naming the option.
+
 Runs
 ----
 CI: derandomized (fixed seed), :data:`EXAMPLES` examples per callable
@@ -23,18 +46,17 @@ CI: derandomized (fixed seed), :data:`EXAMPLES` examples per callable
     FWS_FUZZ_EXAMPLES=2000 python -m pytest -q tests/test_fuzz.py
 
 and the exhaustive count of every (callable, argument, bad value) triple,
-printed as "N calls tried, M handled well" per callable::
+printed as "N calls tried, M handled well" per callable, then per targeted
+category::
 
     python benchmarks/fuzz_counts.py
 
 Known failures
 --------------
-Callables whose fixes belong to other parts of the code (issue 13 items
-1-3 and 9: the simulation engine's tolerances, step and duration; items of
-modules outside ``validation/design/paths/metrics/comparison/models/
-acceleration/gains/vehicle/controllers``) are listed in :data:`KNOWN` with
-the reason. They are marked ``xfail`` (not strict, so a fix shows as
-XPASS) and listed in the test report; ``FWS_FUZZ_STRICT=1`` makes them
+Failures whose fixes belong to other parts of the code are listed in
+:data:`KNOWN` by (callable, argument) with the reason. Their tests are
+marked ``xfail`` when one of them is found (not strict, so a fix shows as
+a pass) and listed in the test report; ``FWS_FUZZ_STRICT=1`` makes them
 ordinary failures.
 
 Deliberately excluded (with the reason)
