@@ -17,10 +17,9 @@ cones hit (:meth:`Manoeuvre.cones_hit`) and completion: the run did not
 stop and passed the last gate, or, on a course without gates, covered its
 :attr:`Manoeuvre.distance` along the path (every lap of a closed one).
 There is no jerk column: on a course of straight lines and clothoids the
-curvature rate jumps at every joint, the
-feedforward steering rate with it, and the kinematic model's lateral
-acceleration (eq. 13, which contains the steering rate) jumps there too, so
-its time derivative is unbounded.
+curvature rate jumps at every joint, the feedforward steering rate with it,
+and the kinematic model's lateral acceleration (eq. 13, which contains the
+steering rate) jumps there too, so its time derivative is unbounded.
 
 :func:`default_controllers` gives a fair starting set at a speed: the
 paper's double-root law (front steering and a rear ratio), rear-wheel

@@ -276,15 +276,16 @@ def steady_state_offset(
     bad = ~((1.0 - kappa * e > 0.0) & (np.abs(theta) < 0.5 * math.pi))
     if np.any(bad):
         i = np.unravel_index(int(np.argmax(bad)), np.shape(bad)) if np.ndim(bad) else ()
-        ei, thi = float(np.asarray(e)[i]), float(np.asarray(theta)[i])
-        vi = float(np.broadcast_to(v, np.shape(bad))[i])
-        ki = float(np.broadcast_to(kappa, np.shape(bad))[i])
+        # the first such point, each argument at that point (bounded message)
+        vi, ki, g1, g2, ga, ei, thi = (
+            float(np.broadcast_to(x, np.shape(bad))[i])
+            for x in (v, kappa, k1, k2, a, e, theta)
+        )
         raise ValueError(
             f"no steady state near the path at speed={vi!r} m/s, curvature={ki!r} "
-            f"1/m with k1={gains.k1!r}, k2={gains.k2!r}, ratio={gains.ratio!r}: "
-            f"the small-angle solution e={ei:.4g} m, theta={thi:.4g} rad lies "
-            "outside the range of the path-frame model (1 - curvature*e > 0, "
-            "|theta| < pi/2)"
+            f"1/m with k1={g1!r}, k2={g2!r}, ratio={ga!r}: the small-angle "
+            f"solution e={ei:.4g} m, theta={thi:.4g} rad lies outside the range "
+            "of the path-frame model (1 - curvature*e > 0, |theta| < pi/2)"
         )
     if np.ndim(e) == 0:
         return float(e), float(theta)
