@@ -562,9 +562,11 @@ def _check_point(speed, curvature):
 def _solve_axle(base, lateral, stiffness, peak, name):
     # delta = base + F^-1(lateral / cos(delta)): a contraction (its slope is
     # about alpha*tan(delta), far below 1 for road angles), so plain fixed-point
-    # iteration converges to machine precision in a few steps.
+    # iteration converges to machine precision in a few steps. The slope
+    # reaches 1 at the largest curvature the axle holds (the fold that
+    # _axle_reach finds); the step budget reaches to 1e-4 of it.
     delta = base + slip_for_force(lateral, stiffness=stiffness, peak=peak)
-    for _ in range(100):
+    for _ in range(3000):
         cos_d = np.cos(delta)
         if np.any(cos_d <= 0.0):
             break
@@ -712,7 +714,8 @@ def dynamic_feedforward(
     ValueError
         For missing vehicle data, a non-positive `speed`, a non-finite
         `curvature`, or a curve the tyres cannot hold (magic tyre beyond its
-        peak force, or no angle below pi/2).
+        peak force, or no angle below pi/2); the message names the force
+        the limiting axle needs and the largest curvature at that speed.
 
     Examples
     --------

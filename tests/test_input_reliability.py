@@ -145,7 +145,7 @@ def test_dynamic_plant_beyond_the_tyre_names_the_largest_curvature():
     ref = _front_reach(BMW, V)
     assert largest == pytest.approx(ref, rel=1e-5)
     # below it the operating point exists; above it the same message
-    fws.LateralPlant(BMW, speed=V, curvature=0.99 * ref, model="dynamic", tyre="magic")
+    fws.LateralPlant(BMW, speed=V, curvature=0.999 * ref, model="dynamic", tyre="magic")
     with pytest.raises(ValueError, match="largest curvature at this speed"):
         fws.LateralPlant(
             BMW, speed=V, curvature=1.01 * ref, model="dynamic", tyre="magic"
