@@ -106,7 +106,7 @@ def main(argv: list[str]) -> int:
         cat_tried += tried
         cat_well += well
         print(f"[{category}]: {tried} calls tried, {well} handled well")
-        if verbose:
+        if verbose and bad_lines:
             print("\n".join(bad_lines))
     pct = 100.0 * cat_well / max(cat_tried, 1)
     print(
