@@ -5,7 +5,11 @@ Runs the cases of ``tests/test_fuzz.py`` -- each public callable of
 (NaN, +-inf, 0, negative, huge, tiny, bool, complex, None, strings, foreign
 objects, wrong shapes) -- and prints, per callable, "N calls tried, M handled
 well" (handled well: a result that passes the callable's postconditions, or
-a ValueError/TypeError naming the argument), then the total.
+a ValueError/TypeError naming the argument), then the total; then the
+targeted categories of valid-looking bad input (``TARGETED`` there, each
+probe once) and +-1e300 in every command-line option given in degrees,
+per category and in total. Known failures (``KNOWN`` there) are counted
+as not handled well and listed with ``-v``.
 
     python benchmarks/fuzz_counts.py            # summary and totals
     python benchmarks/fuzz_counts.py -v         # also every call not handled well
@@ -27,7 +31,15 @@ import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")
 
-from test_fuzz import BAD_VALUES, CASES, EXCLUDED, judge  # noqa: E402
+from test_fuzz import (  # noqa: E402
+    BAD_VALUES,
+    CASES,
+    EXCLUDED,
+    TARGETED,
+    cli_angle_options,
+    judge,
+    judge_cli,
+)
 from timing import machine_line  # noqa: E402
 
 
@@ -60,6 +72,46 @@ def main(argv: list[str]) -> int:
         f"total: {total_tried} calls tried to {len(names)} callables, "
         f"{total_well} handled well ({pct:.1f} %); "
         f"{len(EXCLUDED)} public names excluded (see tests/test_fuzz.py); "
+        f"{time.perf_counter() - t0:.1f} s"
+    )
+    if [a for a in argv if not a.startswith("-")]:
+        return 0  # named callables only
+    t0 = time.perf_counter()
+    cat_tried = cat_well = 0
+    groups = {
+        name: [(p.case, p.arg, p.label, p) for p in probes]
+        for name, probes in TARGETED.items()
+    }
+    groups["huge finite angles in CLI options"] = [
+        (command, option, text, None)
+        for command, option in cli_angle_options()
+        for text in ("1e300", "-1e300")
+    ]
+    for category, probes in groups.items():
+        tried = well = 0
+        bad_lines = []
+        for who, arg, label, p in probes:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                if p is None:
+                    good, why = judge_cli(who, arg, label)
+                else:
+                    good, why = judge(
+                        CASES[who], arg, p.value, base=p.base, post=p.post
+                    )
+            tried += 1
+            well += good
+            if not good:
+                bad_lines.append(f"    {who}({arg}={label}): {why[:200]}")
+        cat_tried += tried
+        cat_well += well
+        print(f"[{category}]: {tried} calls tried, {well} handled well")
+        if verbose and bad_lines:
+            print("\n".join(bad_lines))
+    pct = 100.0 * cat_well / max(cat_tried, 1)
+    print(
+        f"targeted total: {cat_tried} calls tried in {len(groups)} categories, "
+        f"{cat_well} handled well ({pct:.1f} %); "
         f"{time.perf_counter() - t0:.1f} s"
     )
     return 0

@@ -192,6 +192,20 @@ def _finite(text: str) -> float:
     return v
 
 
+def _angle_deg(text: str) -> float:
+    """A finite angle in degrees whose magnitude names a direction."""
+    from .validation import MAX_ANGLE
+
+    v = _finite(text)
+    limit = math.degrees(MAX_ANGLE)
+    if abs(v) > limit:
+        raise argparse.ArgumentTypeError(
+            f"must have magnitude <= {limit:.4g} deg (angles are used modulo "
+            f"360 deg, and a larger number names no direction), got {v:g}"
+        )
+    return v
+
+
 def _positive_int(
     text: str, *, low: int = 2, high: int | None = None, unit: str = "", hint=""
 ) -> int:
@@ -437,7 +451,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--x0", type=_finite, default=0.0, help="x_R(0) [m] (0)")
     p.add_argument("--y0", type=_finite, default=-5.0, help="y_R(0) [m] (-5)")
-    p.add_argument("--psi0", type=_finite, default=0.0, help="psi(0) [deg] (0)")
+    p.add_argument("--psi0", type=_angle_deg, default=0.0, help="psi(0) [deg] (0)")
     p.add_argument(
         "--duration",
         type=_budget_float("simulate", "--duration"),

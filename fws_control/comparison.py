@@ -31,7 +31,13 @@ from .paths import Arc, Straight
 from .plant import LateralPlant, as_plant
 from .reprs import summary_repr
 from .simulation import SimulationResult, simulate
-from .validation import check_bool, check_finite, check_positive, check_scalar
+from .validation import (
+    MAX_ANGLE,
+    check_bool,
+    check_finite,
+    check_positive,
+    check_scalar,
+)
 
 __all__ = ["LinearNonlinearComparison", "compare_linear_nonlinear"]
 
@@ -337,6 +343,11 @@ def compare_linear_nonlinear(
                 f"initial_errors must be a pair (e0, theta0), got {initial_errors!r}"
             )
         e0, th0 = (float(v) for v in errs)
+        if abs(th0) > MAX_ANGLE:
+            raise ValueError(
+                f"initial_errors theta0 must have magnitude <= {MAX_ANGLE:g} rad "
+                f"(it is used modulo 2 pi), got {initial_errors!r}"
+            )
         px, py = path.position(0.0)
         h = float(path.heading(0.0))
         initial_state = (

@@ -6,18 +6,20 @@ input delay and steering lag, and returns a :class:`ControllerComparison`: a
 table of metrics per controller and a figure.
 
 Every run starts at the entry of the first gate (on the centre line, or
-with a lateral offset) and ends when R has passed the last gate. Metrics
+with a lateral offset) and ends when R has passed the last gate (on a
+course without gates, once it has covered the course's distance). Metrics
 (per controller, over the run, of absolute values): peak lateral
 acceleration of G [m/s²], max lateral error ``e`` [m], max ``delta_f`` and
 ``delta_r`` [deg] and their rates [deg/s] — all exact maxima of the
 continuous solution (``result.peaks``), independent of
 the output grid — the RMS of ``e`` [m] (trapezoidal on the output grid),
-cones hit (:meth:`Manoeuvre.cones_hit`) and completion (the run passed the
-last gate without stopping). There is no jerk column: on a course of
-straight lines and clothoids the curvature rate jumps at every joint, the
-feedforward steering rate with it, and the kinematic model's lateral
-acceleration (eq. 13, which contains the steering rate) jumps there too, so
-its time derivative is unbounded.
+cones hit (:meth:`Manoeuvre.cones_hit`) and completion: the run did not
+stop and passed the last gate, or, on a course without gates, covered its
+:attr:`Manoeuvre.distance` along the path (every lap of a closed one).
+There is no jerk column: on a course of straight lines and clothoids the
+curvature rate jumps at every joint, the feedforward steering rate with it,
+and the kinematic model's lateral acceleration (eq. 13, which contains the
+steering rate) jumps there too, so its time derivative is unbounded.
 
 :func:`default_controllers` gives a fair starting set at a speed: the
 paper's double-root law (front steering and a rear ratio), rear-wheel
@@ -48,7 +50,7 @@ from .design import double_root_gains
 from .gains import SteeringGains
 from .manoeuvres import Manoeuvre
 from .plant import LateralPlant
-from .simulation import SimulationResult, simulate
+from .simulation import STATUS_END_OF_PATH, SimulationResult, simulate
 from .validation import check_scalar, check_type
 from .vehicle import Vehicle
 
@@ -271,7 +273,18 @@ def _metrics(result: SimulationResult, manoeuvre: Manoeuvre, wheelbase: float):
         if np.count_nonzero(ok) > 1
         else math.nan
     )
-    finished = bool(result.ok) and bool(np.nanmax(result.x) >= manoeuvre.end_x)
+    if manoeuvre.gates:
+        finished = bool(result.ok) and bool(np.nanmax(result.x) >= manoeuvre.end_x)
+    else:
+        # a closed course returns to its start: x cannot tell a lap driven,
+        # the arc length covered along the path can (s is not wrapped); an
+        # open one ends where the run stops at the far end of its path
+        s = np.asarray(result.s, dtype=float)
+        s = s[np.isfinite(s)]
+        if str(result.status) == STATUS_END_OF_PATH:
+            finished = s.size > 0 and bool(s[-1] > 0.5 * float(manoeuvre.path.length))
+        else:
+            finished = bool(result.ok) and bool(s[-1] - s[0] >= manoeuvre.distance)
     return (
         float(pk.lateral_accel.value),
         rms,
@@ -376,7 +389,7 @@ def compare(
     # passed the last gate: the run covers the course and nothing else.
     x0 = manoeuvre.start_x if manoeuvre.gates else 0.0
     initial_state = (x0, offset, 0.0)
-    span = (manoeuvre.end_x - x0) if manoeuvre.gates else float(path.length)
+    span = (manoeuvre.end_x - x0) if manoeuvre.gates else manoeuvre.distance
     duration = 1.1 * span / V + 0.5  # the path is longer than its x-span
     dt = check_scalar("dt", dt)
     if not 0.0 < dt <= duration / 10.0:
@@ -393,6 +406,15 @@ def compare(
                 f"controller, got {type(c).__name__}"
             )
         if isinstance(c, SteeringGains):
+            shapes = {n: np.shape(getattr(c, n)) for n in ("k1", "k2", "ratio")}
+            if any(shapes.values()):
+                # a row of the table is one run: a sweep has no single row
+                given = ", ".join(f"{n} of shape {s}" for n, s in shapes.items() if s)
+                raise ValueError(
+                    f"controllers[{label!r}] holds an array of designs ({given}): "
+                    "compare needs one design (scalar k1, k2, ratio) per label; "
+                    "use simulate_batch for sweeps"
+                )
             c = StateFeedback.from_gains(c)
         res = simulate(
             vehicle,

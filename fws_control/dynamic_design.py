@@ -30,7 +30,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .design import double_root_gains
-from .dynamics import TYRES, require_dynamics
+from .dynamics import TYRES, dynamic_feedforward, require_dynamics
 from .gains import SteeringGains
 from .plant import LateralPlant, resolve_ratio
 from .reprs import summary_repr
@@ -221,9 +221,13 @@ def steady_state_offset(
     ------
     ValueError
         For missing vehicle data, a non-positive speed, a non-finite
-        curvature or a loop with no steady state (:math:`\Delta = 0`, a
-        closed-loop pole at 0: e.g. ``k1 = 0``, or ``ratio = 1`` with
-        :math:`K_{us} \ne 0`).
+        curvature, a curve the tyres cannot hold at that speed (as
+        ``LateralPlant(..., model="dynamic")``), a loop with no steady state
+        (:math:`\Delta = 0`, a closed-loop pole at 0: e.g. ``k1 = 0``, or
+        ``ratio = 1`` with :math:`K_{us} \ne 0`), or a solution outside the
+        range of the path-frame errors (:math:`1 - \kappa e \le 0` or
+        :math:`|\theta| \ge \pi/2`), where the small-angle model holds no
+        steady state.
 
     Examples
     --------
@@ -242,6 +246,9 @@ def steady_state_offset(
     kappa = np.asarray(
         check_magnitude("curvature", curvature, MAX_CURVATURE, "1/m"), dtype=float
     )
+    # the operating point must exist (the tyres can hold the curve), as for
+    # LateralPlant(model="dynamic"): the same check, the same message
+    dynamic_feedforward(vehicle, speed=v, curvature=kappa)
     m, f = vehicle.mass, vehicle.wheelbase
     l_f, l_r = vehicle.front_to_cg, vehicle.rear_to_cg
     k1, k2, a = (np.asarray(x, dtype=float) for x in (gains.k1, gains.k2, gains.ratio))
@@ -263,6 +270,23 @@ def steady_state_offset(
         )
     e = kappa * (p_f * m22 - m12 * p_r) / det
     theta = kappa * (m11 * p_r - m21 * p_f) / det
+    # The closed form is a first-order answer: outside the range where the
+    # path-frame errors mean anything (R on the path's side of the centre,
+    # |theta| < pi/2) it is a number with no steady state behind it.
+    bad = ~((1.0 - kappa * e > 0.0) & (np.abs(theta) < 0.5 * math.pi))
+    if np.any(bad):
+        i = np.unravel_index(int(np.argmax(bad)), np.shape(bad)) if np.ndim(bad) else ()
+        # the first such point, each argument at that point (bounded message)
+        vi, ki, g1, g2, ga, ei, thi = (
+            float(np.broadcast_to(x, np.shape(bad))[i])
+            for x in (v, kappa, k1, k2, a, e, theta)
+        )
+        raise ValueError(
+            f"no steady state near the path at speed={vi!r} m/s, curvature={ki!r} "
+            f"1/m with k1={g1!r}, k2={g2!r}, ratio={ga!r}: the small-angle "
+            f"solution e={ei:.4g} m, theta={thi:.4g} rad lies outside the range "
+            "of the path-frame model (1 - curvature*e > 0, |theta| < pi/2)"
+        )
     if np.ndim(e) == 0:
         return float(e), float(theta)
     return e, theta

@@ -562,9 +562,11 @@ def _check_point(speed, curvature):
 def _solve_axle(base, lateral, stiffness, peak, name):
     # delta = base + F^-1(lateral / cos(delta)): a contraction (its slope is
     # about alpha*tan(delta), far below 1 for road angles), so plain fixed-point
-    # iteration converges to machine precision in a few steps.
+    # iteration converges to machine precision in a few steps. The slope
+    # reaches 1 at the largest curvature the axle holds (the fold that
+    # _axle_reach finds); the step budget reaches to 1e-4 of it.
     delta = base + slip_for_force(lateral, stiffness=stiffness, peak=peak)
-    for _ in range(100):
+    for _ in range(3000):
         cos_d = np.cos(delta)
         if np.any(cos_d <= 0.0):
             break
@@ -577,6 +579,90 @@ def _solve_axle(base, lateral, stiffness, peak, name):
         f"no steady {name} steering angle below pi/2 holds this speed and curvature "
         f"(lateral force {float(np.max(np.abs(lateral)))!r} N needed): the vehicle "
         "cannot follow the curve"
+    )
+
+
+def _axle_reach(vehicle: Vehicle, speed: float, tyre: str, front: bool) -> float:
+    """Largest curvature [1/m] one axle holds in the steady turn at `speed`.
+
+    The steady equation of the axle, ``F(alpha) cos(beta + alpha) = q kappa``
+    (``beta = arctan(f kappa)`` at the front, 0 at the rear; ``q = m u^2
+    l/f``), has a solution on the rising branch of the tyre (and with the
+    steering angle below pi/2) while the largest left side reaches the right
+    side; the curvature where they meet is the reach.
+    """
+    from scipy.optimize import brentq, minimize_scalar
+
+    f = vehicle.wheelbase
+    lever = vehicle.rear_to_cg if front else vehicle.front_to_cg
+    stiff = vehicle.cornering_front if front else vehicle.cornering_rear
+    peak = _axle_peaks(vehicle, tyre)[0 if front else 1]
+    q = vehicle.mass * speed**2 * lever / f
+    if peak is None:
+        top, rising = stiff * np.pi / 2, np.pi / 2
+    else:
+        b = stiff / (MAGIC_SHAPE * peak)
+        top, rising = peak, float(np.tan(np.pi / (2 * MAGIC_SHAPE)) / b)
+
+    def margin(kappa):
+        beta = float(np.arctan(f * kappa)) if front else 0.0
+        hi = min(rising, np.pi / 2 - beta)
+        best = minimize_scalar(
+            lambda a: (
+                -float(tyre_force(a, stiffness=stiff, peak=peak)) * np.cos(beta + a)
+            ),
+            bounds=(0.0, hi),
+            method="bounded",
+            options={"xatol": 1e-12},
+        )
+        return -float(best.fun) - q * kappa
+
+    return float(brentq(margin, 0.0, top / q, xtol=1e-15, rtol=1e-12))
+
+
+def _reach_error(vehicle: Vehicle, u, kappa, tyre: str) -> ValueError:
+    """The error for a curve the tyres cannot hold, naming its largest curvature."""
+    u, kappa = np.broadcast_arrays(u, kappa)
+    peaks = _axle_peaks(vehicle, tyre)
+    f = vehicle.wheelbase
+    # the first point that fails: beyond a peak force already, else the
+    # first that has no steady angles of its own
+    i = None
+    for j in np.ndindex(u.shape):
+        try:
+            _steady_angles(vehicle, u[j], kappa[j], tyre)
+        except ValueError:
+            i = j
+            break
+    i = next(iter(np.ndindex(u.shape))) if i is None else i
+    ui, ki = float(u[i]), float(kappa[i])
+    reach = {
+        axle: _axle_reach(vehicle, ui, tyre, axle == "front")
+        for axle in ("front", "rear")
+    }
+    axle = min(reach, key=reach.get)
+    lever = vehicle.rear_to_cg if axle == "front" else vehicle.front_to_cg
+    need = vehicle.mass * ui**2 * abs(ki) * lever / f
+    peak = peaks[0 if axle == "front" else 1]
+    gives = (
+        f"its tyres give at most friction x axle load = {peak:.6g} N"
+        if peak is not None
+        else "more than its linear tyres give below a steering angle of pi/2"
+    )
+    largest = (
+        f"the largest curvature at this speed is {reach[axle]:.6g} 1/m (radius "
+        f"{1.0 / reach[axle]:.6g} m)"
+    )
+    if abs(ki) < reach[axle]:
+        # within round-off of the limit the fixed point does not settle
+        return ValueError(
+            f"curvature={ki!r} 1/m at speed={ui!r} m/s is too close to the limit "
+            f"of the {tyre} tyres for a steady solution: {largest}"
+        )
+    return ValueError(
+        f"curvature={ki!r} 1/m at speed={ui!r} m/s needs a lateral force the "
+        f"tyres cannot give ({tyre} tyre): the {axle} axle must carry at least "
+        f"{need:.6g} N, {gives}; {largest}"
     )
 
 
@@ -628,7 +714,8 @@ def dynamic_feedforward(
     ValueError
         For missing vehicle data, a non-positive `speed`, a non-finite
         `curvature`, or a curve the tyres cannot hold (magic tyre beyond its
-        peak force, or no angle below pi/2).
+        peak force, or no angle below pi/2); the message names the force
+        the limiting axle needs and the largest curvature at that speed.
 
     Examples
     --------
@@ -645,6 +732,17 @@ def dynamic_feedforward(
     """
     require_dynamics(vehicle, tyre=tyre)
     u, kappa = _check_point(speed, curvature)
+    try:
+        delta_f, delta_r = _steady_angles(vehicle, u, kappa, tyre)
+    except ValueError:
+        raise _reach_error(vehicle, u, kappa, tyre) from None
+    if np.ndim(delta_f) == 0:
+        return float(delta_f), float(delta_r)
+    return delta_f, delta_r
+
+
+def _steady_angles(vehicle: Vehicle, u, kappa, tyre: str):
+    """The fixed points of :func:`dynamic_feedforward` (checked arguments)."""
     f = vehicle.wheelbase
     l_f, l_r = vehicle.front_to_cg, vehicle.rear_to_cg
     need = vehicle.mass * u**2 * kappa / f
@@ -655,8 +753,6 @@ def dynamic_feedforward(
     delta_r = _solve_axle(
         np.zeros_like(need), need * l_f, vehicle.cornering_rear, peak_r, "rear"
     )
-    if np.ndim(delta_f) == 0:
-        return float(delta_f), float(delta_r)
     return delta_f, delta_r
 
 

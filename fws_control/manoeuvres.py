@@ -220,6 +220,9 @@ class Manoeuvre:
         Width ``b`` [m] the gates were sized for.
     start_x : float
         x of the first gate's entry [m] (the path starts `start_x` before it).
+    laps : float
+        Number of times a course without gates drives its closed path
+        (finite and > 0; default 1); an open path is driven once (1).
 
     Examples
     --------
@@ -237,6 +240,7 @@ class Manoeuvre:
     gates: tuple[Gate, ...]
     vehicle_width: float
     start_x: float = 0.0
+    laps: float = 1.0
 
     def __post_init__(self) -> None:
         _check_name(self.name)
@@ -257,6 +261,24 @@ class Manoeuvre:
             )
         object.__setattr__(self, "vehicle_width", width)
         object.__setattr__(self, "start_x", check_scalar("start_x", self.start_x))
+        laps = check_scalar("laps", self.laps)
+        if laps <= 0.0:
+            raise ValueError(f"laps must be finite and > 0, got {self.laps!r}")
+        if laps != 1.0 and (self.gates or not self.path.closed):
+            # an open path ends; gates are passed once, by x
+            raise ValueError(
+                f"laps must be 1 for an open path or a course with gates, got "
+                f"{self.laps!r}"
+            )
+        object.__setattr__(self, "laps", laps)
+
+    @property
+    def distance(self) -> float:
+        """Arc length along the path [m] that a course without gates covers.
+
+        ``laps`` times the length of the path.
+        """
+        return self.laps * float(self.path.length)
 
     @property
     def end_x(self) -> float:
@@ -548,8 +570,9 @@ def constant_radius(*, radius: float = 40.0, turns: float = 1.0) -> Manoeuvre:
     radius : float, optional
         Radius [m] (left turn).
     turns : float, optional
-        Number of laps of the path (> 0); one or more laps make a closed
-        path.
+        Number of laps to drive (> 0). Below 1 the path is an open arc of
+        that fraction of the circle; from 1 on it is the closed circle,
+        driven `turns` times (:attr:`Manoeuvre.laps`).
 
     Returns
     -------
@@ -561,10 +584,21 @@ def constant_radius(*, radius: float = 40.0, turns: float = 1.0) -> Manoeuvre:
     >>> m = fws.constant_radius(radius=40.0)
     >>> round(float(m.path.curvature(10.0)), 6), m.gates
     (0.025, ())
+    >>> m3 = fws.constant_radius(radius=40.0, turns=3)
+    >>> m3.laps, round(m3.distance / m3.path.length, 12)
+    (3.0, 3.0)
     """
     r = _positive("radius", radius)
-    t = _positive("turns", turns)
-    path = (
-        Arc(curvature=1.0 / r) if t >= 1.0 else Arc(1.0 / r, length=2 * math.pi * r * t)
-    )
-    return Manoeuvre(f"constant radius {r:g} m", path, (), 0.0, 0.0)
+    t = check_scalar("turns", turns)
+    if t <= 0.0:
+        raise ValueError(f"turns must be finite and > 0, got {turns!r}")
+    if t < 1.0:
+        return Manoeuvre(
+            f"constant radius {r:g} m",
+            Arc(1.0 / r, length=2 * math.pi * r * t),
+            (),
+            0.0,
+            0.0,
+        )
+    name = f"constant radius {r:g} m" + (f", {t:g} laps" if t != 1.0 else "")
+    return Manoeuvre(name, Arc(curvature=1.0 / r), (), 0.0, 0.0, laps=t)

@@ -29,6 +29,7 @@ __all__ = [
     "MAX_SPEED",
     "MAX_CURVATURE",
     "MAX_RATIO",
+    "MAX_ANGLE",
 ]
 
 MODELS = ("exact", "paper", "dynamic")
@@ -46,6 +47,12 @@ MAX_CURVATURE = 1.0e6
 #: coefficients are formed from it (stability lines, charts): ``abs(a)`` of a real
 #: four-wheel steering is below 10; 1e300 overflowed the coefficients.
 MAX_RATIO = 1.0e6
+
+#: Largest magnitude of an angle given as a heading or an initial angle
+#: [rad]. Angles are used through sine and cosine, i.e. modulo 2 pi: at
+#: 1e6 rad neighbouring doubles are 1.2e-10 rad apart, at 1e300 rad 1e284
+#: rad apart, so such a number names no direction at all.
+MAX_ANGLE = 1.0e6
 
 
 def _short(value: Any) -> str:

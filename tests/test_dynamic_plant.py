@@ -172,7 +172,7 @@ def test_operating_point_and_errors():
     with pytest.raises(ValueError, match="model must be one of"):
         fws.LateralPlant(VEH, speed=5.0, model="Dynamic")
     # 40 m/s on a 50 m radius needs 3.2 g: beyond the magic tyre's peak
-    with pytest.raises(ValueError, match="saturates"):
+    with pytest.raises(ValueError, match="needs a lateral force the tyres cannot give"):
         fws.LateralPlant(VEH, speed=40.0, curvature=0.02, model="dynamic", tyre="magic")
 
 

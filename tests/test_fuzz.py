@@ -15,6 +15,29 @@ Anything else -- another exception (``AttributeError``, ``OverflowError``,
 ``LinAlgError``, ``ZeroDivisionError``, ...), a message that does not name the
 argument, a NaN result, a call that runs past :data:`TIME_LIMIT` -- fails.
 
+Targeted categories
+-------------------
+Some bad input looks valid: a value that is right for its type and wrong
+only for that argument, or only in combination with the others. The
+categories of :data:`TARGETED` try such values once each (no sampling),
+with the other arguments set where the category needs it and a
+postcondition computed in the test where a result could be silent garbage:
+
+* extreme but finite speeds and curvatures of the steady-state functions
+  (a steady state must obey the force balance of the tyres);
+* an array of designs where one design is expected (must be refused);
+* huge finite angles in initial states (a heading whose neighbouring
+  doubles are more than 1e-6 rad apart names no direction);
+* a curve beyond the tyre's reach for the dynamic plant (the refusal must
+  name the curvature);
+* a closed course driven several times (the course's length, and
+  ``compare``'s completion judged from the swept angle of the positions);
+* non-finite entries in the A, B, C of a user StateSpace plant.
+
+Every command-line option given in degrees is tried with +-1e300
+(:func:`cli_angle_options`): the parser must refuse it with one error line
+naming the option.
+
 Runs
 ----
 CI: derandomized (fixed seed), :data:`EXAMPLES` examples per callable
@@ -23,18 +46,17 @@ CI: derandomized (fixed seed), :data:`EXAMPLES` examples per callable
     FWS_FUZZ_EXAMPLES=2000 python -m pytest -q tests/test_fuzz.py
 
 and the exhaustive count of every (callable, argument, bad value) triple,
-printed as "N calls tried, M handled well" per callable::
+printed as "N calls tried, M handled well" per callable, then per targeted
+category::
 
     python benchmarks/fuzz_counts.py
 
 Known failures
 --------------
-Callables whose fixes belong to other parts of the code (issue 13 items
-1-3 and 9: the simulation engine's tolerances, step and duration; items of
-modules outside ``validation/design/paths/metrics/comparison/models/
-acceleration/gains/vehicle/controllers``) are listed in :data:`KNOWN` with
-the reason. They are marked ``xfail`` (not strict, so a fix shows as
-XPASS) and listed in the test report; ``FWS_FUZZ_STRICT=1`` makes them
+Failures whose fixes belong to other parts of the code are listed in
+:data:`KNOWN` by (callable, argument) with the reason. Their tests are
+marked ``xfail`` when one of them is found (not strict, so a fix shows as
+a pass) and listed in the test report; ``FWS_FUZZ_STRICT=1`` makes them
 ordinary failures.
 
 Deliberately excluded (with the reason)
@@ -306,7 +328,8 @@ class Case:
             k: (v.make() if isinstance(v, _Lazy) else v) for k, v in values.items()
         }
         pos = [values[k] for k in self.args]
-        kw = {k: values[k] for k in self.kwargs}
+        # keyword arguments of the baseline, and any a targeted category sets
+        kw = {k: v for k, v in values.items() if k not in self.args}
         return self.func(*pos, **kw), values
 
     @property
@@ -443,7 +466,7 @@ CASES: dict[str, Case] = {
             gates=(fws.Gate(10.0, 15.0, -1.5, 1.5),),
             vehicle_width=1.8,
         ),
-        dict(start_x=0.0),
+        dict(start_x=0.0, laps=1.0),
     ),
     "double_lane_change": Case(
         fws.double_lane_change,
@@ -642,9 +665,271 @@ CASES: dict[str, Case] = {
     ),
 }
 
+# --------------------------------------------------------------------------
+# targeted categories: bad input that looks valid
+
+
+def _heading_named(angle: Any) -> bool:
+    """True if `angle` [rad] names a direction: doubles near it < 1e-6 apart.
+
+    Angles are used through sine and cosine; at 1e300 rad neighbouring
+    doubles are 1e284 rad apart, so the number names no direction.
+    """
+    a = np.abs(np.asarray(angle, dtype=float))
+    return bool(np.all(np.spacing(a) <= 1e-6))
+
+
+def steady_offset_post(result, call) -> bool:
+    """A steady state the dynamic model with linear tyres can hold.
+
+    With e, theta constant, R circles the path's centre at radius
+    ``|1/kappa - e|`` with a tangential speed >= V, so the yaw rate is
+    ``|r| >= V |kappa| / |1 - kappa e|``; the lateral balance ``m V r =
+    F_f cos(delta_f) + F_r cos(delta_r)`` with ``|F| < C pi`` (slip below pi)
+    bounds ``|r| < pi (C_f + C_r)/(m V)``. The path-frame errors exist only
+    for ``1 - kappa e > 0`` and ``|theta| < pi/2``.
+    """
+    if not _finite_tree(result):
+        return False
+    veh = call["vehicle"]
+    e, theta = (np.asarray(v, dtype=float) for v in result)
+    V = np.broadcast_to(np.asarray(call["speed"], dtype=float), e.shape)
+    k = np.broadcast_to(np.asarray(call["curvature"], dtype=float), e.shape)
+    gap = 1.0 - k * e
+    r_max = math.pi * (veh.cornering_front + veh.cornering_rear) / (veh.mass * V)
+    return bool(
+        np.all(gap > 0.0)
+        and np.all(np.abs(theta) < math.pi / 2)
+        and np.all(V * np.abs(k) <= r_max * gap)
+    )
+
+
+def ratio_limits_post(result, call) -> bool:
+    """a(V) lies between its limits at V -> 0 and V -> inf (monotone in V^2)."""
+    veh = call["vehicle"]
+    l_f, l_r = veh.front_to_cg, veh.rear_to_cg
+    lo, hi = sorted(
+        (-l_r / l_f, veh.cornering_front * l_f / (veh.cornering_rear * l_r))
+    )
+    a = np.asarray(result, dtype=float)
+    return bool(np.all(np.isfinite(a)) and np.all((a >= lo) & (a <= hi)))
+
+
+def refused(result, call) -> bool:
+    """Only a refusal is right (a result at all is the finding)."""
+    return False
+
+
+def heading_post(result, call) -> bool:
+    """A run only from initial headings that name a direction."""
+    x0 = np.asarray(call["initial_state"], dtype=float)
+    return _heading_named(x0[..., 2]) and simulation_post(result, call)
+
+
+def heading_error_post(result, call) -> bool:
+    return _heading_named(np.asarray(call["initial_errors"])[1]) and finite(
+        result, call
+    )
+
+
+def course_length_post(turns: float) -> Callable[[Any, dict], bool]:
+    """The course drives `turns` laps of its circle: its length says so."""
+
+    def post(result, call) -> bool:
+        r = 1.0 / abs(result.path.kappa)
+        # the distance a course covers; a path's own length for courses
+        # that have no other notion of it
+        length = getattr(result, "distance", float(result.path.length))
+        return math.isclose(length, 2 * math.pi * r * turns, rel_tol=1e-9)
+
+    return post
+
+
+def closed_course_post(turns: float) -> Callable[[Any, dict], bool]:
+    """`compare` on a circle driven `turns` times, judged from the positions.
+
+    Each run's swept angle about the centre (from x, y) tells whether it
+    drove the laps; "completed" must say that (and the run not stop), and
+    the runs must be long enough for a tracking controller to drive them.
+    """
+
+    def post(result, call) -> bool:
+        if not _finite_tree(result.table):
+            return False
+        cx, cy = call["manoeuvre"].path.center
+        drove = []
+        for r in result.results:
+            x, y = np.asarray(r.x, dtype=float), np.asarray(r.y, dtype=float)
+            ok = np.isfinite(x) & np.isfinite(y)
+            phi = np.unwrap(np.arctan2(y[ok] - cy, x[ok] - cx))
+            swept = abs(float(phi[-1] - phi[0])) if phi.size else 0.0
+            drove.append(str(r.status) == "ok" and swept >= 2 * math.pi * turns)
+        done = [bool(c) for c in result.table["completed"]]
+        return any(drove) and done == drove
+
+    return post
+
+
+@dataclass(frozen=True)
+class Probe:
+    """One targeted bad input: `arg` of callable `case` replaced by `value`.
+
+    `base` changes other arguments first (e.g. the dynamic model for a
+    tyre's reach); `post` replaces the case's postcondition.
+    """
+
+    case: str
+    arg: str
+    label: str
+    value: Any
+    base: dict[str, Any] = field(default_factory=dict)
+    post: Callable[[Any, dict], bool] | None = None
+
+
+def _nan_ss(where: str) -> ct.StateSpace:
+    """The baseline plant as a StateSpace with a NaN in matrix `where`."""
+    A, B = PLANT.matrices()
+    M = {"A": np.array(A, float), "B": np.array(B, float), "C": np.eye(2)}
+    M[where][0, 1] = math.nan
+    return ct.ss(M["A"], M["B"], M["C"], np.zeros((2, 2)))
+
+
+_SWEEP = fws.SteeringGains(k1=[0.1, 0.2], k2=0.5, ratio=0.0)
+_MAGIC = dict(vehicle=BMW, speed=20.0, model="dynamic", tyre="magic")
+
+#: Categories of valid-looking bad input, each a list of probes. Every probe
+#: is tried once (no sampling): a result must pass the probe's postcondition,
+#: a refusal must name the argument.
+TARGETED: dict[str, list[Probe]] = {
+    "extreme but finite speeds and curvatures of steady states": [
+        Probe(
+            "steady_state_offset", "speed", "1e6 m/s", 1.0e6, post=steady_offset_post
+        ),
+        Probe(
+            "steady_state_offset",
+            "speed",
+            "array with 1e6 m/s",
+            np.array([20.0, 1.0e6]),
+            post=steady_offset_post,
+        ),
+        Probe(
+            "steady_state_offset",
+            "curvature",
+            "1e6 1/m",
+            1.0e6,
+            post=steady_offset_post,
+        ),
+        Probe(
+            "steady_state_offset",
+            "curvature",
+            "0.2 1/m at 30 m/s",
+            0.2,
+            base=dict(speed=30.0),
+            post=steady_offset_post,
+        ),
+        Probe("zero_sideslip_ratio", "speed", "1e6 m/s", 1.0e6, post=ratio_limits_post),
+        Probe(
+            "zero_sideslip_ratio", "speed", "1e-6 m/s", 1.0e-6, post=ratio_limits_post
+        ),
+    ],
+    "an array of designs where one design is expected": [
+        Probe("compare", "controllers", "sweep of k1", _Lazy(lambda: {"4ws": _SWEEP})),
+        *(
+            Probe(name, "gains", "sweep of k1", _SWEEP, post=refused)
+            for name in (
+                "simulate",
+                "compare_linear_nonlinear",
+                "closed_loop",
+                "gain_loop",
+                "closed_loop_system",
+                "path_tracking_controller",
+                "feedback_controller",
+                "feedforward_feedback_controller",
+            )
+        ),
+    ],
+    "huge finite angles in initial states": [
+        Probe(
+            "simulate",
+            "initial_state",
+            "psi 1e300",
+            (0.0, -1.0, 1e300),
+            post=heading_post,
+        ),
+        Probe(
+            "simulate_batch",
+            "initial_state",
+            "psi -1e300 in one run",
+            np.array([[0.0, -1.0, 0.0], [0.0, -1.0, -1e300]]),
+            post=heading_post,
+        ),
+        Probe(
+            "compare_linear_nonlinear",
+            "initial_errors",
+            "theta0 1e300",
+            (0.5, 1e300),
+            post=heading_error_post,
+        ),
+    ],
+    "a curve beyond the tyre's reach": [
+        Probe(
+            "LateralPlant",
+            "curvature",
+            "0.2 1/m at 20 m/s, magic tyre",
+            0.2,
+            base=_MAGIC,
+        ),
+        Probe(
+            "LateralPlant",
+            "curvature",
+            "2 1/m at 20 m/s, linear tyre",
+            2.0,
+            base={**_MAGIC, "tyre": "linear"},
+        ),
+        Probe(
+            "kinematic_design_limit",
+            "curvature",
+            "0.2 1/m, magic tyre",
+            0.2,
+            base=dict(tyre="magic", speeds=np.array([5.0, 20.0])),
+        ),
+    ],
+    "several turns of a closed course": [
+        Probe("constant_radius", "turns", "3 laps", 3.0, post=course_length_post(3.0)),
+        Probe(
+            "constant_radius", "turns", "1.5 laps", 1.5, post=course_length_post(1.5)
+        ),
+        Probe(
+            "compare",
+            "manoeuvre",
+            "2 laps of a 10 m circle",
+            _Lazy(lambda: fws.constant_radius(radius=10.0, turns=2)),
+            post=closed_course_post(2.0),
+        ),
+    ],
+    "non-finite entries of a StateSpace plant": [
+        Probe(
+            name,
+            "plant",
+            f"NaN in {m}",
+            _Lazy(lambda m=m: _nan_ss(m)),
+            # as_plant's baseline resolves a Vehicle at a speed; a StateSpace
+            # takes no operating point
+            base=dict(speed=None, curvature=None) if name == "as_plant" else {},
+        )
+        for name in ("as_plant", "closed_loop", "is_stable")
+        for m in "ABC"
+    ],
+}
+
 #: Known failures that other parts of the code must fix (see the module notes).
 #: (callable, argument) -> reason; argument None: every argument.
-KNOWN: dict[tuple[str, str | None], str] = {}
+KNOWN: dict[tuple[str, str | None], str] = {
+    ("as_plant", "plant"): "non-finite StateSpace entries not yet refused by as_plant",
+    ("closed_loop", "plant"): (
+        "non-finite StateSpace entries not yet refused by as_plant"
+    ),
+}
 
 
 @pytest.mark.parametrize("name", list(CASES))
@@ -676,13 +961,24 @@ def _alarm(signum, frame):
     raise CallTimeout(f"call took more than {TIME_LIMIT} s")
 
 
-def judge(case: Case, arg: str, value: Any) -> tuple[bool, str]:
-    """Call `case` with `arg` replaced by `value`: (handled well, why not)."""
+def judge(
+    case: Case,
+    arg: str,
+    value: Any,
+    *,
+    base: dict[str, Any] | None = None,
+    post: Callable[[Any, dict], bool] | None = None,
+) -> tuple[bool, str]:
+    """Call `case` with `arg` replaced by `value`: (handled well, why not).
+
+    `base` changes other arguments of the baseline first (a targeted
+    category's setting); `post` replaces the case's postcondition.
+    """
     old = signal.signal(signal.SIGALRM, _alarm)
     signal.setitimer(signal.ITIMER_REAL, TIME_LIMIT)
     try:
         try:
-            result, values = case.call({arg: value})
+            result, values = case.call({**(base or {}), arg: value})
         finally:
             signal.setitimer(signal.ITIMER_REAL, 0.0)
             signal.signal(signal.SIGALRM, old)
@@ -706,7 +1002,7 @@ def judge(case: Case, arg: str, value: Any) -> tuple[bool, str]:
     if not flag and (isinstance(value, (bool, np.bool_)) or kind == "b"):
         return False, f"bool {arg}={value!r} accepted as a number"
     try:
-        ok = case.post(result, values)
+        ok = (post or case.post)(result, values)
     except Exception as exc:  # noqa: BLE001
         return False, f"postcondition raised {type(exc).__name__}: {exc}"
     finally:
@@ -761,3 +1057,82 @@ def test_bad_input_is_handled(name, fuzz_counts):
                 for (a, lab), why in known.items()
             )
         )
+
+
+# --------------------------------------------------------------------------
+# targeted categories and the command line
+
+
+@pytest.mark.parametrize("category", list(TARGETED))
+def test_targeted_bad_input_is_handled(category, fuzz_counts):
+    counts = fuzz_counts.setdefault(f"[{category}]", Counter())
+    found: dict[tuple[str, str, str], str] = {}
+    for p in TARGETED[category]:
+        good, why = judge(CASES[p.case], p.arg, p.value, base=p.base, post=p.post)
+        counts["tried"] += 1
+        counts["well"] += int(good)
+        if not good:
+            found[(p.case, p.arg, p.label)] = why
+    known = {k: v for k, v in found.items() if (k[0], k[1]) in KNOWN}
+    unknown = {k: v for k, v in found.items() if k not in known}
+    lines = [f"{c}({a}={lab}): {why}" for (c, a, lab), why in unknown.items()]
+    assert not unknown, "\n".join(lines)
+    if known and not STRICT:
+        pytest.xfail(
+            "; ".join(
+                f"{c}({a}={lab}) [{KNOWN[(c, a)]}]: {why[:120]}"
+                for (c, a, lab), why in known.items()
+            )
+        )
+
+
+def cli_angle_options() -> list[tuple[str, str]]:
+    """(command, option) of every command-line option given in degrees."""
+    import argparse
+
+    from fws_control.cli import build_parser
+
+    out = []
+    parser = build_parser()
+    for action in parser._actions:  # argparse keeps its subparsers here
+        if isinstance(action, argparse._SubParsersAction):
+            for command, sub in action.choices.items():
+                for a in sub._actions:
+                    if a.option_strings and "[deg" in (a.help or ""):
+                        out.append((command, a.option_strings[0]))
+    return out
+
+
+def judge_cli(command: str, option: str, text: str) -> tuple[bool, str]:
+    """Parse one command line: refused with one error line naming `option`."""
+    import contextlib
+    import io
+
+    from fws_control.cli import build_parser
+
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err):
+        try:
+            # "--opt=-1e300": a negative number as the option's value
+            build_parser().parse_args([command, f"{option}={text}"])
+        except SystemExit as exc:
+            lines = err.getvalue().strip().splitlines()
+            if exc.code == 2 and len(lines) == 1 and option in lines[0]:
+                return True, ""
+            return False, f"exit {exc.code}: {lines}"
+    return False, f"{command} {option} {text} accepted"
+
+
+def test_cli_angle_options_found():
+    # the category below must have something to try
+    assert ("simulate", "--psi0") in cli_angle_options()
+
+
+@pytest.mark.parametrize("command, option", cli_angle_options())
+@pytest.mark.parametrize("text", ["1e300", "-1e300"])
+def test_cli_huge_angles_are_refused(command, option, text, fuzz_counts):
+    counts = fuzz_counts.setdefault("[huge finite angles in CLI options]", Counter())
+    good, why = judge_cli(command, option, text)
+    counts["tried"] += 1
+    counts["well"] += int(good)
+    assert good, why

@@ -51,7 +51,7 @@ from ..dynamics import (
 from ..gains import SteeringGains
 from ..models import path_frame_derivatives, yaw_rate
 from ..paths import Arc, Path, Straight
-from ..validation import check_finite, check_positive
+from ..validation import MAX_ANGLE, check_finite, check_positive
 from ..vehicle import Vehicle
 
 __all__ = [
@@ -389,7 +389,9 @@ def check_initial_state(initial_state: Any) -> np.ndarray:
     Raises
     ------
     ValueError
-        If the values are not finite or the last axis is not of length 3.
+        If the values are not finite, the last axis is not of length 3 or
+        a heading's magnitude exceeds
+        :data:`~fws_control.validation.MAX_ANGLE`.
 
     Examples
     --------
@@ -403,7 +405,19 @@ def check_initial_state(initial_state: Any) -> np.ndarray:
             "initial_state must be (x_R, y_R, psi) or an array of shape (runs, 3), "
             f"got shape {arr.shape}"
         )
+    _check_heading(arr)
     return np.atleast_2d(arr)
+
+
+def _check_heading(arr: np.ndarray) -> None:
+    """Refuse initial headings too large to name a direction (MAX_ANGLE)."""
+    psi = np.abs(arr[..., 2])
+    if np.any(psi > MAX_ANGLE):
+        raise ValueError(
+            f"initial_state heading psi must have magnitude <= {MAX_ANGLE:g} rad "
+            "(it is used modulo 2 pi, and a larger double names no direction), "
+            f"got {float(np.max(psi))!r}"
+        )
 
 
 def check_model(vehicle: Vehicle, model: Any, tyre: Any) -> tuple[str, str]:
@@ -456,7 +470,9 @@ def split_initial_state(initial_state: Any, *, model: str) -> np.ndarray:
     Raises
     ------
     ValueError
-        If the values are not finite or the last axis has the wrong length.
+        If the values are not finite, the last axis has the wrong length or
+        a heading's magnitude exceeds
+        :data:`~fws_control.validation.MAX_ANGLE`.
 
     Examples
     --------
@@ -478,6 +494,7 @@ def split_initial_state(initial_state: Any, *, model: str) -> np.ndarray:
         raise ValueError(
             f"initial_state must be {shapes} for model={model!r}, got shape {arr.shape}"
         )
+    _check_heading(arr)
     arr = np.atleast_2d(arr)
     if arr.shape[1] == 5:
         return arr
