@@ -385,7 +385,7 @@ def _delay_verdict(
 
     Returns ``(ok, failing_delay)`` for 1-D gain arrays; ``failing_delay``
     is ``tlo`` where the loop is unstable at the lower end and the first
-    crossing delay in the interval otherwise (NaN where ``ok``).
+    crossing delay in the interval otherwise (inf where ``ok``).
     """
     d = np.asarray(cp.open_loop, dtype=float).reshape(-1)
     n1 = np.asarray(cp.n1, dtype=float).reshape(-1)
@@ -439,7 +439,7 @@ def _delay_verdict(
     first = np.where(hit, first, np.inf)
     fail_at = np.min(first, axis=1)
     ok = stable_lo & ~np.any(hit, axis=1)
-    failing = np.where(ok, np.nan, np.where(stable_lo, fail_at, tlo))
+    failing = np.where(ok, np.inf, np.where(stable_lo, fail_at, tlo))
     return ok, failing
 
 
@@ -478,7 +478,7 @@ class _Sweep:
         }
         ok = np.ones(k1.size, dtype=bool)
         fail_point = np.full(k1.size, -1)
-        fail_delay = np.full(k1.size, np.nan)
+        fail_delay = np.full(k1.size, np.inf)
         points: list[tuple[tuple[str, float], ...]] = []
 
         def evaluate(values: dict[str, float]) -> int:
@@ -820,7 +820,7 @@ class RobustRegion:
         Per grid point (shape of `stable`): index into `worst_parameters` of
         a parameter point at which the gains are unstable, -1 where stable.
     failing_delay : ndarray
-        Per grid point: the delay [s] at which it fails there (NaN where
+        Per grid point: the delay [s] at which it fails there (``inf`` where
         stable).
     samples : dict of str to ndarray
         The samples of each interval parameter (delay excluded) after the
@@ -969,7 +969,8 @@ def _axis(name: str, values) -> np.ndarray:
 
     if values is None:
         return DEFAULT_GAIN_AXIS.copy()
-    arr = np.asarray(values, dtype=float) if not isinstance(values, str) else None
+    bad = isinstance(values, str) or np.iscomplexobj(values)
+    arr = None if bad else np.asarray(values, dtype=float)
     if arr is None or arr.ndim != 1 or arr.size < 2 or not np.all(np.isfinite(arr)):
         raise ValueError(
             f"{name} must be a 1-D array of at least 2 finite gains, got {values!r}"
@@ -1312,12 +1313,10 @@ def robust_gains(
         j = int(np.argmax(vals))
         return vals[j], points[j]
 
+    sweep = _Sweep(fam, region.ratio, 9, 6)  # keeps its plants between calls
+
     def objective(x) -> float:
-        if not robust_stable(
-            fam.template,
-            SteeringGains(x[0], x[1], _plain(region.ratio)),
-            box=region.box,
-        ):
+        if not sweep.run(np.array([x[0]]), np.array([x[1]]))[0][0]:
             return 1e3  # outside the robust region
         return worst(x)[0]
 
