@@ -229,7 +229,7 @@ class ParameterBox:
         d = self.delay
         return d if isinstance(d, tuple) else (d, d)
 
-    def bounds(self, name: str) -> tuple[float, float] | None:
+    def _range(self, name: str) -> tuple[float, float] | None:
         """``(low, high)`` of a set parameter (equal ends if fixed), else None."""
         v = getattr(self, name)
         if v is None:
@@ -259,7 +259,7 @@ class _Family:
     def __init__(self, plant: Any, box: ParameterBox, model: Any):
         self.box = box
         if isinstance(plant, Vehicle):
-            speed = box.bounds("speed")
+            speed = box._range("speed")
             if speed is None:
                 raise TypeError(
                     "a Vehicle plant needs the speed in the box (box={'speed': ...})"
