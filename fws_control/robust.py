@@ -1200,7 +1200,7 @@ class RobustDesign:
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     >>> des = fws.robust_gains(veh, ratio=0.0, box={"speed": (10.0, 30.0)},
     ...                        k1=np.linspace(0.0, 0.2, 5),
-    ...                        k2=np.linspace(0.0, 1.0, 5))
+    ...                        k2=np.linspace(0.0, 1.0, 5), starts=1)
     >>> des.abscissa < 0
     True
     """
@@ -1284,7 +1284,7 @@ def robust_gains(
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     >>> des = fws.robust_gains(veh, ratio=0.0, box={"speed": (10.0, 30.0)},
     ...                        k1=np.linspace(0.0, 0.2, 5),
-    ...                        k2=np.linspace(0.0, 1.0, 5))
+    ...                        k2=np.linspace(0.0, 1.0, 5), starts=1)
     >>> des.worst["speed"]
     10.0
     """
