@@ -202,3 +202,47 @@ def test_plot(region):
     assert ax.get_xlabel() == "$k_1$ [rad/m]" and ax.get_ylabel() == "$k_2$ [-]"
     assert len(cplt.lines[0, 0]) >= 2 + len(region.boundary)
     plt.close(cplt.figure)
+
+
+def test_dynamic_model_box():
+    """Cornering stiffness and mass intervals of the dynamic model."""
+    import dataclasses
+
+    bmw = fws.vehicles.BMW_320I
+    cf, m = bmw.cornering_front, bmw.mass
+    box = {
+        "speed": (10.0, 30.0),
+        "delay": (0.0, 0.1),
+        "cornering_front": (0.8 * cf, 1.2 * cf),
+        "mass": (0.9 * m, 1.2 * m),
+    }
+    reg = fws.robust_region(
+        bmw, ratio=0.0, box=box, model="dynamic", k1=np.linspace(-0.01, 0.06, 30),
+        k2=np.linspace(-0.1, 1.2, 30), samples=3, depth=2,
+    )  # fmt: skip
+    assert 0.05 < reg.stable_fraction < 0.6
+    rng = np.random.default_rng(5)
+    iy, ix = np.nonzero(reg.stable)
+    worst = -np.inf
+    for i in rng.integers(0, ix.size, 60):
+        veh = dataclasses.replace(
+            bmw, cornering_front=rng.uniform(0.8 * cf, 1.2 * cf),
+            mass=rng.uniform(0.9 * m, 1.2 * m),
+        )  # fmt: skip
+        plant = fws.LateralPlant(veh, speed=rng.uniform(10.0, 30.0), model="dynamic")
+        g = fws.SteeringGains(reg.k1[ix[i]], reg.k2[iy[i]], 0.0)
+        tau = rng.uniform(1e-6, 0.1)
+        re = fws.rightmost_roots(plant, g, delay=tau, n=1, nodes=10)[0].real
+        worst = max(worst, re)
+    assert worst < 0.0
+    # outside: unstable at the recorded parameter point
+    jy, jx = np.nonzero(~reg.stable)
+    for i in rng.integers(0, jx.size, 10):
+        p = reg.worst_parameters[reg.failing_point[jy[i], jx[i]]]
+        veh = dataclasses.replace(bmw, cornering_front=p["cornering_front"],
+                                  mass=p["mass"])  # fmt: skip
+        plant = fws.LateralPlant(veh, speed=p["speed"], model="dynamic")
+        g = fws.SteeringGains(reg.k1[jx[i]], reg.k2[jy[i]], 0.0)
+        tau = reg.failing_delay[jy[i], jx[i]]
+        re = fws.rightmost_roots(plant, g, delay=tau, n=1, nodes=10)[0].real
+        assert re > -1e-7
