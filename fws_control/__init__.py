@@ -135,6 +135,15 @@ if TYPE_CHECKING:  # static tools see the names; at run time __getattr__ loads t
         Straight,
     )
     from .plant import LateralPlant, LoopMatrices, as_plant, loop_matrices
+    from .robust import (
+        BoundaryPiece,
+        ParameterBox,
+        RobustDesign,
+        RobustRegion,
+        robust_gains,
+        robust_region,
+        robust_stable,
+    )
     from .rootlocus import gain_locus, gain_loop, parameter_locus
     from .simulation import (
         SimulationResult,
@@ -261,6 +270,16 @@ __all__ += [
     "understeer_gradient",
     "zero_sideslip_ratio",
 ]
+# robust stability over a parameter box
+__all__ += [
+    "ParameterBox",
+    "BoundaryPiece",
+    "RobustRegion",
+    "RobustDesign",
+    "robust_region",
+    "robust_stable",
+    "robust_gains",
+]
 __version__ = "0.2.0.dev0"
 
 
@@ -373,6 +392,15 @@ _EXPORTS = {
         "LoopMatrices",
         "as_plant",
         "loop_matrices",
+    ),
+    "robust": (
+        "BoundaryPiece",
+        "ParameterBox",
+        "RobustDesign",
+        "RobustRegion",
+        "robust_gains",
+        "robust_region",
+        "robust_stable",
     ),
     "rootlocus": (
         "gain_locus",

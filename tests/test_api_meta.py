@@ -127,6 +127,10 @@ RECORD_CLASSES = {
     "StabilityChart": "result record of stability_chart",
     "DelayMarginChart": "result record of delay_margin_chart",
     "CriticalDelay": "result record of critical_delay (delay, frequency, ...)",
+    "ParameterBox": "parameter record: one interval or value per parameter",
+    "BoundaryPiece": "result record (kind, k1, k2, omega, parameters)",
+    "RobustRegion": "result record of robust_region",
+    "RobustDesign": "result record of robust_gains",
     "ChartPanel": "result record (title, charts, labels)",
     "TurningGeometry": "result record of steady_turn / turning_radius",
     "LinearNonlinearComparison": "result record of compare_linear_nonlinear",
@@ -840,7 +844,13 @@ def _plot_factories():
             fws.vehicles.BMW_320I, ratio=0.0, pole=-1.0, speeds=[5.0, 20.0, 40.0]
         ).plot
 
+    def robust():
+        return fws.robust_region(
+            veh, ratio=0.0, box={"speed": (10.0, 30.0)}, k1=k, k2=k
+        ).plot
+
     return {
+        "RobustRegion.plot": robust,
         "KinematicDesignLimit.plot": design_limit,
         "ControllerComparison.plot": controller_comparison,
         "StabilityChart.plot": chart,
