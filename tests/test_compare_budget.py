@@ -1,0 +1,95 @@
+"""compare() refuses, before any run, requests beyond its work budget.
+
+Each refused request ran for minutes or forever before (over 40 s of CPU for
+one controller, see :data:`~fws_control.controller_comparison.COMPARE_MAX_STEPS`).
+The estimate in the message is recomputed here from the course's geometry
+and the loop's time scales written from their formulas.
+"""
+
+from __future__ import annotations
+
+import re
+import time
+
+import numpy as np
+import pytest
+
+import fws_control as fws
+from fws_control.controller_comparison import COMPARE_MAX_STEPS
+
+VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+COURSE = fws.double_lane_change()
+
+
+def _duration(speed):
+    # compare() runs from the first gate's entry to past the last gate
+    return 1.1 * (COURSE.end_x - COURSE.start_x) / speed + 0.5
+
+
+def _refusal(controllers, **kw):
+    start = time.process_time()
+    with pytest.raises(ValueError, match="max_steps=1000") as info:
+        fws.compare(VEH, COURSE, controllers, **kw)
+    assert time.process_time() - start < 1.0  # refused up front
+    return str(info.value)
+
+
+def _number(pattern, text):
+    return float(re.search(pattern, text).group(1))
+
+
+@pytest.mark.parametrize(
+    "controllers, kw, scale",
+    [
+        # actuator lag: the loop's time scale is T
+        ("default", dict(speed=20.0, actuator_time_constant=1e-3), 1e-3),
+        # a 0.1 s delay at 1 m/s: steps at most the delay over 122 s
+        ("default", dict(speed=1.0, delay=0.1), 0.1),
+        # pure pursuit: dtheta/dt = -2 V theta / L_d
+        ({"pp": fws.PurePursuit(lookahead=1e-3)}, dict(speed=20.0), 1e-3 / 40.0),
+        # Stanley: de/dt = -k V e / (k_s + V)
+        ({"st": fws.Stanley(gain=1e6)}, dict(speed=20.0), 20.1 / (1e6 * 20.0)),
+    ],
+)
+def test_stiff_requests_refused_with_the_estimate(controllers, kw, scale):
+    if controllers == "default":
+        controllers = fws.default_controllers(VEH, speed=kw["speed"])
+    msg = _refusal(controllers, **kw)
+    steps = _duration(kw["speed"]) / scale
+    assert steps > COMPARE_MAX_STEPS
+    assert _number(r"about ([0-9.e+]+) solver steps", msg) == pytest.approx(
+        steps, rel=5e-3
+    )
+
+
+@pytest.mark.parametrize("kw", [dict(speed=20.0, dt=1e-5), dict(speed=0.1)])
+def test_many_samples_refused_with_the_estimate(kw):
+    msg = _refusal(fws.default_controllers(VEH, speed=kw["speed"]), **kw)
+    samples = _duration(kw["speed"]) / kw.get("dt", 0.01)
+    assert samples > 100 * COMPARE_MAX_STEPS
+    assert _number(r"([0-9.e+]+) output samples", msg) == pytest.approx(
+        samples, rel=5e-3
+    )
+
+
+def test_max_steps_raises_the_budget():
+    course = fws.constant_radius(radius=40.0, turns=0.05)
+    g = {"paper": fws.double_root_gains(VEH, speed=10.0, ratio=0.0, pole=-1.0)}
+    kw = dict(speed=10.0, delay=0.05)
+    with pytest.raises(ValueError, match="max_steps=5 steps"):
+        fws.compare(VEH, course, g, max_steps=5, **kw)
+    cmp = fws.compare(VEH, course, g, max_steps=1e4, **kw)
+    # the run is the one simulate gives for the same request
+    res = cmp.results[0]
+    ref = fws.simulate(
+        VEH, course.path, g["paper"], initial_state=(0.0, 0.0, 0.0),
+        duration=float(res.t[-1]), delay=0.05, speed=10.0,
+    )  # fmt: skip
+    np.testing.assert_allclose(res.e, ref.e, atol=1e-9)
+
+
+@pytest.mark.parametrize("bad", [0.0, -1.0, np.nan])
+def test_max_steps_range(bad):
+    g = {"st": fws.Stanley()}
+    with pytest.raises(ValueError, match="max_steps"):
+        fws.compare(VEH, COURSE, g, speed=20.0, max_steps=bad)
