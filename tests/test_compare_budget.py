@@ -8,6 +8,7 @@ and the loop's time scales written from their formulas.
 
 from __future__ import annotations
 
+import math
 import re
 import time
 
@@ -93,3 +94,17 @@ def test_max_steps_range(bad):
     g = {"st": fws.Stanley()}
     with pytest.raises(ValueError, match="max_steps"):
         fws.compare(VEH, COURSE, g, speed=20.0, max_steps=bad)
+
+
+def test_stability_chart_refuses_a_delay_beyond_its_budget():
+    plant = fws.LateralPlant(VEH, speed=5.0)
+    start = time.process_time()
+    with pytest.raises(
+        ValueError, match=r"delay=1000\.0 s on a 401 x 401 grid"
+    ) as info:
+        fws.stability_chart(plant, ratio=-1.0, delay=1e3)
+    assert time.process_time() - start < 1.0
+    # the estimate is at least the grid times the delay's phase points up to
+    # 1 rad/s (8 delay / pi each), already beyond the budget of 1e8
+    work = _number(r"needs about ([0-9.e+]+) evaluations", str(info.value))
+    assert work >= 401 * 401 * 8 * 1e3 / math.pi > 1e8
