@@ -313,20 +313,20 @@ def _time_scales(controllers: dict, *, speed: float, delay: float, tau) -> list:
     """``(time scale [s], what)`` of the loop's fast dynamics that bound steps."""
     scales = []
     if tau is not None:
-        scales.append((tau, "the actuator time constant"))
+        scales.append((tau, f"lag {tau:g} s"))
     if delay > 0.0:
-        scales.append((delay, "the input delay (steps are at most the delay)"))
+        scales.append((delay, f"steps <= delay {delay:g} s"))
     for label, c in controllers.items():
         if isinstance(c, Stanley):
             # cross-track error of the front axle: de/dt = -V k e / (k_s + V)
             k = float(np.min(c.gain))
             scales.append(
-                ((c.softening + speed) / (k * speed), f"Stanley {label!r} (its gain)")
+                ((c.softening + speed) / (k * speed), f"Stanley {label!r} gain")
             )
         elif isinstance(c, PurePursuit):
             # heading error: dtheta/dt = -2 V theta / L_d (small errors)
             ld = float(np.min(c.distance(speed)))
-            scales.append((ld / (2.0 * speed), f"pure pursuit {label!r} (its L_d)"))
+            scales.append((ld / (2.0 * speed), f"{label!r} look-ahead"))
     return scales
 
 
@@ -439,23 +439,18 @@ def compare(
     tau_a = None if actuator_time_constant is None else tau
     scales = _time_scales(controllers, speed=V, delay=tau_d, tau=tau_a)
     steps, what = max(
-        ((duration / h, w) for h, w in scales), default=(0.0, ""), key=lambda p: p[0]
+        ((duration / h, f"{w}: {duration:.3g} / {h:.3g} s") for h, w in scales),
+        default=(0.0, ""),
+        key=lambda p: p[0],
     )
     samples = duration / dt
     if steps > budget or samples > _SAMPLES_PER_STEP * budget:
-        need = (
-            f"{steps:.3g} solver steps ({duration:.3g} s over the time scale of "
-            f"{what}) and "
-            if steps > budget
-            else ""
-        )
+        need = f"{steps:.3g} solver steps ({what}) and " if steps > budget else ""
         raise ValueError(
-            f"compare: this request needs about {need}{samples:.3g} output samples "
-            f"per controller (duration {duration:.3g} s at speed={V:g} m/s, "
-            f"dt={dt:g} s), beyond the budget of max_steps={budget:g} steps and "
-            f"{_SAMPLES_PER_STEP * budget:.3g} samples (it would take minutes to "
-            "hours); pass max_steps=... to raise it, or a faster speed, a larger "
-            "dt, a slower actuator, a shorter delay"
+            f"compare: {need}{samples:.3g} output samples per run of "
+            f"{duration:.3g} s, beyond the budget of max_steps={budget:g} steps and "
+            f"{_SAMPLES_PER_STEP * budget:.3g} samples; pass a larger max_steps to "
+            "run it anyway (minutes or more), or ask for less"
         )
     labels, results = [], []
     for label, c in controllers.items():

@@ -58,7 +58,7 @@ def test_stiff_requests_refused_with_the_estimate(controllers, kw, scale):
     msg = _refusal(controllers, **kw)
     steps = _duration(kw["speed"]) / scale
     assert steps > COMPARE_MAX_STEPS
-    assert _number(r"about ([0-9.e+]+) solver steps", msg) == pytest.approx(
+    assert _number(r"compare: ([0-9.e+]+) solver steps", msg) == pytest.approx(
         steps, rel=5e-3
     )
 
@@ -108,3 +108,18 @@ def test_stability_chart_refuses_a_delay_beyond_its_budget():
     # 1 rad/s (8 delay / pi each), already beyond the budget of 1e8
     work = _number(r"needs about ([0-9.e+]+) evaluations", str(info.value))
     assert work >= 401 * 401 * 8 * 1e3 / math.pi > 1e8
+
+
+def test_cli_compare_slow_and_delayed_is_refused_at_once(tmp_path, capsys):
+    from fws_control.cli import main
+
+    out = tmp_path / "c.png"
+    start = time.process_time()
+    status = main(["compare", "--speed", "1", "--delay", "0.1", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert status == 2 and not out.exists()
+    assert time.process_time() - start < 20.0  # (imports and designs only)
+    # 1.1 x the course's x-span / 1 m/s + 0.5 s, over the 0.1 s delay
+    steps = _number(r"compare: ([0-9.e+]+) solver steps", err)
+    assert steps == pytest.approx(_duration(1.0) / 0.1, rel=5e-3)
+    assert "max_steps=1000" in err
