@@ -447,10 +447,10 @@ def compare(
     if steps > budget or samples > _SAMPLES_PER_STEP * budget:
         need = f"{steps:.3g} solver steps ({what}) and " if steps > budget else ""
         raise ValueError(
-            f"compare: {need}{samples:.3g} output samples per run of "
-            f"{duration:.3g} s, beyond the budget of max_steps={budget:g} steps and "
-            f"{_SAMPLES_PER_STEP * budget:.3g} samples; pass a larger max_steps to "
-            "run it anyway (minutes or more), or ask for less"
+            f"compare: {need}{samples:.3g} output samples per run ({duration:.3g} "
+            f"s at dt={dt:g} s), beyond the budget of max_steps={budget:g} steps "
+            f"and {_SAMPLES_PER_STEP * budget:.3g} samples; pass a larger "
+            "max_steps to run it anyway (minutes or more)"
         )
     labels, results = [], []
     for label, c in controllers.items():
