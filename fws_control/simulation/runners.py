@@ -573,12 +573,21 @@ def _run_on_dask(client, bounds, args, keep, t_size, bar, run) -> None:
     idle_since = None  # since when the cluster has had no worker
     try:
         while pending and task_error is None:
-            try:
-                done, _ = wait(
-                    list(pending), timeout=_POLL_INTERVAL, return_when="FIRST_COMPLETED"
-                )
-            except TimeoutError:
-                done = ()
+            # (a cancelled future counts as done: dask's wait raises on it)
+            done = [f for f in pending if f.done() or f.cancelled()]
+            if not done:
+                try:
+                    done, _ = wait(
+                        list(pending),
+                        timeout=_POLL_INTERVAL,
+                        return_when="FIRST_COMPLETED",
+                    )
+                except TimeoutError:
+                    done = ()
+                except Exception:
+                    done = [f for f in pending if f.cancelled()]
+                    if not done:
+                        raise  # the cluster went away (below)
             for fut in done:
                 j = pending.pop(fut)
                 try:
