@@ -25,7 +25,7 @@ from .delay import critical_delay, unstable_root_count
 from .design import double_root_gains
 from .exceptions import UncontrollableError
 from .gains import SteeringGains
-from .linear import AffinePolynomial, characteristic_coefficients
+from .linear import AffinePolynomial, characteristic_coefficients, horner
 from .plant import LateralPlant, as_plant, loop_matrices, resolve_ratio
 from .reprs import summary_repr
 from .stability import (
@@ -109,6 +109,43 @@ def _curve_in_box(
         mid = np.sqrt(w[:-1][split] * w[1:][split])
         w = np.sort(np.concatenate([w, mid]))
     return complex_root_curve(cp, w, delay)
+
+
+#: Most gain points times frequency points of a delayed chart's count
+#: (:func:`~fws_control.delay.unstable_root_count` resolves the delay's
+#: phase on the imaginary axis: ``8 delay w / pi`` points up to the frequency
+#: bound ``w`` of the loop, plus 320 for the polynomials). Measured on the
+#: paper's plant at 5 m/s (w = 32 rad/s): the default 401 x 401 grid at a
+#: 1 s delay is 6.4e7 of them, 9.5 s of CPU; at 10 s, 1.8e8 (about 200 s);
+#: at 1000 s, 1.3e10.
+_MAX_DELAY_WORK = 1.0e8
+
+
+def _check_delay_work(cp: AffinePolynomial, k1a, k2a, delay: float) -> None:
+    """Refuse a delayed chart whose root count would take minutes or more."""
+    d_c, n1_c, n2_c = (
+        np.asarray(c, dtype=float).reshape(-1) for c in (cp.open_loop, cp.n1, cp.n2)
+    )
+    K1, K2 = float(np.max(np.abs(k1a))), float(np.max(np.abs(k2a)))
+    roots = np.roots(d_c) if d_c.size > 1 else np.array([])
+    # frequency beyond which the gains' terms are below half the open loop's
+    # (the bound the count's grid goes up to)
+    w = max(1.0, 2.0 * float(np.max(np.abs(roots), initial=0.0)) + 1.0)
+    for _ in range(200):
+        s = 1j * w * np.geomspace(1.0, 1e3, 64)
+        bound = K1 * np.abs(horner(n1_c, s)) + K2 * np.abs(horner(n2_c, s))
+        if np.all(bound < 0.5 * np.abs(horner(d_c, s))):
+            break
+        w *= 2.0
+    work = k1a.size * k2a.size * (8.0 * delay * w / math.pi + 320.0)
+    if work > _MAX_DELAY_WORK:
+        raise ValueError(
+            f"delay={delay!r} s on a {k2a.size} x {k1a.size} grid needs about "
+            f"{work:.3g} evaluations of the characteristic function (gain points x "
+            f"frequency points up to {w:.3g} rad/s), beyond the budget of "
+            f"{_MAX_DELAY_WORK:.3g}; use a coarser k1/k2 grid (the work is "
+            "proportional to the number of points and, for long delays, to the delay)"
+        )
 
 
 @summary_repr
@@ -665,6 +702,7 @@ def stability_chart(
     tau = check_delay(delay)
     undecided = 0
     if tau > 0.0:
+        _check_delay_work(characteristic_coefficients(p, ratio=ratio), k1a, k2a, tau)
         count = unstable_root_count(p, grid, delay=tau)
         stable = count == 0
         undecided = int(np.count_nonzero(count < 0))

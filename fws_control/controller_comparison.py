@@ -51,7 +51,7 @@ from .gains import SteeringGains
 from .manoeuvres import Manoeuvre
 from .plant import LateralPlant
 from .simulation import STATUS_END_OF_PATH, SimulationResult, simulate
-from .validation import check_scalar, check_type
+from .validation import check_delay, check_scalar, check_type
 from .vehicle import Vehicle
 
 __all__ = [
@@ -59,6 +59,7 @@ __all__ = [
     "compare",
     "default_controllers",
     "COMPARISON_METRICS",
+    "COMPARE_MAX_STEPS",
 ]
 
 #: Column names of :attr:`ControllerComparison.table` (units in the names).
@@ -304,6 +305,43 @@ _MIN_SPEED, _MAX_SPEED = 0.1, 100.0
 _MAX_OFFSET = 10.0
 _MIN_TIME_CONSTANT = 1.0e-3
 
+#: Work budget of one run of :func:`compare` (the default of its `max_steps`):
+#: the run's duration over the loop's fastest time scale -- the actuator
+#: time constant, the input delay (the solver's steps are at most the delay),
+#: Stanley's cross-track time ``(softening + V) / (gain V)`` and pure
+#: pursuit's ``L_d / (2 V)`` -- a count of steps that the solver cannot
+#: avoid; and 100 output samples per such step (``duration / dt``). Measured
+#: per controller on the ISO 3888-1 course with the numpy engine (CPU):
+#: at 20 m/s with an actuator of 0.01 s (660 steps) the paper's law 4.7 s
+#: and Stanley 15 s, with 1e-3 s (6,600) 12 s and over 40 s; at 1 m/s with a
+#: 0.1 s delay (1,215 steps) the default set runs past 600 s; 121,000
+#: samples (0.1 m/s) keep Stanley busy for over 40 s.
+COMPARE_MAX_STEPS = 1000
+
+#: Output samples per step of :data:`COMPARE_MAX_STEPS`.
+_SAMPLES_PER_STEP = 100
+
+
+def _time_scales(controllers: dict, *, speed: float, delay: float, tau) -> list:
+    """``(time scale [s], what)`` of the loop's fast dynamics that bound steps."""
+    scales = []
+    if tau is not None:
+        scales.append((tau, f"lag {tau:g} s"))
+    if delay > 0.0:
+        scales.append((delay, f"steps <= delay {delay:g} s"))
+    for label, c in controllers.items():
+        if isinstance(c, Stanley):
+            # cross-track error of the front axle: de/dt = -V k e / (k_s + V)
+            k = float(np.min(c.gain))
+            scales.append(
+                ((c.softening + speed) / (k * speed), f"Stanley {label!r} gain")
+            )
+        elif isinstance(c, PurePursuit):
+            # heading error: dtheta/dt = -2 V theta / L_d (small errors)
+            ld = float(np.min(c.distance(speed)))
+            scales.append((ld / (2.0 * speed), f"{label!r} look-ahead"))
+    return scales
+
 
 def compare(
     vehicle: Vehicle,
@@ -315,6 +353,7 @@ def compare(
     delay: float = 0.0,
     actuator_time_constant: float | None = None,
     dt: float = 0.01,
+    max_steps: float = COMPARE_MAX_STEPS,
 ) -> ControllerComparison:
     """Run every controller on the same plant and course; tabulate metrics.
 
@@ -341,6 +380,14 @@ def compare(
         rate limits of the vehicle apply through it.
     dt : float, optional
         Output spacing [s], > 0 and at most a tenth of the run's duration.
+    max_steps : float, optional
+        Work budget of each run (default :data:`COMPARE_MAX_STEPS`, 1000):
+        the run's duration over its fastest time scale (actuator time
+        constant, delay, Stanley's ``(softening + V) / (gain V)``, pure
+        pursuit's ``L_d / (2 V)``) may not exceed it, nor ``duration / dt``
+        100 times it. A larger request raises ValueError before any run,
+        saying the estimate; pass a larger `max_steps` to run it anyway
+        (minutes to hours).
 
     Returns
     -------
@@ -397,6 +444,26 @@ def compare(
         raise ValueError(
             f"dt must be > 0 and <= duration/10 = {duration / 10.0:.3g} s for "
             f"this course and speed, got {dt!r}"
+        )
+    budget = check_scalar("max_steps", max_steps)
+    if not budget > 0.0:
+        raise ValueError(f"max_steps must be > 0, got {max_steps!r}")
+    tau_d = check_delay(delay)
+    tau_a = None if actuator_time_constant is None else tau
+    scales = _time_scales(controllers, speed=V, delay=tau_d, tau=tau_a)
+    steps, what = max(
+        ((duration / h, f"{w}: {duration:.3g} / {h:.3g} s") for h, w in scales),
+        default=(0.0, ""),
+        key=lambda p: p[0],
+    )
+    samples = duration / dt
+    if steps > budget or samples > _SAMPLES_PER_STEP * budget:
+        need = f"{steps:.3g} solver steps ({what}) and " if steps > budget else ""
+        raise ValueError(
+            f"compare: {need}{samples:.3g} output samples per run ({duration:.3g} "
+            f"s at dt={dt:g} s), beyond the budget of max_steps={budget:g} steps "
+            f"and {_SAMPLES_PER_STEP * budget:.3g} samples; pass a larger "
+            "max_steps to run it anyway (minutes or more)"
         )
     labels, results = [], []
     for label, c in controllers.items():

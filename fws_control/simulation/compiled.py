@@ -81,6 +81,7 @@ still imports; :func:`integrate_compiled` raises :class:`ImportError`.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -183,16 +184,43 @@ def available() -> bool:
     return numba is not None
 
 
+# Whether the kernels are compiled with numba's on-disk cache. It turns
+# False, with one :class:`RuntimeWarning`, where numba finds no writable
+# cache folder (a read-only install used by an account without a writable
+# home: no ``__pycache__`` next to this file, no ``~/.cache/numba``, no
+# ``NUMBA_CACHE_DIR``); the kernels are then compiled in every process.
+_CACHING = True
+
+
 def _jit(fn, inline="never"):
     # cache=True: the compilation (seconds) is paid once per machine and
     # numba version, not once per process. Without numba the kernels stay
     # plain Python (importable, never called by integrate_compiled).
+    global _CACHING
     if numba is None:  # pragma: no cover
         return fn
     # error_model="numpy": a division by zero gives inf or NaN as in numpy
     # (and the solver then rejects the step or fails the run), instead of
     # raising ZeroDivisionError out of the whole batch (e.g. V = 1e300).
-    return numba.njit(cache=True, nogil=True, error_model="numpy", inline=inline)(fn)
+    options = dict(nogil=True, error_model="numpy", inline=inline)
+    if _CACHING:
+        try:
+            return numba.njit(cache=True, **options)(fn)
+        except RuntimeError as exc:
+            # numba looks for its cache folder when the decorator runs and
+            # raises "cannot cache function ...: no locator available" if
+            # none is writable; the engine then works uncached
+            if "cannot cache" not in str(exc):
+                raise
+            _CACHING = False
+            warnings.warn(
+                f"numba finds no writable cache folder ({exc}); the compiled "
+                "engine is compiled in every process (about 20 s of CPU). Set "
+                "NUMBA_CACHE_DIR to a writable folder to keep the compilation.",
+                RuntimeWarning,
+                stacklevel=3,
+            )
+    return numba.njit(cache=False, **options)(fn)
 
 
 def _jit_inline(fn):

@@ -30,6 +30,7 @@ import dataclasses
 import functools
 import math
 import sys
+import time
 import warnings
 from typing import Any
 
@@ -508,6 +509,26 @@ class _NoBar:
         pass
 
 
+# Seconds simulate_batch waits on a Dask cluster that has no worker
+# before it gives up the pending chunks (marked "failed", see _run_on_dask):
+# long enough for a cluster that scales up from zero to start one.
+_LOST_CLUSTER_WAIT = 60.0
+
+# Seconds between two checks of the cluster's workers while chunks are pending.
+_POLL_INTERVAL = 1.0
+
+
+def _has_workers(client) -> bool:
+    """Whether the Dask cluster behind `client` has a worker (True if unknown)."""
+    info = getattr(client, "scheduler_info", None)
+    if info is None:
+        return True
+    try:
+        return bool(info().get("workers", True))
+    except Exception:  # the scheduler went away: the wait will say so
+        return True
+
+
 def _run_on_dask(client, bounds, args, keep, t_size, bar, run) -> None:
     """Run the chunks on a Dask cluster; keep every chunk that finishes.
 
@@ -515,12 +536,15 @@ def _run_on_dask(client, bounds, args, keep, t_size, bar, run) -> None:
     work. A task the cluster loses afterwards (cancelled, worker or
     scheduler gone) does not discard the chunks that finished: its runs are
     marked ``"failed"`` with NaN data and a message naming Dask's error, and
-    a :class:`RuntimeWarning` says how many runs were lost. An exception
-    raised by the simulation itself (e.g. an ambiguous initial projection)
-    propagates, as it would locally.
+    a :class:`RuntimeWarning` says how many runs were lost. A cluster left
+    without workers (all killed, no nanny to restart them) would keep the
+    tasks pending forever: once it has had no worker for
+    ``_LOST_CLUSTER_WAIT`` (60) seconds, the pending tasks are cancelled and
+    lost in the same way. An exception raised by the simulation itself
+    (e.g. an ambiguous initial projection) propagates, as it would locally.
     """
     try:
-        from dask.distributed import as_completed
+        from dask.distributed import wait
     except ImportError as exc:  # pragma: no cover - optional extra
         raise ImportError(
             "client= needs dask.distributed; install the extra "
@@ -546,19 +570,52 @@ def _run_on_dask(client, bounds, args, keep, t_size, bar, run) -> None:
     pending = dict(futures)
     lost = []
     task_error = None
+    idle_since = None  # since when the cluster has had no worker
     try:
-        for fut in as_completed(list(futures)):
-            j = pending.pop(fut)
-            try:
-                chunk = fut.result()
-            except Exception as exc:
-                if fut.status == "error":  # the simulation itself raised
-                    task_error = exc
-                    break
-                lost.append((j, exc))
+        while pending and task_error is None:
+            # (a cancelled future counts as done: dask's wait raises on it)
+            done = [f for f in pending if f.done() or f.cancelled()]
+            if not done:
+                try:
+                    done, _ = wait(
+                        list(pending),
+                        timeout=_POLL_INTERVAL,
+                        return_when="FIRST_COMPLETED",
+                    )
+                except TimeoutError:
+                    done = ()
+                except Exception:
+                    done = [f for f in pending if f.cancelled()]
+                    if not done:
+                        raise  # the cluster went away (below)
+            for fut in done:
+                j = pending.pop(fut)
+                try:
+                    chunk = fut.result()
+                except Exception as exc:
+                    if fut.status == "error":  # the simulation itself raised
+                        task_error = exc
+                        break
+                    lost.append((j, exc))
+                    continue
+                keep(j, chunk)
+                bar.update(1)
+            if done or task_error is not None:
+                idle_since = None
                 continue
-            keep(j, chunk)
-            bar.update(1)
+            if _has_workers(client):
+                idle_since = None
+            elif idle_since is None:
+                idle_since = time.monotonic()
+            elif time.monotonic() - idle_since > _LOST_CLUSTER_WAIT:
+                exc = TimeoutError(
+                    f"the Dask cluster has had no worker for {_LOST_CLUSTER_WAIT:g} "
+                    "s: its workers are gone"
+                )
+                for fut, j in pending.items():
+                    fut.cancel()
+                    lost.append((j, exc))
+                pending.clear()
     except Exception as exc:  # the cluster went away while we waited
         lost.extend((j, exc) for j in pending.values())
         pending.clear()
@@ -998,7 +1055,10 @@ def simulate_batch(
     client : dask.distributed.Client, optional
         Submit the chunks to this Dask cluster (needs the extra
         ``distributed``). The vehicle, path and arguments are pickled to the
-        workers.
+        workers. Chunks that the cluster loses (a task cancelled, the
+        scheduler gone, or no worker left for 60 s) are marked ``"failed"``
+        with NaN data and a :class:`RuntimeWarning`; the finished chunks are
+        kept.
     progress : bool, optional
         Show a tqdm progress bar over the chunks. ``None`` (default): only if
         standard error is a terminal.

@@ -1,0 +1,123 @@
+"""The compiled engine where numba cannot write its cache.
+
+A root-owned, read-only install used by an account without a writable home
+(a service, a container, ``nobody``) leaves numba no cache folder: no
+``__pycache__`` next to the package, no ``~/.cache/numba``. Its decorator
+then raises ``RuntimeError: cannot cache function ...: no locator
+available``; the engine must compile uncached instead, with one warning.
+
+References: numba's own ``cache=False`` compile of the same function (the
+fast test), and, as an account that cannot write the package nor its home
+(the slow test: about 30 s of CPU, most of it numba's compilation),
+``fws-control reproduce`` writing its figures with the exit status 0, as it
+does with a writable cache.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import stat
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fws_control.simulation import compiled
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_no_cache_folder_compiles_uncached_with_one_warning(monkeypatch):
+    numba = pytest.importorskip("numba", reason="the extra 'fast' (numba)")
+    from numba.core import caching
+
+    # numba's view of a read-only install without a home: no locator fits
+    monkeypatch.setattr(caching.CacheImpl, "_locator_classes", [])
+    monkeypatch.setattr(compiled, "_CACHING", True)
+
+    def hypot3(x, y, z):
+        return (x * x + y * y + z * z) ** 0.5
+
+    with pytest.raises(RuntimeError, match="no locator available"):
+        numba.njit(cache=True)(hypot3)
+    with pytest.warns(RuntimeWarning, match="no writable cache folder") as seen:
+        first = compiled._jit(hypot3)
+        second = compiled._jit(lambda x: 2.0 * x)
+    assert len(seen) == 1  # one warning, not one per kernel
+    assert first(2.0, 3.0, 6.0) == 7.0 and second(1.5) == 3.0
+    reference = numba.njit(cache=False)(hypot3)
+    rng = np.random.default_rng(1)
+    for x, y, z in rng.normal(size=(5, 3)):
+        assert first(x, y, z) == reference(x, y, z) == np.sqrt(x * x + y * y + z * z)
+
+
+def _unprivileged_command() -> tuple[list[str], str | None]:
+    """A prefix that runs a command without the right to write others' files.
+
+    As root: ``setpriv`` drops every capability (no CAP_DAC_OVERRIDE: the
+    mode bits bind root as any account), so a folder without write bits is
+    read-only. As another account the mode bits bind already.
+    """
+    if os.geteuid() != 0:
+        return [], None
+    setpriv = shutil.which("setpriv")
+    if setpriv is None:
+        return [], "setpriv (util-linux) is not installed: cannot drop root's rights"
+    return [setpriv, "--inh-caps=-all", "--bounding-set=-all"], None
+
+
+def _read_only(path: Path) -> None:
+    for p in [path, *path.rglob("*")]:
+        mode = p.stat().st_mode
+        p.chmod(mode & ~(stat.S_IWUSR | stat.S_IWGRP | stat.S_IWOTH))
+
+
+def test_reproduce_from_a_read_only_install_without_a_home(tmp_path):
+    pytest.importorskip("numba", reason="the extra 'fast' (numba)")
+    prefix, why = _unprivileged_command()
+    if why:
+        print(why)
+        pytest.skip(why)
+    site = tmp_path / "site"
+    shutil.copytree(
+        ROOT / "fws_control",
+        site / "fws_control",
+        ignore=shutil.ignore_patterns("__pycache__", "*.pyc"),
+    )
+    home = tmp_path / "home"
+    home.mkdir()
+    out = tmp_path / "figures"
+    out.mkdir()
+    _read_only(site)
+    _read_only(home)
+    env = {
+        k: v
+        for k, v in os.environ.items()
+        if k not in ("NUMBA_CACHE_DIR", "XDG_CACHE_HOME", "MPLCONFIGDIR", "PYTHONPATH")
+    }
+    env.update(HOME=str(home), PYTHONPATH=str(site), PYTHONDONTWRITEBYTECODE="1")
+    # the folder really is read-only for the command's account
+    probe = subprocess.run(
+        [*prefix, sys.executable, "-c", f"open({str(site / 'probe')!r}, 'w')"],
+        env=env, capture_output=True, text=True, timeout=60, check=False,
+    )  # fmt: skip
+    assert probe.returncode != 0 and "Permission denied" in probe.stderr
+    try:
+        run = subprocess.run(
+            # the README's command; fig. 5 is the first on the compiled
+            # engine (the one that failed), --quick keeps the test short
+            [*prefix, sys.executable, "-m", "fws_control", "reproduce",
+             "--out", str(out), "--quick", "--only", "fig2", "fig5"],
+            env=env, cwd=tmp_path, capture_output=True, text=True, timeout=600,
+            check=False,
+        )  # fmt: skip
+    finally:
+        for p in [site, *site.rglob("*"), home]:
+            p.chmod(p.stat().st_mode | stat.S_IWUSR)  # so that tmp_path is removed
+    assert run.returncode == 0, run.stderr[-2000:]
+    figures = sorted(p.name for p in out.glob("*.png"))
+    assert figures == ["fig2.png", "fig5.png"], figures
+    assert run.stderr.count("no writable cache folder") == 1, run.stderr[-2000:]
