@@ -40,7 +40,7 @@ from .validation import check_delay
 __all__ = ["MostStableDesign", "most_stable_gains"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class MostStableDesign:
     r"""Gains of minimal spectral abscissa of a delayed loop, with a certificate.
 
@@ -69,8 +69,20 @@ class MostStableDesign:
     evaluations : int
         Rightmost-root computations the search took.
     k1, k2, abscissa_grid : ndarray
-        The start grid and the abscissa on it (at the optimal ratio), for
-        :meth:`plot`.
+        The start grid and the abscissa on it, for :meth:`plot`.
+    grid_ratio : float
+        The ratio of the start grid (the starting ratio).
+    plant : LateralPlant or control.StateSpace
+        The plant the design is for.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> plant = fws.LateralPlant(veh, speed=20.0, steering_lag=0.27)
+    >>> best = fws.most_stable_gains(plant, delay=0.24, ratio=0.0, grid=6)
+    >>> round(best.abscissa, 3), best.roots_right
+    (-0.916, 0)
     """
 
     gains: SteeringGains
@@ -85,6 +97,7 @@ class MostStableDesign:
     k1: np.ndarray
     k2: np.ndarray
     abscissa_grid: np.ndarray
+    grid_ratio: float
     plant: Any
 
     @property
@@ -94,6 +107,10 @@ class MostStableDesign:
 
     def plot(self, ax=None) -> ct.ControlPlot:
         """The delayed stability chart with contours of the abscissa and the optimum.
+
+        Chart and contours are at the ratio of the start grid; with a free
+        ratio the optimum may lie at another ratio (its value is in the
+        legend).
 
         Parameters
         ----------
@@ -122,7 +139,7 @@ class MostStableDesign:
 
         if ax is None:
             _, ax = plt.subplots(figsize=(6.5, 4.6), layout="constrained")
-        ratio = float(self.gains.ratio)
+        ratio = self.grid_ratio
         k1 = np.linspace(self.k1[0], self.k1[-1], 121)
         k2 = np.linspace(self.k2[0], self.k2[-1], 121)
         chart = stability_chart(self.plant, ratio=ratio, k1=k1, k2=k2, delay=self.delay)
@@ -134,7 +151,10 @@ class MostStableDesign:
         ax.clabel(cs, fmt="%.2f", fontsize=7)
         (mark,) = ax.plot(
             float(self.gains.k1), float(self.gains.k2), "r*", ms=12,
-            label=f"most stable: $\\alpha$ = {self.abscissa:.3f} 1/s",
+            label=(
+                f"most stable: $\\alpha$ = {self.abscissa:.3f} 1/s, "
+                f"a = {float(self.gains.ratio):.3g}"
+            ),
         )  # fmt: skip
         ax.set_xlabel("$k_1$ [rad/m]")
         ax.set_ylabel("$k_2$ [rad/rad]")
@@ -399,10 +419,12 @@ def most_stable_gains(
     x, _ = best
     a_opt = float(x[2] * unit[2]) if free else a0
     gains = SteeringGains(float(x[0] * unit[0]), float(x[1] * unit[1]), a_opt)
-    return _certify(p, loop, gains, tau, margin, k1, k2, alpha)
+    return _certify(p, loop, gains, tau, margin, k1, k2, alpha, a0)
 
 
-def _certify(p, loop, gains, tau, margin, k1, k2, alpha_grid) -> MostStableDesign:
+def _certify(
+    p, loop, gains, tau, margin, k1, k2, alpha_grid, grid_ratio
+) -> MostStableDesign:
     n = 4
     while True:
         roots = rightmost_roots(p, gains, delay=tau, n=n)
@@ -444,5 +466,6 @@ def _certify(p, loop, gains, tau, margin, k1, k2, alpha_grid) -> MostStableDesig
         k1=k1,
         k2=k2,
         abscissa_grid=alpha_grid,
+        grid_ratio=grid_ratio,
         plant=p,
     )

@@ -840,7 +840,12 @@ def _plot_factories():
             fws.vehicles.BMW_320I, ratio=0.0, pole=-1.0, speeds=[5.0, 20.0, 40.0]
         ).plot
 
+    def most_stable():
+        lagged = fws.LateralPlant(veh, speed=20.0, steering_lag=0.27)
+        return fws.most_stable_gains(lagged, delay=0.24, ratio=0.0, grid=4).plot
+
     return {
+        "MostStableDesign.plot": most_stable,
         "KinematicDesignLimit.plot": design_limit,
         "ControllerComparison.plot": controller_comparison,
         "StabilityChart.plot": chart,
