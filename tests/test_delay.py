@@ -465,10 +465,8 @@ def test_unstable_root_count_with_delay_is_rightmost_root_count(lag, ratio, tau)
     checked = 0
     seen = set()
     for a1, a2, c in zip(k1, k2, count, strict=True):
-        # n = 4: beyond the fourth root the Chebyshev discretisation of the
-        # lagged plant has a band of unconverged (spurious) eigenvalues near
-        # Re = -15...-27 and rightmost_roots refuses n >= 5 (RuntimeError,
-        # documented) for some gains.
+        # n = 4: the right-half-plane roots of these gains are among the
+        # four rightmost.
         r = fws.rightmost_roots(
             plant, fws.SteeringGains(a1, a2, ratio), delay=tau, n=4, nodes=8
         )
