@@ -419,7 +419,7 @@ def _same_rightmost(coarse: np.ndarray, fine: np.ndarray, k: int) -> bool:
     coarse root right of the `k`-th fine root is in the fine set (so that a
     root is neither missing nor spurious in either).
     """
-    if fine.size < k:
+    if fine.size < k or coarse.size == 0:
         return False
     tol = 1e-8 * (1.0 + np.abs(fine[:k]))
     if np.any(np.min(np.abs(fine[:k, None] - coarse[None, :]), axis=1) > tol):
