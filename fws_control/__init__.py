@@ -80,6 +80,7 @@ if TYPE_CHECKING:  # static tools see the names; at run time __getattr__ loads t
         rightmost_roots,
         unstable_root_count,
     )
+    from .delay_design import MostStableDesign, most_stable_gains
     from .design import double_root_gains
     from .dynamic_design import (
         KinematicDesignLimit,
@@ -193,6 +194,8 @@ __all__ = [
     "critical_delay",
     "rightmost_roots",
     "unstable_root_count",
+    "MostStableDesign",
+    "most_stable_gains",
     "double_root_gains",
     "is_stable",
     "StabilityBoundary",
@@ -332,6 +335,10 @@ _EXPORTS = {
         "critical_delay",
         "rightmost_roots",
         "unstable_root_count",
+    ),
+    "delay_design": (
+        "MostStableDesign",
+        "most_stable_gains",
     ),
     "design": ("double_root_gains",),
     "dynamic_design": (

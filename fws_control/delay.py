@@ -288,7 +288,7 @@ def rightmost_roots(
     *,
     delay: float,
     n: int = 6,
-    nodes: int = 40,
+    nodes: int = 8,
     speed: Any = None,
     curvature: Any = None,
     model: Any = None,
@@ -299,10 +299,16 @@ def rightmost_roots(
     k_2\mathbf c_\theta) x(t-\tau)` is discretised by Chebyshev collocation
     of its infinitesimal generator on ``nodes + 1`` points of
     :math:`[-\tau, 0]`; the eigenvalues of that matrix of size
-    ``n_states * (nodes + 1)`` converge spectrally to the characteristic
-    roots, the rightmost first. Each of the `n` rightmost is then refined by
-    Newton's method on :math:`D(s) = d(s) + e^{-s\tau}q(s)` (up to 20 steps,
-    to a relative step of 1e-14).
+    ``n_states * (nodes + 1)`` approximate the characteristic roots, the
+    rightmost first. The rightmost eigenvalues, and the eigenvalues of the
+    undelayed loop (the roots at :math:`\tau = 0`, which a small delay only
+    perturbs), start Newton's method on :math:`D(s) = d(s) +
+    e^{-s\tau}q(s)`; a start that lands on a root already found is restarted
+    with that root deflated (Newton on :math:`D(s)/\prod(s - r_i)`), so that
+    the two roots a small delay splits off a double root are both found.
+    The nodes are doubled until two successive discretisations give the
+    same `n` rightmost roots; the result is the polished roots, each a root
+    of :math:`D` to rounding.
 
     Parameters
     ----------
@@ -316,16 +322,18 @@ def rightmost_roots(
     n : int, optional
         How many roots to return, 1 to 1000.
     nodes : int, optional
-        Chebyshev nodes of the first discretisation, 4 to 100. The nodes are doubled
-        until the `n` rightmost eigenvalues agree (to 1e-6 relative) between
-        two successive discretisations, at most five times.
+        Chebyshev nodes of the first discretisation, 4 to 100. The nodes are
+        doubled until the polished `n` rightmost roots agree (to 1e-8
+        relative) between two successive discretisations, at most five
+        times.
     speed, curvature, model : optional
         With a :class:`Vehicle` only, as in :func:`linearize`.
 
     Returns
     -------
     ndarray of complex
-        The `n` rightmost roots [1/s], by decreasing real part.
+        The `n` rightmost roots [1/s], by decreasing real part (a complex
+        pair: the one with positive imaginary part first).
 
     Raises
     ------
@@ -362,40 +370,226 @@ def rightmost_roots(
         raise ValueError("rightmost_roots needs one operating point")
     b = lm.input_vector(g.ratio)
     A1 = -np.outer(b, g.k1 * lm.c_e + g.k2 * lm.c_theta)
-    cp = characteristic_coefficients(p, ratio=g.ratio)
-    m = A.shape[0]
+    lam0 = np.linalg.eigvals(A + A1)
     if tau == 0.0:
-        lam = np.linalg.eigvals(A + A1)
-        return lam[np.argsort(-lam.real, kind="stable")][:k]
-
-    def spectrum(N):
-        _, Dm = _cheb(N)
-        big = np.kron(Dm * (2.0 / tau), np.eye(m))  # theta = tau (x - 1)/2
-        big[:m, :] = 0.0
-        big[:m, :m] = A
-        big[:m, -m:] = A1
-        lam = np.linalg.eigvals(big)
-        return lam[np.argsort(-lam.real, kind="stable")]
-
-    coarse = spectrum(N)
-    for _ in range(5):
-        fine = spectrum(2 * N)
-        # the k rightmost of the finer discretisation must be reproduced by
-        # the coarser one (spectral convergence) before they are polished
-        lead = fine[:k]
-        dist = np.min(np.abs(lead[:, None] - coarse[None, :]), axis=1)
-        if np.all(dist <= 1e-6 * (1.0 + np.abs(lead))):
-            out = np.array([_newton(cp, g.k1, g.k2, tau, z) for z in lead])
-            moved = np.abs(out - lead) > 1e-4 * (1.0 + np.abs(lead))
-            gaps = np.abs(out[:, None] - out[None, :])
-            np.fill_diagonal(gaps, np.inf)
-            if not np.any(moved) and not np.any(gaps <= 1e-9 * (1.0 + np.abs(out))):
-                return out[np.argsort(-out.real, kind="stable")]
-        coarse, N = fine, 2 * N
+        return lam0[np.argsort(-lam0.real, kind="stable")][:k]
+    cp = characteristic_coefficients(p, ratio=g.ratio)
+    quasi = _Quasi(cp, float(g.k1), float(g.k2), tau)
+    m = A.shape[0]
+    # start at least so fine that the matrix has a few eigenvalues per root
+    # asked for
+    N = max(N, min(_MAX_NODES, -(-2 * k // m)))
+    previous = None
+    for _ in range(6):
+        # the undelayed roots start Newton too: a small delay only moves them
+        # a little, and splits a double root into two close ones
+        roots = quasi.polish(_spectrum(A, A1, tau, N), lam0, k)
+        if previous is not None and _same_rightmost(previous, roots, k):
+            return roots[:k]
+        previous, N = roots, 2 * N
     raise RuntimeError(
-        f"rightmost_roots did not converge with {N} Chebyshev nodes for n={k} "
+        f"rightmost_roots did not converge with {N // 2} Chebyshev nodes for n={k} "
         "roots; ask for fewer roots (n) or a larger nodes"
     )
+
+
+def _spectrum(A: np.ndarray, A1: np.ndarray, tau: float, N: int):
+    """Eigenvalues of the Chebyshev discretisation with `N` nodes.
+
+    Upper half plane and real axis only (the rest are their conjugates),
+    rightmost first. All of them start Newton: the discretisation has
+    spurious eigenvalues (``|s| tau`` of the order of ``N``) that can lie
+    right of true roots, e.g. of the far roots of a loop with a tiny delay.
+    """
+    m = A.shape[0]
+    _, Dm = _cheb(N)
+    big = np.kron(Dm * (2.0 / tau), np.eye(m))  # theta = tau (x - 1)/2
+    big[:m, :] = 0.0
+    big[:m, :m] = A
+    big[:m, -m:] = A1
+    lam = np.linalg.eigvals(big)
+    lam = lam[lam.imag >= 0.0]
+    return lam[np.argsort(-lam.real, kind="stable")]
+
+
+def _same_rightmost(coarse: np.ndarray, fine: np.ndarray, k: int) -> bool:
+    """Whether two sets of polished roots agree on their `k` rightmost.
+
+    Each of the `k` rightmost fine roots is in the coarse set, and every
+    coarse root right of the `k`-th fine root is in the fine set (so that a
+    root is neither missing nor spurious in either).
+    """
+    if fine.size < k or coarse.size == 0:
+        return False
+    tol = 1e-8 * (1.0 + np.abs(fine[:k]))
+    if np.any(np.min(np.abs(fine[:k, None] - coarse[None, :]), axis=1) > tol):
+        return False
+    edge = fine[k - 1].real - 1e-8 * (1.0 + abs(fine[k - 1]))
+    right = coarse[coarse.real >= edge]
+    return bool(
+        np.all(
+            np.min(np.abs(right[:, None] - fine[None, :]), axis=1)
+            <= 1e-8 * (1.0 + np.abs(right))
+        )
+    )
+
+
+class _Quasi:
+    r"""``D(s) = d(s) + e^{-s tau} q(s)`` of one loop, and Newton's method on it."""
+
+    def __init__(self, cp: AffinePolynomial, k1: float, k2: float, tau: float):
+        d = np.asarray(cp.open_loop, dtype=float)
+        q = k1 * np.asarray(cp.n1, dtype=float) + k2 * np.asarray(cp.n2, dtype=float)
+        n = d.size
+        # d, d', q, q' as rows of one coefficient array (zero padded in
+        # front), so that one Horner pass evaluates all four
+        rows = np.zeros((4, n))
+        rows[0] = d
+        rows[1, 1:] = np.polyder(d)
+        rows[2, n - q.size :] = q
+        if q.size > 1:
+            dq = np.polyder(q)
+            rows[3, n - dq.size :] = dq
+        self.rows = rows[:, :, None]
+        # sizes of the terms, for a residual relative to them (a common root
+        # of d and q, e.g. a mode the steering cannot reach, makes both small)
+        self.sizes = np.abs(rows[[0, 2]])[:, :, None]
+        self.tau = tau
+
+    def _horner(self, c, s):
+        out = np.broadcast_to(c[:, 0], (c.shape[0], s.size)).astype(s.dtype)
+        for k in range(1, c.shape[1]):
+            out = out * s + c[:, k]
+        return out
+
+    def value(self, s):
+        """D(s) and D'(s) for a 1-d array `s`."""
+        d, dd, q, dq = self._horner(self.rows, s)
+        e = np.exp(-s * self.tau)
+        return d + e * q, dd + e * (dq - self.tau * q)
+
+    def relative_residual(self, s):
+        """|D(s)| over the size of its terms (sum of |coefficient| |s|^k)."""
+        f, _ = self.value(s)
+        a = np.abs(s)
+        d_size, q_size = self._horner(self.sizes, a)
+        return np.abs(f) / (d_size + np.abs(np.exp(-s * self.tau)) * q_size)
+
+    def newton(self, s, known=None, steps: int = 40):
+        """Newton from the starts `s` (array); the `known` roots deflated.
+
+        Returns the end points, whether each is a root (relative residual of
+        :math:`D` below 1e-11) and its error estimate (the size of one more,
+        undeflated, Newton step: about the distance to the root, also to a
+        multiple one, on which Newton converges only linearly).
+        """
+        s = np.array(s, dtype=complex)
+        active = np.ones(s.shape, dtype=bool)
+        # a start that runs off this far has left for no root near it
+        far = 1e3 * (1.0 + np.max(np.abs(s), initial=0.0))
+        with np.errstate(all="ignore"):
+            for _ in range(steps):
+                if not active.any():
+                    break
+                z = s[active]
+                f, df = self.value(z)
+                w = df / f  # D'/D: deflation subtracts 1/(s - r) per root r
+                if known is not None and known.size:
+                    w = w - np.sum(1.0 / (z[:, None] - known[None, :]), axis=1)
+                step = np.where(f == 0, 0.0, 1.0 / w)
+                bad = ~np.isfinite(step)
+                z = z - np.where(bad, 0.0, step)
+                s[active] = z
+                done = (
+                    bad
+                    | (np.abs(step) <= 1e-14 * np.maximum(1.0, np.abs(z)))
+                    | (np.abs(z) > far)
+                )
+                active[np.flatnonzero(active)[done]] = False
+            f, df = self.value(s)
+            err = np.where(f == 0, 0.0, np.abs(f / df))
+            # f == 0: an exact root (e.g. s = 0 of a loop without feedback,
+            # where the size of the terms is 0 too)
+            ok = (
+                np.isfinite(s)
+                & np.isfinite(err)
+                & ((f == 0) | (self.relative_residual(s) <= 1e-11))
+            )
+        return s, ok, np.where(ok, err, np.inf)
+
+    def polish(self, starts: np.ndarray, extra: np.ndarray, k: int) -> np.ndarray:
+        """Distinct roots from the starts, conjugates added, rightmost first.
+
+        Newton starts from the `starts` (sorted by decreasing real part) in
+        batches, until `k` roots are found and the next start lies well left
+        of the `k`-th (the rest, further left, would only find roots further
+        left), then from each of `extra`. A multiple root (to rounding) is
+        returned once.
+        """
+        found: list[complex] = []
+        found_err: list[float] = []
+        retries: dict[int, int] = {}
+        batch = 2 * k + 4
+        todo, rest = starts[:batch], starts[batch:]
+        while True:
+            self._polish_into(todo, found, found_err, retries)
+            if rest.size == 0:
+                break
+            z = np.array(found, dtype=complex)
+            # a complex root stands for itself and its conjugate
+            re = np.sort(np.repeat(z.real, np.where(z.imag > 0, 2, 1)))[::-1]
+            if re.size >= k and rest[0].real < re[k - 1] - 0.1 * (1.0 + abs(re[k - 1])):
+                break
+            todo, rest = rest[:batch], rest[batch:]
+            batch *= 2
+        self._polish_into(extra, found, found_err, retries)
+        roots = np.array(found, dtype=complex)
+        errs = np.array(found_err)
+        # a root within its error (or 1e-7) of the real axis is real (a
+        # double real root to rounding); the others come
+        # with their conjugates (the coefficients are real)
+        small = np.abs(roots.imag) <= 1e-7 * (1.0 + np.abs(roots)) + 10.0 * errs
+        roots = np.where(small, roots.real + 0j, roots)
+        roots = np.concatenate([roots, np.conj(roots[~small & (roots.imag > 0)])])
+        return roots[np.lexsort((-roots.imag, -roots.real))]
+
+    def _polish_into(self, starts, found, found_err, retries) -> None:
+        """Newton from `starts`; new roots (upper half plane) appended to `found`."""
+        starts = starts[starts.imag >= 0.0]
+        s, ok, err = self.newton(starts)
+        # each root stands for its conjugate pair: keep the upper one
+        s = np.where(s.imag < 0.0, np.conj(s), s)
+
+        def match(z, e):
+            for i, (r, er) in enumerate(zip(found, found_err, strict=True)):
+                # closer than 1e-7 is a multiple root to rounding (Newton
+                # finds a double root to about the square root of eps)
+                if abs(z - r) <= 1e-7 * (1.0 + abs(z)) + 10.0 * (e + er):
+                    return i
+            return -1
+
+        for z0, z, good, e in zip(starts, s, ok, err, strict=True):
+            if not good:
+                continue
+            i = match(z, e)
+            if i < 0:
+                found.append(z)
+                found_err.append(e)
+                continue
+            if abs(z - z0) > 1e-2 * (1.0 + abs(z)) or retries.get(i, 0) >= 2:
+                # a start far from the known root it reached: spurious
+                continue
+            # landed, from close by, on a root already found: a cluster (the
+            # roots a small delay splits off a double root). Deflate the roots
+            # found so far and start again, a little off the known root; a
+            # deflated cluster root converges within a few steps
+            retries[i] = retries.get(i, 0) + 1
+            known = np.array(found + [np.conj(r) for r in found if r.imag != 0])
+            start = z0 * (1.0 + 1e-7) + 1e-7
+            (z2,), (good2,), (e2,) = self.newton(np.array([start]), known, steps=20)
+            if good2 and match(z2, e2) < 0 and z2.imag >= -10.0 * e2:
+                found.append(z2)
+                found_err.append(e2)
 
 
 def _newton(cp: AffinePolynomial, k1, k2, tau, s):

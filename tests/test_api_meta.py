@@ -849,8 +849,13 @@ def _plot_factories():
             veh, ratio=0.0, box={"speed": (10.0, 30.0)}, k1=k, k2=k
         ).plot
 
+    def most_stable():
+        lagged = fws.LateralPlant(veh, speed=20.0, steering_lag=0.27)
+        return fws.most_stable_gains(lagged, delay=0.24, ratio=0.0, grid=4).plot
+
     return {
         "RobustRegion.plot": robust,
+        "MostStableDesign.plot": most_stable,
         "KinematicDesignLimit.plot": design_limit,
         "ControllerComparison.plot": controller_comparison,
         "StabilityChart.plot": chart,

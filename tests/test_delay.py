@@ -465,10 +465,8 @@ def test_unstable_root_count_with_delay_is_rightmost_root_count(lag, ratio, tau)
     checked = 0
     seen = set()
     for a1, a2, c in zip(k1, k2, count, strict=True):
-        # n = 4: beyond the fourth root the Chebyshev discretisation of the
-        # lagged plant has a band of unconverged (spurious) eigenvalues near
-        # Re = -15...-27 and rightmost_roots refuses n >= 5 (RuntimeError,
-        # documented) for some gains.
+        # n = 4: the right-half-plane roots of these gains are among the
+        # four rightmost.
         r = fws.rightmost_roots(
             plant, fws.SteeringGains(a1, a2, ratio), delay=tau, n=4, nodes=8
         )
@@ -688,3 +686,112 @@ def test_issue13_unstable_root_count_long_delay_refused():
     r = fws.rightmost_roots(_P13, _G13, delay=0.2, n=2)
     c = fws.unstable_root_count(_P13, _G13, delay=0.2)
     assert int(c) == np.count_nonzero(r.real > 0)
+
+
+# --------------------------------------------------------------------------
+# 8. rightmost_roots: cost on a lagged plant, tiny delays
+# --------------------------------------------------------------------------
+
+
+def dense_newton_roots(d, q, tau, re, im, steps=80):
+    """Roots of d(s) + e^{-s tau} q(s) by Newton from every point of a grid.
+
+    Starts on re x im (upper half plane); returns the distinct converged
+    roots (relative residual <= 1e-12, merged within 1e-7), both halves.
+    """
+    s = (re[None, :] + 1j * im[:, None]).ravel()
+    dd, dq = np.polyder(d), np.polyder(q)
+    with np.errstate(all="ignore"):
+        for _ in range(steps):
+            e = np.exp(-s * tau)
+            f = np.polyval(d, s) + e * np.polyval(q, s)
+            df = np.polyval(dd, s) + e * (np.polyval(dq, s) - tau * np.polyval(q, s))
+            s = s - f / df
+        ok = np.isfinite(s) & (relative_residual(d, q, tau, s) <= 1e-12)
+    roots = []
+    for z in sorted(s[ok], key=lambda z: (-z.real, -abs(z.imag))):
+        z = complex(z.real, abs(z.imag))
+        if all(abs(z - r) > 1e-7 * (1 + abs(z)) for r in roots):
+            roots.append(z)
+    roots = np.array(roots)
+    return np.concatenate([roots, np.conj(roots[roots.imag > 1e-9])])
+
+
+def test_rightmost_roots_lagged_plant_small_discretisation(monkeypatch):
+    # The lagged plant (5 m/s, kappa 0.1, lag 0.27 s, a = 0) where the
+    # default call used to double its 40 nodes up to 1280 (a 5124 x 5124
+    # eigenproblem, 17 s): the rightmost roots converge with 16-64 nodes.
+    loop = make_loop(5.0, 0.1, 0.0, k1=0.005, k2=0.1, lag=0.27)
+    d, q = quasi_polynomial(loop.A, loop.b, loop.C)
+    sizes = []
+    real_eigvals = np.linalg.eigvals
+
+    def counting_eigvals(M):
+        sizes.append(np.shape(M)[-1])
+        return real_eigvals(M)
+
+    monkeypatch.setattr(np.linalg, "eigvals", counting_eigvals)
+    r = fws.rightmost_roots(loop.plant, loop.gains, delay=0.24)
+    monkeypatch.undo()
+    assert max(sizes) <= 4 * 65  # measured: 8, 16, 32, 64 nodes
+    ref = dense_newton_roots(
+        d, q, 0.24, np.linspace(-40.0, 2.0, 85), np.linspace(0.0, 60.0, 121)
+    )
+    ref = ref[np.lexsort((-ref.imag, -ref.real))][:6]
+    np.testing.assert_allclose(r, ref, rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("tau", [1e-6, 1e-5, 1e-4])
+@pytest.mark.parametrize(
+    ("speed", "curvature", "ratio", "pole"),
+    [(20.0, 0.0, 0.0, -1.0), (5.0, 0.1, -1.0, -2.0)],
+)
+def test_rightmost_roots_tiny_delay_splits_the_double_root(
+    tau, speed, curvature, ratio, pole
+):
+    # The double-root design: d + q = (s - pole)^2 with d = s^2 + (V kappa)^2
+    # (written out in the test). A delay tau splits the double root: with
+    # D = (s - pole)^2 - s tau q(s) + O(tau^2), s = pole + delta,
+    # delta^2 = tau pole q(pole) = -tau pole (pole^2 + v^2) > 0: two real
+    # roots pole -+ sqrt(tau |pole| (pole^2 + v^2)) + O(tau). The old
+    # discretisation raised "did not converge with 1280 Chebyshev nodes".
+    loop = make_loop(speed, curvature, ratio, pole=pole)
+    d, q = quasi_polynomial(loop.A, loop.b, loop.C)
+    v = speed * curvature
+    np.testing.assert_allclose(d, [1.0, 0.0, v**2], atol=1e-12)
+    np.testing.assert_allclose(q, [-2 * pole, pole**2 - v**2], rtol=1e-9)
+    delta = math.sqrt(tau * abs(pole) * (pole**2 + v**2))
+    first_order = np.array([pole + delta, pole - delta])
+    r = fws.rightmost_roots(loop.plant, loop.gains, delay=tau, n=2)
+    assert np.all(r.imag == 0.0)
+    # O(tau) from the first-order split (measured <= 3 tau pole^2)
+    np.testing.assert_allclose(r.real, first_order, atol=10 * tau * pole**2)
+    # and Newton from a dense grid around the double root finds the same two
+    ref = dense_newton_roots(
+        d, q, tau,
+        pole + np.linspace(-5 * delta, 5 * delta, 101), np.linspace(0, delta, 11),
+    )  # fmt: skip
+    ref = np.sort(ref.real)[::-1]
+    assert ref.size == 2
+    np.testing.assert_allclose(r.real, ref, rtol=1e-10)
+    # n = 3: the third is the rightmost of the far roots, a real root of
+    # s^2 + v^2 + e^{-s tau} q(s) = 0 with s tau of about -10...-16 (by
+    # brentq on its log form), with no complex root right of it (dense
+    # Newton in z = s tau).
+    r3 = fws.rightmost_roots(loop.plant, loop.gains, delay=tau, n=3)
+    np.testing.assert_allclose(r3[:2], r, rtol=1e-12)
+
+    def log_gap(x):  # log|d(x)| - log|e^{-x tau} q(x)| for x << 0
+        return math.log(x * x + v**2) - (
+            -x * tau + math.log(abs(-2 * pole * x + pole**2 - v**2))
+        )
+
+    far = brentq(log_gap, -100.0 / tau, -1.0 / tau, xtol=1e-12 / tau)
+    assert r3[2] == pytest.approx(far, rel=1e-9)
+    scaled = dense_newton_roots(
+        np.array([1.0, 0.0, (v * tau) ** 2]),
+        np.array([-2 * pole * tau, (pole**2 - v**2) * tau**2]),
+        1.0, np.linspace(-40.0, -1.0, 79), np.linspace(0.0, 40.0, 81),
+    )  # fmt: skip
+    scaled = scaled[scaled.real < -0.5]  # not the pair near z = pole tau
+    assert np.max(scaled.real) == pytest.approx(far * tau, rel=1e-9)

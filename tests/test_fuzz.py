@@ -71,6 +71,7 @@ Deliberately excluded (with the reason)
   ``BoundaryCurve``, ``CriticalDelay``, ``StabilityChart``,
   ``ControllerComparison``, ``DelayMarginChart``, ``TurningGeometry``,
   ``LinearNonlinearComparison``, ``SimulationResult``, ``TrackingMetrics``,
+  ``MostStableDesign``,
   ``Projection``: their fields are fuzzed through the functions that build
   them.
 * The arguments ``name`` (a label passed to python-control), ``ax`` and
@@ -130,6 +131,7 @@ EXCLUDED = {
     "BoundaryPiece": "result record",
     "RobustRegion": "result record",
     "RobustDesign": "result record",
+    "MostStableDesign": "result record",
     "vehicles": "a module (example vehicle data sets, no callables)",
 }
 
@@ -403,6 +405,12 @@ CASES: dict[str, Case] = {
         fws.rightmost_roots, PG, dict(delay=0.2, n=4, nodes=20), examples=FEW
     ),
     "unstable_root_count": Case(fws.unstable_root_count, PG, dict(delay=0.2)),
+    "most_stable_gains": Case(
+        fws.most_stable_gains,
+        dict(plant=PLANT),
+        dict(delay=0.3, ratio=-1.0, grid=4, margin=0.5),
+        examples=3,
+    ),
     "double_root_gains": Case(
         fws.double_root_gains,
         dict(plant=PLANT),
