@@ -147,8 +147,10 @@ if TYPE_CHECKING:  # static tools see the names; at run time __getattr__ loads t
         BoundaryCurve,
         StabilityBoundaries,
         StabilityBoundary,
+        StabilityVerdict,
         is_stable,
         stability_boundaries,
+        stability_verdict,
     )
     from .turning import (
         TurningGeometry,
@@ -186,6 +188,8 @@ __all__ = [
     "unstable_root_count",
     "double_root_gains",
     "is_stable",
+    "stability_verdict",
+    "StabilityVerdict",
     "StabilityBoundary",
     "stability_boundaries",
     "symbolic",
@@ -390,8 +394,10 @@ _EXPORTS = {
         "BoundaryCurve",
         "StabilityBoundaries",
         "StabilityBoundary",
+        "StabilityVerdict",
         "is_stable",
         "stability_boundaries",
+        "stability_verdict",
     ),
     "turning": (
         "TurningGeometry",
