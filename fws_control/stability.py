@@ -225,6 +225,7 @@ def _eigen_verdict(
     bound)``; see :class:`StabilityVerdict` for the bound.
     """
     n = lm.order
+    shape = shape if shape else (1,)  # one point: a batch of one
     at = np.unravel_index(todo, shape)
     A = np.broadcast_to(np.asarray(lm.A, dtype=float), shape + (n, n))[at]
     bf = np.broadcast_to(lm.B_front, shape + (n,))[at]
@@ -239,17 +240,36 @@ def _eigen_verdict(
     Acl = A - b[:, :, None] * kc[:, None, :]
     # Entrywise scale of the terms of A - b k^T: forming A_cl rounds each
     # entry by a few units of it, and eig is backward stable in its norm.
-    S = np.abs(A) + (np.abs(bf) + np.abs(a * br))[:, :, None] * (
-        np.abs(g1) * np.abs(ce) + np.abs(g2) * np.abs(ct_)
-    )[:, None, :]
+    S = (
+        np.abs(A)
+        + (np.abs(bf) + np.abs(a * br))[:, :, None]
+        * (np.abs(g1) * np.abs(ce) + np.abs(g2) * np.abs(ct_))[:, None, :]
+    )
     eta = 4.0 * (n + 2) * _EPS * np.sqrt(np.sum(S * S, axis=(-2, -1)))
     code = np.full(todo.size, UNDECIDED, dtype=np.int8)
     bound = np.full(todo.size, np.inf)
     finite = np.all(np.isfinite(Acl), axis=(-2, -1))
+    finite &= np.isfinite(eta)
+    Acl = np.where(finite[:, None, None], Acl, 0.0)  # overflowed: undecided
     chunk = 50_000
     for lo in range(0, todo.size, chunk):
         sl = slice(lo, lo + chunk)
-        lam, X = np.linalg.eig(Acl[sl])
+        c, bnd = _eigen_chunk(Acl[sl], eta[sl])
+        c[~finite[sl]] = UNDECIDED
+        code[sl] = c
+        bound[sl] = bnd
+    return code, bound
+
+
+def _eigen_chunk(Acl: np.ndarray, eta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    try:
+        lam, X = np.linalg.eig(Acl)
+    except np.linalg.LinAlgError:  # QR iteration did not converge: no verdict
+        return (
+            np.full(Acl.shape[0], UNDECIDED, dtype=np.int8),
+            np.full(Acl.shape[0], np.inf),
+        )
+    with np.errstate(over="ignore", invalid="ignore"):
         kappa = np.full(lam.shape, np.inf)
         try:
             Y = np.linalg.inv(X)
@@ -258,22 +278,19 @@ def _eigen_verdict(
             for i in range(lam.shape[0]):
                 try:
                     Yi = np.linalg.inv(X[i])
-                    kappa[i] = np.linalg.norm(X[i], axis=0) * np.linalg.norm(Yi, axis=1)
                 except np.linalg.LinAlgError:
-                    pass
+                    continue
+                kappa[i] = np.linalg.norm(X[i], axis=0) * np.linalg.norm(Yi, axis=1)
         # first-order eigenvalue perturbation, doubled for the second-order
         # terms of near-defective (double-root) eigenvalues
-        rad = 2.0 * eta[sl, None] * np.where(np.isfinite(kappa), kappa, np.inf)
+        rad = 2.0 * eta[:, None] * kappa
         rad = np.where(np.isfinite(rad), rad, np.inf)
         hi = np.max(lam.real + rad, axis=-1)
         low = np.max(lam.real - rad, axis=-1)
-        c = np.full(lam.shape[0], UNDECIDED, dtype=np.int8)
-        c[hi < 0] = STABLE
-        c[low > 0] = NOT_STABLE
-        c[~finite[sl]] = UNDECIDED
-        code[sl] = c
-        bound[sl] = np.where(c == UNDECIDED, 2.0 * np.max(rad, axis=-1), 0.0)
-    return code, bound
+    c = np.full(lam.shape[0], UNDECIDED, dtype=np.int8)
+    c[hi < 0] = STABLE
+    c[low > 0] = NOT_STABLE
+    return c, np.where(c == UNDECIDED, 2.0 * np.max(rad, axis=-1), 0.0)
 
 
 @summary_repr
@@ -376,7 +393,9 @@ def stability_verdict(
     :func:`~fws_control.delay.unstable_root_count` (one operating point,
     scalar ratio): 0 stable, > 0 not stable, undecided where the count is
     (a root on, or within the frequency resolution of, the axis; bound
-    ``inf``).
+    ``inf``) unless :math:`p(0) \le 0` certainly (with the coefficient's
+    error bound): :math:`D(0) = p(0)` does not depend on the delay, so that
+    is a root at ``s = 0`` or a positive real root, not stable.
 
     Parameters
     ----------
@@ -415,6 +434,17 @@ def stability_verdict(
         code = np.where(
             count == 0, STABLE, np.where(count > 0, NOT_STABLE, UNDECIDED)
         ).astype(np.int8)
+        if np.any(code == UNDECIDED):
+            # D(0) = p(0) does not depend on the delay: p(0) = 0 is a root at
+            # s = 0, and p(0) < 0 a positive real root (D(sigma) -> +inf as
+            # sigma -> +inf, since deg q < deg d). Both are decided.
+            p_ = as_plant(plant, speed=speed, curvature=curvature, model=model)
+            cp = characteristic_coefficients(p_, ratio=resolve_ratio(p_, g.ratio))
+            pc, rc = cp.coefficient_bounds(g.k1, g.k2)
+            sign = np.sign(pc[0])
+            at_zero = np.broadcast_to(sign * pc[-1] + rc[-1] <= 0, code.shape)
+            code = np.where((code == UNDECIDED) & at_zero, NOT_STABLE, code)
+            code = code.astype(np.int8)
         bound = np.where(code == UNDECIDED, np.inf, 0.0)
         return StabilityVerdict(code=code, bound=bound)
     p = as_plant(plant, speed=speed, curvature=curvature, model=model)

@@ -46,7 +46,7 @@ Deliberately excluded (with the reason)
 * ``Path``, ``LateralController``: abstract base classes (not instantiable).
 * Result records built by the library and not meant to be built by hand --
   ``AffinePolynomial``, ``LoopMatrices``, ``StabilityBoundaries``,
-  ``BoundaryCurve``, ``CriticalDelay``, ``StabilityChart``,
+  ``BoundaryCurve``, ``CriticalDelay``, ``StabilityChart``, ``StabilityVerdict``,
   ``ControllerComparison``, ``DelayMarginChart``, ``TurningGeometry``,
   ``LinearNonlinearComparison``, ``SimulationResult``, ``TrackingMetrics``,
   ``Projection``: their fields are fuzzed through the functions that build
@@ -97,6 +97,7 @@ EXCLUDED = {
     "BoundaryCurve": "result record",
     "CriticalDelay": "result record",
     "StabilityChart": "result record",
+    "StabilityVerdict": "result record",
     "ControllerComparison": "result record",
     "DelayMarginChart": "result record",
     "TurningGeometry": "result record",
@@ -384,6 +385,9 @@ CASES: dict[str, Case] = {
         post=gains_placed,
     ),
     "is_stable": Case(fws.is_stable, PG, dict(delay=0.0)),
+    "stability_verdict": Case(
+        fws.stability_verdict, PG, dict(delay=0.0), post=finite_or_inf
+    ),
     "StabilityBoundary": Case(
         fws.StabilityBoundary,
         dict(alpha=1.0, beta=0.0, gamma=-0.5, condition="p0 > 0"),
