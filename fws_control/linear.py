@@ -326,15 +326,20 @@ class AffinePolynomial:
         for j in range(self.order + 1):
             d, n1, n2 = self.open_loop[..., j], self.n1[..., j], self.n2[..., j]
             t1, t2 = k1 * n1, k2 * n2
-            p.append(d + t1 + t2)
-            rad = 4 * eps * (np.abs(d) + np.abs(t1) + np.abs(t2))
+            # Each bound term has the shape of its own factors (a row of k1,
+            # a column of k2 on a chart grid): the sums reach the full grid
+            # shape only once, in the last addition.
+            u = 4 * eps * np.abs(d)
+            v = 4 * eps * np.abs(t1)
+            w = 4 * eps * np.abs(t2)
             if self.open_loop_error is not None:
-                rad = rad + self.open_loop_error[..., j]
+                u = u + self.open_loop_error[..., j]
             if self.n1_error is not None:
-                rad = rad + a1 * self.n1_error[..., j]
+                v = v + a1 * self.n1_error[..., j]
             if self.n2_error is not None:
-                rad = rad + a2 * self.n2_error[..., j]
-            r.append(rad)
+                w = w + a2 * self.n2_error[..., j]
+            p.append((d + t1) + t2)
+            r.append((u + v) + w)
         return p, r
 
     def evaluate(self, s, k1=0.0, k2=0.0) -> np.ndarray:

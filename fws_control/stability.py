@@ -189,31 +189,33 @@ def _interval_routh(pm: list, pr: list) -> np.ndarray:
 def _polynomial_verdict(cp: AffinePolynomial, k1, k2) -> np.ndarray:
     """Certified verdict from the coefficients and their error bounds."""
     p, r = cp.coefficient_bounds(k1, k2)
-    shape = np.broadcast_shapes(*(np.shape(x) for x in p + r))
-    sign = np.sign(np.broadcast_to(p[0], shape))
-    pm = [np.broadcast_to(x, shape) * sign for x in p]
+    full = np.broadcast_shapes(*(np.shape(x) for x in p + r))
+    shape = full if full else (1,)  # one point: an array of one
+    sign = np.sign(p[0])  # the leading coefficient: 1 for a monic d
+    if np.all(sign == 1.0):
+        pm = [np.broadcast_to(x, shape) for x in p]
+    else:
+        pm = [np.broadcast_to(x * sign, shape) for x in p]
     pr = [np.broadcast_to(x, shape) for x in r]
     # Every coefficient of a Hurwitz polynomial has the leading one's sign:
     # one that certainly has not (exactly 0 included) means not stable.
-    bad = pm[0] - pr[0] <= 0  # leading coefficient not certain: undecided
-    code = np.full(shape, UNDECIDED, dtype=np.int8)
+    bad = np.broadcast_to(pm[0] - pr[0] <= 0, shape)  # leading not certain
     off = np.zeros(shape, dtype=bool)
     sure = ~bad
     for m, rad in zip(pm[1:], pr[1:], strict=True):
-        off |= m + rad <= 0
-        sure &= m - rad > 0
-    code[off & ~bad] = NOT_STABLE
+        off |= m <= -rad
+        sure &= m > rad
+    off &= ~bad
     if cp.order <= 2:
         # degree <= 2: Hurwitz iff every coefficient is positive (eqs. 35-36)
-        code[sure] = STABLE
-        return code
-    todo = np.flatnonzero((~off & ~bad).ravel())
-    if todo.size:
-        sub = _interval_routh(
-            [x.reshape(-1)[todo] for x in pm], [x.reshape(-1)[todo] for x in pr]
-        )
-        code.reshape(-1)[todo] = sub
-    return code
+        code = np.where(sure, STABLE, np.where(off, NOT_STABLE, UNDECIDED))
+        return code.astype(np.int8).reshape(full)
+    code = np.full(shape, UNDECIDED, dtype=np.int8)
+    code[off] = NOT_STABLE
+    todo = np.nonzero(~off & ~bad)
+    if todo[0].size:
+        code[todo] = _interval_routh([x[todo] for x in pm], [x[todo] for x in pr])
+    return code.reshape(full)
 
 
 def _eigen_verdict(
