@@ -177,7 +177,9 @@ def check(plants: int, seed: int = 0, *, verbose: bool = False) -> dict:
     names = ("plants", "decided", "undecided", "wrong_stable", "wrong_unstable",
              "undecided_outside_bound", "exact", "mpmath")  # fmt: skip
     out = dict.fromkeys(names, 0)
-    for _ in range(plants):
+    for i in range(plants):
+        if verbose and i and i % 10_000 == 0:
+            print("after", i, "plants:", out, flush=True)
         sys_, g, (A, B, C) = random_plant(rng)
         v = fws.stability_verdict(sys_, g)
         code, bound = int(v.code), float(v.bound)
