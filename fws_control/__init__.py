@@ -157,8 +157,10 @@ if TYPE_CHECKING:  # static tools see the names; at run time __getattr__ loads t
         BoundaryCurve,
         StabilityBoundaries,
         StabilityBoundary,
+        StabilityVerdict,
         is_stable,
         stability_boundaries,
+        stability_verdict,
     )
     from .turning import (
         TurningGeometry,
@@ -198,6 +200,8 @@ __all__ = [
     "most_stable_gains",
     "double_root_gains",
     "is_stable",
+    "stability_verdict",
+    "StabilityVerdict",
     "StabilityBoundary",
     "stability_boundaries",
     "symbolic",
@@ -425,8 +429,10 @@ _EXPORTS = {
         "BoundaryCurve",
         "StabilityBoundaries",
         "StabilityBoundary",
+        "StabilityVerdict",
         "is_stable",
         "stability_boundaries",
+        "stability_verdict",
     ),
     "turning": (
         "TurningGeometry",

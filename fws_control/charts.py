@@ -5,8 +5,12 @@ characteristic polynomial is affine in ``k1, k2``
 (:func:`~fws_control.characteristic_coefficients`), so its coefficients on
 the grid are one broadcast expression and the test is the closed form
 :math:`p_1 > 0,\ p_0 > 0` (two states, eqs. 35-36) or the vectorised
-Routh-Hurwitz test (:func:`~fws_control.stability.routh_hurwitz`). A
-1000 x 1000 grid costs milliseconds instead of a million eigenvalue problems.
+Routh-Hurwitz test, both run in interval arithmetic on the coefficients'
+error bounds (:func:`~fws_control.stability_verdict`); only the points that
+test leaves open (near a boundary) go to stacked eigenvalue problems, and
+points that even those cannot separate from the axis are drawn as
+"undecided". A 1000 x 1000 grid costs a fraction of a second instead of a
+million eigenvalue problems.
 The chart also carries the D-subdivision boundaries
 (:func:`stability_boundaries`) and, for a 2-state plant and a requested
 double root :math:`\lambda_0`, the gains of :func:`double_root_gains`.
@@ -21,7 +25,7 @@ from typing import Any
 import control as ct
 import numpy as np
 
-from .delay import critical_delay, unstable_root_count
+from .delay import critical_delay
 from .design import double_root_gains
 from .exceptions import UncontrollableError
 from .gains import SteeringGains
@@ -29,12 +33,14 @@ from .linear import AffinePolynomial, characteristic_coefficients, horner
 from .plant import LateralPlant, as_plant, loop_matrices, resolve_ratio
 from .reprs import summary_repr
 from .stability import (
+    STABLE,
+    UNDECIDED,
     BoundaryCurve,
     StabilityBoundaries,
     complex_root_curve,
     default_frequencies,
-    is_stable,
     stability_boundaries,
+    stability_verdict,
 )
 from .validation import (
     MAX_RATIO,
@@ -179,14 +185,20 @@ class StabilityChart:
         verdict of each point is the count of right-half-plane roots of the
         quasi-polynomial (:func:`~fws_control.delay.unstable_root_count`).
     undecided : int
-        Grid points whose root count could not be decided (a root on or
-        within the frequency resolution of the imaginary axis); they are
-        marked not stable.
+        Grid points whose verdict could not be decided: without delay, the
+        rightmost pole within the rounding bound of the imaginary axis
+        (:func:`~fws_control.stability_verdict`); with a delay, a root on or
+        within the frequency resolution of the axis. They are not in
+        `stable`, and :meth:`plot` draws them as their own grey hatched class.
     design : SteeringGains or None
         Double-root gains for `pole`; None when no pole was requested or the
         design does not exist (then `design_error` says why).
     design_error : str or None
         Why the design failed (:class:`UncontrollableError`).
+    verdict : ndarray of int8 or None
+        Same shape as `stable`: 1 stable, 0 not stable, -1 undecided (the
+        codes of :class:`~fws_control.StabilityVerdict`); None means the
+        chart was built without it (every point decided, as `stable`).
 
     Examples
     --------
@@ -210,6 +222,14 @@ class StabilityChart:
     undecided: int = 0
     design: SteeringGains | None = None
     design_error: str | None = None
+    verdict: np.ndarray | None = None
+
+    @property
+    def undecided_mask(self) -> np.ndarray:
+        """Boolean grid of the undecided points (shape of `stable`)."""
+        if self.verdict is None:
+            return np.zeros(np.shape(self.stable), dtype=bool)
+        return np.asarray(self.verdict) == -1
 
     @property
     def order(self) -> int:
@@ -278,6 +298,13 @@ class StabilityChart:
         out = []
         if self.empty:
             out.append(f"{pre}no stable gains on this grid")
+        if self.undecided:
+            why = (
+                "root count undecided (a root near the axis)"
+                if self.delay
+                else "a pole within rounding of the axis"
+            )
+            out.append(f"{pre}{self.undecided} undecided points: {why}")
         if self.design_error is not None:
             out.append(rf"{pre}no $\lambda_0$ design (uncontrollable)")
         elif self.design is not None and not self.design_on_chart:
@@ -413,6 +440,15 @@ class StabilityChart:
                         linewidths=4.0, alpha=0.45, zorder=2,
                     )
                 )  # fmt: skip
+        undecided = self.undecided_mask
+        if np.any(undecided):
+            fill, _ = _region_paths(self.k1, self.k2, undecided)
+            artists.append(
+                _add_paths(
+                    ax, fill, facecolors=["0.75"], edgecolors=["0.35"],
+                    linewidths=0.0, hatch="xx", alpha=0.8, zorder=3,
+                )
+            )  # fmt: skip
         # contourf makes no legend handle; a proxy patch stands in for it.
         handles = [
             Patch(
@@ -422,6 +458,15 @@ class StabilityChart:
                 label=region_label + (" (empty)" if self.empty else ""),
             )
         ]
+        if np.any(undecided):
+            handles.append(
+                Patch(
+                    facecolor="0.75",
+                    edgecolor="0.35",
+                    hatch="xx",
+                    label=f"undecided ({int(np.count_nonzero(undecided))} points)",
+                )
+            )
         k1r = (float(self.k1.min()), float(self.k1.max()))
         k2r = (float(self.k2.min()), float(self.k2.max()))
         if boundaries:
@@ -642,10 +687,14 @@ def stability_chart(
         :data:`DEFAULT_GAIN_AXIS` (401 points on ``[-1, 1]``).
     delay : float, optional
         Input delay on the steering command [s], >= 0. Without delay the
-        verdict is the closed form / Routh-Hurwitz test; with a delay it is
-        the number of right-half-plane roots of the quasi-polynomial (argument
+        verdict is :func:`~fws_control.stability_verdict` (Routh-Hurwitz in
+        interval arithmetic on exact coefficients, eigenvalues with
+        perturbation bounds near the boundary); with a delay it is the
+        number of right-half-plane roots of the quasi-polynomial (argument
         principle, :func:`~fws_control.delay.unstable_root_count`), and the
         boundaries are the D-subdivision curves of all crossing frequencies.
+        Undecided points are counted in ``undecided`` and marked in
+        ``verdict``, never in ``stable``.
     pole : float, optional
         Double root :math:`\lambda_0 < 0` whose gains
         (:func:`double_root_gains`, 2-state plants) are stored and marked. If
@@ -700,14 +749,11 @@ def stability_chart(
     # Outer broadcasting (k2 down the rows, k1 across) avoids a meshgrid.
     grid = SteeringGains(k1a[np.newaxis, :], k2a[:, np.newaxis], ratio)
     tau = check_delay(delay)
-    undecided = 0
     if tau > 0.0:
         _check_delay_work(characteristic_coefficients(p, ratio=ratio), k1a, k2a, tau)
-        count = unstable_root_count(p, grid, delay=tau)
-        stable = count == 0
-        undecided = int(np.count_nonzero(count < 0))
-    else:
-        stable = is_stable(p, grid)
+    verdict = stability_verdict(p, grid, delay=tau).code
+    stable = verdict == STABLE
+    undecided = int(np.count_nonzero(verdict == UNDECIDED))
     bounds = stability_boundaries(p, ratio=ratio, delay=tau)
     k1r = (float(k1a.min()), float(k1a.max()))
     k2r = (float(k2a.min()), float(k2a.max()))
@@ -737,6 +783,7 @@ def stability_chart(
         undecided=undecided,
         design=design,
         design_error=err,
+        verdict=verdict,
     )
 
 

@@ -18,9 +18,16 @@ with :math:`\mathbf b = \mathbf B_f + a\mathbf B_r` and
 :math:`\mathbf c_1, \mathbf c_2` the rows measuring ``e`` and ``theta``
 (:class:`AffinePolynomial`). This module holds the single numeric
 implementation of it: closed form for the kinematic :class:`LateralPlant`
-(eq. 34 with ``(c - a)`` for ``(1 - a)``), the Faddeev-LeVerrier recursion
-for a :class:`control.StateSpace` of any order. Stability, the stability
-boundaries, the double-root design and the root loci all start from it.
+(eq. 34 with ``(c - a)`` for ``(1 - a)``); for a :class:`control.StateSpace`
+of any order the Faddeev-LeVerrier recursion run in exact integer arithmetic
+on the double-precision matrices (every double is an integer times a power
+of two), each coefficient then rounded once to the nearest double. In
+floating point that recursion loses the small coefficients of a plant whose
+poles span several decades (its error grows like :math:`\|A\|^k`); exact,
+it cannot. Every coefficient carries a bound on its error
+(:meth:`AffinePolynomial.coefficient_bounds`), which the stability verdict
+uses. Stability, the stability boundaries, the double-root design and the
+root loci all start from it.
 """
 
 from __future__ import annotations
@@ -218,6 +225,12 @@ class AffinePolynomial:
         Coefficients of :math:`d(s)`.
     n1, n2 : ndarray
         Coefficients of :math:`n_1(s)` and :math:`n_2(s)` (leading zero).
+    open_loop_error, n1_error, n2_error : ndarray or None
+        Bounds on the absolute errors of those coefficients against the
+        exact polynomials of the plant's (double-precision) data; None: the
+        coefficients are exact. :func:`characteristic_coefficients` fills
+        them: half a unit in the last place for a state space (exact, then
+        rounded once), a few units for the closed form.
 
     Examples
     --------
@@ -232,6 +245,9 @@ class AffinePolynomial:
     open_loop: np.ndarray
     n1: np.ndarray
     n2: np.ndarray
+    open_loop_error: np.ndarray | None = None
+    n1_error: np.ndarray | None = None
+    n2_error: np.ndarray | None = None
 
     @property
     def order(self) -> int:
@@ -267,6 +283,64 @@ class AffinePolynomial:
         k1 = np.asarray(k1, dtype=float)[..., np.newaxis]
         k2 = np.asarray(k2, dtype=float)[..., np.newaxis]
         return self.open_loop + k1 * self.n1 + k2 * self.n2
+
+    def coefficient_bounds(self, k1, k2) -> tuple[list, list]:
+        r"""Coefficients of :math:`p(s)` and bounds on their errors, by column.
+
+        Returns the lists ``p`` and ``r`` (one array per power, highest
+        first, broadcast over the gains) with
+        :math:`|p_j - p^{exact}_j| \le r_j`, where :math:`p^{exact}` is the
+        polynomial of the exact data (``open_loop + k1 n1 + k2 n2`` with the
+        stored error bounds) and :math:`r_j` adds the rounding of the
+        evaluation, :math:`4\epsilon(|d_j| + |k_1 n_{1,j}| + |k_2 n_{2,j}|)`
+        (three roundings, with room).
+
+        Parameters
+        ----------
+        k1 : float or array_like
+            Lateral-error gain [rad/m], any finite value.
+        k2 : float or array_like
+            Heading-error gain [rad/rad], any finite value; broadcasts with
+            `k1` and with the leading dimensions of the polynomial.
+
+        Returns
+        -------
+        tuple of list of ndarray
+            ``(p, r)``, each a list of ``n + 1`` arrays.
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+        >>> cp = fws.characteristic_coefficients(fws.LateralPlant(veh, speed=5.0),
+        ...                                      ratio=0.0)
+        >>> p, r = cp.coefficient_bounds(0.2, 0.5)
+        >>> [float(v) for v in p], all(float(e) < 1e-14 for e in r)
+        ([1.0, 0.9259259259259258, 1.851851851851852], True)
+        """
+        k1 = np.asarray(k1, dtype=float)
+        k2 = np.asarray(k2, dtype=float)
+        a1, a2 = np.abs(k1), np.abs(k2)
+        eps = np.finfo(float).eps
+        p, r = [], []
+        for j in range(self.order + 1):
+            d, n1, n2 = self.open_loop[..., j], self.n1[..., j], self.n2[..., j]
+            t1, t2 = k1 * n1, k2 * n2
+            # Each bound term has the shape of its own factors (a row of k1,
+            # a column of k2 on a chart grid): the sums reach the full grid
+            # shape only once, in the last addition.
+            u = 4 * eps * np.abs(d)
+            v = 4 * eps * np.abs(t1)
+            w = 4 * eps * np.abs(t2)
+            if self.open_loop_error is not None:
+                u = u + self.open_loop_error[..., j]
+            if self.n1_error is not None:
+                v = v + a1 * self.n1_error[..., j]
+            if self.n2_error is not None:
+                w = w + a2 * self.n2_error[..., j]
+            p.append((d + t1) + t2)
+            r.append((u + v) + w)
+        return p, r
 
     def evaluate(self, s, k1=0.0, k2=0.0) -> np.ndarray:
         """:math:`p(s)` at points `s` (broadcast with the gains), by Horner.
@@ -346,27 +420,77 @@ def horner(coefficients: np.ndarray, s) -> np.ndarray:
     return out
 
 
-def _faddeev_leverrier(A: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
-    """Characteristic polynomial and adjugate terms of ``s I - A``.
+def _dyadic(x: np.ndarray) -> tuple[np.ndarray, int]:
+    """Integers ``X`` (object array) and a shift ``t`` with ``x == X * 2**-t``.
 
-    `A` has shape ``(..., n, n)`` (a stack of matrices). Returns ``(d, M)``
-    with ``d`` the monic coefficients ``(..., n + 1)`` (highest power first)
-    and ``adj(sI - A) = sum_k M[k] s^(n-1-k)``. The recursion gives the exact
-    structure (degrees below ``n`` of every ``c adj b``), which an
-    eigenvalue route does not; its rounding grows with the order, which is
-    why it serves the low-order plants of lateral control.
+    Every finite double is an integer times a power of two, so this is exact.
+    """
+    x = np.asarray(x, dtype=float)
+    m, e = np.frexp(x)  # x = m 2^e, 0.5 <= |m| < 1: m 2^53 is an integer
+    mant = (m * 2.0**53).astype(np.int64)
+    e = e.astype(np.int64) - 53
+    nz = mant != 0
+    t = int(-e[nz].min()) if np.any(nz) else 0
+    shift = np.where(nz, e + t, 0)
+    out = mant.astype(object) << shift.astype(object)
+    return out, t
+
+
+def _rounded(value: int, shift: int) -> float:
+    """``value * 2**-shift`` rounded once to the nearest double."""
+    if value == 0:
+        return 0.0
+    try:
+        # int true division and int -> float conversion round correctly
+        return value / (1 << shift) if shift > 0 else float(value << -shift)
+    except OverflowError:
+        raise ValueError(
+            "plant has a characteristic-polynomial coefficient beyond the double "
+            f"range (about 2**{value.bit_length() - shift}); rescale its states "
+            "or time unit"
+        ) from None
+
+
+def _exact_affine(
+    A: np.ndarray, b_front: np.ndarray, b_rear: np.ndarray, c_e, c_theta
+) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
+    """Exact ``d`` and the numerators of one plant, each rounded once.
+
+    Faddeev-LeVerrier in integer arithmetic on the scaled matrix
+    ``2**t A``: its characteristic polynomial has integer coefficients, so
+    the division by ``k`` in the recursion is exact, and so are the
+    adjugate terms ``M_k`` and the numerators ``c M_k b``. Returns ``d``
+    and ``(e_f, e_r, theta_f, theta_r)`` (``n`` + 1 coefficients each).
     """
     n = A.shape[-1]
-    eye = np.eye(n)
-    d = np.zeros(A.shape[:-2] + (n + 1,))
-    d[..., 0] = 1.0
-    M = []
-    Mk = np.zeros_like(A)
+    Ai, t = _dyadic(A)
+    eye = np.eye(n, dtype=np.int64).astype(object)
+    Mk = np.zeros((n, n), dtype=object)
+    d = [1]
+    Ms = []
     for k in range(1, n + 1):
-        Mk = A @ Mk + d[..., k - 1, None, None] * eye
-        M.append(Mk)
-        d[..., k] = -np.trace(A @ Mk, axis1=-2, axis2=-1) / k
-    return d, M
+        Mk = Ai.dot(Mk) + d[-1] * eye
+        Ms.append(Mk)
+        q, r = divmod(-int(np.trace(Ai.dot(Mk))), k)
+        if r:  # pragma: no cover - an integer matrix has an integer polynomial
+            raise ArithmeticError("Faddeev-LeVerrier lost exactness")
+        d.append(q)
+    d_out = np.array([_rounded(dk, k * t) for k, dk in enumerate(d)])
+    nums = []
+    for c in (c_e, c_theta):
+        ci, tc = _dyadic(c)
+        for b in (b_front, b_rear):
+            bi, tb = _dyadic(b)
+            vals = [0.0] + [
+                _rounded(int(ci.dot(Mk).dot(bi)), k * t + tc + tb)
+                for k, Mk in enumerate(Ms)
+            ]
+            nums.append(np.array(vals))
+    return d_out, tuple(nums)  # (c_e, c_theta) x (front, rear)
+
+
+#: One rounding unit of double precision (half the machine epsilon).
+_UNIT = 0.5 * np.finfo(float).eps
 
 
 def _lateral_coefficients(plant: LateralPlant, ratio) -> AffinePolynomial:
@@ -380,31 +504,58 @@ def _lateral_coefficients(plant: LateralPlant, ratio) -> AffinePolynomial:
     one = np.ones_like(V)
     # eq. (34) with (c - a) for (1 - a): p1 = V a k1 + V (c - a)/f k2,
     # p0 = V^2/f ((c - a) k1 + (1 - a k2) f kappa^2)
+    v2k2 = V**2 * kappa**2
+    # Error bounds against the exact formulas of the double-precision inputs:
+    # at most four roundings per term (c = 1 + f^2 kappa^2 two, c - a one, the
+    # products the rest), taken on the magnitudes before (c - a) cancels.
+    ca = (np.abs(c) + np.abs(a)) / abs(f)
     return AffinePolynomial(
-        open_loop=np.stack([one, zero, V**2 * kappa**2], -1),
+        open_loop=np.stack([one, zero, v2k2], -1),
         n1=np.stack([zero, V * a, V**2 * (c - a) / f], -1),
         n2=np.stack([zero, V * (c - a) / f, -(V**2) * a * kappa**2 + 0.0], -1),
+        open_loop_error=np.stack([zero, zero, 3 * _UNIT * v2k2], -1),
+        n1_error=np.stack([zero, _UNIT * np.abs(V * a), 8 * _UNIT * V**2 * ca], -1),
+        n2_error=np.stack(
+            [zero, 8 * _UNIT * np.abs(V) * ca, 4 * _UNIT * np.abs(a) * v2k2], -1
+        ),
     )
 
 
 def _statespace_coefficients(lm: LoopMatrices, ratio) -> AffinePolynomial:
-    d, M = _faddeev_leverrier(np.asarray(lm.A, dtype=float))
-
-    # n_i(s) = c_i adj(sI - A) (B_f + a B_r): four fixed polynomials, then a
-    # broadcast over the ratio.
-    def poly(c, b):
-        terms = [np.einsum("...i,...ij,...j->...", c, Mk, b) for Mk in M]
-        return np.stack([np.zeros_like(terms[0]), *terms], axis=-1)
-
-    ef, er = poly(lm.c_e, lm.B_front), poly(lm.c_e, lm.B_rear)
-    tf_, tr = poly(lm.c_theta, lm.B_front), poly(lm.c_theta, lm.B_rear)
+    A = np.asarray(lm.A, dtype=float)
+    vecs = [
+        np.broadcast_to(np.asarray(v, dtype=float), A.shape[:-1])
+        for v in (lm.B_front, lm.B_rear, lm.c_e, lm.c_theta)
+    ]
+    lead = A.shape[:-2]
+    n = A.shape[-1]
+    d = np.empty(lead + (n + 1,))
+    parts = np.empty((4,) + lead + (n + 1,))
+    for idx in np.ndindex(lead):
+        d[idx], polys = _exact_affine(A[idx], *(v[idx] for v in vecs))
+        for j, poly in enumerate(polys):
+            parts[(j,) + idx] = poly
+    ef, er, tf_, tr = parts
+    # n_i(s) = c_i adj(sI - A) (B_f + a B_r): four exact polynomials, then a
+    # broadcast over the ratio (two roundings, bounded below).
     a = np.asarray(ratio, dtype=float)[..., np.newaxis]
     n1 = ef + a * er
     n2 = tf_ + a * tr
     open_loop = np.broadcast_to(d, np.broadcast_shapes(d.shape, n1.shape))
     n1 = np.broadcast_to(n1, open_loop.shape)
     n2 = np.broadcast_to(n2, open_loop.shape)
-    return AffinePolynomial(open_loop=open_loop, n1=n1, n2=n2)
+    # each of ef, er, tf, tr is the exact value rounded once; a*er and the sum
+    # add a rounding each
+    err1 = np.broadcast_to(3 * _UNIT * (np.abs(ef) + np.abs(a * er)), n1.shape)
+    err2 = np.broadcast_to(3 * _UNIT * (np.abs(tf_) + np.abs(a * tr)), n2.shape)
+    return AffinePolynomial(
+        open_loop=open_loop,
+        n1=n1,
+        n2=n2,
+        open_loop_error=_UNIT * np.abs(open_loop),
+        n1_error=err1,
+        n2_error=err2,
+    )
 
 
 def characteristic_coefficients(

@@ -413,6 +413,9 @@ def as_plant(
         For any other kind of plant, for `speed`/`curvature`/`model` given
         with a plant that already fixes them, or for a Vehicle without
         `speed`.
+    ValueError
+        For a state space with a non-finite entry in A, B, C or D (the
+        message names the matrix and the entry).
 
     Examples
     --------
@@ -420,6 +423,11 @@ def as_plant(
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     >>> fws.as_plant(veh, speed=5.0).speed
     5.0
+    >>> import control as ct, numpy as np
+    >>> fws.as_plant(ct.ss([[0.0, 1.0], [0.0, np.nan]], np.eye(2), np.eye(2), 0))
+    Traceback (most recent call last):
+    ...
+    ValueError: plant matrix A has the non-finite entry A[1, 1] = nan; ...
     """
     given = {
         k: v
@@ -444,6 +452,8 @@ def as_plant(
                 f"{', '.join(k + '=' for k in given)} applies only to a Vehicle "
                 f"plant; a {type(plant).__name__} already fixes its operating point"
             )
+        if not isinstance(plant, LateralPlant):
+            _check_finite_matrices(plant)
         return plant
     if isinstance(plant, _control_class("InputOutputSystem")):
         raise TypeError(
@@ -532,6 +542,20 @@ class LoopMatrices:
         return self.B_front + a * self.B_rear
 
 
+def _check_finite_matrices(sys: ct.StateSpace) -> None:
+    """Refuse a state space with a NaN or infinite entry, naming it."""
+    for name in ("A", "B", "C", "D"):
+        m = np.asarray(getattr(sys, name), dtype=float)
+        bad = np.argwhere(~np.isfinite(m))
+        if bad.size:
+            i, j = (int(v) for v in bad[0])
+            more = f" ({len(bad)} such entries)" if len(bad) > 1 else ""
+            raise ValueError(
+                f"plant matrix {name} has the non-finite entry {name}[{i}, {j}] = "
+                f"{float(m[i, j])!r}{more}; every entry of A, B, C and D must be finite"
+            )
+
+
 def _index(labels: list[str], name: str) -> int | None:
     return labels.index(name) if name in labels else None
 
@@ -544,8 +568,7 @@ def _statespace_loop(sys: ct.StateSpace) -> LoopMatrices:
     A, B, C, D = (np.asarray(m, dtype=float) for m in (sys.A, sys.B, sys.C, sys.D))
     if A.shape[0] == 0:
         raise ValueError("plant must have at least one state, got a static gain")
-    if not (np.all(np.isfinite(A)) and np.all(np.isfinite(B))):
-        raise ValueError("plant matrices A and B must be finite")
+    _check_finite_matrices(sys)
     inputs, outputs, states = (
         list(sys.input_labels),
         list(sys.output_labels),

@@ -38,6 +38,8 @@ def brief(value: Any) -> str:
     ('0.3', "'ok'")
     """
     if isinstance(value, np.ndarray):
+        if value.ndim == 0:  # a 0-d array reads as its scalar
+            return brief(value.item())
         if value.ndim <= 1 and value.size <= 4 and value.dtype.kind in "biufcUS":
             if value.dtype.kind in "fc":
                 return "[" + ", ".join(f"{v:.6g}" for v in value.tolist()) + "]"

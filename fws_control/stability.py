@@ -32,7 +32,7 @@ import numpy as np
 from .delay import unstable_root_count
 from .gains import SteeringGains
 from .linear import AffinePolynomial, characteristic_coefficients, check_gains
-from .plant import LateralPlant, as_plant, resolve_ratio
+from .plant import LateralPlant, LoopMatrices, as_plant, loop_matrices, resolve_ratio
 from .reprs import summary_repr
 from .validation import (
     MAX_RATIO,
@@ -44,6 +44,11 @@ from .validation import (
 
 __all__ = [
     "is_stable",
+    "stability_verdict",
+    "StabilityVerdict",
+    "STABLE",
+    "NOT_STABLE",
+    "UNDECIDED",
     "routh_hurwitz",
     "hurwitz_columns",
     "StabilityBoundary",
@@ -131,41 +136,331 @@ def hurwitz_columns(columns) -> np.ndarray:
     return ok & finite
 
 
-#: Relative rounding bound of a coefficient ``d_j + k1 n1_j + k2 n2_j``
-#: (three terms, two products): a few units of the machine epsilon.
-_ROUNDING = 8 * np.finfo(float).eps
+#: Codes of :attr:`StabilityVerdict.code`.
+STABLE, NOT_STABLE, UNDECIDED = 1, 0, -1
+
+_EPS = float(np.finfo(float).eps)
 
 
-def _stable_from_polynomial(cp: AffinePolynomial, k1, k2) -> bool | np.ndarray:
-    cols = [
-        cp.open_loop[..., j] + k1 * cp.n1[..., j] + k2 * cp.n2[..., j]
-        for j in range(cp.order + 1)
-    ]
-    # A coefficient within rounding of zero is zero: a point on a boundary line
-    # (p1 = 0 or p0 = 0) must not come out stable by a floating-point tie. The
-    # bound uses the largest gains asked, so it costs no extra pass over a grid.
-    big1 = float(np.max(np.abs(k1), initial=0.0))
-    big2 = float(np.max(np.abs(k2), initial=0.0))
-    tol = [
-        _ROUNDING
-        * float(
-            np.max(
-                np.abs(cp.open_loop[..., j])
-                + big1 * np.abs(cp.n1[..., j])
-                + big2 * np.abs(cp.n2[..., j]),
-                initial=0.0,
+def _interval_routh(pm: list, pr: list) -> np.ndarray:
+    """Routh test in midpoint-radius interval arithmetic, 1-D arrays.
+
+    ``pm[j] +- pr[j]`` encloses the coefficient of ``s^(n-j)``; leading
+    coefficient positive. Every Routh entry is enclosed likewise (outward
+    rounding included), so a sign read off an interval that excludes 0 holds
+    for every polynomial in the box. Returns the code per polynomial: stable
+    when every pivot is certainly positive, not stable at the first pivot
+    certainly <= 0 after positive ones, undecided at a pivot whose interval
+    holds 0.
+    """
+    upper = list(zip(pm[0::2], pr[0::2], strict=True))
+    lower = list(zip(pm[1::2], pr[1::2], strict=True))
+    alive = upper[0][0] - upper[0][1] > 0
+    code = np.full(alive.shape, UNDECIDED, dtype=np.int8)
+    zero = (np.zeros_like(alive, dtype=float),) * 2
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        for _ in range(len(pm) - 1):
+            lm_, lr_ = lower[0]
+            code[alive & (lm_ + lr_ <= 0)] = NOT_STABLE
+            alive &= lm_ - lr_ > 0
+            um_, ur_ = upper[0]
+            qm = um_ / lm_
+            # x/y for x in um +- ur, y in lm +- lr (lm > lr >= 0)
+            qr = (ur_ + np.abs(qm) * lr_) / (lm_ - lr_) + _EPS * np.abs(qm)
+            new = []
+            for j in range(len(upper) - 1):
+                bm, br = lower[j + 1] if j + 1 < len(lower) else zero
+                am, ar = upper[j + 1]
+                prod = qm * bm
+                m = am - prod
+                r = (
+                    ar
+                    + np.abs(qm) * br
+                    + np.abs(bm) * qr
+                    + qr * br
+                    + _EPS * (np.abs(am) + 2 * np.abs(prod))
+                )
+                new.append((m, r))
+            upper, lower = lower, new if new else [zero]
+    code[alive] = STABLE
+    return code
+
+
+def _polynomial_verdict(cp: AffinePolynomial, k1, k2) -> np.ndarray:
+    """Certified verdict from the coefficients and their error bounds."""
+    p, r = cp.coefficient_bounds(k1, k2)
+    full = np.broadcast_shapes(*(np.shape(x) for x in p + r))
+    shape = full if full else (1,)  # one point: an array of one
+    sign = np.sign(p[0])  # the leading coefficient: 1 for a monic d
+    if np.all(sign == 1.0):
+        pm = [np.broadcast_to(x, shape) for x in p]
+    else:
+        pm = [np.broadcast_to(x * sign, shape) for x in p]
+    pr = [np.broadcast_to(x, shape) for x in r]
+    # Every coefficient of a Hurwitz polynomial has the leading one's sign:
+    # one that certainly has not (exactly 0 included) means not stable.
+    bad = np.broadcast_to(pm[0] - pr[0] <= 0, shape)  # leading not certain
+    off = np.zeros(shape, dtype=bool)
+    sure = ~bad
+    for m, rad in zip(pm[1:], pr[1:], strict=True):
+        off |= m <= -rad
+        sure &= m > rad
+    off &= ~bad
+    if cp.order <= 2:
+        # degree <= 2: Hurwitz iff every coefficient is positive (eqs. 35-36)
+        code = np.where(sure, STABLE, np.where(off, NOT_STABLE, UNDECIDED))
+        return code.astype(np.int8).reshape(full)
+    code = np.full(shape, UNDECIDED, dtype=np.int8)
+    code[off] = NOT_STABLE
+    todo = np.nonzero(~off & ~bad)
+    if todo[0].size:
+        code[todo] = _interval_routh([x[todo] for x in pm], [x[todo] for x in pr])
+    return code.reshape(full)
+
+
+def _eigen_verdict(
+    lm: LoopMatrices, ratio, k1, k2, shape: tuple, todo: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Verdict from closed-loop eigenvalues and their perturbation bounds.
+
+    For the flat indices `todo` of the grid `shape`. Returns ``(code,
+    bound)``; see :class:`StabilityVerdict` for the bound.
+    """
+    n = lm.order
+    shape = shape if shape else (1,)  # one point: a batch of one
+    at = np.unravel_index(todo, shape)
+    A = np.broadcast_to(np.asarray(lm.A, dtype=float), shape + (n, n))[at]
+    bf = np.broadcast_to(lm.B_front, shape + (n,))[at]
+    br = np.broadcast_to(lm.B_rear, shape + (n,))[at]
+    ce = np.broadcast_to(lm.c_e, shape + (n,))[at]
+    ct_ = np.broadcast_to(lm.c_theta, shape + (n,))[at]
+    a = np.broadcast_to(np.asarray(ratio, dtype=float), shape)[at][:, None]
+    g1 = np.broadcast_to(np.asarray(k1, dtype=float), shape)[at][:, None]
+    g2 = np.broadcast_to(np.asarray(k2, dtype=float), shape)[at][:, None]
+    b = bf + a * br
+    kc = g1 * ce + g2 * ct_
+    Acl = A - b[:, :, None] * kc[:, None, :]
+    # Entrywise scale of the terms of A - b k^T: forming A_cl rounds each
+    # entry by a few units of it, and eig is backward stable in its norm.
+    S = (
+        np.abs(A)
+        + (np.abs(bf) + np.abs(a * br))[:, :, None]
+        * (np.abs(g1) * np.abs(ce) + np.abs(g2) * np.abs(ct_))[:, None, :]
+    )
+    eta = 4.0 * (n + 2) * _EPS * np.sqrt(np.sum(S * S, axis=(-2, -1)))
+    code = np.full(todo.size, UNDECIDED, dtype=np.int8)
+    bound = np.full(todo.size, np.inf)
+    finite = np.all(np.isfinite(Acl), axis=(-2, -1))
+    finite &= np.isfinite(eta)
+    Acl = np.where(finite[:, None, None], Acl, 0.0)  # overflowed: undecided
+    chunk = 50_000
+    for lo in range(0, todo.size, chunk):
+        sl = slice(lo, lo + chunk)
+        c, bnd = _eigen_chunk(Acl[sl], eta[sl])
+        c[~finite[sl]] = UNDECIDED
+        code[sl] = c
+        bound[sl] = bnd
+    return code, bound
+
+
+def _eigen_chunk(Acl: np.ndarray, eta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    try:
+        lam, X = np.linalg.eig(Acl)
+    except np.linalg.LinAlgError:  # QR iteration did not converge: no verdict
+        return (
+            np.full(Acl.shape[0], UNDECIDED, dtype=np.int8),
+            np.full(Acl.shape[0], np.inf),
+        )
+    with np.errstate(over="ignore", invalid="ignore"):
+        kappa = np.full(lam.shape, np.inf)
+        try:
+            Y = np.linalg.inv(X)
+            kappa = np.linalg.norm(X, axis=-2) * np.linalg.norm(Y, axis=-1)
+        except np.linalg.LinAlgError:  # an exactly singular eigenvector basis
+            for i in range(lam.shape[0]):
+                try:
+                    Yi = np.linalg.inv(X[i])
+                except np.linalg.LinAlgError:
+                    continue
+                kappa[i] = np.linalg.norm(X[i], axis=0) * np.linalg.norm(Yi, axis=1)
+        # first-order eigenvalue perturbation, doubled for the second-order
+        # terms of near-defective (double-root) eigenvalues
+        rad = 2.0 * eta[:, None] * kappa
+        rad = np.where(np.isfinite(rad), rad, np.inf)
+        hi = np.max(lam.real + rad, axis=-1)
+        low = np.max(lam.real - rad, axis=-1)
+    c = np.full(lam.shape[0], UNDECIDED, dtype=np.int8)
+    c[hi < 0] = STABLE
+    c[low > 0] = NOT_STABLE
+    return c, np.where(c == UNDECIDED, 2.0 * np.max(rad, axis=-1), 0.0)
+
+
+@summary_repr
+@dataclass(frozen=True, eq=False)
+class StabilityVerdict:
+    r"""Tri-state stability verdict of the linear closed loop, per gain point.
+
+    Returned by :func:`stability_verdict`.
+
+    Attributes
+    ----------
+    code : ndarray of int8
+        1 (:data:`STABLE`): every closed-loop pole has a negative real part;
+        0 (:data:`NOT_STABLE`): some pole has a real part >= 0; -1
+        (:data:`UNDECIDED`): the rounding bounds do not separate the
+        rightmost pole from the imaginary axis.
+    bound : ndarray of float
+        Where undecided without delay: a bound :math:`B` with
+        :math:`|\operatorname{Re}\lambda_{max}| \le B` for the rightmost
+        closed-loop eigenvalue (see :func:`stability_verdict`); ``inf`` where
+        no bound is known (with a delay, or a non-diagonalisable computed
+        eigenbasis); 0 where decided.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> v = fws.stability_verdict(fws.LateralPlant(veh, speed=5.0),
+    ...                           fws.SteeringGains([0.1, -0.1], 0.5, ratio=0.0))
+    >>> v.code.tolist(), v.stable.tolist(), v.undecided.tolist()
+    ([1, 0], [True, False], [False, False])
+    """
+
+    code: np.ndarray
+    bound: np.ndarray
+
+    def _mask(self, value: int) -> bool | np.ndarray:
+        out = self.code == value
+        return bool(out) if np.ndim(out) == 0 else out
+
+    @property
+    def stable(self) -> bool | np.ndarray:
+        """True where the loop is certainly stable."""
+        return self._mask(STABLE)
+
+    @property
+    def not_stable(self) -> bool | np.ndarray:
+        """True where the loop certainly has a pole with real part >= 0."""
+        return self._mask(NOT_STABLE)
+
+    @property
+    def undecided(self) -> bool | np.ndarray:
+        """True where the verdict is within the rounding bound."""
+        return self._mask(UNDECIDED)
+
+
+def stability_verdict(
+    plant: Any,
+    gains: SteeringGains,
+    *,
+    delay: float = 0.0,
+    speed: Any = None,
+    curvature: Any = None,
+    model: Any = None,
+) -> StabilityVerdict:
+    r"""Stable, not stable or undecided, for every gain point, with error bounds.
+
+    Without delay, two stages:
+
+    1. **Coefficients.** :math:`p_j = d_j + k_1 n_{1,j} + k_2 n_{2,j}` with
+       the error bound :math:`r_j` of
+       :meth:`~fws_control.AffinePolynomial.coefficient_bounds` (the
+       polynomials are exact, rounded once; :math:`r_j` adds
+       :math:`4\epsilon(|d_j| + |k_1 n_{1,j}| + |k_2 n_{2,j}|)`). A
+       coefficient with :math:`p_j + r_j \le 0` proves the loop not stable;
+       otherwise the Routh array runs in interval arithmetic on
+       :math:`[p_j - r_j, p_j + r_j]` (closed form
+       :math:`p_1, p_0 > 0` for two states): where every pivot is certainly
+       positive the loop is stable, where one is certainly negative it is
+       not. These verdicts are proved, not estimated.
+    2. **Eigenvalues**, only for the points stage 1 leaves open (a pivot
+       interval holds 0: a pole near the axis, or a polynomial too
+       ill-conditioned for its coefficients): stacked
+       :func:`numpy.linalg.eig` of :math:`A_{cl} = A - b(k_1 c_e +
+       k_2 c_\theta)` with the perturbation radius
+       :math:`r_i = 2\eta\,\kappa(\lambda_i)` of each eigenvalue, where
+       :math:`\kappa(\lambda_i) = \|x_i\|\|y_i\|/|y_i^H x_i|` is its
+       condition number and :math:`\eta = 4(n+2)\epsilon\|S\|_F` bounds the
+       backward error of forming :math:`A_{cl}` and of the eigensolver, with
+       :math:`S = |A| + (|b_f| + |a||b_r|)(|k_1||c_e| + |k_2||c_\theta|)`
+       entrywise. Stable where :math:`\max_i(\operatorname{Re}\lambda_i +
+       r_i) < 0`, not stable where :math:`\max_i(\operatorname{Re}\lambda_i -
+       r_i) > 0`, otherwise undecided with the bound
+       :math:`B = 2\max_i r_i`: then the rightmost eigenvalue satisfies
+       :math:`|\operatorname{Re}\lambda_{max}| \le B`. So every point whose
+       rightmost eigenvalue is farther than :math:`B` from the axis is
+       decided.
+
+    With a delay the verdict is the root count of
+    :func:`~fws_control.delay.unstable_root_count` (one operating point,
+    scalar ratio): 0 stable, > 0 not stable, undecided where the count is
+    (a root on, or within the frequency resolution of, the axis; bound
+    ``inf``) unless :math:`p(0) \le 0` certainly (with the coefficient's
+    error bound): :math:`D(0) = p(0)` does not depend on the delay, so that
+    is a root at ``s = 0`` or a positive real root, not stable.
+
+    Parameters
+    ----------
+    plant : LateralPlant, control.StateSpace or Vehicle
+        The plant (see :mod:`fws_control.plant`), of any order.
+    gains : SteeringGains
+        Gains and ratio; arrays broadcast with each other and with the
+        operating points of a :class:`LateralPlant`.
+    delay : float, optional
+        Input delay on the steering command [s], >= 0.
+    speed, curvature, model : optional
+        With a :class:`Vehicle` only, as in :func:`linearize`.
+
+    Returns
+    -------
+    StabilityVerdict
+        ``code`` and ``bound`` have the broadcast shape of the gains and
+        operating points.
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> plant = fws.LateralPlant(veh, speed=5.0)
+    >>> v = fws.stability_verdict(plant, fws.SteeringGains(0.1, 0.5, ratio=0.0))
+    >>> int(v.code), bool(v.stable)
+    (1, True)
+    """
+    g = check_gains(gains)
+    if check_delay(delay) > 0.0:
+        count = np.asarray(
+            unstable_root_count(
+                plant, g, delay=delay, speed=speed, curvature=curvature, model=model
             )
         )
-        for j in range(cp.order + 1)
-    ]
-    if cp.order == 2:
-        # Closed form of eqs. (35)-(36); monic, so p1 > 0 and p0 > 0.
-        out = (cols[1] > tol[1]) & (cols[2] > tol[2])
-    else:
-        out = hurwitz_columns(cols)
-        for c, t in zip(cols[1:], tol[1:], strict=True):
-            out &= c > t  # every coefficient of a Hurwitz polynomial is > 0
-    return bool(out) if np.ndim(out) == 0 else out
+        code = np.where(
+            count == 0, STABLE, np.where(count > 0, NOT_STABLE, UNDECIDED)
+        ).astype(np.int8)
+        if np.any(code == UNDECIDED):
+            # D(0) = p(0) does not depend on the delay: p(0) = 0 is a root at
+            # s = 0, and p(0) < 0 a positive real root (D(sigma) -> +inf as
+            # sigma -> +inf, since deg q < deg d). Both are decided.
+            p_ = as_plant(plant, speed=speed, curvature=curvature, model=model)
+            cp = characteristic_coefficients(p_, ratio=resolve_ratio(p_, g.ratio))
+            pc, rc = cp.coefficient_bounds(g.k1, g.k2)
+            sign = np.sign(pc[0])
+            at_zero = np.broadcast_to(sign * pc[-1] + rc[-1] <= 0, code.shape)
+            code = np.where((code == UNDECIDED) & at_zero, NOT_STABLE, code)
+            code = code.astype(np.int8)
+        bound = np.where(code == UNDECIDED, np.inf, 0.0)
+        return StabilityVerdict(code=code, bound=bound)
+    p = as_plant(plant, speed=speed, curvature=curvature, model=model)
+    ratio = resolve_ratio(p, g.ratio)
+    cp = characteristic_coefficients(p, ratio=ratio)
+    k1, k2 = np.asarray(g.k1, dtype=float), np.asarray(g.k2, dtype=float)
+    code = _polynomial_verdict(cp, k1, k2)
+    bound = np.zeros(code.shape)
+    todo = np.flatnonzero(code.ravel() == UNDECIDED)
+    if todo.size:
+        sub, b = _eigen_verdict(loop_matrices(p), ratio, k1, k2, code.shape, todo)
+        code.reshape(-1)[todo] = sub
+        bound.reshape(-1)[todo] = b
+    return StabilityVerdict(code=code, bound=bound)
 
 
 def is_stable(
@@ -177,7 +472,13 @@ def is_stable(
     curvature: Any = None,
     model: Any = None,
 ) -> bool | np.ndarray:
-    """Asymptotic stability of the linear closed loop.
+    """Asymptotic stability of the linear closed loop (proved, never guessed).
+
+    True only where :func:`stability_verdict` proves stability; False where
+    it proves a pole with real part >= 0 *and* where it cannot decide (the
+    rightmost pole within the stated rounding bound of the imaginary axis,
+    or an undecided root count with a delay). Use :func:`stability_verdict`
+    to tell "not stable" from "undecided".
 
     Parameters
     ----------
@@ -191,16 +492,16 @@ def is_stable(
         Input delay on the steering command [s], >= 0. With a delay the
         verdict is the root count of
         :func:`~fws_control.delay.unstable_root_count` (one operating point,
-        scalar ratio); undecided points (a root on the axis) are not stable.
+        scalar ratio).
     speed, curvature, model : optional
         With a :class:`Vehicle` only, as in :func:`linearize`.
 
     Returns
     -------
     bool or ndarray of bool
-        True where every closed-loop pole has a negative real part (closed
-        form for two states, :func:`routh_hurwitz` otherwise). Points on a
-        boundary (a pole on the imaginary axis) are not stable.
+        True where every closed-loop pole certainly has a negative real part
+        (see :func:`stability_verdict` for the method and its error bound).
+        Points on a boundary (a pole on the imaginary axis) are not stable.
 
     Examples
     --------
@@ -215,17 +516,9 @@ def is_stable(
            [0, 0, 0],
            [0, 0, 1]])
     """
-    g = check_gains(gains)
-    if check_delay(delay) > 0.0:
-        count = unstable_root_count(
-            plant, g, delay=delay, speed=speed, curvature=curvature, model=model
-        )
-        out = count == 0
-        return bool(out) if out.ndim == 0 else out
-    cp = characteristic_coefficients(
-        plant, ratio=g.ratio, speed=speed, curvature=curvature, model=model
-    )
-    return _stable_from_polynomial(cp, np.asarray(g.k1), np.asarray(g.k2))
+    return stability_verdict(
+        plant, gains, delay=delay, speed=speed, curvature=curvature, model=model
+    ).stable
 
 
 @dataclass(frozen=True)

@@ -125,6 +125,7 @@ RECORD_CLASSES = {
     "StabilityBoundaries": "result record (real_root, complex_root, lines)",
     "BoundaryCurve": "result record (omega, k1, k2 arrays)",
     "StabilityChart": "result record of stability_chart",
+    "StabilityVerdict": "result record of stability_verdict (code, bound)",
     "DelayMarginChart": "result record of delay_margin_chart",
     "CriticalDelay": "result record of critical_delay (delay, frequency, ...)",
     "ParameterBox": "parameter record: one interval or value per parameter",
@@ -176,6 +177,10 @@ POSITIONAL_EXCEPTIONS = {
     "AffinePolynomial.coefficients": (
         {"k1", "k2"},
         "spec: .coefficients(k1, k2) evaluates at gain points",
+    ),
+    "AffinePolynomial.coefficient_bounds": (
+        {"k1", "k2"},
+        "evaluates the coefficients and their bounds at gain points",
     ),
     "AffinePolynomial.evaluate": (
         {"s", "k1", "k2"},

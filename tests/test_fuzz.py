@@ -68,7 +68,7 @@ Deliberately excluded (with the reason)
 * ``Path``, ``LateralController``: abstract base classes (not instantiable).
 * Result records built by the library and not meant to be built by hand --
   ``AffinePolynomial``, ``LoopMatrices``, ``StabilityBoundaries``,
-  ``BoundaryCurve``, ``CriticalDelay``, ``StabilityChart``,
+  ``BoundaryCurve``, ``CriticalDelay``, ``StabilityChart``, ``StabilityVerdict``,
   ``ControllerComparison``, ``DelayMarginChart``, ``TurningGeometry``,
   ``LinearNonlinearComparison``, ``SimulationResult``, ``TrackingMetrics``,
   ``MostStableDesign``,
@@ -120,6 +120,7 @@ EXCLUDED = {
     "BoundaryCurve": "result record",
     "CriticalDelay": "result record",
     "StabilityChart": "result record",
+    "StabilityVerdict": "result record",
     "ControllerComparison": "result record",
     "DelayMarginChart": "result record",
     "TurningGeometry": "result record",
@@ -418,6 +419,9 @@ CASES: dict[str, Case] = {
         post=gains_placed,
     ),
     "is_stable": Case(fws.is_stable, PG, dict(delay=0.0)),
+    "stability_verdict": Case(
+        fws.stability_verdict, PG, dict(delay=0.0), post=finite_or_inf
+    ),
     "StabilityBoundary": Case(
         fws.StabilityBoundary,
         dict(alpha=1.0, beta=0.0, gamma=-0.5, condition="p0 > 0"),
@@ -981,12 +985,7 @@ TARGETED: dict[str, list[Probe]] = {
 
 #: Known failures that other parts of the code must fix (see the module notes).
 #: (callable, argument) -> reason; argument None: every argument.
-KNOWN: dict[tuple[str, str | None], str] = {
-    ("as_plant", "plant"): "non-finite StateSpace entries not yet refused by as_plant",
-    ("closed_loop", "plant"): (
-        "non-finite StateSpace entries not yet refused by as_plant"
-    ),
-}
+KNOWN: dict[tuple[str, str | None], str] = {}
 
 
 @pytest.mark.parametrize("name", list(CASES))
