@@ -52,7 +52,13 @@ where a channel reaches its limit (or leaves it) is located as an event on
 the dense output, the step is cut there and the integration restarts with
 that channel held at the limit (or free), so that the right-hand side is
 smooth within every step (``switching=False`` clips with min/max inside the
-right-hand side instead, as the numpy engine does).
+right-hand side instead, as the numpy engine does). A channel released from
+a limit starts the next step at that limit (to the rounding of the located
+switch), so in that step only its opposite limit switches it: a command
+that crosses from one limit to the other within a step is then located
+there instead of being switched back at the restart without end
+(``tests/test_compiled_limits.py``; agreement with the numpy engine on
+random rate-limited scenarios: ``benchmarks/bench_limit_agreement.py``).
 
 With ``integrate_compiled(..., solution=[])`` every run's dense output is
 kept (:class:`CompiledSolution`), and :func:`compiled_peaks` finds the
