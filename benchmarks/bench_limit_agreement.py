@@ -28,7 +28,7 @@ the clips' kinks inside its steps (min/max in its right-hand side): there
 DOP853's error estimate is not that of a smooth solution, and the numpy
 engine is the less accurate of the two (``tests/test_compiled_limits.py``
 measured it up to 1.03e-6 m off both compiled methods, which agree with
-each other to 4e-8 m). 1e-5 m is 1/50 of the 5e-4 m the compiled engine
+each other to 3.9e-8 m there). 1e-5 m is 1/50 of the 5e-4 m the compiled engine
 was off when it integrated across a switch of the clips.
 
 Run: ``python benchmarks/bench_limit_agreement.py [--count 1000]`` (about

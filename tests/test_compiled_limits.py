@@ -12,11 +12,12 @@ compiled DOP853 and Radau, both with the switches located: two accurate
 integrations at ``rtol = 1e-10``, ``atol = 1e-12`` each stay within 10-100
 local tolerances (``|e| <= 5`` m: ~5e-10 m each) of the exact solution plus
 the switches' roots (4 eps relative); 1e-6 m leaves a factor of ~1000 for
-the error growth over a run (measured: <= 4e-8 m). ``TOL_NUMPY = 1e-5`` m
+the error growth over a run (measured: <= 4.1e-7 m on the first 40
+scenarios of :func:`_scenarios`). ``TOL_NUMPY = 1e-5`` m
 against the numpy engine, which integrates across the clips' kinks inside
 its steps (min/max in the right-hand side), where DOP853's error estimate
 is not that of a smooth solution (measured: up to 1.03e-6 m off both
-compiled methods, which agree to 4e-8 m there). Both are far below the
+compiled methods, which agree to 3.9e-8 m there). Both are far below the
 1e-4 to 3e-3 m of a run integrated across a missed switch.
 ``benchmarks/bench_limit_agreement.py`` runs 1000 such scenarios.
 """
