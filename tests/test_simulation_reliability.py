@@ -338,6 +338,8 @@ def test_max_steps_marks_a_run_failed_instead_of_running_on(monkeypatch):
     )  # fmt: skip
     assert res.status.tolist() == ["ok", "failed"]
     assert "more than 30 solver steps (MAX_STEPS)" in res.message[1]
+    # the message names the tolerances, a cause besides stiffness
+    assert "rtol=1e-10, atol=1e-12" in res.message[1]
 
 
 # --------------------------------------------------------------------------

@@ -52,7 +52,13 @@ where a channel reaches its limit (or leaves it) is located as an event on
 the dense output, the step is cut there and the integration restarts with
 that channel held at the limit (or free), so that the right-hand side is
 smooth within every step (``switching=False`` clips with min/max inside the
-right-hand side instead, as the numpy engine does).
+right-hand side instead, as the numpy engine does). A channel released from
+a limit starts the next step at that limit (to the rounding of the located
+switch), so in that step only its opposite limit switches it: a command
+that crosses from one limit to the other within a step is then located
+there instead of being switched back at the restart without end
+(``tests/test_compiled_limits.py``; agreement with the numpy engine on
+random rate-limited scenarios: ``benchmarks/bench_limit_agreement.py``).
 
 With ``integrate_compiled(..., solution=[])`` every run's dense output is
 kept (:class:`CompiledSolution`), and :func:`compiled_peaks` finds the
@@ -282,7 +288,10 @@ _NQ = 18
 _P_SPEED, _P_K1, _P_K2, _P_RATIO = 0, 1, 2, 3
 # modes of the four clips (front/rear angle, front/rear rate): -1, 0 or +1
 _P_MODE = 4
-_NP = 8
+# the held mode (-1 or +1) each clip was released from at the restart of
+# the current step, 0 otherwise (see _events)
+_P_RELEASED = 8
+_NP = 12
 # rows of compiled_outputs, in the order of engine.SIGNALS
 _NSIG = len(SIGNALS)
 _N_STOPS = 4
@@ -576,7 +585,15 @@ def _stop_events(y, p, q, breaks, coefs, g):
 
 @_jit
 def _events(y, p, q, breaks, coefs, g):
-    """Event functions: 0-3 stop a run, 4-7 switch a clip's mode (at <= 0)."""
+    """Event functions: 0-3 stop a run, 4-7 switch a clip's mode (at <= 0).
+
+    A clip released from its limit at the start of the step (``p[8 + j]``,
+    with ``p`` of 12 entries) is at that limit there: it can only move away
+    from it, so only the opposite limit switches it in that step. With
+    ``|raw|`` against the limit, the released clip would start the step on
+    the wrong side by the rounding of the located switch and be switched
+    back at once, for ever, when the step crosses to the opposite limit.
+    """
     _stop_events(y, p, q, breaks, coefs, g)
     if q[_Q_SWITCH] == 0.0:
         for j in range(_N_STOPS, _N_EVENTS):
@@ -585,10 +602,15 @@ def _events(y, p, q, breaks, coefs, g):
     # clip j: free (mode 0) while |raw| < limit, held while mode * raw > limit
     v = np.empty(8)
     _clip_values(y, p, q, breaks, coefs, v)
+    released = p.size >= _NP
     for j in range(4):
         mode = p[_P_MODE + j]
         if mode == 0.0:
-            g[_N_STOPS + j] = v[4 + j] - abs(v[j])
+            side = p[_P_RELEASED + j] if released else 0.0
+            if side == 0.0:
+                g[_N_STOPS + j] = v[4 + j] - abs(v[j])
+            else:
+                g[_N_STOPS + j] = v[4 + j] + side * v[j]
         else:
             g[_N_STOPS + j] = mode * v[j] - v[4 + j]
 
@@ -1001,6 +1023,8 @@ def _drivers(method):
             v = np.empty(8)
             for j in range(4):
                 p[_P_MODE + j] = 0.0
+                if p.size >= _NP:
+                    p[_P_RELEASED + j] = 0.0
             for j in range(4):
                 _clip_values(y, p, q, breaks, coefs, v)
                 if abs(v[j]) > v[4 + j]:
@@ -1219,12 +1243,24 @@ def _drivers(method):
                     y[i] = ytmp[i]
                 t = t_hit
                 site = j_hit - _N_STOPS
+                track = p.size >= _NP
+                v = np.empty(8)
+                if track:
+                    # a clip released before and now inside its limits
+                    # watches both limits again
+                    _clip_values(y, p, q, breaks, coefs, v)
+                    for jj in range(4):
+                        if p[_P_RELEASED + jj] != 0.0 and abs(v[jj]) < v[4 + jj]:
+                            p[_P_RELEASED + jj] = 0.0
                 if p[_P_MODE + site] != 0.0:
+                    if track:
+                        p[_P_RELEASED + site] = p[_P_MODE + site]
                     p[_P_MODE + site] = 0.0
                 else:
-                    v = np.empty(8)
                     _clip_values(y, p, q, breaks, coefs, v)
                     p[_P_MODE + site] = 1.0 if v[site] > 0 else -1.0
+                    if track:
+                        p[_P_RELEASED + site] = 0.0
                 switches += 1
                 if switches > _MAX_SWITCHES:
                     return (
@@ -1262,8 +1298,18 @@ def _drivers(method):
                 continue
             if t == t_bound:
                 return 0, t, steps, rejected_total, nfev, stiff, switches, rec, n_rec
-            for j in range(_N_EVENTS):
-                g_old[j] = g_new[j]
+            released = False
+            if q[_Q_SWITCH] != 0.0 and p.size >= _NP:
+                for j in range(4):
+                    if p[_P_RELEASED + j] != 0.0:
+                        p[_P_RELEASED + j] = 0.0
+                        released = True
+            if released:
+                # a step after a release: the clips watch both limits again
+                _events(y, p, q, breaks, coefs, g_old)
+            else:
+                for j in range(_N_EVENTS):
+                    g_old[j] = g_new[j]
 
     def solve_batch(
         Y0, P, q, breaks, coefs, t_eval, rtol, atol, out, codes, t_stop, stats, rec,
