@@ -507,8 +507,12 @@ def _lateral_coefficients(plant: LateralPlant, ratio) -> AffinePolynomial:
     v2k2 = V**2 * kappa**2
     # Error bounds against the exact formulas of the double-precision inputs:
     # at most four roundings per term (c = 1 + f^2 kappa^2 two, c - a one, the
-    # products the rest), taken on the magnitudes before (c - a) cancels.
-    ca = (np.abs(c) + np.abs(a)) / abs(f)
+    # products the rest), taken on the magnitudes before (c - a) cancels. On a
+    # straight path c = 1 exactly, so c - a is one correctly rounded
+    # subtraction of exact operands: its error is relative to |c - a| itself,
+    # and a structural zero (a = 1, the heading uncontrollable) stays an
+    # exact zero that decides "not stable" instead of "undecided".
+    ca = np.where(kappa == 0.0, np.abs(c - a), np.abs(c) + np.abs(a)) / abs(f)
     return AffinePolynomial(
         open_loop=np.stack([one, zero, v2k2], -1),
         n1=np.stack([zero, V * a, V**2 * (c - a) / f], -1),

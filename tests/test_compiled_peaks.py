@@ -88,6 +88,10 @@ CASES = {
 # curvature; its curvature *rate* (in the feedforward's rate and the
 # lateral acceleration) is one order less accurate: 1e-7 (measured 5e-8).
 TOL = {"spline": 1e-7}
+# At an angle limit the numpy engine integrates across the clip's kink (the
+# compiled engine locates it): its lateral acceleration's peak is 1.1e-9
+# relative off there (measured with scipy 1.17).
+NUMPY_TOL = {"angle_limits": 3e-9}
 # With the rate limits the compiled peak times of the rates and the lateral
 # acceleration lie at a corner of the rate clip, which the compiled engine
 # locates as an event and the numpy engine does not (min/max): there the
@@ -111,7 +115,7 @@ def test_exact_peaks_as_numpy_engine(name):
     assert got.status == ref.status
     assert got.t_stop == pytest.approx(ref.t_stop, rel=1e-9)
     assert got.peaks.exact and ref.peaks.exact
-    tol = TOL.get(name, 1e-9)
+    tol = TOL.get(name, NUMPY_TOL.get(name, 1e-9))
     for sig in PEAK_SIGNALS:
         p, r = getattr(got.peaks, sig), getattr(ref.peaks, sig)
         assert p.value == pytest.approx(r.value, rel=tol, abs=1e-14), sig

@@ -243,6 +243,13 @@ def _draw_panel(ax, panel: ChartPanel, legend: bool = True) -> list:
             design=True,
         )
         notes += ch.notes(label=lab)
+    # one legend entry for the undecided points of all overlaid charts (each
+    # chart's count is in the notes)
+    undecided = [h for h in handles if h.get_label().startswith("undecided")]
+    handles = [h for h in handles if h not in undecided]
+    if undecided:
+        undecided[0].set_label("undecided (hatched)")
+        handles.append(undecided[0])
     handles += [
         Line2D([], [], color="0.3", ls="-", label=r"$p_1 = 0$ (eq. 35)"),
         Line2D([], [], color="0.3", ls="--", label=r"$p_0 = 0$ (eq. 36)"),
