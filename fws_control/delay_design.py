@@ -35,7 +35,7 @@ from .delay import critical_delay, rightmost_roots, unstable_root_count
 from .gains import SteeringGains
 from .linear import characteristic_coefficients, horner
 from .plant import as_plant, loop_matrices
-from .validation import check_delay
+from .validation import check_delay, check_scalar
 
 __all__ = ["MostStableDesign", "most_stable_gains"]
 
@@ -189,6 +189,18 @@ class _Loop:
         g = SteeringGains(float(k1), float(k2), float(a))
         return complex(rightmost_roots(self.plant, g, delay=self.tau, n=1)[0])
 
+    def trial(self, k1, k2, a) -> complex | None:
+        """The rightmost root at a search point, None where it is not found.
+
+        A start-grid or line-search point where :func:`rightmost_roots` does
+        not converge counts as no improvement (the search backs off); the
+        returned design is certified on its own.
+        """
+        try:
+            return self.root(k1, k2, a)
+        except RuntimeError:
+            return None
+
     def gradient(self, k1, k2, a, s) -> np.ndarray:
         """d(Re s)/d(k1, k2, a) at a simple root s."""
         tau = self.tau
@@ -341,12 +353,10 @@ def most_stable_gains(
         or not (4 <= grid <= 40)
     ):
         raise ValueError(f"grid must be an integer in [4, 40], got {grid!r}")
-    margin = float(margin)
-    if not (math.isfinite(margin) and margin > 0):
+    margin = check_scalar("margin", margin)
+    if not margin > 0:
         raise ValueError(f"margin must be a finite number > 0, got {margin!r}")
-    a0 = float(ratio)
-    if not math.isfinite(a0):
-        raise ValueError(f"ratio must be finite, got {ratio!r}")
+    a0 = check_scalar("ratio", ratio)
     a_lo = a_hi = a0
     if ratio_bounds is not None:
         a_lo, a_hi = _check_bounds("ratio_bounds", ratio_bounds)
@@ -359,14 +369,16 @@ def most_stable_gains(
     if loop.d.ndim != 1:
         raise ValueError("most_stable_gains needs one operating point")
     s0 = 0.25j / tau
-    dmag = abs(horner(loop.d, s0))
+    with np.errstate(over="ignore", invalid="ignore"):  # tiny delays: refused below
+        dmag = abs(horner(loop.d, s0))
     scale = []
     for name, bounds, n in (
         ("k1_bounds", k1_bounds, loop.n1 + a0 * loop.dn1),
         ("k2_bounds", k2_bounds, loop.n2 + a0 * loop.dn2),
     ):
         if bounds is None:
-            nm = abs(horner(n, s0))
+            with np.errstate(over="ignore", invalid="ignore"):
+                nm = abs(horner(n, s0))
             if nm == 0.0:
                 raise ValueError(
                     f"the gain of {name[:2]} does not reach the loop at ratio "
@@ -376,6 +388,12 @@ def most_stable_gains(
             # (a delay allows a bandwidth of a fraction of 1/tau); zero gain
             # would leave the plant's own poles at the origin
             top = 2.0 * dmag / nm
+            if not (math.isfinite(top) and top > 0.0):
+                raise ValueError(
+                    f"delay={delay!r} s is too small for a start grid of the gains "
+                    f"(its scale {top!r} is not finite); give {name}, or design "
+                    "without the delay (double_root_gains, stability_chart)"
+                )
             bounds = (top / 100.0, top)
         scale.append(_check_bounds(name, bounds))
     (k1_lo, k1_hi), (k2_lo, k2_hi) = scale
@@ -389,7 +407,8 @@ def most_stable_gains(
     alpha = np.empty((grid, grid))
     for i, b in enumerate(k2):
         for j, c in enumerate(k1):
-            alpha[i, j] = loop.root(c, b, a0).real
+            s = loop.trial(c, b, a0)
+            alpha[i, j] = math.inf if s is None else s.real
     order = np.argsort(alpha, axis=None)
     # search in units of the grid box, so that k1 and k2 weigh alike
     unit = np.array([k1_hi - k1_lo, k2_hi - k2_lo, max(a_hi - a_lo, 1.0)])
@@ -400,7 +419,9 @@ def most_stable_gains(
         if free and not a_lo <= a <= a_hi:
             return math.inf, np.zeros(x.size)
         g1, g2 = x[0] * unit[0], x[1] * unit[1]
-        s = loop.root(g1, g2, a)
+        s = loop.trial(g1, g2, a)
+        if s is None:
+            return math.inf, np.zeros(x.size)
         grad = loop.gradient(g1, g2, a, s) * unit
         return s.real, grad[: x.size]
 

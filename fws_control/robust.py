@@ -74,6 +74,7 @@ from .validation import (
     MAX_CURVATURE,
     MAX_RATIO,
     MAX_SPEED,
+    check_finite,
     check_magnitude,
     check_scalar,
 )
@@ -969,9 +970,8 @@ def _axis(name: str, values) -> np.ndarray:
 
     if values is None:
         return DEFAULT_GAIN_AXIS.copy()
-    bad = isinstance(values, str) or np.iscomplexobj(values)
-    arr = None if bad else np.asarray(values, dtype=float)
-    if arr is None or arr.ndim != 1 or arr.size < 2 or not np.all(np.isfinite(arr)):
+    arr = np.asarray(check_finite(name, values), dtype=float)
+    if arr.ndim != 1 or arr.size < 2:
         raise ValueError(
             f"{name} must be a 1-D array of at least 2 finite gains, got {values!r}"
         )
