@@ -851,10 +851,11 @@ class SimulationResult:
 
         A result that keeps no time series (``signals="metrics"``) gives
         one row per run instead: ``run``, the per-run and batch columns
-        above, and the exact peaks ``peak_e, peak_delta_f, peak_delta_r,
-        peak_delta_f_rate, peak_delta_r_rate, peak_lateral_accel`` (see
-        :attr:`peaks`; :meth:`TrackingMetrics.to_pandas
-        <fws_control.TrackingMetrics.to_pandas>` adds the horizon metrics).
+        above, and the exact peaks ``peak_e``, ``peak_delta_f``,
+        ``peak_delta_r``, ``peak_delta_f_rate``, ``peak_delta_r_rate`` and
+        ``peak_lateral_accel`` (see :attr:`peaks`;
+        :meth:`fws_control.TrackingMetrics.to_pandas` adds the horizon
+        metrics).
 
         Raises
         ------
