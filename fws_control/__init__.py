@@ -91,6 +91,7 @@ if TYPE_CHECKING:  # static tools see the names; at run time __getattr__ loads t
     )
     from .exceptions import (
         AmbiguousProjectionError,
+        ClusterLostError,
         SignalNotKeptError,
         SingularStateError,
         UncontrollableError,
@@ -267,6 +268,7 @@ __all__ += [
     "Projection",
     "AmbiguousProjectionError",
     "SignalNotKeptError",
+    "ClusterLostError",
 ]
 # the dynamic single-track model (issue 10)
 __all__ += [
@@ -354,6 +356,7 @@ _EXPORTS = {
     ),
     "exceptions": (
         "AmbiguousProjectionError",
+        "ClusterLostError",
         "SignalNotKeptError",
         "SingularStateError",
         "UncontrollableError",

@@ -1,9 +1,10 @@
 """Exceptions of fws_control, in one place.
 
-Every exception is a :class:`ValueError` subclass, so that code that catches
-bad input in general keeps working, while callers that care can tell a design
-that cannot exist from a singular state of the model or an ambiguous
-projection.
+Every exception about the input is a :class:`ValueError` subclass, so that
+code that catches bad input in general keeps working, while callers that care
+can tell a design that cannot exist from a singular state of the model or an
+ambiguous projection. :class:`ClusterLostError` is a :class:`RuntimeError`:
+the input was fine, the environment failed.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ __all__ = [
     "SingularStateError",
     "AmbiguousProjectionError",
     "SignalNotKeptError",
+    "ClusterLostError",
 ]
 
 
@@ -101,3 +103,32 @@ class SignalNotKeptError(ValueError, AttributeError):
     >>> hasattr(res, "theta"), res.e.shape
     (False, (1, 101))
     """
+
+
+class ClusterLostError(RuntimeError):
+    """The Dask cluster of a batch lost all its workers; finished runs are kept.
+
+    Raised by :func:`~fws_control.simulate_batch` (``client=``) once the
+    cluster has had no worker for a bounded wait (60 s): without a nanny
+    nothing restarts a killed worker, and the pending tasks would wait
+    forever. The chunks that finished before are not lost: :attr:`result` is
+    the batch's :class:`~fws_control.simulation.SimulationResult` with their
+    runs, and the runs that were pending marked ``"failed"`` (NaN data, a
+    message saying why). A :class:`RuntimeError`, not a ``ValueError``: the
+    input was fine, the environment failed.
+
+    Attributes
+    ----------
+    result : SimulationResult
+        The whole batch: finished runs as computed, lost runs failed.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> issubclass(fws.ClusterLostError, RuntimeError)
+    True
+    """
+
+    def __init__(self, message: str, *, result=None) -> None:
+        super().__init__(message)
+        self.result = result

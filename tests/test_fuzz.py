@@ -112,6 +112,7 @@ EXCLUDED = {
     "UncontrollableError": "exception class",
     "AmbiguousProjectionError": "exception class",
     "SignalNotKeptError": "exception class",
+    "ClusterLostError": "exception class",
     "Path": "abstract base class",
     "LateralController": "abstract base class",
     "AffinePolynomial": "result record",

@@ -2,9 +2,10 @@
 
 Without a nanny nothing restarts a killed worker, and the scheduler keeps
 the pending tasks forever. The reference is the same batch run here
-(client=None): the chunk that finished before the workers went is kept
-bitwise, the other is marked failed with NaN data, and the call returns
-within a bounded wait instead of waiting forever.
+(client=None): the call raises ClusterLostError within a bounded wait
+instead of waiting forever; the result it carries keeps the chunk that
+finished before the workers went bitwise, and marks the other failed with
+NaN data.
 """
 
 from __future__ import annotations
@@ -51,7 +52,7 @@ class _GatedClient:
         return self.client.scheduler_info(**kwargs)
 
 
-def test_cluster_without_workers_gives_up_after_a_bounded_wait(monkeypatch):
+def test_cluster_without_workers_raises_after_a_bounded_wait(monkeypatch):
     distributed = dask_distributed()
     monkeypatch.setattr(runners, "_LOST_CLUSTER_WAIT", 1.0, raising=False)
     monkeypatch.setattr(runners, "_POLL_INTERVAL", 0.1, raising=False)
@@ -83,11 +84,14 @@ def test_cluster_without_workers_gives_up_after_a_bounded_wait(monkeypatch):
 
         def call():
             try:
-                with pytest.warns(RuntimeWarning, match="2 runs of 1 lost"):
-                    box["res"] = fws.simulate_batch(
+                with pytest.raises(
+                    fws.ClusterLostError, match="no worker for 1 s: .*; 2 pending runs"
+                ) as info:
+                    fws.simulate_batch(
                         VEH, Arc(0.1), CURVE_GAINS_WITH_STOP,
                         client=_GatedClient(client), **kw,
                     )  # fmt: skip
+                box["res"] = info.value.result
             except BaseException as exc:  # reported by the main thread
                 box["error"] = exc
 

@@ -40,6 +40,7 @@ from scipy.integrate import DOP853, RK23, RK45
 from ..baselines import LateralController
 from ..controllers import check_feedforward
 from ..dynamics import require_dynamics
+from ..exceptions import ClusterLostError
 from ..gains import SteeringGains
 from ..metrics import HORIZON_METRICS, tracking_metrics
 from ..paths import Path
@@ -510,7 +511,8 @@ class _NoBar:
 
 
 # Seconds simulate_batch waits on a Dask cluster that has no worker
-# before it gives up the pending chunks (marked "failed", see _run_on_dask):
+# before it gives up the pending chunks (marked "failed", then
+# ClusterLostError, see _run_on_dask):
 # long enough for a cluster that scales up from zero to start one.
 _LOST_CLUSTER_WAIT = 60.0
 
@@ -529,7 +531,7 @@ def _has_workers(client) -> bool:
         return True
 
 
-def _run_on_dask(client, bounds, args, keep, t_size, bar, run) -> None:
+def _run_on_dask(client, bounds, args, keep, t_size, bar, run) -> str | None:
     """Run the chunks on a Dask cluster; keep every chunk that finishes.
 
     A client that cannot take the tasks (closed) raises at once, before any
@@ -539,9 +541,12 @@ def _run_on_dask(client, bounds, args, keep, t_size, bar, run) -> None:
     a :class:`RuntimeWarning` says how many runs were lost. A cluster left
     without workers (all killed, no nanny to restart them) would keep the
     tasks pending forever: once it has had no worker for
-    ``_LOST_CLUSTER_WAIT`` (60) seconds, the pending tasks are cancelled and
-    lost in the same way. An exception raised by the simulation itself
-    (e.g. an ambiguous initial projection) propagates, as it would locally.
+    ``_LOST_CLUSTER_WAIT`` (60) seconds, the pending tasks are cancelled,
+    their runs marked failed in the same way, and the message returned:
+    the caller builds the result of the finished chunks and raises
+    :class:`~fws_control.ClusterLostError` with it. An exception raised by
+    the simulation itself (e.g. an ambiguous initial projection)
+    propagates, as it would locally.
     """
     try:
         from dask.distributed import wait
@@ -570,6 +575,7 @@ def _run_on_dask(client, bounds, args, keep, t_size, bar, run) -> None:
     pending = dict(futures)
     lost = []
     task_error = None
+    cluster_lost = None  # the message once the cluster has no worker left
     idle_since = None  # since when the cluster has had no worker
     try:
         while pending and task_error is None:
@@ -612,6 +618,7 @@ def _run_on_dask(client, bounds, args, keep, t_size, bar, run) -> None:
                     f"the Dask cluster has had no worker for {_LOST_CLUSTER_WAIT:g} "
                     "s: its workers are gone"
                 )
+                cluster_lost = str(exc)
                 for fut, j in pending.items():
                     fut.cancel()
                     lost.append((j, exc))
@@ -630,6 +637,13 @@ def _run_on_dask(client, bounds, args, keep, t_size, bar, run) -> None:
             f"({type(exc).__name__}: {exc}); the other chunks were kept"
         )
         keep(j, _lost_chunk(hi - lo, t_size, note))
+    if cluster_lost is not None:
+        runs = sum(bounds[j][1] - bounds[j][0] for j, _ in lost)
+        return (
+            f"simulate_batch: {cluster_lost}; {runs} pending runs were not "
+            "simulated (marked 'failed', NaN data); the finished chunks are "
+            "kept in this error's `result`"
+        )
     if lost:
         runs = sum(bounds[j][1] - bounds[j][0] for j, _ in lost)
         warnings.warn(
@@ -638,6 +652,7 @@ def _run_on_dask(client, bounds, args, keep, t_size, bar, run) -> None:
             RuntimeWarning,
             stacklevel=3,
         )
+    return None
 
 
 #: Most solver steps a delay may force over the run (duration / delay).
@@ -1056,9 +1071,11 @@ def simulate_batch(
         Submit the chunks to this Dask cluster (needs the extra
         ``distributed``). The vehicle, path and arguments are pickled to the
         workers. Chunks that the cluster loses (a task cancelled, the
-        scheduler gone, or no worker left for 60 s) are marked ``"failed"``
-        with NaN data and a :class:`RuntimeWarning`; the finished chunks are
-        kept.
+        scheduler gone) are marked ``"failed"`` with NaN data and a
+        :class:`RuntimeWarning`; the finished chunks are kept. A cluster
+        left with no worker for 60 s raises
+        :class:`~fws_control.ClusterLostError`, whose ``result`` holds the
+        finished chunks (the pending runs marked ``"failed"``).
     progress : bool, optional
         Show a tqdm progress bar over the chunks. ``None`` (default): only if
         standard error is a terminal.
@@ -1125,6 +1142,9 @@ def simulate_batch(
         If `gains` is not a SteeringGains or a sequence of them,
         `signals` is not None, a str or a sequence of str, or `out` is not a
         numpy array.
+    ClusterLostError
+        If the Dask cluster of `client` has had no worker for 60 s (its
+        ``result`` keeps the finished chunks).
 
     Examples
     --------
@@ -1361,6 +1381,7 @@ def simulate_batch(
             if whole is not None:
                 whole[lo:hi] = part
 
+    cluster_lost = None
     try:
         if client is None:
             # The compiled engine writes all signals straight into the
@@ -1376,11 +1397,11 @@ def simulate_batch(
                     keep(j, run(*args(lo, hi)))
                 bar.update(1)
         else:
-            _run_on_dask(client, bounds, args, keep, t.size, bar, run)
+            cluster_lost = _run_on_dask(client, bounds, args, keep, t.size, bar, run)
     finally:
         bar.close()
 
-    return SimulationResult(
+    result = SimulationResult(
         t=t,
         signals=data,
         run_status=status.astype(str),
@@ -1409,3 +1430,6 @@ def simulate_batch(
         run_metrics=metrics,
         peaks_exact=exact,
     )
+    if cluster_lost is not None:
+        raise ClusterLostError(cluster_lost, result=result)
+    return result
