@@ -4,8 +4,8 @@ Samples the issue's domain (ratio in [-2, 2], |curvature| <= 0.3, speed in
 [1, 40] m/s, pole in [-5, -0.1], both models), skipping designs within 1e-4
 of the uncontrollable one (a = 1 on a straight path), and prints the worst
 relative differences against control.acker, control.place (poles split by
-1e-6) and the target polynomial (lambda - pole)^2; then the agreement of
-is_stable with closed-loop eigenvalues. Run: python benchmarks/accuracy_core.py
+1e-6) and the target polynomial (lambda - pole)^2.
+Run: python benchmarks/accuracy_core.py
 """
 
 import control as ct
@@ -23,12 +23,13 @@ def main(n: int = 5000, seed: int = 1) -> None:
         model = str(rng.choice(["exact", "paper"]))
         V, k = rng.uniform(1, 40), rng.uniform(-0.3, 0.3)
         a, lam = rng.uniform(-2, 2), rng.uniform(-5, -0.1)
-        c = fws.input_gain_factor(veh, k, model)
+        plant = fws.LateralPlant(veh, speed=V, curvature=k, model=model)
+        c = plant.input_gain_factor
         if (a * veh.wheelbase * k) ** 2 + (c - a) ** 2 <= 1e-4:
             continue
         used += 1
-        g = fws.double_root_gains(veh, V, k, a, lam, model=model)
-        lin = fws.linearize(veh, V, k, model)
+        g = fws.double_root_gains(plant, ratio=a, pole=lam)
+        lin = fws.linearize(plant)
         b = lin.B @ np.array([[1.0], [a]])
         got = np.array([g.k1, g.k2])
         for name, ref in (
@@ -39,7 +40,7 @@ def main(n: int = 5000, seed: int = 1) -> None:
             worst[name] = max(
                 worst[name], np.linalg.norm(got - ref) / np.linalg.norm(ref)
             )
-        poly = fws.characteristic_polynomial(veh, V, k, g, model)
+        poly = fws.characteristic_polynomial(plant, g)
         target = np.array([1.0, -2 * lam, lam**2])
         worst["poly"] = max(
             worst["poly"], np.abs(poly - target).max() / np.abs(target).max()

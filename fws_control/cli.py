@@ -1462,9 +1462,9 @@ def run() -> None:
     (:func:`gc.freeze`), so that the interpreter's last garbage collection
     does not traverse the hundreds of thousands of objects of python-control,
     scipy and matplotlib only to free memory the operating system reclaims
-    at exit anyway: 0.6-0.7 s of CPU after ``reproduce`` (measured with
-    ``benchmarks/bench_startup.py``, alternating with the previous version:
-    7.46 against 6.63 s for the whole process, see docs/performance.md).
+    at exit anyway: 0.6-0.7 s of CPU after ``reproduce`` (the whole
+    process 7.46 s with that last collection, 6.63 s without, measured with
+    ``benchmarks/bench_startup.py --baseline``).
     Modules are still torn down and ``atexit`` handlers still run; every
     file is closed by then (the commands write through context managers).
     Library code and tests call :func:`main`, which leaves the collector

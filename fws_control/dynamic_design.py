@@ -195,7 +195,11 @@ def steady_state_offset(
     exact to first order in the angles; the nonlinear model with linear
     tyres differs by terms of relative order :math:`\kappa^2` (0.29 % of
     the offset for the example below, 20 m/s on a 100 m radius, solved with
-    ``scipy.optimize.fsolve`` in ``tests/test_dynamic_steady.py``). It is reached
+    ``scipy.optimize.fsolve`` in ``tests/test_dynamic_steady.py``); for the
+    double-root design of :data:`~fws_control.vehicles.BMW_320I`
+    (:math:`\lambda_0 = -1`, ``ratio=0``) 0.34 % at 20 m/s on a 100 m
+    radius and 10 % at 5 m/s on a 10 m radius (``tests/test_doc_numbers.py``):
+    use it where the steering and slip angles are small. It is reached
     only if the closed loop is stable (:func:`fws_control.is_stable` on
     ``LateralPlant(..., model="dynamic")``). Saturating tyres need a
     numeric solution.

@@ -243,7 +243,7 @@ def _jit_inline(fn):
     # those of the calls (checked on arcs, a straight, a clothoid, angle
     # and rate limits with an actuator under DOP853 and Radau, and stops).
     # Measured on the paper's curve at 4000 runs (best of 5, interleaved
-    # with a copy of the package without it; docs/performance.md): the
+    # with a copy of the package without the inlining): the
     # integration 0.86x, the output stage 0.94x, the exact peaks 0.87x,
     # simulate_batch 0.91x. The cost: the first default simulate with an
     # empty cache took 22.5-23.5 instead of 16.4-17.0 s of CPU.
@@ -312,10 +312,10 @@ _MAX_SWITCHES = 100_000
 def _wrap_lap(s, period):
     """``s % period`` with Python's semantics (as np.mod), bit for bit.
 
-    Numba's float ``%`` (fmod, then CPython's sign fix-up) cost 17 ns per
-    call: 26 of the output stage's 207 us per run on the paper's curve (a
-    closed path), and it is paid at every evaluation of the right-hand side
-    too (about 700 per run). Within a lap and the neighbouring ones the
+    Numba's float ``%`` (fmod, then CPython's sign fix-up) costs 17 ns per
+    call, paid at every output time of a closed path and at every
+    evaluation of the right-hand side (about 700 per run on the paper's
+    curve). Within a lap and the neighbouring ones the
     result is computed as Python does without fmod: on [0, period)
     fmod(s, period) is s itself; on [period, 2 period) it is s - period,
     which is exact (Sterbenz); on [-period, 0) Python adds period to
@@ -335,8 +335,8 @@ def _wrap_lap(s, period):
 def _feedforward_angle(kappa, q):
     """``atan(f kappa)``, the feedforward angle; for the first table
     piece's constant curvature (an arc, a straight) the value computed once
-    in :func:`shared_parameters` with the same ``atan`` (16 ns a call: 25
-    of the output stage's 181 us per run on the paper's curve). A
+    in :func:`shared_parameters` with the same ``atan`` (16 ns a call,
+    paid at every output time and right-hand-side evaluation). A
     curvature of -0.0 gets the angle of +0.0."""
     if kappa == q[_Q_KAPPA0]:
         return q[_Q_FF_ANGLE0]

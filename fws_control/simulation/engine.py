@@ -273,11 +273,11 @@ def choose_method(
     integrates with ``"LSODA"``.
 
     The rule is the same for every run of a batch, whatever their number:
-    a run's accuracy must not depend on the batch it sits in. (Batches of
-    more than 16 runs used to keep DOP853, for speed: measured on the curve
-    scenario at T = 0.05 s over 15 s against a fixed-step reference, a run
-    was then 330 tolerances off, while alone, with LSODA, it is 0.72 and in
-    a 16-run LSODA chunk 0.74.) :func:`~fws_control.simulate_batch`
+    a run's accuracy must not depend on the batch it sits in. (DOP853 for
+    large batches would be faster and wrong: on the curve scenario at
+    T = 0.05 s over 15 s against a fixed-step reference, a run in a DOP853
+    batch of 20 is 330 tolerances off, while alone, with LSODA, it is 0.72
+    and in a 16-run LSODA chunk 0.74.) :func:`~fws_control.simulate_batch`
     integrates LSODA runs in chunks of :data:`LSODA_MAX_RUNS` (16) runs, its
     Jacobian of the stacked runs being dense (17.3 ms of CPU per run over
     15 s). The compiled engine has no LSODA: with numba, ``engine="auto"``

@@ -1110,7 +1110,7 @@ def simulate_batch(
         at its first touch (measured on the paper's scenario: from next to
         nothing to about 150 us of CPU per run in best-of-5 timings, and up
         to 450 us of system time in single batches, next to the compiled
-        engine's own 300 us: ``docs/performance.md``); a
+        engine's own 300 us; ``benchmarks/bench_engine.py``); a
         memory map of a ``.npy`` file
         (:func:`numpy.lib.format.open_memmap`) streams a sweep larger than
         memory to disk. The output budget
