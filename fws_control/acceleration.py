@@ -131,6 +131,8 @@ def lateral_acceleration(
         it), the shapes do not broadcast, or magnitudes so extreme that the
         result overflows. Non-finite elements of arrays give non-finite
         elements in their place (see :func:`~fws_control.models.check_inputs`).
+        Also a ValueError if ``vehicle.rear_to_cg`` is None (the
+        acceleration is that of G).
 
     Examples
     --------
@@ -143,13 +145,14 @@ def lateral_acceleration(
     2.5
     """
     psi_dot = yaw_rate(vehicle, delta_f, delta_r, speed=speed)
+    d = vehicle.cg_distance("lateral_acceleration (the acceleration of G)")
     psi_ddot = yaw_acceleration(
         vehicle, delta_f, delta_r, delta_f_rate, delta_r_rate, speed=speed
     )
     # the inputs passed the checks of yaw_rate and yaw_acceleration
     dr, rr, V = (np.asarray(v, dtype=float) for v in (delta_r, delta_r_rate, speed))
     with np.errstate(over="ignore", invalid="ignore"):
-        out = V * (psi_dot + rr) * np.cos(dr) + vehicle.rear_to_cg * psi_ddot
+        out = V * (psi_dot + rr) * np.cos(dr) + d * psi_ddot
     check_result(
         "lateral acceleration",
         out,

@@ -109,6 +109,8 @@ def steady_turn(vehicle: Vehicle, delta_f, delta_r) -> TurningGeometry:
     ------
     SingularStateError
         If ``|delta_f| >= pi/2``.
+    ValueError
+        If ``vehicle.rear_to_cg`` is None (needed for the radius of G).
 
     Examples
     --------
@@ -126,7 +128,7 @@ def steady_turn(vehicle: Vehicle, delta_f, delta_r) -> TurningGeometry:
     dr = np.asarray(check_finite("delta_r", delta_r), dtype=float)
     check_steering(df)
     df, dr = np.broadcast_arrays(df, dr)
-    f, d = vehicle.wheelbase, vehicle.rear_to_cg
+    f, d = vehicle.wheelbase, vehicle.cg_distance("steady_turn (the radius of G)")
     kappa = np.sin(df - dr) / (f * np.cos(df))
     with np.errstate(divide="ignore", invalid="ignore"):
         t = np.where(kappa != 0.0, 1.0 / kappa, np.inf)
@@ -181,7 +183,8 @@ def turning_radius(
     ------
     ValueError
         If no front limit is given (neither argument nor vehicle) or a limit
-        is outside (0, pi/2).
+        is outside (0, pi/2). Also if ``vehicle.rear_to_cg`` is None
+        (needed for the radius of G).
 
     Examples
     --------
