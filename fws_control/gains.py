@@ -37,7 +37,13 @@ class SteeringGains:
 
     Notes
     -----
-    Arrays broadcast, so one object can hold a whole sweep of designs.
+    Arrays broadcast, so one object can hold a whole sweep of designs. In a
+    sweep where some designs do not exist
+    (:func:`~fws_control.double_root_gains` with
+    ``uncontrollable="mask"``), `k1` and `k2` are
+    :class:`numpy.ma.MaskedArray`\ s: masked (and NaN underneath) where
+    there is no design, finite elsewhere; matplotlib leaves the masked
+    points out of a plot.
 
     Examples
     --------
@@ -58,7 +64,19 @@ class SteeringGains:
 
     def __post_init__(self) -> None:
         for name in ("k1", "k2", "ratio"):
-            object.__setattr__(self, name, check_finite(name, getattr(self, name)))
+            value = getattr(self, name)
+            if name != "ratio" and np.ma.isMaskedArray(value):
+                # a sweep with designs that do not exist: the masked entries
+                # hold NaN (so that reading the data without the mask cannot
+                # pass for a design), the others must be finite
+                mask = np.ma.getmaskarray(value)
+                data = np.asarray(
+                    check_finite(name, np.ma.filled(value.astype(float), 0.0))
+                )
+                value = np.ma.masked_array(np.where(mask, np.nan, data), mask=mask)
+            else:
+                value = check_finite(name, value)
+            object.__setattr__(self, name, value)
 
     @property
     def k3(self) -> float | np.ndarray:
