@@ -145,7 +145,7 @@ def lateral_acceleration(
     2.5
     """
     psi_dot = yaw_rate(vehicle, delta_f, delta_r, speed=speed)
-    d = vehicle.cg_distance("lateral_acceleration (the acceleration of G)")
+    d = vehicle.cg_distance(needed_by="lateral_acceleration (the acceleration of G)")
     psi_ddot = yaw_acceleration(
         vehicle, delta_f, delta_r, delta_f_rate, delta_r_rate, speed=speed
     )

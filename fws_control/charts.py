@@ -19,7 +19,7 @@ double root :math:`\lambda_0`, the gains of :func:`double_root_gains`.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import control as ct
@@ -195,6 +195,11 @@ class StabilityChart:
         design does not exist (then `design_error` says why).
     design_error : str or None
         Why the design failed (:class:`UncontrollableError`).
+    design_model : str or None
+        The model of the plant the design was placed on when it is not the
+        chart's: ``"exact"`` (the kinematic plant at the same operating
+        point) for a chart of a ``LateralPlant(model="dynamic")``; None when
+        the design is the chart plant's own.
     verdict : ndarray of int8 or None
         Same shape as `stable`: 1 stable, 0 not stable, -1 undecided (the
         codes of :class:`~fws_control.StabilityVerdict`); None means the
@@ -223,6 +228,7 @@ class StabilityChart:
     design: SteeringGains | None = None
     design_error: str | None = None
     verdict: np.ndarray | None = None
+    design_model: str | None = None
 
     @property
     def undecided_mask(self) -> np.ndarray:
@@ -338,6 +344,7 @@ class StabilityChart:
         legend: bool = True,
         notes: bool = True,
         title: bool | str = True,
+        mark: Any = None,
     ) -> ct.ControlPlot:
         r"""Draw the stable region, the boundaries and the design point.
 
@@ -368,6 +375,10 @@ class StabilityChart:
             `label`; the notes of charts overlaid on one axes go into one box.
         title : bool or str, optional
             True: :meth:`describe`; a string: that title; False: none.
+        mark : SteeringGains or (k1, k2), optional
+            Gains of one's own to mark with a star (several if `k1`, `k2` are
+            arrays), e.g. a design from another tool; a SteeringGains must
+            have the chart's ratio. Points outside the grid are clipped.
 
         Returns
         -------
@@ -387,13 +398,22 @@ class StabilityChart:
         >>> cplt.axes[0, 0].get_xlabel()
         '$k_1$ [rad/m]'
         >>> plt.close(cplt.figure)
+
+        Marking one's own gains:
+
+        >>> cplt = ch.plot(mark=(0.2, 0.5))
+        >>> star = cplt.lines[0, 0][-1]
+        >>> star.get_xydata().tolist(), star.get_label()
+        ([[0.2, 0.5]], 'marked: (0.200, 0.500)')
+        >>> plt.close(cplt.figure)
         """
         import matplotlib.pyplot as plt
 
+        points = None if mark is None else self._mark_points(mark)
         if ax is None:
             _, ax = plt.subplots(figsize=(5.5, 4.8), layout="constrained")
         artists, handles = self._draw(
-            ax, color, label, hatch, alpha, boundaries, design, outline
+            ax, color, label, hatch, alpha, boundaries, design, outline, points
         )
         if title:
             ax.set_title(self.describe() if title is True else title, fontsize=10)
@@ -404,7 +424,46 @@ class StabilityChart:
         lines[0, 0] = artists
         return ct.ControlPlot(lines, np.array([[ax]]), ax.figure, legend=leg)
 
-    def _draw(self, ax, color, label, hatch, alpha, boundaries, design, outline=False):
+    def _mark_points(self, mark: Any) -> tuple[np.ndarray, np.ndarray]:
+        """The ``(k1, k2)`` arrays of `mark` (see :meth:`plot`), checked."""
+        if isinstance(mark, SteeringGains):
+            if not np.all(np.asarray(mark.ratio) == self.ratio):
+                raise ValueError(
+                    f"mark must have the chart's ratio {self.ratio!r}, got gains "
+                    f"with ratio {mark.ratio!r}: on another ratio the chart does "
+                    "not show their stability"
+                )
+            pair: Any = (mark.k1, mark.k2)
+        else:
+            pair = mark
+        if not isinstance(pair, (tuple, list, np.ndarray)) or len(pair) != 2:
+            raise ValueError(
+                f"mark must be SteeringGains or a (k1, k2) pair, got {mark!r}"
+            )
+        k1m, k2m = (
+            np.ravel(np.asarray(check_finite(f"mark {n}", v), dtype=float))
+            for n, v in zip(("k1", "k2"), pair, strict=True)
+        )
+        try:
+            k1m, k2m = np.broadcast_arrays(k1m, k2m)
+        except ValueError:
+            raise ValueError(
+                f"mark: k1 and k2 must broadcast, got {k1m.size} and {k2m.size} values"
+            ) from None
+        return k1m, k2m
+
+    def _draw(
+        self,
+        ax,
+        color,
+        label,
+        hatch,
+        alpha,
+        boundaries,
+        design,
+        outline=False,
+        mark=None,
+    ):
         """Draw on `ax`; return ``(artists, legend handles)``."""
         from matplotlib.colors import to_rgba
         from matplotlib.patches import Patch
@@ -504,6 +563,7 @@ class StabilityChart:
                     first = False
         if design and self.design_on_chart:
             k1d, k2d = float(self.design.k1), float(self.design.k2)
+            kin = " (kinematic design)" if self.design_model == "exact" else ""
             (pt,) = ax.plot(
                 k1d,
                 k2d,
@@ -511,7 +571,7 @@ class StabilityChart:
                 color=color,
                 mec="k",
                 ms=7,
-                label=rf"$\lambda_0$ = {self.pole:g}: ({k1d:.3f}, {k2d:.3f})",
+                label=rf"$\lambda_0$ = {self.pole:g}{kin}: ({k1d:.3f}, {k2d:.3f})",
                 zorder=5,
             )
             artists.append(pt)
@@ -543,6 +603,19 @@ class StabilityChart:
                 zorder=6,
             )
             artists.append(pt)
+        if mark is not None:
+            k1m, k2m = mark
+            text = (
+                f"marked: ({k1m[0]:.3f}, {k2m[0]:.3f})"
+                if k1m.size == 1
+                else f"marked gains ({k1m.size})"
+            )
+            (pt,) = ax.plot(
+                k1m, k2m, "*", color=color, mec="k", ms=12, ls="none", label=text,
+                zorder=6,
+            )  # fmt: skip
+            artists.append(pt)
+            handles.append(pt)
         ax.set_xlim(*k1r)
         ax.set_ylim(*k2r)
         ax.set_xlabel(r"$k_1$ [rad/m]")
@@ -563,7 +636,7 @@ class StabilityChart:
             Axes to draw on.
         **kwargs
             `color`, `label`, `hatch`, `alpha`, `boundaries`, `design`,
-            `outline` as in :meth:`plot`.
+            `outline`, `mark` as in :meth:`plot`.
 
         Returns
         -------
@@ -578,6 +651,7 @@ class StabilityChart:
             "boundaries": True,
             "design": True,
             "outline": False,
+            "mark": None,
         }
         unknown = set(kwargs) - set(opts)
         if unknown:
@@ -585,6 +659,8 @@ class StabilityChart:
                 f"draw() got unexpected keyword arguments {sorted(unknown)}"
             )
         opts.update(kwargs)
+        if opts["mark"] is not None:
+            opts["mark"] = self._mark_points(opts["mark"])
         return self._draw(ax, **opts)[1]
 
 
@@ -697,10 +773,16 @@ def stability_chart(
         ``verdict``, never in ``stable``.
     pole : float, optional
         Double root :math:`\lambda_0 < 0` whose gains
-        (:func:`double_root_gains`, 2-state plants) are stored and marked. If
-        that design is uncontrollable (``a = 1`` on a straight path) the chart
-        records the reason in :attr:`StabilityChart.design_error` instead of
-        failing.
+        (:func:`double_root_gains`) are stored and marked. If that design is
+        uncontrollable (``a = 1`` on a straight path) the chart records the
+        reason in :attr:`StabilityChart.design_error` instead of failing.
+        Two gains place a double root only in a 2-state loop: on a chart of
+        ``LateralPlant(model="dynamic")`` the marked gains are the kinematic
+        plant's design at the same operating point (``model="exact"``,
+        recorded in :attr:`StabilityChart.design_model`), so the chart shows
+        where that design lands on the dynamic plant; another plant of more
+        than two states raises a ValueError (mark gains of one's own with
+        ``chart.plot(mark=(k1, k2))``).
     speed, curvature, model : optional
         With a :class:`Vehicle` only, as in :func:`linearize`. For ``V < 0``
         condition (35) flips side (see :mod:`fws_control.stability`).
@@ -716,8 +798,8 @@ def stability_chart(
         For positional arguments after the plant, or an unknown plant.
     ValueError
         For a non-finite or array `ratio`, a non-negative `pole`, a `pole`
-        with a plant of more than two states, or grid axes that are not 1-D
-        monotonic arrays.
+        with a plant of more than two states other than a dynamic
+        :class:`LateralPlant`, or grid axes that are not 1-D monotonic arrays.
 
     Examples
     --------
@@ -746,6 +828,25 @@ def stability_chart(
     check_magnitude("ratio", ratio, MAX_RATIO)
     k1a = _axis("k1", k1)
     k2a = _axis("k2", k2)
+    design = err = design_model = None
+    if pole is not None:  # before the grid: a refused pole costs nothing
+        pole = check_scalar("pole", pole)
+        dp = p
+        order = loop_matrices(p).order
+        if order > 2 and isinstance(p, LateralPlant) and p.model == "dynamic":
+            dp, design_model = replace(p, model="exact"), "exact"
+        elif order > 2:
+            raise ValueError(
+                f"pole={pole!r} needs a 2-state plant, got one of order {order}: "
+                "two gains cannot place a double root there. Pick (k1, k2) from "
+                "the chart (pole=None) and mark them with chart.plot(mark=(k1, "
+                "k2)); a LateralPlant(model='dynamic') marks its kinematic design"
+            )
+        try:
+            g = double_root_gains(dp, ratio=ratio, pole=pole)
+            design = SteeringGains(float(g.k1), float(g.k2), ratio)
+        except UncontrollableError as exc:
+            err = str(exc)
     # Outer broadcasting (k2 down the rows, k1 across) avoids a meshgrid.
     grid = SteeringGains(k1a[np.newaxis, :], k2a[:, np.newaxis], ratio)
     tau = check_delay(delay)
@@ -762,14 +863,6 @@ def stability_chart(
         curve = _curve_in_box(cp, k1r, k2r, tau)
     else:
         curve = bounds.complex_root
-    design = err = None
-    if pole is not None:
-        pole = check_scalar("pole", pole)
-        try:
-            g = double_root_gains(p, ratio=ratio, pole=pole)
-            design = SteeringGains(float(g.k1), float(g.k2), ratio)
-        except UncontrollableError as exc:
-            err = str(exc)
     return StabilityChart(
         plant=p,
         ratio=ratio,
@@ -784,6 +877,7 @@ def stability_chart(
         design=design,
         design_error=err,
         verdict=verdict,
+        design_model=design_model,
     )
 
 

@@ -128,7 +128,8 @@ def steady_turn(vehicle: Vehicle, delta_f, delta_r) -> TurningGeometry:
     dr = np.asarray(check_finite("delta_r", delta_r), dtype=float)
     check_steering(df)
     df, dr = np.broadcast_arrays(df, dr)
-    f, d = vehicle.wheelbase, vehicle.cg_distance("steady_turn (the radius of G)")
+    f = vehicle.wheelbase
+    d = vehicle.cg_distance(needed_by="steady_turn (the radius of G)")
     kappa = np.sin(df - dr) / (f * np.cos(df))
     with np.errstate(divide="ignore", invalid="ignore"):
         t = np.where(kappa != 0.0, 1.0 / kappa, np.inf)

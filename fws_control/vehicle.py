@@ -145,9 +145,9 @@ class Vehicle:
         ValueError
             If ``rear_to_cg`` is None.
         """
-        return self.wheelbase - self.cg_distance("front_to_cg")
+        return self.wheelbase - self.cg_distance(needed_by="front_to_cg")
 
-    def cg_distance(self, needed_by: str) -> float:
+    def cg_distance(self, *, needed_by: str) -> float:
         """``rear_to_cg`` [m], or a ValueError saying what needs it.
 
         Parameters
@@ -169,12 +169,12 @@ class Vehicle:
         Examples
         --------
         >>> import fws_control as fws
-        >>> fws.Vehicle(wheelbase=2.7, rear_to_cg=1.2).cg_distance("a_y")
+        >>> fws.Vehicle(wheelbase=2.7, rear_to_cg=1.2).cg_distance(needed_by="a_y")
         1.2
-        >>> fws.Vehicle(wheelbase=2.7).cg_distance("the lateral acceleration at G")
+        >>> fws.Vehicle(wheelbase=2.7).cg_distance(needed_by="the acceleration of G")
         Traceback (most recent call last):
             ...
-        ValueError: rear_to_cg is None, but the lateral acceleration at G needs the \
+        ValueError: rear_to_cg is None, but the acceleration of G needs the \
 position of the centre of gravity G: give Vehicle(..., rear_to_cg=d) with 0 <= d \
 <= wheelbase=2.7 m
         """

@@ -65,7 +65,7 @@ def test_rear_to_cg_is_optional_and_compares():
     assert v != fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     assert hash(v) == hash(fws.Vehicle(2.7))
     assert repr(v) == "Vehicle(wheelbase=2.7)"
-    assert fws.Vehicle(2.7, 1.2).cg_distance("x") == 1.2
+    assert fws.Vehicle(2.7, 1.2).cg_distance(needed_by="x") == 1.2
     assert fws.Vehicle(2.7, 1.2).front_to_cg == pytest.approx(1.5, abs=1e-15)
 
 
