@@ -214,8 +214,8 @@ def _read_exports() -> dict[str, str | None]:
     """Public name -> the submodule that defines it (None for a submodule)."""
     import ast  # only here: ast costs about as much as this package's import
 
-    spec = __spec__
-    source = spec.loader.get_source(__name__) if spec and spec.loader else None
+    get_source = getattr(getattr(__spec__, "loader", None), "get_source", None)
+    source = get_source(__name__) if get_source is not None else None
     if source is None:
         raise ImportError(
             f"{__name__} reads its public names from the source of "

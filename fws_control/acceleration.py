@@ -12,8 +12,11 @@ steering angles and their rates only, not on the position or heading.
 
 from __future__ import annotations
 
+from typing import Any, cast
+
 import numpy as np
 
+from .hints import RealArrayLike
 from .models import check_inputs, check_result, check_steering, yaw_rate
 from .validation import check_type
 from .vehicle import Vehicle
@@ -22,7 +25,13 @@ __all__ = ["yaw_acceleration", "lateral_acceleration"]
 
 
 def yaw_acceleration(
-    vehicle: Vehicle, delta_f, delta_r, delta_f_rate, delta_r_rate, *, speed
+    vehicle: Vehicle,
+    delta_f: RealArrayLike,
+    delta_r: RealArrayLike,
+    delta_f_rate: RealArrayLike,
+    delta_r_rate: RealArrayLike,
+    *,
+    speed: RealArrayLike,
 ) -> float | np.ndarray:
     r"""Yaw acceleration :math:`\ddot\psi` from eq. (10) by the chain rule.
 
@@ -99,7 +108,13 @@ def yaw_acceleration(
 
 
 def lateral_acceleration(
-    vehicle: Vehicle, delta_f, delta_r, delta_f_rate, delta_r_rate, *, speed
+    vehicle: Vehicle,
+    delta_f: RealArrayLike,
+    delta_r: RealArrayLike,
+    delta_f_rate: RealArrayLike,
+    delta_r_rate: RealArrayLike,
+    *,
+    speed: RealArrayLike,
 ) -> float | np.ndarray:
     r"""Lateral acceleration of the centre of gravity G, paper eq. (13).
 
@@ -144,7 +159,8 @@ def lateral_acceleration(
     >>> round(fws.lateral_acceleration(veh, delta, 0.0, 0.0, 0.0, speed=5.0), 9)
     2.5
     """
-    psi_dot = yaw_rate(vehicle, delta_f, delta_r, speed=speed)
+    # yaw_rate checks and names the arguments (numbers or arrays)
+    psi_dot = yaw_rate(vehicle, delta_f, delta_r, speed=cast(Any, speed))
     d = vehicle.cg_distance(needed_by="lateral_acceleration (the acceleration of G)")
     psi_ddot = yaw_acceleration(
         vehicle, delta_f, delta_r, delta_f_rate, delta_r_rate, speed=speed

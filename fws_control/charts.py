@@ -19,8 +19,9 @@ double root :math:`\lambda_0`, the gains of :func:`double_root_gains`.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import control as ct
 import numpy as np
@@ -29,6 +30,7 @@ from .delay import critical_delay
 from .design import double_root_gains
 from .exceptions import UncontrollableError
 from .gains import SteeringGains
+from .hints import RatioLike, RealArrayLike
 from .linear import AffinePolynomial, characteristic_coefficients, horner
 from .plant import LateralPlant, as_plant, loop_matrices, resolve_ratio
 from .reprs import summary_repr
@@ -49,6 +51,11 @@ from .validation import (
     check_magnitude,
     check_scalar,
 )
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
+    from .vehicle import Vehicle
 
 __all__ = [
     "StabilityChart",
@@ -263,7 +270,7 @@ class StabilityChart:
         return self.plant.model if self.lateral else None
 
     @property
-    def vehicle(self):
+    def vehicle(self) -> Vehicle | None:
         """Vehicle of a :class:`LateralPlant` (None otherwise)."""
         return self.plant.vehicle if self.lateral else None
 
@@ -332,7 +339,7 @@ class StabilityChart:
 
     def plot(
         self,
-        ax=None,
+        ax: Axes | None = None,
         *,
         color: str = "C0",
         label: str | None = None,
@@ -624,7 +631,7 @@ class StabilityChart:
         ax.axvline(0.0, color="0.7", lw=0.5, zorder=0)
         return artists, handles
 
-    def draw(self, ax, **kwargs) -> list:
+    def draw(self, ax: Axes, **kwargs: Any) -> list[Any]:
         """Draw into `ax` without title, legend or notes; return legend handles.
 
         For figures that overlay several charts and build one legend (see
@@ -643,7 +650,7 @@ class StabilityChart:
         list
             Legend handles.
         """
-        opts = {
+        opts: dict[str, Any] = {
             "color": "C0",
             "label": None,
             "hatch": None,
@@ -703,7 +710,7 @@ def _add_paths(ax, path, **kwargs):
     return coll
 
 
-def note_box(ax, notes) -> None:
+def note_box(ax: Axes, notes: Sequence[str]) -> None:
     """Write remarks into the top-left corner of `ax` (nothing if none).
 
     Called again on the same axes (overlaid charts), it appends to the box
@@ -723,7 +730,7 @@ def note_box(ax, notes) -> None:
         old = box.get_text().split("\n")
         box.set_text("\n".join(old + [n for n in notes if n not in old]))
         return
-    ax._fws_note_box = ax.text(
+    ax._fws_note_box = ax.text(  # type: ignore[attr-defined]
         0.02,
         0.98,
         "\n".join(notes),
@@ -739,9 +746,9 @@ def note_box(ax, notes) -> None:
 def stability_chart(
     plant: Any,
     *,
-    ratio: float,
-    k1=None,
-    k2=None,
+    ratio: float | Callable[..., Any],
+    k1: RealArrayLike | None = None,
+    k2: RealArrayLike | None = None,
     delay: float = 0.0,
     pole: float | None = None,
     speed: Any = None,
@@ -940,7 +947,11 @@ class DelayMarginChart:
         return np.nan_to_num(self.delay, nan=-1.0) > tau
 
     def plot(
-        self, ax=None, *, against: str = "pole", delay: float | None = None
+        self,
+        ax: Axes | None = None,
+        *,
+        against: str = "pole",
+        delay: float | None = None,
     ) -> ct.ControlPlot:
         """Critical delay against the pole (one curve per ratio) or the ratio.
 
@@ -1031,8 +1042,8 @@ class DelayMarginChart:
 def delay_margin_chart(
     plant: Any,
     *,
-    ratio,
-    pole,
+    ratio: RatioLike,
+    pole: RealArrayLike,
     design_plant: Any = None,
     speed: Any = None,
     curvature: Any = None,

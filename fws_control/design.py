@@ -30,6 +30,7 @@ import numpy as np
 
 from .exceptions import UncontrollableError
 from .gains import SteeringGains
+from .hints import RatioLike, RealArrayLike
 from .linear import characteristic_coefficients
 from .plant import LateralPlant, as_plant, loop_matrices, resolve_ratio
 from .validation import check_finite
@@ -106,8 +107,8 @@ def _condition(lm, a, k1, k2, lam) -> np.ndarray:
 def double_root_gains(
     plant: Any,
     *,
-    ratio,
-    pole,
+    ratio: RatioLike,
+    pole: RealArrayLike,
     speed: Any = None,
     curvature: Any = None,
     model: Any = None,

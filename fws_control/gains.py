@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .hints import RealArrayLike
 from .reprs import value_repr
 from .validation import check_finite
 
@@ -113,7 +114,9 @@ class SteeringGains:
         return -self.K
 
     @classmethod
-    def from_K(cls, K, *, ratio=None, rtol: float = 1e-9) -> SteeringGains:
+    def from_K(
+        cls, K: RealArrayLike, *, ratio: RealArrayLike | None = None, rtol: float = 1e-9
+    ) -> SteeringGains:
         r"""Gains from a python-control feedback matrix (``u = -K y``).
 
         Parameters
@@ -155,7 +158,7 @@ class SteeringGains:
                     "steering ratio it was designed for)"
                 )
             row = arr.ravel()
-            return cls(float(row[0]), float(row[1]), ratio)
+            return cls(float(row[0]), float(row[1]), check_finite("ratio", ratio))
         if arr.shape != (2, 2):
             raise ValueError(
                 f"K must be a 1 x 2 row or a 2 x 2 matrix, got shape {arr.shape}"
@@ -178,7 +181,9 @@ class SteeringGains:
             )
         return cls(float(front[0]), float(front[1]), a)
 
-    def steering(self, e, theta) -> tuple[np.ndarray, np.ndarray]:
+    def steering(
+        self, e: RealArrayLike, theta: RealArrayLike
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Feedback steering angles ``(delta_f_fb, delta_r_fb)`` for errors.
 
         Parameters
