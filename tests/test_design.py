@@ -5,14 +5,14 @@ import math
 import control as ct
 import numpy as np
 import pytest
-from conftest import gain_factor, lambdify
+from conftest import PAPER_VEHICLE, gain_factor, lambdify
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
 import fws_control as fws
 from fws_control import symbolic as S
 
-VEH = fws.Vehicle(2.7, 1.35)
+VEH = PAPER_VEHICLE
 models = st.sampled_from(["exact", "paper"])
 ratios = st.floats(-2.0, 2.0)
 curvatures = st.floats(-0.3, 0.3)
