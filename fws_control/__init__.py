@@ -39,417 +39,219 @@ about a second and a half of CPU to import).
 
 import importlib
 import importlib.util
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
-if TYPE_CHECKING:  # static tools see the names; at run time __getattr__ loads them
-    from . import dynamics, symbolic, vehicles
-    from .acceleration import lateral_acceleration, yaw_acceleration
+# The package's public names, once: type checkers read these imports as
+# re-exports (``name as name``); at run time __getattr__ below reads the same
+# statements to list ``__all__`` and load each name on first use. (isort would
+# split every ``as`` import onto its own statement.)
+# isort: off
+if TYPE_CHECKING:
+    from . import dynamics as dynamics
+    from . import symbolic as symbolic
+    from . import vehicles as vehicles
+    from .acceleration import (
+        lateral_acceleration as lateral_acceleration,
+        yaw_acceleration as yaw_acceleration,
+    )
     from .baselines import (
-        LateralController,
-        LQRController,
-        PurePursuit,
-        RearWheelFeedback,
-        Stanley,
-        StateFeedback,
-        as_controller,
-        saturate,
+        LateralController as LateralController,
+        LQRController as LQRController,
+        PurePursuit as PurePursuit,
+        RearWheelFeedback as RearWheelFeedback,
+        Stanley as Stanley,
+        StateFeedback as StateFeedback,
+        as_controller as as_controller,
+        saturate as saturate,
     )
     from .charts import (
-        DelayMarginChart,
-        StabilityChart,
-        delay_margin_chart,
-        stability_chart,
+        DelayMarginChart as DelayMarginChart,
+        StabilityChart as StabilityChart,
+        delay_margin_chart as delay_margin_chart,
+        stability_chart as stability_chart,
     )
-    from .comparison import LinearNonlinearComparison, compare_linear_nonlinear
+    from .comparison import (
+        LinearNonlinearComparison as LinearNonlinearComparison,
+        compare_linear_nonlinear as compare_linear_nonlinear,
+    )
     from .controller_comparison import (
-        ControllerComparison,
-        compare,
-        default_controllers,
+        ControllerComparison as ControllerComparison,
+        compare as compare,
+        default_controllers as default_controllers,
     )
     from .controllers import (
-        feedback_controller,
-        feedforward_feedback_controller,
-        path_tracking_controller,
-        steering_actuator,
-        steering_command,
-        steering_command_rate,
+        feedback_controller as feedback_controller,
+        feedforward_feedback_controller as feedforward_feedback_controller,
+        path_tracking_controller as path_tracking_controller,
+        steering_actuator as steering_actuator,
+        steering_command as steering_command,
+        steering_command_rate as steering_command_rate,
     )
     from .delay import (
-        CriticalDelay,
-        critical_delay,
-        rightmost_roots,
-        unstable_root_count,
+        CriticalDelay as CriticalDelay,
+        critical_delay as critical_delay,
+        rightmost_roots as rightmost_roots,
+        unstable_root_count as unstable_root_count,
     )
-    from .delay_design import MostStableDesign, most_stable_gains
-    from .design import double_root_gains
+    from .delay_design import (
+        MostStableDesign as MostStableDesign,
+        most_stable_gains as most_stable_gains,
+    )
+    from .design import double_root_gains as double_root_gains
     from .dynamic_design import (
-        KinematicDesignLimit,
-        kinematic_design_limit,
-        steady_state_offset,
-        understeer_gradient,
-        zero_sideslip_ratio,
+        KinematicDesignLimit as KinematicDesignLimit,
+        kinematic_design_limit as kinematic_design_limit,
+        steady_state_offset as steady_state_offset,
+        understeer_gradient as understeer_gradient,
+        zero_sideslip_ratio as zero_sideslip_ratio,
     )
     from .exceptions import (
-        AmbiguousProjectionError,
-        ClusterLostError,
-        SignalNotKeptError,
-        SingularStateError,
-        UncontrollableError,
+        AmbiguousProjectionError as AmbiguousProjectionError,
+        ClusterLostError as ClusterLostError,
+        SignalNotKeptError as SignalNotKeptError,
+        SingularStateError as SingularStateError,
+        UncontrollableError as UncontrollableError,
     )
-    from .gains import SteeringGains
+    from .gains import SteeringGains as SteeringGains
     from .linear import (
-        AffinePolynomial,
-        characteristic_coefficients,
-        characteristic_polynomial,
-        closed_loop,
-        linearize,
+        AffinePolynomial as AffinePolynomial,
+        characteristic_coefficients as characteristic_coefficients,
+        characteristic_polynomial as characteristic_polynomial,
+        closed_loop as closed_loop,
+        linearize as linearize,
     )
     from .manoeuvres import (
-        Gate,
-        Manoeuvre,
-        constant_radius,
-        double_lane_change,
-        obstacle_avoidance,
-        slalom,
+        Gate as Gate,
+        Manoeuvre as Manoeuvre,
+        constant_radius as constant_radius,
+        double_lane_change as double_lane_change,
+        obstacle_avoidance as obstacle_avoidance,
+        slalom as slalom,
     )
     from .metrics import (
-        TrackingMetrics,
-        overshoot,
-        peak_abs,
-        rms,
-        settling_time,
-        steady_state,
-        tracking_metrics,
+        TrackingMetrics as TrackingMetrics,
+        overshoot as overshoot,
+        peak_abs as peak_abs,
+        rms as rms,
+        settling_time as settling_time,
+        steady_state as steady_state,
+        tracking_metrics as tracking_metrics,
     )
     from .models import (
-        feedforward_steering,
-        global_frame_model,
-        path_frame_model,
-        yaw_rate,
+        feedforward_steering as feedforward_steering,
+        global_frame_model as global_frame_model,
+        path_frame_model as path_frame_model,
+        yaw_rate as yaw_rate,
     )
     from .paths import (
-        Arc,
-        Clothoid,
-        Path,
-        PathChain,
-        Projection,
-        Spline,
-        Straight,
+        Arc as Arc,
+        Clothoid as Clothoid,
+        Path as Path,
+        PathChain as PathChain,
+        Projection as Projection,
+        Spline as Spline,
+        Straight as Straight,
     )
-    from .plant import LateralPlant, LoopMatrices, as_plant, loop_matrices
+    from .plant import (
+        LateralPlant as LateralPlant,
+        LoopMatrices as LoopMatrices,
+        as_plant as as_plant,
+        loop_matrices as loop_matrices,
+    )
     from .robust import (
-        BoundaryPiece,
-        ParameterBox,
-        RobustDesign,
-        RobustRegion,
-        robust_gains,
-        robust_region,
-        robust_stable,
+        BoundaryPiece as BoundaryPiece,
+        ParameterBox as ParameterBox,
+        RobustDesign as RobustDesign,
+        RobustRegion as RobustRegion,
+        robust_gains as robust_gains,
+        robust_region as robust_region,
+        robust_stable as robust_stable,
     )
-    from .rootlocus import gain_locus, gain_loop, parameter_locus
+    from .rootlocus import (
+        gain_locus as gain_locus,
+        gain_loop as gain_loop,
+        parameter_locus as parameter_locus,
+    )
     from .simulation import (
-        SimulationResult,
-        closed_loop_system,
-        projection_system,
-        simulate,
-        simulate_batch,
+        SimulationResult as SimulationResult,
+        closed_loop_system as closed_loop_system,
+        projection_system as projection_system,
+        simulate as simulate,
+        simulate_batch as simulate_batch,
     )
     from .stability import (
-        BoundaryCurve,
-        StabilityBoundaries,
-        StabilityBoundary,
-        StabilityVerdict,
-        is_stable,
-        stability_boundaries,
-        stability_verdict,
+        BoundaryCurve as BoundaryCurve,
+        StabilityBoundaries as StabilityBoundaries,
+        StabilityBoundary as StabilityBoundary,
+        StabilityVerdict as StabilityVerdict,
+        is_stable as is_stable,
+        stability_boundaries as stability_boundaries,
+        stability_verdict as stability_verdict,
     )
     from .turning import (
-        TurningGeometry,
-        plot_turning_radius,
-        steady_turn,
-        turning_radius,
+        TurningGeometry as TurningGeometry,
+        plot_turning_radius as plot_turning_radius,
+        steady_turn as steady_turn,
+        turning_radius as turning_radius,
     )
-    from .vehicle import Vehicle
+    from .vehicle import Vehicle as Vehicle
+# isort: on
 
-__all__ = [
-    "Vehicle",
-    "SingularStateError",
-    "global_frame_model",
-    "path_frame_model",
-    "yaw_rate",
-    "feedforward_steering",
-    "yaw_acceleration",
-    "lateral_acceleration",
-    "linearize",
-    "closed_loop",
-    "AffinePolynomial",
-    "LateralPlant",
-    "LoopMatrices",
-    "as_plant",
-    "loop_matrices",
-    "StabilityBoundaries",
-    "BoundaryCurve",
-    "characteristic_coefficients",
-    "characteristic_polynomial",
-    "SteeringGains",
-    "UncontrollableError",
-    "CriticalDelay",
-    "critical_delay",
-    "rightmost_roots",
-    "unstable_root_count",
-    "MostStableDesign",
-    "most_stable_gains",
-    "double_root_gains",
-    "is_stable",
-    "stability_verdict",
-    "StabilityVerdict",
-    "StabilityBoundary",
-    "stability_boundaries",
-    "symbolic",
-    "dynamics",
-    "StabilityChart",
-    "stability_chart",
-    "LateralController",
-    "StateFeedback",
-    "LQRController",
-    "PurePursuit",
-    "Stanley",
-    "RearWheelFeedback",
-    "saturate",
-    "as_controller",
-    "ControllerComparison",
-    "compare",
-    "default_controllers",
-    "Gate",
-    "Manoeuvre",
-    "double_lane_change",
-    "obstacle_avoidance",
-    "slalom",
-    "constant_radius",
-    "DelayMarginChart",
-    "delay_margin_chart",
-    "gain_loop",
-    "gain_locus",
-    "parameter_locus",
-    "TurningGeometry",
-    "steady_turn",
-    "turning_radius",
-    "plot_turning_radius",
-    "LinearNonlinearComparison",
-    "compare_linear_nonlinear",
-]
-__all__ += [
-    "steering_command",
-    "steering_command_rate",
-    "path_tracking_controller",
-    "feedback_controller",
-    "feedforward_feedback_controller",
-    "steering_actuator",
-    "SimulationResult",
-    "simulate",
-    "closed_loop_system",
-    "projection_system",
-    "simulate_batch",
-    "peak_abs",
-    "settling_time",
-    "overshoot",
-    "rms",
-    "steady_state",
-    "TrackingMetrics",
-    "tracking_metrics",
-]
-__all__ += [
-    "Path",
-    "Straight",
-    "Arc",
-    "Clothoid",
-    "Spline",
-    "PathChain",
-    "Projection",
-    "AmbiguousProjectionError",
-    "SignalNotKeptError",
-    "ClusterLostError",
-]
-# the dynamic single-track model (issue 10)
-__all__ += [
-    "vehicles",
-    "KinematicDesignLimit",
-    "kinematic_design_limit",
-    "steady_state_offset",
-    "understeer_gradient",
-    "zero_sideslip_ratio",
-]
-# robust stability over a parameter box
-__all__ += [
-    "ParameterBox",
-    "BoundaryPiece",
-    "RobustRegion",
-    "RobustDesign",
-    "robust_region",
-    "robust_stable",
-    "robust_gains",
-]
 __version__ = "0.2.0.dev0"
 
 
 # Lazy loading (PEP 562): ``import fws_control`` runs no submodule, so that a
 # command-line call or a script that needs a few names does not pay for
 # python-control (which pulls in matplotlib, scipy.signal and scipy.stats),
-# sympy or scipy.integrate. A name of __all__ is imported from its submodule
-# at first access and then cached in the module's namespace.
-#: Submodule -> the public names the package re-exports from it.
-_EXPORTS = {
-    "acceleration": (
-        "lateral_acceleration",
-        "yaw_acceleration",
-    ),
-    "baselines": (
-        "LateralController",
-        "LQRController",
-        "PurePursuit",
-        "RearWheelFeedback",
-        "Stanley",
-        "StateFeedback",
-        "as_controller",
-        "saturate",
-    ),
-    "charts": (
-        "DelayMarginChart",
-        "StabilityChart",
-        "delay_margin_chart",
-        "stability_chart",
-    ),
-    "comparison": (
-        "LinearNonlinearComparison",
-        "compare_linear_nonlinear",
-    ),
-    "controller_comparison": (
-        "ControllerComparison",
-        "compare",
-        "default_controllers",
-    ),
-    "controllers": (
-        "feedback_controller",
-        "feedforward_feedback_controller",
-        "path_tracking_controller",
-        "steering_actuator",
-        "steering_command",
-        "steering_command_rate",
-    ),
-    "delay": (
-        "CriticalDelay",
-        "critical_delay",
-        "rightmost_roots",
-        "unstable_root_count",
-    ),
-    "delay_design": (
-        "MostStableDesign",
-        "most_stable_gains",
-    ),
-    "design": ("double_root_gains",),
-    "dynamic_design": (
-        "KinematicDesignLimit",
-        "kinematic_design_limit",
-        "steady_state_offset",
-        "understeer_gradient",
-        "zero_sideslip_ratio",
-    ),
-    "exceptions": (
-        "AmbiguousProjectionError",
-        "ClusterLostError",
-        "SignalNotKeptError",
-        "SingularStateError",
-        "UncontrollableError",
-    ),
-    "gains": ("SteeringGains",),
-    "linear": (
-        "AffinePolynomial",
-        "characteristic_coefficients",
-        "characteristic_polynomial",
-        "closed_loop",
-        "linearize",
-    ),
-    "manoeuvres": (
-        "Gate",
-        "Manoeuvre",
-        "constant_radius",
-        "double_lane_change",
-        "obstacle_avoidance",
-        "slalom",
-    ),
-    "metrics": (
-        "TrackingMetrics",
-        "overshoot",
-        "peak_abs",
-        "rms",
-        "settling_time",
-        "steady_state",
-        "tracking_metrics",
-    ),
-    "models": (
-        "feedforward_steering",
-        "global_frame_model",
-        "path_frame_model",
-        "yaw_rate",
-    ),
-    "paths": (
-        "Arc",
-        "Clothoid",
-        "Path",
-        "PathChain",
-        "Projection",
-        "Spline",
-        "Straight",
-    ),
-    "plant": (
-        "LateralPlant",
-        "LoopMatrices",
-        "as_plant",
-        "loop_matrices",
-    ),
-    "robust": (
-        "BoundaryPiece",
-        "ParameterBox",
-        "RobustDesign",
-        "RobustRegion",
-        "robust_gains",
-        "robust_region",
-        "robust_stable",
-    ),
-    "rootlocus": (
-        "gain_locus",
-        "gain_loop",
-        "parameter_locus",
-    ),
-    "simulation": (
-        "SimulationResult",
-        "closed_loop_system",
-        "projection_system",
-        "simulate",
-        "simulate_batch",
-    ),
-    "stability": (
-        "BoundaryCurve",
-        "StabilityBoundaries",
-        "StabilityBoundary",
-        "StabilityVerdict",
-        "is_stable",
-        "stability_boundaries",
-        "stability_verdict",
-    ),
-    "turning": (
-        "TurningGeometry",
-        "plot_turning_radius",
-        "steady_turn",
-        "turning_radius",
-    ),
-    "vehicle": ("Vehicle",),
-}
-_ORIGIN = {name: module for module, names in _EXPORTS.items() for name in names}
+# sympy or scipy.integrate. The ``if TYPE_CHECKING:`` imports above are the
+# one list of public names: type checkers read them as re-exports (the
+# ``name as name`` form), and at the first attribute access the same
+# statements are read from this file's source (as SPEC 1's lazy_loader reads
+# a stub) to give ``__all__`` and the submodule of each name. A name is then
+# imported from its submodule and cached in the module's namespace.
 
 
-def __getattr__(name: str):
-    module = _ORIGIN.get(name)
+def _read_exports() -> dict[str, str | None]:
+    """Public name -> the submodule that defines it (None for a submodule)."""
+    import ast  # only here: ast costs about as much as this package's import
+
+    get_source = getattr(getattr(__spec__, "loader", None), "get_source", None)
+    source = get_source(__name__) if get_source is not None else None
+    if source is None:
+        raise ImportError(
+            f"{__name__} reads its public names from the source of "
+            f"{__name__}/__init__.py, which this installation does not include"
+        )
+    block = next(
+        node
+        for node in ast.parse(source).body
+        if isinstance(node, ast.If)
+        and isinstance(node.test, ast.Name)
+        and node.test.id == "TYPE_CHECKING"
+    )
+    exports: dict[str, str | None] = {}
+    for node in block.body:
+        assert isinstance(node, ast.ImportFrom) and node.level == 1, ast.dump(node)
+        for alias in node.names:
+            exports[alias.asname or alias.name] = node.module
+    return exports
+
+
+def _origin() -> dict[str, str]:
+    """Public name -> its submodule; sets ``__all__`` on the first call."""
+    origin = globals().get("_ORIGIN")
+    if origin is None:
+        exports = _read_exports()
+        origin = {n: m for n, m in exports.items() if m is not None}
+        globals().update(__all__=list(exports), _ORIGIN=origin)
+    return origin
+
+
+def __getattr__(name: str) -> Any:
+    if name in ("__all__", "_ORIGIN"):
+        _origin()
+        return globals()[name]
+    module = _origin().get(name)
     if module is not None:
         value = getattr(importlib.import_module(f".{module}", __name__), name)
         globals()[name] = value
@@ -462,4 +264,5 @@ def __getattr__(name: str):
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+    _origin()
+    return sorted(set(globals()) | set(globals()["__all__"]))

@@ -12,8 +12,11 @@ steering angles and their rates only, not on the position or heading.
 
 from __future__ import annotations
 
+from typing import Any, cast
+
 import numpy as np
 
+from .hints import RealArrayLike
 from .models import check_inputs, check_result, check_steering, yaw_rate
 from .validation import check_type
 from .vehicle import Vehicle
@@ -22,7 +25,13 @@ __all__ = ["yaw_acceleration", "lateral_acceleration"]
 
 
 def yaw_acceleration(
-    vehicle: Vehicle, delta_f, delta_r, delta_f_rate, delta_r_rate, *, speed
+    vehicle: Vehicle,
+    delta_f: RealArrayLike,
+    delta_r: RealArrayLike,
+    delta_f_rate: RealArrayLike,
+    delta_r_rate: RealArrayLike,
+    *,
+    speed: RealArrayLike,
 ) -> float | np.ndarray:
     r"""Yaw acceleration :math:`\ddot\psi` from eq. (10) by the chain rule.
 
@@ -99,7 +108,13 @@ def yaw_acceleration(
 
 
 def lateral_acceleration(
-    vehicle: Vehicle, delta_f, delta_r, delta_f_rate, delta_r_rate, *, speed
+    vehicle: Vehicle,
+    delta_f: RealArrayLike,
+    delta_r: RealArrayLike,
+    delta_f_rate: RealArrayLike,
+    delta_r_rate: RealArrayLike,
+    *,
+    speed: RealArrayLike,
 ) -> float | np.ndarray:
     r"""Lateral acceleration of the centre of gravity G, paper eq. (13).
 
@@ -131,6 +146,8 @@ def lateral_acceleration(
         it), the shapes do not broadcast, or magnitudes so extreme that the
         result overflows. Non-finite elements of arrays give non-finite
         elements in their place (see :func:`~fws_control.models.check_inputs`).
+        Also a ValueError if ``vehicle.rear_to_cg`` is None (the
+        acceleration is that of G).
 
     Examples
     --------
@@ -142,14 +159,16 @@ def lateral_acceleration(
     >>> round(fws.lateral_acceleration(veh, delta, 0.0, 0.0, 0.0, speed=5.0), 9)
     2.5
     """
-    psi_dot = yaw_rate(vehicle, delta_f, delta_r, speed=speed)
+    # yaw_rate checks and names the arguments (numbers or arrays)
+    psi_dot = yaw_rate(vehicle, delta_f, delta_r, speed=cast(Any, speed))
+    d = vehicle.cg_distance(needed_by="lateral_acceleration (the acceleration of G)")
     psi_ddot = yaw_acceleration(
         vehicle, delta_f, delta_r, delta_f_rate, delta_r_rate, speed=speed
     )
     # the inputs passed the checks of yaw_rate and yaw_acceleration
     dr, rr, V = (np.asarray(v, dtype=float) for v in (delta_r, delta_r_rate, speed))
     with np.errstate(over="ignore", invalid="ignore"):
-        out = V * (psi_dot + rr) * np.cos(dr) + vehicle.rear_to_cg * psi_ddot
+        out = V * (psi_dot + rr) * np.cos(dr) + d * psi_ddot
     check_result(
         "lateral acceleration",
         out,

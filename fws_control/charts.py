@@ -19,8 +19,9 @@ double root :math:`\lambda_0`, the gains of :func:`double_root_gains`.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Any
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
 
 import control as ct
 import numpy as np
@@ -29,6 +30,7 @@ from .delay import critical_delay
 from .design import double_root_gains
 from .exceptions import UncontrollableError
 from .gains import SteeringGains
+from .hints import RatioLike, RealArrayLike
 from .linear import AffinePolynomial, characteristic_coefficients, horner
 from .plant import LateralPlant, as_plant, loop_matrices, resolve_ratio
 from .reprs import summary_repr
@@ -49,6 +51,11 @@ from .validation import (
     check_magnitude,
     check_scalar,
 )
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
+    from .vehicle import Vehicle
 
 __all__ = [
     "StabilityChart",
@@ -195,6 +202,11 @@ class StabilityChart:
         design does not exist (then `design_error` says why).
     design_error : str or None
         Why the design failed (:class:`UncontrollableError`).
+    design_model : str or None
+        The model of the plant the design was placed on when it is not the
+        chart's: ``"exact"`` (the kinematic plant at the same operating
+        point) for a chart of a ``LateralPlant(model="dynamic")``; None when
+        the design is the chart plant's own.
     verdict : ndarray of int8 or None
         Same shape as `stable`: 1 stable, 0 not stable, -1 undecided (the
         codes of :class:`~fws_control.StabilityVerdict`); None means the
@@ -223,6 +235,7 @@ class StabilityChart:
     design: SteeringGains | None = None
     design_error: str | None = None
     verdict: np.ndarray | None = None
+    design_model: str | None = None
 
     @property
     def undecided_mask(self) -> np.ndarray:
@@ -257,7 +270,7 @@ class StabilityChart:
         return self.plant.model if self.lateral else None
 
     @property
-    def vehicle(self):
+    def vehicle(self) -> Vehicle | None:
         """Vehicle of a :class:`LateralPlant` (None otherwise)."""
         return self.plant.vehicle if self.lateral else None
 
@@ -326,7 +339,7 @@ class StabilityChart:
 
     def plot(
         self,
-        ax=None,
+        ax: Axes | None = None,
         *,
         color: str = "C0",
         label: str | None = None,
@@ -338,6 +351,7 @@ class StabilityChart:
         legend: bool = True,
         notes: bool = True,
         title: bool | str = True,
+        mark: Any = None,
     ) -> ct.ControlPlot:
         r"""Draw the stable region, the boundaries and the design point.
 
@@ -368,6 +382,10 @@ class StabilityChart:
             `label`; the notes of charts overlaid on one axes go into one box.
         title : bool or str, optional
             True: :meth:`describe`; a string: that title; False: none.
+        mark : SteeringGains or (k1, k2), optional
+            Gains of one's own to mark with a star (several if `k1`, `k2` are
+            arrays), e.g. a design from another tool; a SteeringGains must
+            have the chart's ratio. Points outside the grid are clipped.
 
         Returns
         -------
@@ -387,13 +405,22 @@ class StabilityChart:
         >>> cplt.axes[0, 0].get_xlabel()
         '$k_1$ [rad/m]'
         >>> plt.close(cplt.figure)
+
+        Marking one's own gains:
+
+        >>> cplt = ch.plot(mark=(0.2, 0.5))
+        >>> star = cplt.lines[0, 0][-1]
+        >>> star.get_xydata().tolist(), star.get_label()
+        ([[0.2, 0.5]], 'marked: (0.200, 0.500)')
+        >>> plt.close(cplt.figure)
         """
         import matplotlib.pyplot as plt
 
+        points = None if mark is None else self._mark_points(mark)
         if ax is None:
             _, ax = plt.subplots(figsize=(5.5, 4.8), layout="constrained")
         artists, handles = self._draw(
-            ax, color, label, hatch, alpha, boundaries, design, outline
+            ax, color, label, hatch, alpha, boundaries, design, outline, points
         )
         if title:
             ax.set_title(self.describe() if title is True else title, fontsize=10)
@@ -404,7 +431,46 @@ class StabilityChart:
         lines[0, 0] = artists
         return ct.ControlPlot(lines, np.array([[ax]]), ax.figure, legend=leg)
 
-    def _draw(self, ax, color, label, hatch, alpha, boundaries, design, outline=False):
+    def _mark_points(self, mark: Any) -> tuple[np.ndarray, np.ndarray]:
+        """The ``(k1, k2)`` arrays of `mark` (see :meth:`plot`), checked."""
+        if isinstance(mark, SteeringGains):
+            if not np.all(np.asarray(mark.ratio) == self.ratio):
+                raise ValueError(
+                    f"mark must have the chart's ratio {self.ratio!r}, got gains "
+                    f"with ratio {mark.ratio!r}: on another ratio the chart does "
+                    "not show their stability"
+                )
+            pair: Any = (mark.k1, mark.k2)
+        else:
+            pair = mark
+        if not isinstance(pair, (tuple, list, np.ndarray)) or len(pair) != 2:
+            raise ValueError(
+                f"mark must be SteeringGains or a (k1, k2) pair, got {mark!r}"
+            )
+        k1m, k2m = (
+            np.ravel(np.asarray(check_finite(f"mark {n}", v), dtype=float))
+            for n, v in zip(("k1", "k2"), pair, strict=True)
+        )
+        try:
+            k1m, k2m = np.broadcast_arrays(k1m, k2m)
+        except ValueError:
+            raise ValueError(
+                f"mark: k1 and k2 must broadcast, got {k1m.size} and {k2m.size} values"
+            ) from None
+        return k1m, k2m
+
+    def _draw(
+        self,
+        ax,
+        color,
+        label,
+        hatch,
+        alpha,
+        boundaries,
+        design,
+        outline=False,
+        mark=None,
+    ):
         """Draw on `ax`; return ``(artists, legend handles)``."""
         from matplotlib.colors import to_rgba
         from matplotlib.patches import Patch
@@ -504,6 +570,7 @@ class StabilityChart:
                     first = False
         if design and self.design_on_chart:
             k1d, k2d = float(self.design.k1), float(self.design.k2)
+            kin = " (kinematic design)" if self.design_model == "exact" else ""
             (pt,) = ax.plot(
                 k1d,
                 k2d,
@@ -511,7 +578,7 @@ class StabilityChart:
                 color=color,
                 mec="k",
                 ms=7,
-                label=rf"$\lambda_0$ = {self.pole:g}: ({k1d:.3f}, {k2d:.3f})",
+                label=rf"$\lambda_0$ = {self.pole:g}{kin}: ({k1d:.3f}, {k2d:.3f})",
                 zorder=5,
             )
             artists.append(pt)
@@ -543,6 +610,19 @@ class StabilityChart:
                 zorder=6,
             )
             artists.append(pt)
+        if mark is not None:
+            k1m, k2m = mark
+            text = (
+                f"marked: ({k1m[0]:.3f}, {k2m[0]:.3f})"
+                if k1m.size == 1
+                else f"marked gains ({k1m.size})"
+            )
+            (pt,) = ax.plot(
+                k1m, k2m, "*", color=color, mec="k", ms=12, ls="none", label=text,
+                zorder=6,
+            )  # fmt: skip
+            artists.append(pt)
+            handles.append(pt)
         ax.set_xlim(*k1r)
         ax.set_ylim(*k2r)
         ax.set_xlabel(r"$k_1$ [rad/m]")
@@ -551,7 +631,7 @@ class StabilityChart:
         ax.axvline(0.0, color="0.7", lw=0.5, zorder=0)
         return artists, handles
 
-    def draw(self, ax, **kwargs) -> list:
+    def draw(self, ax: Axes, **kwargs: Any) -> list[Any]:
         """Draw into `ax` without title, legend or notes; return legend handles.
 
         For figures that overlay several charts and build one legend (see
@@ -563,14 +643,14 @@ class StabilityChart:
             Axes to draw on.
         **kwargs
             `color`, `label`, `hatch`, `alpha`, `boundaries`, `design`,
-            `outline` as in :meth:`plot`.
+            `outline`, `mark` as in :meth:`plot`.
 
         Returns
         -------
         list
             Legend handles.
         """
-        opts = {
+        opts: dict[str, Any] = {
             "color": "C0",
             "label": None,
             "hatch": None,
@@ -578,6 +658,7 @@ class StabilityChart:
             "boundaries": True,
             "design": True,
             "outline": False,
+            "mark": None,
         }
         unknown = set(kwargs) - set(opts)
         if unknown:
@@ -585,6 +666,8 @@ class StabilityChart:
                 f"draw() got unexpected keyword arguments {sorted(unknown)}"
             )
         opts.update(kwargs)
+        if opts["mark"] is not None:
+            opts["mark"] = self._mark_points(opts["mark"])
         return self._draw(ax, **opts)[1]
 
 
@@ -627,7 +710,7 @@ def _add_paths(ax, path, **kwargs):
     return coll
 
 
-def note_box(ax, notes) -> None:
+def note_box(ax: Axes, notes: Sequence[str]) -> None:
     """Write remarks into the top-left corner of `ax` (nothing if none).
 
     Called again on the same axes (overlaid charts), it appends to the box
@@ -647,7 +730,7 @@ def note_box(ax, notes) -> None:
         old = box.get_text().split("\n")
         box.set_text("\n".join(old + [n for n in notes if n not in old]))
         return
-    ax._fws_note_box = ax.text(
+    ax._fws_note_box = ax.text(  # type: ignore[attr-defined]
         0.02,
         0.98,
         "\n".join(notes),
@@ -663,9 +746,9 @@ def note_box(ax, notes) -> None:
 def stability_chart(
     plant: Any,
     *,
-    ratio: float,
-    k1=None,
-    k2=None,
+    ratio: float | Callable[..., Any],
+    k1: RealArrayLike | None = None,
+    k2: RealArrayLike | None = None,
     delay: float = 0.0,
     pole: float | None = None,
     speed: Any = None,
@@ -697,10 +780,16 @@ def stability_chart(
         ``verdict``, never in ``stable``.
     pole : float, optional
         Double root :math:`\lambda_0 < 0` whose gains
-        (:func:`double_root_gains`, 2-state plants) are stored and marked. If
-        that design is uncontrollable (``a = 1`` on a straight path) the chart
-        records the reason in :attr:`StabilityChart.design_error` instead of
-        failing.
+        (:func:`double_root_gains`) are stored and marked. If that design is
+        uncontrollable (``a = 1`` on a straight path) the chart records the
+        reason in :attr:`StabilityChart.design_error` instead of failing.
+        Two gains place a double root only in a 2-state loop: on a chart of
+        ``LateralPlant(model="dynamic")`` the marked gains are the kinematic
+        plant's design at the same operating point (``model="exact"``,
+        recorded in :attr:`StabilityChart.design_model`), so the chart shows
+        where that design lands on the dynamic plant; another plant of more
+        than two states raises a ValueError (mark gains of one's own with
+        ``chart.plot(mark=(k1, k2))``).
     speed, curvature, model : optional
         With a :class:`Vehicle` only, as in :func:`linearize`. For ``V < 0``
         condition (35) flips side (see :mod:`fws_control.stability`).
@@ -716,8 +805,8 @@ def stability_chart(
         For positional arguments after the plant, or an unknown plant.
     ValueError
         For a non-finite or array `ratio`, a non-negative `pole`, a `pole`
-        with a plant of more than two states, or grid axes that are not 1-D
-        monotonic arrays.
+        with a plant of more than two states other than a dynamic
+        :class:`LateralPlant`, or grid axes that are not 1-D monotonic arrays.
 
     Examples
     --------
@@ -746,6 +835,25 @@ def stability_chart(
     check_magnitude("ratio", ratio, MAX_RATIO)
     k1a = _axis("k1", k1)
     k2a = _axis("k2", k2)
+    design = err = design_model = None
+    if pole is not None:  # before the grid: a refused pole costs nothing
+        pole = check_scalar("pole", pole)
+        dp = p
+        order = loop_matrices(p).order
+        if order > 2 and isinstance(p, LateralPlant) and p.model == "dynamic":
+            dp, design_model = replace(p, model="exact"), "exact"
+        elif order > 2:
+            raise ValueError(
+                f"pole={pole!r} needs a 2-state plant, got one of order {order}: "
+                "two gains cannot place a double root there. Pick (k1, k2) from "
+                "the chart (pole=None) and mark them with chart.plot(mark=(k1, "
+                "k2)); a LateralPlant(model='dynamic') marks its kinematic design"
+            )
+        try:
+            g = double_root_gains(dp, ratio=ratio, pole=pole)
+            design = SteeringGains(float(g.k1), float(g.k2), ratio)
+        except UncontrollableError as exc:
+            err = str(exc)
     # Outer broadcasting (k2 down the rows, k1 across) avoids a meshgrid.
     grid = SteeringGains(k1a[np.newaxis, :], k2a[:, np.newaxis], ratio)
     tau = check_delay(delay)
@@ -762,14 +870,6 @@ def stability_chart(
         curve = _curve_in_box(cp, k1r, k2r, tau)
     else:
         curve = bounds.complex_root
-    design = err = None
-    if pole is not None:
-        pole = check_scalar("pole", pole)
-        try:
-            g = double_root_gains(p, ratio=ratio, pole=pole)
-            design = SteeringGains(float(g.k1), float(g.k2), ratio)
-        except UncontrollableError as exc:
-            err = str(exc)
     return StabilityChart(
         plant=p,
         ratio=ratio,
@@ -784,6 +884,7 @@ def stability_chart(
         design=design,
         design_error=err,
         verdict=verdict,
+        design_model=design_model,
     )
 
 
@@ -846,7 +947,11 @@ class DelayMarginChart:
         return np.nan_to_num(self.delay, nan=-1.0) > tau
 
     def plot(
-        self, ax=None, *, against: str = "pole", delay: float | None = None
+        self,
+        ax: Axes | None = None,
+        *,
+        against: str = "pole",
+        delay: float | None = None,
     ) -> ct.ControlPlot:
         """Critical delay against the pole (one curve per ratio) or the ratio.
 
@@ -937,8 +1042,8 @@ class DelayMarginChart:
 def delay_margin_chart(
     plant: Any,
     *,
-    ratio,
-    pole,
+    ratio: RatioLike,
+    pole: RealArrayLike,
     design_plant: Any = None,
     speed: Any = None,
     curvature: Any = None,

@@ -24,12 +24,13 @@ delta_r])`` is a different controller (it feeds back every state).
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
 from .exceptions import UncontrollableError
 from .gains import SteeringGains
+from .hints import RatioLike, RealArrayLike
 from .linear import characteristic_coefficients
 from .plant import LateralPlant, as_plant, loop_matrices, resolve_ratio
 from .validation import check_finite
@@ -106,11 +107,12 @@ def _condition(lm, a, k1, k2, lam) -> np.ndarray:
 def double_root_gains(
     plant: Any,
     *,
-    ratio,
-    pole,
+    ratio: RatioLike,
+    pole: RealArrayLike,
     speed: Any = None,
     curvature: Any = None,
     model: Any = None,
+    uncontrollable: Literal["raise", "mask"] = "raise",
 ) -> SteeringGains:
     r"""Gains that put both closed-loop poles of a 2-state plant at :math:`\lambda_0`.
 
@@ -133,12 +135,19 @@ def double_root_gains(
         Double root :math:`\lambda_0` [1/s], finite and < 0.
     speed, curvature, model : optional
         With a :class:`Vehicle` only, as in :func:`linearize`.
+    uncontrollable : {"raise", "mask"}, optional
+        What a design that does not exist (the UncontrollableError cases
+        below) does: ``"raise"`` (default) raises for the whole call;
+        ``"mask"`` returns `k1` and `k2` as :class:`numpy.ma.MaskedArray`\ s
+        of the broadcast shape, masked (NaN underneath) at those designs, so
+        that a sweep over `ratio` keeps its other elements.
 
     Returns
     -------
     SteeringGains
         Broadcast over the array arguments (and the operating points of a
-        :class:`LateralPlant`).
+        :class:`LateralPlant`). With ``uncontrollable="mask"``,
+        ``gains.k1.mask`` flags the designs that do not exist.
 
     Raises
     ------
@@ -189,7 +198,23 @@ def double_root_gains(
     Traceback (most recent call last):
         ...
     fws_control.exceptions.UncontrollableError: ratio=1.0 with curvature=0.0 makes ...
+
+    A sweep over the ratio that crosses ``a = 1`` on a straight path:
+
+    >>> g = fws.double_root_gains(plant, ratio=[0.0, 1.0, 2.0], pole=-1.0,
+    ...                           uncontrollable="mask")
+    >>> g.k1.mask
+    array([False,  True, False])
+    >>> g.k1.round(4)
+    masked_array(data=[0.108, --, -0.108],
+                 mask=[False,  True, False],
+           fill_value=1e+20)
     """
+    if uncontrollable not in ("raise", "mask"):
+        raise ValueError(
+            f"uncontrollable must be 'raise' or 'mask', got {uncontrollable!r}"
+        )
+    mask = uncontrollable == "mask"
     p = as_plant(plant, speed=speed, curvature=curvature, model=model)
     ratio = resolve_ratio(p, ratio)
     a = check_finite("ratio", ratio)
@@ -230,7 +255,7 @@ def double_root_gains(
             distance = np.where(scale > 0, np.abs(det) / scale, 0.0)
         kappa = None
     singular = np.asarray(distance) <= _SINGULAR_DISTANCE
-    if np.any(singular):
+    if np.any(singular) and not mask:
         worst = float(np.min(distance))
         if worst == 0.0:
             why = (
@@ -270,6 +295,15 @@ def double_root_gains(
     # (e.g. ratio = 1e300 makes det = inf and the gains 0).
     achieved = _achieved_error(lm, a_b, k1, k2, lam)
     bad = ~(predicted <= _PREDICTED_RTOL) | ~(achieved <= _POLE_RTOL)
+    if mask:
+        # the singular designs' gains are inf or NaN (det = 0), their
+        # achieved error inf: `bad` holds them; `singular` is added in case
+        # a division by a tiny det still lands near the pole
+        bad = bad | np.broadcast_to(singular, np.shape(bad))
+        k1, k2 = (
+            np.ma.masked_array(np.where(bad, np.nan, k), mask=bad) for k in (k1, k2)
+        )
+        return SteeringGains(k1=k1, k2=k2, ratio=a_b)
     if np.any(bad):
         shape = np.shape(bad)
         i = np.unravel_index(int(np.argmax(bad)), shape)

@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import KW_ONLY, dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import control as ct
 import numpy as np
@@ -32,6 +32,7 @@ from scipy.optimize import brentq
 from .design import double_root_gains
 from .dynamics import TYRES, dynamic_feedforward, require_dynamics
 from .gains import SteeringGains
+from .hints import RealArrayLike
 from .plant import LateralPlant, resolve_ratio
 from .reprs import summary_repr
 from .validation import (
@@ -42,6 +43,9 @@ from .validation import (
     check_type,
 )
 from .vehicle import Vehicle
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
 
 __all__ = [
     "understeer_gradient",
@@ -67,6 +71,15 @@ def _check_speed(speed) -> np.ndarray | float:
             f"speed must be finite and > 0 m/s (at most {MAX_SPEED:g}), got {speed!r}"
         )
     return v
+
+
+def _axle_data(vehicle: Vehicle) -> tuple[float, float, float, float, float]:
+    """``m, l_f, l_r, C_f, C_r`` of a vehicle that passes require_dynamics."""
+    require_dynamics(vehicle)
+    m, c_f, c_r = vehicle.mass, vehicle.cornering_front, vehicle.cornering_rear
+    assert m is not None and c_f is not None and c_r is not None  # checked above
+    l_r = vehicle.cg_distance(needed_by="the dynamic model")
+    return m, vehicle.wheelbase - l_r, l_r, c_f, c_r
 
 
 def understeer_gradient(vehicle: Vehicle) -> float:
@@ -98,18 +111,13 @@ def understeer_gradient(vehicle: Vehicle) -> float:
     -0.000439
     """
     require_dynamics(vehicle)
-    m, f = vehicle.mass, vehicle.wheelbase
-    return (
-        m
-        / f
-        * (
-            vehicle.rear_to_cg / vehicle.cornering_front
-            - vehicle.front_to_cg / vehicle.cornering_rear
-        )
-    )
+    m, l_f, l_r, c_f, c_r = _axle_data(vehicle)
+    return m / vehicle.wheelbase * (l_r / c_f - l_f / c_r)
 
 
-def zero_sideslip_ratio(vehicle: Vehicle, *, speed) -> float | np.ndarray:
+def zero_sideslip_ratio(
+    vehicle: Vehicle, *, speed: RealArrayLike
+) -> float | np.ndarray:
     r"""Ratio :math:`a(V) = \delta_r/\delta_f` with zero steady sideslip at G.
 
     .. math::
@@ -152,10 +160,10 @@ def zero_sideslip_ratio(vehicle: Vehicle, *, speed) -> float | np.ndarray:
     """
     require_dynamics(vehicle)
     v = np.asarray(_check_speed(speed), dtype=float)
-    m, f = vehicle.mass, vehicle.wheelbase
-    l_f, l_r = vehicle.front_to_cg, vehicle.rear_to_cg
-    num = -l_r + m * l_f * v**2 / (f * vehicle.cornering_rear)
-    den = l_f + m * l_r * v**2 / (f * vehicle.cornering_front)
+    m, l_f, l_r, c_f, c_r = _axle_data(vehicle)
+    f = vehicle.wheelbase
+    num = -l_r + m * l_f * v**2 / (f * c_r)
+    den = l_f + m * l_r * v**2 / (f * c_f)
     out = num / den
     return float(out) if out.ndim == 0 else out
 
@@ -253,11 +261,11 @@ def steady_state_offset(
     # the operating point must exist (the tyres can hold the curve), as for
     # LateralPlant(model="dynamic"): the same check, the same message
     dynamic_feedforward(vehicle, speed=v, curvature=kappa)
-    m, f = vehicle.mass, vehicle.wheelbase
-    l_f, l_r = vehicle.front_to_cg, vehicle.rear_to_cg
+    m, l_f, l_r, c_f, c_r = _axle_data(vehicle)
+    f = vehicle.wheelbase
     k1, k2, a = (np.asarray(x, dtype=float) for x in (gains.k1, gains.k2, gains.ratio))
-    p_f = m * v**2 * l_r / (f * vehicle.cornering_front)
-    p_r = m * v**2 * l_f / (f * vehicle.cornering_rear)
+    p_f = m * v**2 * l_r / (f * c_f)
+    p_r = m * v**2 * l_f / (f * c_r)
     k_sq = kappa**2
     # the two steady equations, linear in (e, theta):
     #   -(k1 + (f + P_f) kappa^2) e + (1 - k2) theta = P_f kappa
@@ -400,7 +408,7 @@ class KinematicDesignLimit:
         """The lower of :attr:`unstable_speed` and :attr:`drift_speed` [m/s]."""
         return min(self.unstable_speed, self.drift_speed)
 
-    def plot(self, ax=None) -> ct.ControlPlot:
+    def plot(self, ax: Axes | None = None) -> ct.ControlPlot:
         """Dominant-pole drift against speed, with the limit speeds marked.
 
         Parameters

@@ -105,7 +105,8 @@ def require_dynamics(vehicle: Vehicle, *, tyre: str = "linear") -> Vehicle:
     TypeError
         If `vehicle` is not a :class:`Vehicle`.
     ValueError
-        If mass, yaw inertia or a cornering stiffness is missing, if `tyre`
+        If rear_to_cg, mass, yaw inertia or a cornering stiffness is
+        missing (the tyre forces act about G), if `tyre`
         is unknown, or if ``tyre="magic"`` and ``friction`` is missing.
     """
     check_type("vehicle", vehicle, Vehicle)
@@ -113,7 +114,13 @@ def require_dynamics(vehicle: Vehicle, *, tyre: str = "linear") -> Vehicle:
         raise ValueError(f"tyre must be one of {TYRES}, got {tyre!r}")
     missing = [
         name
-        for name in ("mass", "yaw_inertia", "cornering_front", "cornering_rear")
+        for name in (
+            "rear_to_cg",
+            "mass",
+            "yaw_inertia",
+            "cornering_front",
+            "cornering_rear",
+        )
         if getattr(vehicle, name) is None
     ]
     if tyre == "magic" and vehicle.friction is None:
@@ -122,7 +129,7 @@ def require_dynamics(vehicle: Vehicle, *, tyre: str = "linear") -> Vehicle:
         raise ValueError(
             "the dynamic model needs Vehicle fields "
             + ", ".join(missing)
-            + " (kg, kg m^2, N/rad per axle; friction for tyre='magic'); "
+            + " (m, kg, kg m^2, N/rad per axle; friction for tyre='magic'); "
             "they are None in the vehicle given"
         )
     return vehicle

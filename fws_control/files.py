@@ -26,7 +26,7 @@ import tempfile
 import threading
 from collections.abc import Iterator
 from pathlib import Path
-from typing import IO
+from typing import IO, Any
 
 __all__ = [
     "FolderInUseError",
@@ -127,6 +127,7 @@ def atomic_write(
     path.parent.mkdir(parents=True, exist_ok=True)
     with _signals_deferred():
         try:
+            tmp: str | None
             fd, tmp = tempfile.mkstemp(
                 dir=path.parent, prefix=f".{path.name}.", suffix=TEMP_SUFFIX
             )
@@ -134,6 +135,7 @@ def atomic_write(
             # Name the file the caller asked for, not the temporary one.
             raise type(exc)(exc.errno, exc.strerror, str(path)) from None
     try:
+        fh: IO[Any]
         if mode == "w":
             fh = open(fd, "w", encoding=encoding or "utf-8", newline="")
         else:
@@ -157,7 +159,7 @@ def atomic_write(
                     os.unlink(tmp)
 
 
-def remove_stale_temporaries(folder: str | os.PathLike) -> list[Path]:
+def remove_stale_temporaries(folder: str | os.PathLike[str]) -> list[Path]:
     r"""Remove temporary files that an earlier, killed writer left in ``folder``.
 
     Only files named like the temporaries of :func:`atomic_write` are

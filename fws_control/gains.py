@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .hints import RealArrayLike
 from .reprs import value_repr
 from .validation import check_finite
 
@@ -37,7 +38,13 @@ class SteeringGains:
 
     Notes
     -----
-    Arrays broadcast, so one object can hold a whole sweep of designs.
+    Arrays broadcast, so one object can hold a whole sweep of designs. In a
+    sweep where some designs do not exist
+    (:func:`~fws_control.double_root_gains` with
+    ``uncontrollable="mask"``), `k1` and `k2` are
+    :class:`numpy.ma.MaskedArray`\ s: masked (and NaN underneath) where
+    there is no design, finite elsewhere; matplotlib leaves the masked
+    points out of a plot.
 
     Examples
     --------
@@ -58,7 +65,19 @@ class SteeringGains:
 
     def __post_init__(self) -> None:
         for name in ("k1", "k2", "ratio"):
-            object.__setattr__(self, name, check_finite(name, getattr(self, name)))
+            value = getattr(self, name)
+            if name != "ratio" and np.ma.isMaskedArray(value):
+                # a sweep with designs that do not exist: the masked entries
+                # hold NaN (so that reading the data without the mask cannot
+                # pass for a design), the others must be finite
+                mask = np.ma.getmaskarray(value)
+                data = np.asarray(
+                    check_finite(name, np.ma.filled(value.astype(float), 0.0))
+                )
+                value = np.ma.masked_array(np.where(mask, np.nan, data), mask=mask)
+            else:
+                value = check_finite(name, value)
+            object.__setattr__(self, name, value)
 
     @property
     def k3(self) -> float | np.ndarray:
@@ -95,7 +114,9 @@ class SteeringGains:
         return -self.K
 
     @classmethod
-    def from_K(cls, K, *, ratio=None, rtol: float = 1e-9) -> SteeringGains:
+    def from_K(
+        cls, K: RealArrayLike, *, ratio: RealArrayLike | None = None, rtol: float = 1e-9
+    ) -> SteeringGains:
         r"""Gains from a python-control feedback matrix (``u = -K y``).
 
         Parameters
@@ -137,7 +158,7 @@ class SteeringGains:
                     "steering ratio it was designed for)"
                 )
             row = arr.ravel()
-            return cls(float(row[0]), float(row[1]), ratio)
+            return cls(float(row[0]), float(row[1]), check_finite("ratio", ratio))
         if arr.shape != (2, 2):
             raise ValueError(
                 f"K must be a 1 x 2 row or a 2 x 2 matrix, got shape {arr.shape}"
@@ -160,7 +181,9 @@ class SteeringGains:
             )
         return cls(float(front[0]), float(front[1]), a)
 
-    def steering(self, e, theta) -> tuple[np.ndarray, np.ndarray]:
+    def steering(
+        self, e: RealArrayLike, theta: RealArrayLike
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Feedback steering angles ``(delta_f_fb, delta_r_fb)`` for errors.
 
         Parameters

@@ -23,7 +23,7 @@ __all__ = ["grid_margins"]
 
 
 def grid_margins(
-    figsize,
+    figsize: tuple[float, float],
     *,
     nrows: int = 1,
     ncols: int = 1,

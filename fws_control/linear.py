@@ -38,12 +38,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .gains import SteeringGains
+from .hints import RatioLike, RealArrayLike
 from .plant import LateralPlant, LoopMatrices, as_plant, loop_matrices, resolve_ratio
 from .reprs import summary_repr
 from .validation import check_finite, check_type
 
 if TYPE_CHECKING:  # imported where a state space is built: ~1 s of start-up
     import control as ct
+    from numpy.typing import ArrayLike
 
 __all__ = [
     "linearize",
@@ -254,7 +256,7 @@ class AffinePolynomial:
         """Degree ``n`` of the polynomial (the number of states)."""
         return int(self.open_loop.shape[-1]) - 1
 
-    def coefficients(self, k1, k2) -> np.ndarray:
+    def coefficients(self, k1: RealArrayLike, k2: RealArrayLike) -> np.ndarray:
         """Coefficients of :math:`p(s)` for gains that broadcast, ``(..., n+1)``.
 
         Parameters
@@ -284,7 +286,9 @@ class AffinePolynomial:
         k2 = np.asarray(k2, dtype=float)[..., np.newaxis]
         return self.open_loop + k1 * self.n1 + k2 * self.n2
 
-    def coefficient_bounds(self, k1, k2) -> tuple[list, list]:
+    def coefficient_bounds(
+        self, k1: RealArrayLike, k2: RealArrayLike
+    ) -> tuple[list[np.ndarray], list[np.ndarray]]:
         r"""Coefficients of :math:`p(s)` and bounds on their errors, by column.
 
         Returns the lists ``p`` and ``r`` (one array per power, highest
@@ -342,7 +346,9 @@ class AffinePolynomial:
             r.append((u + v) + w)
         return p, r
 
-    def evaluate(self, s, k1=0.0, k2=0.0) -> np.ndarray:
+    def evaluate(
+        self, s: ArrayLike, k1: RealArrayLike = 0.0, k2: RealArrayLike = 0.0
+    ) -> np.ndarray:
         """:math:`p(s)` at points `s` (broadcast with the gains), by Horner.
 
         Parameters
@@ -374,7 +380,7 @@ class AffinePolynomial:
         """
         return horner(self.coefficients(k1, k2), s)
 
-    def polynomials_at(self, s) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def polynomials_at(self, s: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(d(s), n1(s), n2(s))`` at points `s` (broadcast).
 
         Parameters
@@ -398,10 +404,11 @@ class AffinePolynomial:
         >>> [complex(v) for v in cp.polynomials_at(0.0)]
         [0j, (9.25925925925926+0j), 0j]
         """
-        return tuple(horner(c, s) for c in (self.open_loop, self.n1, self.n2))
+        q, n1, n2 = (horner(c, s) for c in (self.open_loop, self.n1, self.n2))
+        return q, n1, n2
 
 
-def horner(coefficients: np.ndarray, s) -> np.ndarray:
+def horner(coefficients: np.ndarray, s: ArrayLike) -> np.ndarray:
     """Evaluate polynomials (coefficients on the last axis) at `s`, broadcasting.
 
     Examples
@@ -565,7 +572,7 @@ def _statespace_coefficients(lm: LoopMatrices, ratio) -> AffinePolynomial:
 def characteristic_coefficients(
     plant: Any,
     *,
-    ratio,
+    ratio: RatioLike,
     speed: Any = None,
     curvature: Any = None,
     model: Any = None,

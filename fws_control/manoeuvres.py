@@ -40,13 +40,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy.optimize import brentq
 
+from .hints import RealArrayLike
 from .paths import Arc, Clothoid, Path, PathChain, Straight
 from .reprs import value_repr
 from .validation import check_finite, check_positive, check_scalar, check_type
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
 
 __all__ = [
     "Gate",
@@ -291,7 +296,14 @@ class Manoeuvre:
             return np.empty((0, 2))
         return np.unique(np.vstack([g.cones() for g in self.gates]), axis=0)
 
-    def cones_hit(self, x, y, psi, *, wheelbase: float) -> int:
+    def cones_hit(
+        self,
+        x: RealArrayLike,
+        y: RealArrayLike,
+        psi: RealArrayLike,
+        *,
+        wheelbase: float,
+    ) -> int:
         """Number of cones the vehicle's wheel track sweeps over.
 
         The footprint is the rectangle between the axles (rear axle centre R
@@ -313,12 +325,12 @@ class Manoeuvre:
         cones = self.cones()
         if cones.size == 0:
             return 0
-        x, y, psi = (np.asarray(v, dtype=float).ravel() for v in (x, y, psi))
-        ok = np.isfinite(x) & np.isfinite(y) & np.isfinite(psi)
-        x, y, psi = x[ok], y[ok], psi[ok]
-        dx = cones[None, :, 0] - x[:, None]
-        dy = cones[None, :, 1] - y[:, None]
-        c, s = np.cos(psi)[:, None], np.sin(psi)[:, None]
+        xs, ys, ps = (np.asarray(v, dtype=float).ravel() for v in (x, y, psi))
+        ok = np.isfinite(xs) & np.isfinite(ys) & np.isfinite(ps)
+        xs, ys, ps = xs[ok], ys[ok], ps[ok]
+        dx = cones[None, :, 0] - xs[:, None]
+        dy = cones[None, :, 1] - ys[:, None]
+        c, s = np.cos(ps)[:, None], np.sin(ps)[:, None]
         lon = c * dx + s * dy
         lat = -s * dx + c * dy
         inside = (
@@ -326,7 +338,7 @@ class Manoeuvre:
         )
         return int(np.count_nonzero(np.any(inside, axis=0)))
 
-    def draw_gates(self, ax) -> list:
+    def draw_gates(self, ax: Axes) -> list[Any]:
         """Draw the cone lines and cones on `ax`; return the artists.
 
         Parameters

@@ -27,10 +27,11 @@ status alongside.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
+from .hints import RealArrayLike
 from .reprs import import_pandas, summary_repr
 from .validation import (
     check_bool,
@@ -39,6 +40,9 @@ from .validation import (
     check_real,
     check_scalar,
 )
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = [
     "peak_abs",
@@ -112,7 +116,7 @@ def _time_and_signal(t, signal):
     return t, x
 
 
-def peak_abs(signal, *, name: str | None = None) -> float | np.ndarray:
+def peak_abs(signal: RealArrayLike, *, name: str | None = None) -> float | np.ndarray:
     """Largest absolute value over time: of samples, or exact for a result.
 
     Parameters
@@ -177,7 +181,11 @@ def peak_abs(signal, *, name: str | None = None) -> float | np.ndarray:
 
 
 def settling_time(
-    t, signal, *, band=None, fraction: float = 0.02
+    t: RealArrayLike,
+    signal: RealArrayLike,
+    *,
+    band: RealArrayLike | None = None,
+    fraction: float = 0.02,
 ) -> float | np.ndarray:
     r"""Time after which ``|signal|`` stays within a band around zero.
 
@@ -218,24 +226,24 @@ def settling_time(
     >>> round(settling_time(t, np.exp(-t)), 3), round(math.log(50.0), 3)
     (3.912, 3.912)
     """
-    t, x = _time_and_signal(t, signal)
+    ts, x = _time_and_signal(t, signal)
     mag = np.abs(x)
-    fraction = check_positive("fraction", fraction)  # checked even if unused
+    share = check_positive("fraction", fraction)  # checked even if unused
     if band is None:
-        band = fraction * mag[..., 0]
+        level: Any = share * mag[..., 0]
     else:
         # NaN would compare False everywhere ("settled at once") and a
         # negative band can never be entered: both are refused, by name.
-        band = check_positive("band", band)
+        level = check_positive("band", band)
     try:
-        band = np.broadcast_to(np.asarray(band, dtype=float), mag.shape[:-1])
+        level = np.broadcast_to(np.asarray(level, dtype=float), mag.shape[:-1])
     except ValueError:
         raise ValueError(
             f"band must broadcast with signal[..., 0] of shape {mag.shape[:-1]}, "
-            f"got shape {np.shape(band)}"
+            f"got shape {np.shape(level)}"
         ) from None
-    outside = mag > band[..., None]
-    T = t.size
+    outside = mag > level[..., None]
+    T = ts.size
     # index of the last sample outside the band (-1: never outside)
     last = np.where(
         np.any(outside, axis=-1), T - 1 - np.argmax(outside[..., ::-1], -1), -1
@@ -246,15 +254,15 @@ def settling_time(
     m0 = np.take_along_axis(mag, i[..., None], -1)[..., 0]
     m1 = np.take_along_axis(mag, (i + 1)[..., None], -1)[..., 0]
     with np.errstate(divide="ignore", invalid="ignore"):
-        frac = np.clip((m0 - band) / (m0 - m1), 0.0, 1.0)
-    crossing = t[i] + frac * (t[i + 1] - t[i])
+        frac = np.clip((m0 - level) / (m0 - m1), 0.0, 1.0)
+    crossing = ts[i] + frac * (ts[i + 1] - ts[i])
     out = np.where(last >= 0, crossing, 0.0)
     out = np.where(inside_end, out, np.inf)
     out = np.where(np.any(np.isnan(x), axis=-1), np.nan, out)
     return _scalar(out)
 
 
-def overshoot(signal, *, relative: bool = False) -> float | np.ndarray:
+def overshoot(signal: RealArrayLike, *, relative: bool = False) -> float | np.ndarray:
     """Largest excursion past zero, on the side opposite to the start.
 
     For an error that starts at ``x0 != 0`` and should decay to zero, this is
@@ -294,7 +302,9 @@ def overshoot(signal, *, relative: bool = False) -> float | np.ndarray:
     return _scalar(out)
 
 
-def rms(t, signal, *, t_start: float = 0.0) -> float | np.ndarray:
+def rms(
+    t: RealArrayLike, signal: RealArrayLike, *, t_start: float = 0.0
+) -> float | np.ndarray:
     r"""Root mean square over time, :math:`\sqrt{\frac{1}{T}\int x^2\,dt}`.
 
     Trapezoidal rule over the samples with ``t >= t_start``.
@@ -329,7 +339,9 @@ def rms(t, signal, *, t_start: float = 0.0) -> float | np.ndarray:
     return _scalar(out)
 
 
-def steady_state(t, signal, *, window: float = 1.0) -> float | np.ndarray:
+def steady_state(
+    t: RealArrayLike, signal: RealArrayLike, *, window: float = 1.0
+) -> float | np.ndarray:
     """Time average of the signal over the last `window` seconds.
 
     Parameters
@@ -354,10 +366,10 @@ def steady_state(t, signal, *, window: float = 1.0) -> float | np.ndarray:
     >>> round(steady_state(t, 0.3 + np.exp(-5 * t)), 9)
     0.3
     """
-    t, x = _time_and_signal(t, signal)
+    ts, x = _time_and_signal(t, signal)
     window = check_scalar("window", check_positive("window", window))
     with np.errstate(over="ignore", invalid="ignore"):
-        out = _time_average(t, x, t[-1] - window, "window")
+        out = _time_average(ts, x, ts[-1] - window, "window")
     _overflow(out, x, "time average")
     return _scalar(out)
 
@@ -437,7 +449,7 @@ class TrackingMetrics:
     status: str | np.ndarray
     peak_error: float | np.ndarray = np.nan
 
-    def to_pandas(self):
+    def to_pandas(self) -> pd.DataFrame:
         """A :class:`pandas.DataFrame` with one row per run.
 
         Columns: ``run`` and every metric (the attributes above, in SI units
@@ -503,7 +515,7 @@ class _Result(Protocol):
 def tracking_metrics(
     result: _Result,
     *,
-    band=None,
+    band: RealArrayLike | None = None,
     fraction: float = 0.02,
     window: float = 1.0,
 ) -> TrackingMetrics:

@@ -53,7 +53,7 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -686,7 +686,7 @@ class Path(ABC):
 
     def _candidates(
         self, px: Array, py: Array, S: Array, X: Array, Y: Array, tree: Any
-    ) -> tuple[Array, NDArray[np.bool_], Array, Array, float]:
+    ) -> tuple[NDArray[np.intp], NDArray[np.bool_], Array, Array, float]:
         """Up to K local minima of the sampled distance per point (first pass).
 
         Returns sample indices ``j`` (n, K), their validity, their distances,
@@ -827,8 +827,8 @@ class Path(ABC):
         L = self.length
         m = max(8, math.ceil(L / h))
         if self.closed:
-            return np.arange(m) * (L / m)
-        return np.linspace(0.0, L, m + 1)
+            return np.arange(m, dtype=np.float64) * (L / m)
+        return np.linspace(0.0, L, m + 1, dtype=np.float64)
 
 
 # --------------------------------------------------------------------------
@@ -866,7 +866,8 @@ class Straight(Path):
     inf
     """
 
-    length: float | None = None
+    # None (unbounded) becomes inf in __post_init__: a float from then on
+    length: float | None = None  # type: ignore[assignment]
     start: tuple[float, float] = (0.0, 0.0)
     start_heading: float = 0.0
 
@@ -886,7 +887,7 @@ class Straight(Path):
         )
 
     @property
-    def closed(self) -> bool:
+    def closed(self) -> bool:  # type: ignore[override]  # a constant here
         """Always False."""
         return False
 
@@ -912,7 +913,8 @@ class Straight(Path):
         >>> Straight(length=2.0).placed((1.0, 1.0), 0.5).start
         (1.0, 1.0)
         """
-        return Straight(self.length, start, start_heading)
+        # start is checked (two finite numbers) by Straight itself
+        return Straight(self.length, cast("tuple[float, float]", start), start_heading)
 
     def _frame(self, s: Array) -> tuple[Array, Array, Array, Array]:
         z = np.zeros_like(s)
@@ -924,7 +926,8 @@ class Straight(Path):
 
     def _global(self, px: Array, py: Array) -> tuple[Array, Array, NDArray[np.bool_]]:
         lx, ly = _to_local(self.start, self.start_heading, px, py)
-        s = np.clip(lx, 0.0, self.length) if math.isfinite(self.length) else lx
+        L = cast(float, self.length)  # inf, not None, after __post_init__
+        s = np.clip(lx, 0.0, L) if math.isfinite(L) else lx
         return s, np.hypot(lx - s, ly), np.ones(px.size, dtype=bool)
 
 
@@ -1197,7 +1200,7 @@ class Clothoid(Path):
         object.__setattr__(self, "_equivalent", equiv)
 
     @property
-    def closed(self) -> bool:
+    def closed(self) -> bool:  # type: ignore[override]  # a constant here
         """Always False."""
         return False
 
@@ -1229,7 +1232,11 @@ class Clothoid(Path):
         (1.0, 2.0)
         """
         return Clothoid(
-            self.curvature_start, self.curvature_end, self.length, start, start_heading
+            self.curvature_start,
+            self.curvature_end,
+            self.length,
+            cast("tuple[float, float]", start),  # checked by Clothoid itself
+            start_heading,
         )
 
     def _local_heading(self, s: Array) -> Array:
@@ -1346,7 +1353,8 @@ class Spline(Path):
     """
 
     waypoints: Any
-    closed: bool | None = None
+    # None (decided from the waypoints) becomes a bool in __post_init__
+    closed: bool | None = None  # type: ignore[assignment]
     length: float = field(init=False)
     _cs: CubicSpline = field(init=False, compare=False)
     _t_tab: Array = field(init=False, compare=False)
@@ -1592,7 +1600,8 @@ class PathChain(Path):
     """
 
     segments: Sequence[Path]
-    closed: bool | None = None
+    # None (decided from the segments) becomes a bool in __post_init__
+    closed: bool | None = None  # type: ignore[assignment]
     length: float = field(init=False)
     offsets: Array = field(init=False, repr=False, compare=False)
 
@@ -1671,7 +1680,7 @@ class PathChain(Path):
         first = self.segments[0].placed(start, start_heading)
         return PathChain([first, *self.segments[1:]], closed=self.closed)
 
-    def _dispatch(self, s: Array) -> tuple[Array, Array]:
+    def _dispatch(self, s: Array) -> tuple[NDArray[np.intp], Array]:
         n = len(self.segments)
         idx = np.clip(np.searchsorted(self.offsets, s, side="right") - 1, 0, n - 1)
         lengths = np.diff(self.offsets)

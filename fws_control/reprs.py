@@ -16,9 +16,12 @@ from __future__ import annotations
 
 import dataclasses
 import html
-from typing import Any
+from types import ModuleType
+from typing import Any, TypeVar
 
 import numpy as np
+
+_T = TypeVar("_T")
 
 __all__ = ["brief", "summary_repr", "html_table", "value_repr", "import_pandas"]
 
@@ -98,7 +101,7 @@ def _fields(obj) -> list[tuple[str, str]]:
     ]
 
 
-def summary_repr(cls):
+def summary_repr(cls: type[_T]) -> type[_T]:
     """Class decorator: one-line ``__repr__`` and ``_repr_html_`` of a dataclass.
 
     Examples
@@ -124,8 +127,8 @@ def summary_repr(cls):
     def _repr_html_(self) -> str:
         return html_table(type(self).__name__, _fields(self))
 
-    cls.__repr__ = __repr__
-    cls._repr_html_ = _repr_html_
+    setattr(cls, "__repr__", __repr__)  # noqa: B010 (a class, typed as type[_T])
+    setattr(cls, "_repr_html_", _repr_html_)  # noqa: B010
     return cls
 
 
@@ -178,7 +181,7 @@ def _is_default(field: dataclasses.Field, value: Any) -> bool:
         return False
 
 
-def value_repr(cls):
+def value_repr(cls: type[_T]) -> type[_T]:
     """Class decorator: a short constructor-call ``__repr__`` of a dataclass.
 
     Fields equal to their default are left out; floats print to 12
@@ -209,11 +212,11 @@ def value_repr(cls):
         ]
         return f"{type(self).__name__}({', '.join(parts)})"
 
-    cls.__repr__ = __repr__
+    setattr(cls, "__repr__", __repr__)  # noqa: B010 (a class, typed as type[_T])
     return cls
 
 
-def import_pandas():
+def import_pandas() -> ModuleType:
     """The :mod:`pandas` module, or an ImportError naming the extra for it.
 
     The ``to_pandas()`` methods call it: pandas is optional (the extra

@@ -37,6 +37,7 @@ from scipy.optimize import linear_sum_assignment
 
 from .design import double_root_gains
 from .gains import SteeringGains
+from .hints import RealArrayLike
 from .linear import characteristic_coefficients, check_gains
 from .plant import LateralPlant, as_plant
 from .validation import check_finite, check_model
@@ -154,7 +155,7 @@ def gain_locus(
     plant: Any,
     gains: SteeringGains,
     *,
-    scale=None,
+    scale: RealArrayLike | None = None,
     speed: Any = None,
     curvature: Any = None,
     model: Any = None,
@@ -203,7 +204,7 @@ def gain_locus(
     )  # fmt: skip
 
 
-def quadratic_roots(p1, p0) -> np.ndarray:
+def quadratic_roots(p1: RealArrayLike, p0: RealArrayLike) -> np.ndarray:
     r"""Roots of :math:`\lambda^2 + p_1\lambda + p_0`, shape ``(..., 2)``.
 
     Column 0 is ``(-p1 + sqrt(p1^2 - 4 p0))/2`` with the principal complex
@@ -228,7 +229,7 @@ def quadratic_roots(p1, p0) -> np.ndarray:
     return np.stack([(-p1 + sq) / 2.0, (-p1 - sq) / 2.0], axis=-1)
 
 
-def polynomial_roots(coefficients) -> np.ndarray:
+def polynomial_roots(coefficients: RealArrayLike) -> np.ndarray:
     """Roots of a sequence of polynomials, matched into continuous branches.
 
     The roots of each polynomial (rows of `coefficients`, highest power
@@ -331,7 +332,7 @@ def parameter_locus(
     gains: SteeringGains,
     *,
     parameter: str,
-    values,
+    values: RealArrayLike,
     redesign_pole: float | None = None,
     design_model: str | None = None,
     speed: Any = None,

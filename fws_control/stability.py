@@ -24,13 +24,15 @@ stable *side* of :math:`p_1 = 0` does: for ``V < 0`` (reversing) condition
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, SupportsFloat
 
 import numpy as np
 
 from .delay import unstable_root_count
 from .gains import SteeringGains
+from .hints import RealArrayLike
 from .linear import AffinePolynomial, characteristic_coefficients, check_gains
 from .plant import LateralPlant, LoopMatrices, as_plant, loop_matrices, resolve_ratio
 from .reprs import summary_repr
@@ -60,7 +62,7 @@ __all__ = [
 ]
 
 
-def routh_hurwitz(coefficients) -> bool | np.ndarray:
+def routh_hurwitz(coefficients: RealArrayLike) -> bool | np.ndarray:
     r"""Hurwitz test of polynomials on the last axis, vectorised.
 
     True where every root has a negative real part. The first column of the
@@ -100,7 +102,7 @@ def routh_hurwitz(coefficients) -> bool | np.ndarray:
     return bool(out) if np.ndim(out) == 0 else out
 
 
-def hurwitz_columns(columns) -> np.ndarray:
+def hurwitz_columns(columns: Sequence[RealArrayLike]) -> np.ndarray:
     """:func:`routh_hurwitz` on coefficients given as a list of arrays.
 
     ``columns[j]`` holds the coefficient of :math:`s^{n-j}` for every
@@ -562,7 +564,13 @@ class StabilityBoundary:
             )
 
     @classmethod
-    def from_coefficients(cls, alpha, beta, gamma, condition: str) -> StabilityBoundary:
+    def from_coefficients(
+        cls,
+        alpha: SupportsFloat,
+        beta: SupportsFloat,
+        gamma: SupportsFloat,
+        condition: str,
+    ) -> StabilityBoundary:
         """Normalised boundary from raw coefficients (scalars).
 
         Parameters
@@ -614,7 +622,7 @@ class StabilityBoundary:
             return None
         return bool(self.gamma > 0)
 
-    def satisfied(self, k1, k2) -> bool | np.ndarray:
+    def satisfied(self, k1: RealArrayLike, k2: RealArrayLike) -> bool | np.ndarray:
         """True where this condition holds strictly (broadcasts).
 
         Parameters
@@ -637,7 +645,7 @@ class StabilityBoundary:
         """True for a line ``k1 = const`` (``beta == 0``)."""
         return self.beta == 0.0 and self.alpha != 0.0
 
-    def k2_at(self, k1) -> np.ndarray:
+    def k2_at(self, k1: RealArrayLike) -> np.ndarray:
         """``k2`` on the line for given ``k1`` (not for vertical lines).
 
         Parameters
@@ -661,7 +669,7 @@ class StabilityBoundary:
             )
         return -(self.alpha * np.asarray(k1, dtype=float) + self.gamma) / self.beta
 
-    def k1_at(self, k2) -> np.ndarray:
+    def k1_at(self, k2: RealArrayLike) -> np.ndarray:
         """``k1`` on the line for given ``k2`` (not for horizontal lines).
 
         Parameters
@@ -685,7 +693,9 @@ class StabilityBoundary:
             )
         return -(self.beta * np.asarray(k2, dtype=float) + self.gamma) / self.alpha
 
-    def segment(self, k1_range, k2_range) -> np.ndarray | None:
+    def segment(
+        self, k1_range: tuple[float, float], k2_range: tuple[float, float]
+    ) -> np.ndarray | None:
         """End points of the part of the line inside a rectangle.
 
         Parameters
@@ -806,7 +816,7 @@ class StabilityBoundaries:
     lines: tuple[StabilityBoundary, ...]
     order: int
 
-    def __iter__(self):
+    def __iter__(self) -> Iterator[StabilityBoundary]:
         # unpacking gives the straight lines, as stability_boundaries did in 0.1
         return iter(self.lines)
 
@@ -861,7 +871,7 @@ def default_frequencies(cp: AffinePolynomial, num: int = 2001) -> np.ndarray:
 
 
 def complex_root_curve(
-    cp: AffinePolynomial, omega, delay: float = 0.0
+    cp: AffinePolynomial, omega: RealArrayLike, delay: float = 0.0
 ) -> BoundaryCurve:
     r"""Solve :math:`p(j\omega) = 0` for ``(k1, k2)`` at each frequency.
 
@@ -903,8 +913,8 @@ def complex_root_curve(
 def stability_boundaries(
     plant: Any,
     *,
-    ratio: float,
-    omega=None,
+    ratio: float | Callable[..., Any],
+    omega: RealArrayLike | None = None,
     delay: float = 0.0,
     speed: Any = None,
     curvature: Any = None,
@@ -957,12 +967,12 @@ def stability_boundaries(
     ('p0 > 0', ['p1 > 0', 'p0 > 0'])
     """
     p = as_plant(plant, speed=speed, curvature=curvature, model=model)
-    ratio = check_magnitude("ratio", resolve_ratio(p, ratio), MAX_RATIO)
-    if np.ndim(ratio) or (isinstance(p, LateralPlant) and p.shape != ()):
+    a: Any = check_magnitude("ratio", resolve_ratio(p, ratio), MAX_RATIO)
+    if np.ndim(a) or (isinstance(p, LateralPlant) and p.shape != ()):
         raise ValueError(
             "stability_boundaries needs one operating point and a scalar ratio"
         )
-    cp = characteristic_coefficients(p, ratio=ratio)
+    cp = characteristic_coefficients(p, ratio=a)
     last = cp.order
     real = StabilityBoundary.from_coefficients(
         cp.n1[..., last], cp.n2[..., last], cp.open_loop[..., last], "p0 > 0"
@@ -972,7 +982,7 @@ def stability_boundaries(
         p1 = StabilityBoundary.from_coefficients(
             cp.n1[..., 1], cp.n2[..., 1], cp.open_loop[..., 1], "p1 > 0"
         )
-        lines = (p1, real)
+        lines: tuple[StabilityBoundary, ...] = (p1, real)
     else:
         lines = (real,)
     if omega is None:

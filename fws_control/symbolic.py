@@ -37,10 +37,19 @@ __all__ = [
     "zero_sideslip_ratio",
 ]
 
+V: sp.Symbol
+f: sp.Symbol
+d: sp.Symbol
+kappa: sp.Symbol
+a: sp.Symbol
+k1: sp.Symbol
+k2: sp.Symbol
+lam0: sp.Symbol
+lam: sp.Symbol
 V, f, d, kappa, a, k1, k2, lam0, lam = sp.symbols(
     "V f d kappa a k1 k2 lam0 lam", real=True
 )
-t = sp.Symbol("t", real=True)
+t: sp.Symbol = sp.Symbol("t", real=True)
 SYMBOLS = {
     "speed": V,
     "wheelbase": f,
@@ -180,6 +189,10 @@ def lateral_acceleration() -> sp.Expr:
     return sp.simplify(lat)
 
 
+m: sp.Symbol
+I_z: sp.Symbol
+C_f: sp.Symbol
+C_r: sp.Symbol
 m, I_z, C_f, C_r = sp.symbols("m I_z C_f C_r", positive=True)
 _vy, _r = sp.symbols("v_y r", real=True)
 DYNAMIC_SYMBOLS = {

@@ -31,15 +31,20 @@ smallest where :math:`(1-a)\delta_{f,\max} = \pi/2`, i.e. at
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import control as ct
 import numpy as np
 
+from .hints import RatioLike, RealArrayLike
 from .layout import grid_margins
 from .models import check_steering
 from .reprs import summary_repr
 from .validation import check_finite, check_scalar, check_type
 from .vehicle import Vehicle
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
 
 __all__ = [
     "TurningGeometry",
@@ -90,7 +95,9 @@ class TurningGeometry:
     centre: np.ndarray
 
 
-def steady_turn(vehicle: Vehicle, delta_f, delta_r) -> TurningGeometry:
+def steady_turn(
+    vehicle: Vehicle, delta_f: RealArrayLike, delta_r: RealArrayLike
+) -> TurningGeometry:
     r"""Turning radii of R and G at constant steering angles.
 
     Parameters
@@ -109,6 +116,8 @@ def steady_turn(vehicle: Vehicle, delta_f, delta_r) -> TurningGeometry:
     ------
     SingularStateError
         If ``|delta_f| >= pi/2``.
+    ValueError
+        If ``vehicle.rear_to_cg`` is None (needed for the radius of G).
 
     Examples
     --------
@@ -126,7 +135,8 @@ def steady_turn(vehicle: Vehicle, delta_f, delta_r) -> TurningGeometry:
     dr = np.asarray(check_finite("delta_r", delta_r), dtype=float)
     check_steering(df)
     df, dr = np.broadcast_arrays(df, dr)
-    f, d = vehicle.wheelbase, vehicle.rear_to_cg
+    f = vehicle.wheelbase
+    d = vehicle.cg_distance(needed_by="steady_turn (the radius of G)")
     kappa = np.sin(df - dr) / (f * np.cos(df))
     with np.errstate(divide="ignore", invalid="ignore"):
         t = np.where(kappa != 0.0, 1.0 / kappa, np.inf)
@@ -147,9 +157,9 @@ def steady_turn(vehicle: Vehicle, delta_f, delta_r) -> TurningGeometry:
 def turning_radius(
     vehicle: Vehicle,
     *,
-    ratio,
-    max_steer_front=None,
-    max_steer_rear=None,
+    ratio: RatioLike,
+    max_steer_front: RealArrayLike | None = None,
+    max_steer_rear: RealArrayLike | None = None,
 ) -> TurningGeometry:
     r"""Smallest steady turning radius with ``delta_r = ratio*delta_f``.
 
@@ -181,7 +191,8 @@ def turning_radius(
     ------
     ValueError
         If no front limit is given (neither argument nor vehicle) or a limit
-        is outside (0, pi/2).
+        is outside (0, pi/2). Also if ``vehicle.rear_to_cg`` is None
+        (needed for the radius of G).
 
     Examples
     --------
@@ -238,10 +249,10 @@ def _curve(name: str, value) -> np.ndarray:
 def plot_turning_radius(
     vehicle: Vehicle,
     *,
-    ratios=None,
-    limits=None,
-    ax=None,
-    max_steer_rear=None,
+    ratios: RealArrayLike | None = None,
+    limits: RealArrayLike | None = None,
+    ax: Axes | None = None,
+    max_steer_rear: RealArrayLike | None = None,
     ylim: float = 12.0,
 ) -> ct.ControlPlot:
     r"""Turning radius of R (solid) and G (dashed) against the ratio ``a``.

@@ -45,10 +45,14 @@ class Vehicle:
     wheelbase : float
         Distance between the front and rear axle centres, paper symbol
         :math:`f` [m]. Must be finite and > 0.
-    rear_to_cg : float
+    rear_to_cg : float or None, optional
         Distance from the rear axle centre R to the centre of gravity G,
         paper symbol :math:`d` [m]. Must satisfy ``0 <= rear_to_cg <=
-        wheelbase``.
+        wheelbase``. ``None`` (default) leaves G unknown: the path-frame
+        model of R, the gains, the stability analysis and its charts do not
+        depend on it; what is measured at G (the lateral acceleration, the
+        turning radius of G, the simulation's signals at G, the dynamic
+        model) raises a ValueError naming ``rear_to_cg``.
     max_steer_front, max_steer_rear : float or None, optional
         Steering-angle limits [rad], in (0, pi/2). ``None`` (default) means
         unlimited; saturation is applied only where a limit is set.
@@ -85,10 +89,18 @@ class Vehicle:
     Traceback (most recent call last):
         ...
     ValueError: rear_to_cg must be in [0, wheelbase=2.7] m, got 3.0
+
+    The gains need only the wheelbase:
+
+    >>> g = fws.double_root_gains(fws.Vehicle(wheelbase=2.7), speed=5.0,
+    ...                           ratio=0.5, pole=-1.0)
+    >>> round(g.k1, 6) == round(fws.double_root_gains(veh, speed=5.0,
+    ...                                               ratio=0.5, pole=-1.0).k1, 6)
+    True
     """
 
     wheelbase: float
-    rear_to_cg: float
+    rear_to_cg: float | None = None
     _: KW_ONLY  # the limits are options, named at the call
     max_steer_front: float | None = None
     max_steer_rear: float | None = None
@@ -106,14 +118,16 @@ class Vehicle:
             raise ValueError(
                 f"wheelbase must be finite and > 0 m, got {self.wheelbase!r}"
             )
-        d = _number("rear_to_cg", self.rear_to_cg)
-        if not (math.isfinite(d) and 0.0 <= d <= f):
-            raise ValueError(
-                f"rear_to_cg must be in [0, wheelbase={f}] m, got {self.rear_to_cg!r}"
-            )
         # Store plain floats so that equality and hashing behave for ints too.
         object.__setattr__(self, "wheelbase", f)
-        object.__setattr__(self, "rear_to_cg", d)
+        if self.rear_to_cg is not None:
+            d = _number("rear_to_cg", self.rear_to_cg)
+            if not (math.isfinite(d) and 0.0 <= d <= f):
+                raise ValueError(
+                    f"rear_to_cg must be in [0, wheelbase={f}] m, "
+                    f"got {self.rear_to_cg!r}"
+                )
+            object.__setattr__(self, "rear_to_cg", d)
         for name in ("max_steer_front", "max_steer_rear"):
             object.__setattr__(self, name, check_angle_limit(name, getattr(self, name)))
         for name in ("max_steer_rate_front", "max_steer_rate_rear"):
@@ -124,18 +138,70 @@ class Vehicle:
 
     @property
     def front_to_cg(self) -> float:
-        """Distance from the centre of gravity to the front axle [m]."""
-        return self.wheelbase - self.rear_to_cg
+        """Distance from the centre of gravity to the front axle [m].
+
+        Raises
+        ------
+        ValueError
+            If ``rear_to_cg`` is None.
+        """
+        return self.wheelbase - self.cg_distance(needed_by="front_to_cg")
+
+    def cg_distance(self, *, needed_by: str) -> float:
+        """``rear_to_cg`` [m], or a ValueError saying what needs it.
+
+        Parameters
+        ----------
+        needed_by : str
+            What needs the centre of gravity, for the error message (a
+            function, a signal or a quantity measured at G).
+
+        Returns
+        -------
+        float
+            The distance from the rear axle centre R to G.
+
+        Raises
+        ------
+        ValueError
+            If ``rear_to_cg`` is None.
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> fws.Vehicle(wheelbase=2.7, rear_to_cg=1.2).cg_distance(needed_by="a_y")
+        1.2
+        >>> fws.Vehicle(wheelbase=2.7).cg_distance(needed_by="the acceleration of G")
+        Traceback (most recent call last):
+            ...
+        ValueError: rear_to_cg is None, but the acceleration of G needs the \
+position of the centre of gravity G: give Vehicle(..., rear_to_cg=d) with 0 <= d \
+<= wheelbase=2.7 m
+        """
+        if self.rear_to_cg is None:
+            raise ValueError(
+                f"rear_to_cg is None, but {needed_by} needs the position of the "
+                "centre of gravity G: give Vehicle(..., rear_to_cg=d) with "
+                f"0 <= d <= wheelbase={self.wheelbase:g} m"
+            )
+        return self.rear_to_cg
 
     @property
     def has_dynamics(self) -> bool:
-        """True if mass, yaw inertia and both cornering stiffnesses are set.
+        """True if rear_to_cg, mass, yaw inertia and both cornering
+        stiffnesses are set.
 
-        These four are what the dynamic single-track model needs.
+        These five are what the dynamic single-track model needs.
         """
         return all(
             getattr(self, name) is not None
-            for name in ("mass", "yaw_inertia", "cornering_front", "cornering_rear")
+            for name in (
+                "rear_to_cg",
+                "mass",
+                "yaw_inertia",
+                "cornering_front",
+                "cornering_rear",
+            )
         )
 
     @property

@@ -41,6 +41,7 @@ import control as ct
 import matplotlib
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 
 matplotlib.use("Agg")
 
@@ -745,7 +746,7 @@ def test_exception_tables_have_reasons():
 @cache
 def _objects():
     """Small real objects to call the API on."""
-    veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    veh = PAPER_VEHICLE
     plant = fws.LateralPlant(veh, speed=5.0)
     gains = fws.SteeringGains(k1=0.2, k2=0.9, ratio=-1.0)
     return veh, plant, gains

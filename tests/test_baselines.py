@@ -25,6 +25,7 @@ import math
 import control as ct
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
@@ -1121,24 +1122,24 @@ def test_slalom_amplitude_bound_is_pitch_over_4():
         fws.manoeuvres.s_bend(2 * 4.5, 18.0)
 
 
-_P13 = fws.LateralPlant(fws.Vehicle(2.7, 1.35), speed=5.0, curvature=0.1)
+_P13 = fws.LateralPlant(PAPER_VEHICLE, speed=5.0, curvature=0.1)
 
 
 @pytest.mark.parametrize(
     "make, arg, exc",
     [
         (
-            lambda: fws.saturate(fws.Vehicle(2.7, 1.35), math.nan, 0.0),
+            lambda: fws.saturate(PAPER_VEHICLE, math.nan, 0.0),
             "delta_f",
             ValueError,
         ),  # fmt: skip
         (
-            lambda: fws.saturate(fws.Vehicle(2.7, 1.35), 0.1, None),
+            lambda: fws.saturate(PAPER_VEHICLE, 0.1, None),
             "delta_r",
             ValueError,
         ),  # fmt: skip
         (
-            lambda: fws.saturate(fws.Vehicle(2.7, 1.35), 0.1, np.array([True])),
+            lambda: fws.saturate(PAPER_VEHICLE, 0.1, np.array([True])),
             "delta_r",
             TypeError,
         ),  # fmt: skip
@@ -1191,7 +1192,7 @@ def test_saturate_keeps_nan_array_elements_in_place():
 def test_issue13_compare_ranges_named(kw, arg):
     # before: a 1e295 GiB output request, a singular actuator factor, NaN
     # metrics for dt beyond the run: refused with the stated floor/range
-    veh = fws.Vehicle(2.7, 1.35)
+    veh = PAPER_VEHICLE
     m = fws.constant_radius(radius=40.0, turns=0.05)
     g = {"4ws": fws.SteeringGains(0.1, 0.5, ratio=0.0)}
     with pytest.raises(ValueError, match=rf"\b{arg} must be"):

@@ -7,13 +7,14 @@ import control as ct
 import matplotlib.pyplot as plt
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 
 import fws_control as fws
 from fws_control.paths import Arc, Straight
 from fws_control.simulation import SIGNALS
 from fws_control.simulation.result import expand_runs
 
-VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+VEH = PAPER_VEHICLE
 
 
 def _gains(speed, curvature, ratio, pole=-1.0):

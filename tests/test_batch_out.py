@@ -15,7 +15,13 @@ import re
 
 import numpy as np
 import pytest
-from conftest import CURVE_BATCH_KW, CURVE_GAINS_WITH_STOP, LosingClient, traced_peak
+from conftest import (
+    CURVE_BATCH_KW,
+    CURVE_GAINS_WITH_STOP,
+    PAPER_VEHICLE,
+    LosingClient,
+    traced_peak,
+)
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
@@ -24,7 +30,7 @@ import fws_control as fws
 from fws_control.paths import Arc
 from fws_control.simulation import SIGNALS, engine
 
-VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+VEH = PAPER_VEHICLE
 PATH = Arc(0.1)
 # five designs of the paper's curve scenario and one that stops (conftest)
 GAINS = CURVE_GAINS_WITH_STOP

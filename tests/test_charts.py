@@ -245,3 +245,74 @@ def test_plot_paper_figure(n, naxes, shape, tmp_path):
     fig.savefig(out, dpi=40)
     plt.close(fig)
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+# --- marking gains of one's own; pole= on a 4-state plant -------------------
+
+_DYN = dict(mass=1500.0, yaw_inertia=2600.0, cornering_front=8e4, cornering_rear=9.5e4)
+
+
+def test_mark_is_drawn_at_the_given_gains(veh):
+    axis = np.linspace(-1.0, 1.0, 41)
+    ch = fws.stability_chart(veh, speed=5.0, ratio=-1.0, k1=axis, k2=axis)
+    cplt = ch.plot(mark=(0.25, -0.4))
+    star = cplt.lines[0, 0][-1]
+    assert star.get_marker() == "*" and star.axes is cplt.axes[0, 0]
+    np.testing.assert_array_equal(star.get_xydata(), [[0.25, -0.4]])
+    legend = [t.get_text() for t in cplt.axes[0, 0].get_legend().get_texts()]
+    assert legend[-1] == star.get_label() == "marked: (0.250, -0.400)"
+    plt.close(cplt.figure)
+    # several points, from SteeringGains with the chart's ratio, via draw()
+    fig, ax = plt.subplots()
+    g = fws.SteeringGains(k1=[0.1, 0.2, 0.3], k2=0.5, ratio=-1.0)
+    handles = ch.draw(ax, mark=g)
+    assert handles[-1].get_label() == "marked gains (3)"
+    np.testing.assert_array_equal(
+        handles[-1].get_xydata(), [[0.1, 0.5], [0.2, 0.5], [0.3, 0.5]]
+    )
+    plt.close(fig)
+
+
+@pytest.mark.parametrize(
+    "mark, match",
+    [
+        ("k1k2", "a \\(k1, k2\\) pair"),
+        (0.3, "a \\(k1, k2\\) pair"),
+        ((0.1, 0.2, 0.3), "a \\(k1, k2\\) pair"),
+        ((math.nan, 0.2), "mark k1 must be finite"),
+        (([0.1, 0.2], [0.1, 0.2, 0.3]), "mark: k1 and k2 must broadcast"),
+        (fws.SteeringGains(0.1, 0.2, 0.5), "chart's ratio -1.0"),
+    ],
+)
+def test_bad_mark_is_refused_before_drawing(veh, mark, match):
+    axis = np.linspace(-1.0, 1.0, 11)
+    ch = fws.stability_chart(veh, speed=5.0, ratio=-1.0, k1=axis, k2=axis)
+    n = len(plt.get_fignums())
+    with pytest.raises(ValueError, match=f"^mark.*{match}|{match}"):
+        ch.plot(mark=mark)
+    assert len(plt.get_fignums()) == n  # no figure left behind
+
+
+def test_pole_on_the_dynamic_plant_marks_the_kinematic_design():
+    """The marked point is the gains whose kinematic closed loop (python-
+    control's state space of the exact model) has its double root at the pole."""
+    veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.2, **_DYN)
+    dyn = fws.LateralPlant(veh, speed=10.0, curvature=0.02, model="dynamic")
+    axis = np.linspace(-1.0, 1.0, 41)
+    ch = fws.stability_chart(dyn, ratio=0.0, pole=-1.0, k1=axis, k2=axis)
+    assert ch.design_model == "exact" and ch.order == 4
+    cplt = ch.plot()
+    dot = next(a for a in cplt.lines[0, 0] if "kinematic design" in str(a.get_label()))
+    (k1d, k2d), = dot.get_xydata()  # fmt: skip
+    kin = fws.LateralPlant(veh, speed=10.0, curvature=0.02, model="exact")
+    A = fws.closed_loop(kin, fws.SteeringGains(k1d, k2d, 0.0)).A
+    np.testing.assert_allclose(np.linalg.eigvals(A), [-1.0, -1.0], atol=1e-5)
+    plt.close(cplt.figure)
+
+
+def test_pole_on_another_four_state_plant_says_what_to_pass():
+    veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.2, **_DYN)
+    ss = fws.linearize(veh, speed=10.0, model="dynamic")
+    assert ss.nstates == 4
+    with pytest.raises(ValueError, match=r"^pole=-1.0 needs a 2-state plant.*mark="):
+        fws.stability_chart(ss, ratio=0.0, pole=-1.0)

@@ -14,11 +14,12 @@ import time
 
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 
 import fws_control as fws
 from fws_control.controller_comparison import COMPARE_MAX_STEPS
 
-VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+VEH = PAPER_VEHICLE
 COURSE = fws.double_lane_change()
 
 

@@ -15,6 +15,7 @@ import re
 
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 
 import fws_control as fws
 from fws_control.controller_comparison import COMPARISON_METRICS
@@ -38,7 +39,7 @@ def _page_row(speed: str, condition: str, label: str) -> list[str]:
      (20.0, "actuator", "rear-wheel feedback")],
 )  # fmt: skip
 def test_row_matches_a_fresh_run(speed, condition, label):
-    veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    veh = PAPER_VEHICLE
     course = fws.double_lane_change()
     ctrl = fws.default_controllers(veh, speed=speed)[label]
     kw = (

@@ -14,6 +14,7 @@ import math
 
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import DOP853, solve_ivp
@@ -39,7 +40,7 @@ from fws_control.simulation.compiled import (  # noqa: E402
     solve_run,
 )
 
-VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+VEH = PAPER_VEHICLE
 TOL = {"rtol": 1e-10, "atol": 1e-12}
 
 

@@ -13,6 +13,7 @@ import textwrap
 
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -24,7 +25,7 @@ pytest.importorskip(
     "is not tested"
 )  # fmt: skip
 
-VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+VEH = PAPER_VEHICLE
 LIM = fws.Vehicle(
     wheelbase=2.7,
     rear_to_cg=1.35,
@@ -340,7 +341,7 @@ def test_auto_engine_without_numba():
         sys.modules["numba"] = None  # import numba raises ImportError
         import numpy as np
         import fws_control as fws
-        veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+        veh = PAPER_VEHICLE
         g = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=-1.0,
                                   pole=-1.0)
         kw = dict(speed=5.0, initial_state=(0.0, -5.0, 0.0), duration=2.0)

@@ -16,6 +16,7 @@ with the limits: same step counts, agreement to 2e-6.
 
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import Radau, solve_ivp
@@ -113,7 +114,7 @@ def test_engine_radau_takes_scipys_steps(tau, rtol, duration):
     # order 3), the steps of _radau_step, the outputs from the collocation
     # polynomial written in DOP853's form -- the same steps and outputs as
     # solve_ivp's Radau given the same Jacobian
-    veh = fws.Vehicle(2.7, 1.35)
+    veh = PAPER_VEHICLE
     tab = curvature_table(fws.Arc(0.1))
     g = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=-0.5, pole=-1.0)
     t_eval = np.linspace(0.0, duration, 401)
@@ -137,7 +138,7 @@ def test_engine_radau_stops_where_scipys_event_does():
     # diverging gains (k2 < 0): |delta_f| (the actuator state) reaches
     # pi/2 - margin; the compiled Radau locates it on its dense output as
     # scipy's terminal event does on its own
-    veh = fws.Vehicle(2.7, 1.35)
+    veh = PAPER_VEHICLE
     tab = curvature_table(fws.Arc(0.1))
     g = fws.SteeringGains(0.2, -0.5, 0.0)
     tau, rtol, atol = 0.05, 1e-10, 1e-12

@@ -5,13 +5,14 @@ import math
 import control as ct
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 from hypothesis import given
 from hypothesis import strategies as st
 
 import fws_control as fws
 from fws_control.controllers import actuator_rate
 
-VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+VEH = PAPER_VEHICLE
 finite = st.floats(-3.0, 3.0, allow_nan=False)
 
 
@@ -193,7 +194,7 @@ def test_actuator_time_constant_must_be_positive():
 # -- issue 13 item 7: types, non-finite values, flags, magnitudes -------------
 
 _G = fws.SteeringGains(0.1, 0.5, ratio=-1.0)
-_V = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+_V = PAPER_VEHICLE
 
 
 @pytest.mark.parametrize(

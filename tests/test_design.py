@@ -5,14 +5,14 @@ import math
 import control as ct
 import numpy as np
 import pytest
-from conftest import gain_factor, lambdify
+from conftest import PAPER_VEHICLE, gain_factor, lambdify
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
 import fws_control as fws
 from fws_control import symbolic as S
 
-VEH = fws.Vehicle(2.7, 1.35)
+VEH = PAPER_VEHICLE
 models = st.sampled_from(["exact", "paper"])
 ratios = st.floats(-2.0, 2.0)
 curvatures = st.floats(-0.3, 0.3)
@@ -421,3 +421,62 @@ def test_slow_pole_on_straight_path_is_accepted():
     ev = np.linalg.eigvals(A - np.outer(B @ [1.0, -1.0], [g.k1, g.k2]))
     assert np.allclose(ev, -1e-12, rtol=POLE_RTOL, atol=0.0)
     assert fws.is_stable(plant, g)
+
+
+# --- a sweep that crosses the uncontrollable design -------------------------
+
+
+def test_mask_marks_only_the_uncontrollable_elements(veh):
+    """a = 1 on a straight path has no design; the other elements of the
+    sweep are the designs of single calls and put the double root at the
+    pole (eigenvalues of the closed loop, numpy)."""
+    plant = fws.LateralPlant(veh, speed=5.0)
+    ratios = np.array([-1.0, 0.0, 1.0, 0.5, 1.0, 2.0])
+    g = fws.double_root_gains(plant, ratio=ratios, pole=-1.0, uncontrollable="mask")
+    assert isinstance(g.k1, np.ma.MaskedArray) and isinstance(g.k2, np.ma.MaskedArray)
+    np.testing.assert_array_equal(g.k1.mask, ratios == 1.0)
+    np.testing.assert_array_equal(g.k2.mask, ratios == 1.0)
+    assert np.all(np.isnan(g.k1.data[ratios == 1.0]))
+    for i, a in enumerate(ratios.tolist()):
+        if a == 1.0:
+            with pytest.raises(fws.UncontrollableError, match="ratio=1.0"):
+                fws.double_root_gains(plant, ratio=a, pole=-1.0)
+            continue
+        one = fws.double_root_gains(plant, ratio=a, pole=-1.0)
+        assert (g.k1[i], g.k2[i]) == (one.k1, one.k2)
+        A = fws.closed_loop(plant, one).A  # python-control's closed loop
+        np.testing.assert_allclose(np.linalg.eigvals(A), [-1.0, -1.0], atol=1e-6)
+    # the whole array still raises by default
+    with pytest.raises(fws.UncontrollableError):
+        fws.double_root_gains(plant, ratio=ratios, pole=-1.0)
+
+
+def test_mask_on_a_curve_masks_nothing(veh):
+    plant = fws.LateralPlant(veh, speed=5.0, curvature=0.05)
+    ratios = np.linspace(-2.0, 2.0, 9)  # holds a = 1: controllable on a curve
+    g = fws.double_root_gains(plant, ratio=ratios, pole=-1.0, uncontrollable="mask")
+    ref = fws.double_root_gains(plant, ratio=ratios, pole=-1.0)
+    assert not g.k1.mask.any() and not g.k2.mask.any()
+    np.testing.assert_array_equal(g.k1.data, ref.k1)
+    np.testing.assert_array_equal(g.k2.data, ref.k2)
+
+
+@pytest.mark.parametrize("bad", ["nan", "Raise", None, True])
+def test_uncontrollable_option_checked(veh, bad):
+    with pytest.raises(ValueError, match=r"^uncontrollable must be 'raise' or 'mask'"):
+        fws.double_root_gains(veh, speed=5.0, ratio=0.0, pole=-1.0,
+                              uncontrollable=bad)  # fmt: skip
+
+
+def test_masked_gains_keep_their_mask_and_refuse_non_finite_kept_entries():
+    k1 = np.ma.masked_array([0.1, 5.0, 0.3], mask=[False, True, False])
+    g = fws.SteeringGains(k1=k1, k2=0.5, ratio=0.0)
+    np.testing.assert_array_equal(g.k1.mask, [False, True, False])
+    assert np.isnan(g.k1.data[1]) and g.k1.data[2] == 0.3
+    with pytest.raises(ValueError, match="^k1 must be finite"):
+        fws.SteeringGains(
+            k1=np.ma.masked_array([np.inf, 1.0], mask=[False, True]), k2=0.5, ratio=0.0
+        )
+    with pytest.raises(ValueError, match="^ratio must be finite"):
+        nan = np.ma.masked_array([np.nan], mask=[True])
+        fws.SteeringGains(k1=0.1, k2=0.5, ratio=nan)

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -93,7 +94,7 @@ def test_magic_tyre_slope_and_peak():
 
 def test_missing_data_is_named():
     with pytest.raises(ValueError, match="mass, yaw_inertia, cornering_front"):
-        dynamics.body_derivatives(fws.Vehicle(2.7, 1.35), 0.0, 0.0, 0.0, 0.0, speed=5)
+        dynamics.body_derivatives(PAPER_VEHICLE, 0.0, 0.0, 0.0, 0.0, speed=5)
     with pytest.raises(ValueError, match="friction"):
         dynamics.require_dynamics(
             fws.Vehicle(

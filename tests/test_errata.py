@@ -8,13 +8,13 @@ import control as ct
 import numpy as np
 import pytest
 import sympy as sp
-from conftest import lambdify
+from conftest import PAPER_VEHICLE, lambdify
 from scipy.integrate import solve_ivp
 
 import fws_control as fws
 from fws_control import symbolic as S
 
-VEH = fws.Vehicle(2.7, 1.35)
+VEH = PAPER_VEHICLE
 
 
 def _arc_errors(x, y, psi, k):

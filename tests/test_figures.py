@@ -199,7 +199,7 @@ def test_fig5_points_match_direct_simulation():
     ax_a = [ax for ax in fig.axes if ax.get_yscale() == "log"][0]
     (line,) = [ln for ln in ax_a.lines if ln.get_label() == r"$\lambda_0$ = -1"]
     a, peak = line.get_xdata(), line.get_ydata()
-    veh = fws.Vehicle(2.7, 1.35)
+    veh = PAPER_VEHICLE
     for ratio in (-1.0, 0.0):
         g = fws.double_root_gains(veh, speed=5.0, ratio=ratio, pole=-1.0)
         res = fws.simulate(
@@ -225,7 +225,7 @@ def test_response_figures_match_direct_simulation(n, curvature, y0):
     fig = make_figure(f"fig{n}", quick=True)
     ax = fig.axes[0]
     (line,) = [ln for ln in ax.lines if ln.get_label() == "a = -0.5"]
-    veh = fws.Vehicle(2.7, 1.35)
+    veh = PAPER_VEHICLE
     g = fws.double_root_gains(
         veh, speed=5.0, curvature=curvature, ratio=-0.5, pole=-1.0
     )
@@ -484,7 +484,7 @@ def test_actuator_responses_match_simulate_at_default_tolerance(panel, pole):
 
     cplt = plot_actuator(quick=True)
     ax = cplt.axes[0, panel]
-    veh = fws.Vehicle(2.7, 1.35)
+    veh = PAPER_VEHICLE
     g = fws.double_root_gains(veh, speed=20.0, curvature=0.01, ratio=0.5, pole=pole)
     styles = {ln.get_linestyle(): ln for ln in ax.lines}
     for style, act in (

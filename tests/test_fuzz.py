@@ -93,6 +93,7 @@ from typing import Any
 import control as ct
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -175,7 +176,7 @@ BAD_VALUES: list[tuple[str, Any]] = [
 # --------------------------------------------------------------------------
 # baseline objects
 
-VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+VEH = PAPER_VEHICLE
 PLANT = fws.LateralPlant(VEH, speed=5.0, curvature=0.1)
 GAINS = fws.double_root_gains(PLANT, ratio=-1.0, pole=-1.0)
 ARC = fws.Arc(curvature=0.1)

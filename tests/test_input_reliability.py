@@ -12,6 +12,7 @@ import re
 
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 from scipy.optimize import brentq, minimize_scalar
 
 import fws_control as fws
@@ -157,7 +158,7 @@ def test_dynamic_plant_beyond_the_tyre_names_the_largest_curvature():
 
 
 def test_compare_refuses_an_array_of_designs_and_says_what_to_use():
-    veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    veh = PAPER_VEHICLE
     m = fws.constant_radius(radius=40.0, turns=0.05)
     sweep = fws.SteeringGains(k1=[0.1, 0.2], k2=0.5, ratio=0.0)
     with pytest.raises(ValueError) as info:
@@ -196,7 +197,7 @@ def _swept(result, centre):
 
 
 def test_constant_radius_drives_its_turns():
-    veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    veh = PAPER_VEHICLE
     R, V = 10.0, 5.0
     m = fws.constant_radius(radius=R, turns=3)
     g = fws.double_root_gains(
@@ -219,7 +220,7 @@ def test_completed_on_a_tight_circle_means_the_lap_was_driven():
     # angle and the run stops; the others track the circle. Completion is
     # read here from the positions: a full lap about the centre, ending on
     # the circle, without a stop.
-    veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    veh = PAPER_VEHICLE
     R, V = 2.5, 3.0
     every = fws.default_controllers(veh, speed=V)
     names = ["paper, a = 0", "pure pursuit", "Stanley", "LQR (independent rear)"]
@@ -245,7 +246,7 @@ def test_huge_initial_heading_is_refused():
     # at 1e300 rad neighbouring doubles are ~1e284 rad apart: the number
     # names no direction; at 1e6 rad they are 1e-10 rad apart
     assert np.spacing(1e300) > 2 * math.pi and np.spacing(1e6) < 1e-9
-    veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    veh = PAPER_VEHICLE
     g = fws.SteeringGains(0.1, 0.5, ratio=0.0)
     kw = dict(speed=5.0, duration=1.0)
     with pytest.raises(ValueError, match=r"initial_state heading psi .* 1e\+300"):

@@ -5,7 +5,7 @@ import math
 import control as ct
 import numpy as np
 import pytest
-from conftest import lambdify
+from conftest import PAPER_VEHICLE, lambdify
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -18,7 +18,7 @@ curvatures = st.floats(-0.3, 0.3)
 
 @given(speed=speeds, curvature=curvatures)
 def test_exact_equals_control_linearize_of_path_frame_model(speed, curvature):
-    veh = fws.Vehicle(2.7, 1.35)
+    veh = PAPER_VEHICLE
     nl = fws.path_frame_model(veh, speed=speed, curvature=curvature)
     # Operating point of eqs. (26)-(27), written out: (s, e, theta) = 0,
     # delta_f = atan(kappa f), delta_r = 0.

@@ -15,13 +15,18 @@ import time
 
 import numpy as np
 import pytest
-from conftest import CURVE_BATCH_KW, CURVE_GAINS_WITH_STOP, dask_distributed
+from conftest import (
+    CURVE_BATCH_KW,
+    CURVE_GAINS_WITH_STOP,
+    PAPER_VEHICLE,
+    dask_distributed,
+)
 
 import fws_control as fws
 from fws_control.paths import Arc
 from fws_control.simulation import runners
 
-VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+VEH = PAPER_VEHICLE
 
 
 # Opened by the test once it is done: the chunks after the first wait for

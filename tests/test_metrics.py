@@ -4,13 +4,14 @@ import math
 
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 from hypothesis import given
 from hypothesis import strategies as st
 
 import fws_control as fws
 from fws_control.paths import Arc, Straight
 
-VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+VEH = PAPER_VEHICLE
 T = np.linspace(0.0, 10.0, 2001)
 
 

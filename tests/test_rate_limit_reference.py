@@ -25,11 +25,12 @@ import math
 
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 
 import fws_control as fws
 from fws_control.simulation.engine import LSODA_MAX_RUNS, SOLVERS, choose_method
 
-VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+VEH = PAPER_VEHICLE
 SPEED, KAPPA, E0 = 5.0, 0.1, -5.0  # the paper's curve scenario curve_5
 RATIO = -0.5
 AGREE = 100.0

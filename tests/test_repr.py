@@ -7,6 +7,7 @@ small table.
 
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 
 import fws_control as fws
 from fws_control.paper import PAPER_VEHICLE as VEH
@@ -96,7 +97,7 @@ def test_computed_gains_print_without_float_noise():
 
 
 def test_vehicle_and_plant_reprs_leave_out_defaults():
-    veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    veh = PAPER_VEHICLE
     assert repr(veh) == "Vehicle(wheelbase=2.7, rear_to_cg=1.35)"
     limited = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35, max_steer_front=0.5)
     assert repr(limited) == (

@@ -16,10 +16,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 
 import fws_control as fws
 
-VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+VEH = PAPER_VEHICLE
 BOX = {"speed": (10.0, 30.0), "delay": (0.0, 0.24), "steering_lag": 0.27}
 WINDOWS = {0.0: ((-0.001, 0.009), (-0.05, 0.45)), 0.5: ((-0.002, 0.02), (-0.05, 0.95))}
 

@@ -6,6 +6,7 @@ import control as ct
 import matplotlib.pyplot as plt
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -240,7 +241,7 @@ def test_uncontrollable_redesign_raises(veh):
         )
 
 
-_P13 = fws.LateralPlant(fws.Vehicle(2.7, 1.35), speed=5.0, curvature=0.1)
+_P13 = fws.LateralPlant(PAPER_VEHICLE, speed=5.0, curvature=0.1)
 _G13 = fws.double_root_gains(_P13, ratio=-1.0, pole=-1.0)
 
 

@@ -11,7 +11,13 @@ from __future__ import annotations
 import matplotlib
 import numpy as np
 import pytest
-from conftest import CURVE_BATCH_KW, CURVE_GAINS_WITH_STOP, LosingClient, traced_peak
+from conftest import (
+    CURVE_BATCH_KW,
+    CURVE_GAINS_WITH_STOP,
+    PAPER_VEHICLE,
+    LosingClient,
+    traced_peak,
+)
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -22,7 +28,7 @@ from fws_control.simulation.engine import PEAK_SIGNALS
 
 matplotlib.use("Agg")
 
-VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+VEH = PAPER_VEHICLE
 PATH = Arc(0.1)
 # five designs of the paper's curve scenario and one that stops (conftest)
 GAINS = CURVE_GAINS_WITH_STOP

@@ -7,6 +7,7 @@ the same run integrated alone, and maxima of the samples computed here.
 
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 
 import fws_control as fws
 from fws_control.simulation.engine import PEAK_SIGNALS, SIGNALS
@@ -16,7 +17,7 @@ pytest.importorskip(
     "is not tested"
 )  # fmt: skip
 
-VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+VEH = PAPER_VEHICLE
 ARC = fws.Arc(curvature=0.1)
 #: The paper's curve scenario: V = 5 m/s, kappa = 1/10, R(0) = (0, -5 m).
 CURVE = dict(speed=5.0, initial_state=(0.0, -5.0, 0.0), duration=15.0)

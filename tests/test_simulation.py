@@ -7,12 +7,13 @@ import control as ct
 import matplotlib.pyplot as plt
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 from scipy.integrate import solve_ivp
 
 import fws_control as fws
 from fws_control.paths import AmbiguousProjectionError, Arc, Clothoid, Straight
 
-VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+VEH = PAPER_VEHICLE
 TIGHT = {
     "solve_ivp_method": "DOP853",
     "solve_ivp_kwargs": {"rtol": 1e-10, "atol": 1e-12},

@@ -8,7 +8,7 @@ import signal
 
 import numpy as np
 import pytest
-from conftest import LosingClient, dask_distributed
+from conftest import PAPER_VEHICLE, LosingClient, dask_distributed
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -16,7 +16,7 @@ import fws_control as fws
 from fws_control.paths import Arc, Straight
 from fws_control.simulation import SIGNALS, simulate_reference
 
-VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+VEH = PAPER_VEHICLE
 EPS = np.finfo(float).eps
 
 

@@ -2,14 +2,14 @@
 
 import numpy as np
 import pytest
-from conftest import gain_factor
+from conftest import PAPER_VEHICLE, gain_factor
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import fws_control as fws
 from fws_control.stability import routh_hurwitz
 
-VEH = fws.Vehicle(2.7, 1.35)
+VEH = PAPER_VEHICLE
 _P13 = fws.LateralPlant(VEH, speed=5.0, curvature=0.1)
 
 

@@ -4,6 +4,7 @@ import control as ct
 import matplotlib.pyplot as plt
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 
 import fws_control as fws
 
@@ -108,7 +109,7 @@ def test_limits_from_vehicle_and_rear_clipping():
     np.testing.assert_allclose(geo.delta_r, -np.radians(20))
     np.testing.assert_allclose(geo.rear_axle, 2.7 / (2 * np.sin(np.radians(20))))
     with pytest.raises(ValueError, match="max_steer_front"):
-        fws.turning_radius(fws.Vehicle(2.7, 1.35), ratio=-1.0)
+        fws.turning_radius(PAPER_VEHICLE, ratio=-1.0)
     with pytest.raises(ValueError, match="max_steer_front"):
         fws.turning_radius(veh, ratio=-1.0, max_steer_front=2.0)
     with pytest.raises(ValueError, match="max_steer_rear"):
@@ -142,7 +143,7 @@ def test_plot(veh):
     plt.close(fig)
 
 
-_V13 = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+_V13 = PAPER_VEHICLE
 
 
 @pytest.mark.parametrize(

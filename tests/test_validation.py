@@ -2,11 +2,12 @@
 
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 
 import fws_control as fws
 from fws_control.validation import check_type
 
-VEH = fws.Vehicle(2.7, 1.35)
+VEH = PAPER_VEHICLE
 G = fws.SteeringGains(0.1, 0.5, 0.0)
 
 

@@ -16,6 +16,7 @@ import matplotlib
 import mpmath as mp
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 
 matplotlib.use("Agg")
 
@@ -26,7 +27,7 @@ import fws_control as fws  # noqa: E402
 # the codes of StabilityVerdict.code, as documented
 STABLE, NOT_STABLE, UNDECIDED = 1, 0, -1
 
-VEH = fws.Vehicle(2.7, 1.35)
+VEH = PAPER_VEHICLE
 DYN = fws.Vehicle(
     2.7, 1.35, mass=1500.0, yaw_inertia=2500.0,
     cornering_front=8e4, cornering_rear=8e4,

@@ -674,6 +674,10 @@ def _prepare(
 ):
     """Validate the arguments shared by both runners; broadcast the runs."""
     check_type("vehicle", vehicle, Vehicle)
+    # every run records lateral_accel and v_y (and the peak of lateral_accel)
+    vehicle.cg_distance(
+        needed_by="a simulation (its signals lateral_accel and v_y are at G)"
+    )
     check_type("path", path, Path, "a fws_control Path (e.g. fws.Straight())")
     ctrl = gains if isinstance(gains, LateralController) else None
     if ctrl is None:
