@@ -136,6 +136,12 @@ if TYPE_CHECKING:  # static tools see the names; at run time __getattr__ loads t
         Straight,
     )
     from .plant import LateralPlant, LoopMatrices, as_plant, loop_matrices
+    from .rear_limits import (
+        RearLimitBand,
+        RearSaturation,
+        rear_limit_band,
+        rear_saturation,
+    )
     from .robust import (
         BoundaryPiece,
         ParameterBox,
@@ -146,6 +152,7 @@ if TYPE_CHECKING:  # static tools see the names; at run time __getattr__ loads t
         robust_stable,
     )
     from .rootlocus import gain_locus, gain_loop, parameter_locus
+    from .schedule import GainSchedule, schedule_gains
     from .simulation import (
         SimulationResult,
         closed_loop_system,
@@ -162,6 +169,7 @@ if TYPE_CHECKING:  # static tools see the names; at run time __getattr__ loads t
         stability_boundaries,
         stability_verdict,
     )
+    from .tradeoff import ParetoFront, pareto_front
     from .turning import (
         TurningGeometry,
         plot_turning_radius,
@@ -287,6 +295,17 @@ __all__ += [
     "robust_stable",
     "robust_gains",
 ]
+# design for the real vehicle: trade-off, speed schedules, rear limits
+__all__ += [
+    "ParetoFront",
+    "pareto_front",
+    "GainSchedule",
+    "schedule_gains",
+    "RearLimitBand",
+    "rear_limit_band",
+    "RearSaturation",
+    "rear_saturation",
+]
 __version__ = "0.2.0.dev0"
 
 
@@ -404,6 +423,12 @@ _EXPORTS = {
         "as_plant",
         "loop_matrices",
     ),
+    "rear_limits": (
+        "RearLimitBand",
+        "RearSaturation",
+        "rear_limit_band",
+        "rear_saturation",
+    ),
     "robust": (
         "BoundaryPiece",
         "ParameterBox",
@@ -412,6 +437,14 @@ _EXPORTS = {
         "robust_gains",
         "robust_region",
         "robust_stable",
+    ),
+    "schedule": (
+        "GainSchedule",
+        "schedule_gains",
+    ),
+    "tradeoff": (
+        "ParetoFront",
+        "pareto_front",
     ),
     "rootlocus": (
         "gain_locus",
