@@ -171,6 +171,8 @@ class ParetoFront:
             a.set_xlabel(xl)
             a.set_ylabel(r"decay rate $-\alpha$ [1/s]")
             a.grid(True, alpha=0.3)
+        # efforts of 1e-4 rad/m would print as long decimals that overlap
+        axes[1].ticklabel_format(axis="x", style="sci", scilimits=(-2, 3))
         axes[0].set_title(f"delay {self.delay:g} s, a = {self.ratio:.3g}")
         axes[1].set_title("effort: front command per metre of error")
         leg = axes[0].legend(loc="best", fontsize=8)

@@ -116,6 +116,13 @@ def test_the_constraints_bind_at_their_grid(front):
     # the knee is the most-stable design: -0.9156 1/s, 1.230 s (design_delay.md)
     assert front.margin_decay[0] == pytest.approx(0.91562, abs=1e-5)
     assert tc0 == pytest.approx(1.2299, abs=1e-4)
+    # the fronts of docs/design_delay.md
+    np.testing.assert_allclose(
+        front.margin_decay, [0.9156, 0.4126, 0.2912, 0.2266, 0.1858], atol=1e-4
+    )
+    np.testing.assert_allclose(
+        front.effort_decay, [0.9156, 0.6138, 0.4648, 0.3272, 0.1652], atol=1e-4
+    )
     # more margin and less effort each cost decay
     assert np.all(np.diff(front.margin_decay) < 0)
     assert np.all(np.diff(front.effort_decay) < 0)
