@@ -9,11 +9,14 @@ Subcommands::
     fws-control simulate  --path arc --curvature 0.1 --y0 -5 --out sim.png
     fws-control delay-margin --speed 20 --ratio 0.5 --pole -1 --steering-lag 0.27
     fws-control compare   --manoeuvre iso3888-1 --speed 20 --delay 0.24
+    fws-control design    --speed 20 --delay 0.24 --steering-lag 0.27 --json
     fws-control reproduce --out figures
 
 Angles are given and printed in degrees (also in the CSV of ``simulate``);
-everything else is SI. Every subcommand defaults to the curvature
-:data:`DEFAULT_CURVATURE` (0.1 1/m, the paper's Fig. 7 curve).
+everything else is SI. Every subcommand but ``design`` defaults to the
+curvature :data:`DEFAULT_CURVATURE` (0.1 1/m, the paper's Fig. 7 curve);
+``design`` defaults to a straight road (its defaults are the 20 m/s case
+with Autoware's delay and steering lag).
 
 Exit status: 0 success; 1 an unexpected failure (one line on stderr; run
 with ``--debug`` or ``FWS_CONTROL_DEBUG=1`` for the traceback); 2 invalid
@@ -610,7 +613,142 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_reproduce)
+    _add_design_parser(sub)
     return parser
+
+
+def _add_design_parser(sub) -> None:
+    p = sub.add_parser(
+        "design",
+        help="most-stable or robust gains for a delay and a steering lag",
+        description="Gains for the delayed, lagged loop: 'most-stable' minimises "
+        "the spectral abscissa at one speed (most_stable_gains, certified); "
+        "'robust' maximises the worst-case decay over the speeds --speed LOW HIGH "
+        "and the delays 0 to --delay (robust_gains). Prints a table (or JSON with "
+        "--json) and, with --out, draws the chart of the design.",
+    )
+    p.add_argument(
+        "--method", choices=("most-stable", "robust"), default="most-stable",
+        help="most-stable (one speed) or robust (a speed interval) (most-stable)",
+    )  # fmt: skip
+    p.add_argument(
+        "--speed", nargs="+", type=_finite, default=[20.0], metavar="V", dest="speeds",
+        help="V [m/s]; robust: LOW HIGH (20)",
+    )  # fmt: skip
+    p.add_argument("--curvature", type=_finite, default=0.0, help="kappa [1/m] (0)")
+    p.add_argument("--ratio", type=_finite, default=0.0, help="a (0)")
+    p.add_argument(
+        "--delay", type=_finite, default=0.24, help="input delay tau [s] (0.24)"
+    )
+    p.add_argument(
+        "--steering-lag", type=_finite, default=0.27,
+        help="first-order steering time constant [s], both axles (0.27)",
+    )  # fmt: skip
+    p.add_argument(
+        "--grid", type=lambda t: _positive_int(t, low=4, high=40), default=10,
+        help="start grid points per gain axis, 4 to 40 (10)",
+    )  # fmt: skip
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument("--out", type=Path, help="PNG file of the chart (none)")
+    _add_vehicle(p)
+    p.set_defaults(func=_cmd_design)
+
+
+def _design_numbers(args) -> tuple[dict, object]:
+    """The design the arguments ask for, as a dict of plain numbers, and its plot."""
+    import numpy as np
+
+    from .plant import LateralPlant
+
+    veh = _vehicle(args)
+    if args.method == "most-stable":
+        from .delay_design import most_stable_gains
+
+        if len(args.speeds) != 1:
+            raise ValueError(
+                f"--speed takes one speed for most-stable, got {len(args.speeds)}"
+            )
+        plant = LateralPlant(
+            veh, speed=args.speeds[0], curvature=args.curvature,
+            steering_lag=args.steering_lag,
+        )  # fmt: skip
+        d = most_stable_gains(plant, delay=args.delay, ratio=args.ratio, grid=args.grid)
+        out = {
+            "method": "most-stable",
+            "speed": args.speeds[0],
+            "delay": d.delay,
+            "k1": float(d.gains.k1),
+            "k2": float(d.gains.k2),
+            "ratio": float(d.gains.ratio),
+            "abscissa": d.abscissa,
+            "critical_delay": d.critical_delay,
+            "certified": d.certified,
+        }
+        return out, d.plot
+    from .robust import robust_gains
+
+    if len(args.speeds) != 2 or not args.speeds[0] < args.speeds[1]:
+        raise ValueError(
+            f"--speed takes LOW HIGH (LOW < HIGH) for robust, got {args.speeds}"
+        )
+    box = {
+        "speed": tuple(args.speeds),
+        "delay": (0.0, args.delay),
+        "steering_lag": args.steering_lag,
+        "curvature": args.curvature,
+    }
+    # the start grid spans about twice the scaled most-stable gains of the
+    # Autoware case (k1 V^2 = 0.62 m/s^2, k2 V = 2.2 m/s at 20 m/s) at the
+    # slower speed, where the gains are largest (k1 ~ 1/V^2, k2 ~ 1/V)
+    v = args.speeds[0]
+    k1 = np.linspace(0.0, 1.5 / v**2, args.grid)
+    k2 = np.linspace(0.0, 5.0 / v, args.grid)
+    r = robust_gains(veh, ratio=args.ratio, box=box, k1=k1, k2=k2)
+    out = {
+        "method": "robust",
+        "speed": list(args.speeds),
+        "delay": [0.0, args.delay],
+        "k1": float(r.gains.k1),
+        "k2": float(r.gains.k2),
+        "ratio": float(r.gains.ratio),
+        "abscissa": r.abscissa,
+        "worst": r.worst,
+    }
+    return out, r.region.plot
+
+
+def _cmd_design(args) -> int:
+    import json
+
+    if args.out is not None:
+        _check_out(args.out)
+    out, plot = _design_numbers(args)
+    if args.json:
+        print(json.dumps(out))
+    else:
+        rows = [(k, v) for k, v in out.items() if k != "worst"]
+        rows += [(f"worst {k}", v) for k, v in out.get("worst", {}).items()]
+        for k, v in rows:
+            text = f"{v:.6g}" if isinstance(v, float) else str(v)
+            print(f"{k:>16}  {text}")
+    if args.out is not None:
+        import matplotlib.pyplot as plt
+
+        fig = plot().figure
+        _save_quiet(fig, args.out, args.json)
+        plt.close(fig)
+    return 0
+
+
+def _save_quiet(fig, out: Path, quiet: bool) -> None:
+    """Save the figure; with --json keep stdout to the JSON line."""
+    if not quiet:
+        _save(fig, out)
+        return
+    from .files import atomic_write
+
+    with atomic_write(Path(out)) as fh:
+        fig.savefig(fh, format="png", dpi=110)
 
 
 def _vehicle(args):
@@ -624,7 +762,7 @@ def _plant(args, veh, model=None):
 
     return LateralPlant(
         veh,
-        speed=args.speed,
+        speed=args.speeds,
         curvature=args.curvature,
         model=args.model if model is None else model,
     )
@@ -733,7 +871,7 @@ def _cmd_gains(args) -> int:
         args.model,
     )
     print(
-        f"V = {args.speed:g} m/s, kappa = {args.curvature:g} 1/m, a = {args.ratio:g}, "
+        f"V = {args.speeds:g} m/s, kappa = {args.curvature:g} 1/m, a = {args.ratio:g}, "
         f"lambda0 = {args.pole:g} 1/s, f = {veh.wheelbase:g} m"
     )
     order = [args.model] + [m for m in ("exact", "paper") if m != args.model]
@@ -808,7 +946,7 @@ def _fixed_params(args) -> str:
     """The operating point without the parameter that varies."""
     parts = {
         "ratio": f"a = {args.ratio:g}",
-        "speed": f"V = {args.speed:g} m/s",
+        "speed": f"V = {args.speeds:g} m/s",
         "curvature": f"kappa = {args.curvature:g} 1/m",
     }
     parts.pop(args.param, None)
@@ -840,7 +978,7 @@ def _cmd_rlocus(args) -> int:
         ax = cplt.axes[0, 0]
         ax.set_title(
             f"gain locus of g*(k1, k2), k1 = {float(g.k1):.4f}, k2 = {float(g.k2):.4f}"
-            f"\na = {args.ratio:g}, V = {args.speed:g} m/s, kappa = {args.curvature:g}"
+            f"\na = {args.ratio:g}, V = {args.speeds:g} m/s, kappa = {args.curvature:g}"
             f" 1/m, {args.model} model; square: g = 1",
             fontsize=10,
         )
@@ -919,7 +1057,7 @@ def _cmd_simulate(args) -> int:
     cmp = compare_linear_nonlinear(
         veh,
         g,
-        speed=args.speed,
+        speed=args.speeds,
         curvature=args.curvature if args.path == "arc" else 0.0,
         initial_state=(args.x0, args.y0, math.radians(args.psi0)),
         duration=args.duration,
@@ -965,7 +1103,7 @@ def _cmd_simulate(args) -> int:
             res,
             args.csv,
             gains=g,
-            speed=args.speed,
+            speed=args.speeds,
             curvature=args.curvature if args.path == "arc" else 0.0,
         )
         print(f"wrote {args.csv}")
@@ -1068,9 +1206,9 @@ def _cmd_compare(args) -> int:
     )
 
     _check_out(args.out)
-    if args.speed < COMPARE_MIN_SPEED:
+    if args.speeds < COMPARE_MIN_SPEED:
         raise ValueError(
-            f"--speed must be >= {COMPARE_MIN_SPEED:g} m/s, got {args.speed:g} (the "
+            f"--speed must be >= {COMPARE_MIN_SPEED:g} m/s, got {args.speeds:g} (the "
             "manoeuvre lasts its length / speed; slower runs are beyond the budget: "
             "call fws_control.controller_comparison.compare from Python for them)"
         )
@@ -1088,12 +1226,14 @@ def _cmd_compare(args) -> int:
         "circle": lambda: constant_radius(),
     }[args.manoeuvre]()
     veh = _vehicle(args)
-    ctrls = default_controllers(veh, speed=args.speed, ratio=args.ratio, pole=args.pole)
+    ctrls = default_controllers(
+        veh, speed=args.speeds, ratio=args.ratio, pole=args.pole
+    )
     cmp = compare(
         veh,
         course,
         ctrls,
-        speed=args.speed,
+        speed=args.speeds,
         offset=args.offset,
         delay=args.delay,
         actuator_time_constant=args.steering_lag,
@@ -1103,7 +1243,7 @@ def _cmd_compare(args) -> int:
     plt.close(cplt.figure)
     lag = "none" if args.steering_lag is None else f"{args.steering_lag:g} s"
     print(
-        f"{course.name}, V = {args.speed:g} m/s, delay {args.delay:g} s, steering "
+        f"{course.name}, V = {args.speeds:g} m/s, delay {args.delay:g} s, steering "
         f"lag {lag}, initial offset {args.offset:g} m"
     )
     print(cmp.to_markdown())
@@ -1123,7 +1263,7 @@ def _cmd_delay_margin(args) -> int:
         )
     plant = LateralPlant(
         veh,
-        speed=args.speed,
+        speed=args.speeds,
         curvature=args.curvature,
         model=args.model,
         steering_lag=None if lag is None else (lag[0] if len(lag) == 1 else lag),
@@ -1131,7 +1271,7 @@ def _cmd_delay_margin(args) -> int:
     cd = critical_delay(plant, g)
     design = "given gains" if args.k1 is not None else f"lambda0 = {args.pole:g} design"
     print(
-        f"V = {args.speed:g} m/s, kappa = {args.curvature:g} 1/m, a = {args.ratio:g}, "
+        f"V = {args.speeds:g} m/s, kappa = {args.curvature:g} 1/m, a = {args.ratio:g}, "
         f"k1 = {float(g.k1):.6f} rad/m, k2 = {float(g.k2):.6f} ({design}, "
         f"{args.model} model)"
     )

@@ -101,7 +101,9 @@ class RearLimitBand:
         a = np.asarray(check_finite("ratio", ratio), dtype=float)
         return np.abs(a * self.front_angle) <= self.rear_limit
 
-    def plot(self, ax=None, *, ratio_range: tuple[float, float] = (-2.0, 2.0)):
+    def plot(
+        self, ax=None, *, ratio_range: tuple[float, float] = (-2.0, 2.0)
+    ) -> ct.ControlPlot:
         """The band in the plane of front angle [deg] and ratio :math:`a`.
 
         Parameters
