@@ -1,7 +1,8 @@
 r"""Speed schedules of the most-stable gains: k1(V), k2(V), a(V).
 
-A delay and a steering lag make the best gains depend on the speed. A
-:class:`GainSchedule` holds the most-stable design
+The best gains depend on the speed (the lateral-error gain falls about as
+:math:`1/V^2`, the heading gain as :math:`1/V`). A :class:`GainSchedule`
+holds the most-stable design
 (:func:`~fws_control.most_stable_gains`) at each speed of a grid and gives
 gains at any speed in between.
 
@@ -15,10 +16,11 @@ characteristic polynomial is
 so the scaled gains :math:`k_1 V^2` [rad m/s²] and :math:`k_2 V` [rad m/s]
 fix the roots at every speed (with an input delay too: the quasi-polynomial
 :math:`s^2 + e^{-s\tau}(V k_2 s + V^2 k_1)/f` holds the same products):
-constant scaled gains are the exact speed schedule of that loop. With a delay, a lag or
-:math:`a \ne 0` the best scaled gains still vary slowly with the speed
-(only through those terms), while :math:`k_1` itself falls as
-:math:`1/V^2`. :meth:`GainSchedule.at` therefore interpolates
+constant scaled gains are the exact speed schedule of that loop, and of
+the loop with a steering lag :math:`T` (which multiplies :math:`d(s)` by
+:math:`Ts + 1`). A ratio :math:`a \ne 0`, a curved path or a tyre model
+make the best scaled gains vary with the speed, while :math:`k_1` itself
+falls about as :math:`1/V^2`. :meth:`GainSchedule.at` therefore interpolates
 :math:`k_1 V^2`, :math:`k_2 V` and :math:`a` piecewise linearly in
 :math:`V` and divides back; at the grid speeds it returns the designed gains
 exactly. It does not extrapolate: a speed outside the grid is refused.
