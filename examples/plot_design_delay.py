@@ -30,7 +30,7 @@ plant = fws.LateralPlant(veh, speed=20.0, steering_lag=REALISTIC_STEERING_LAG)
 # the abscissa.
 best = fws.most_stable_gains(plant, delay=REALISTIC_DELAY, ratio=0.0, grid=6)
 print(
-    f"most stable: k1 = {best.gains.k1:.6f} rad/m, k2 = {best.gains.k2:.4f}, "
+    f"most stable: k1 = {best.gains.k1!r} rad/m, k2 = {best.gains.k2!r}, "
     f"abscissa {best.abscissa:.4f} 1/s, critical delay {best.critical_delay:.3f} s, "
     f"certified {best.certified}"
 )
