@@ -762,7 +762,7 @@ def _plant(args, veh, model=None):
 
     return LateralPlant(
         veh,
-        speed=args.speeds,
+        speed=args.speed,
         curvature=args.curvature,
         model=args.model if model is None else model,
     )
@@ -871,7 +871,7 @@ def _cmd_gains(args) -> int:
         args.model,
     )
     print(
-        f"V = {args.speeds:g} m/s, kappa = {args.curvature:g} 1/m, a = {args.ratio:g}, "
+        f"V = {args.speed:g} m/s, kappa = {args.curvature:g} 1/m, a = {args.ratio:g}, "
         f"lambda0 = {args.pole:g} 1/s, f = {veh.wheelbase:g} m"
     )
     order = [args.model] + [m for m in ("exact", "paper") if m != args.model]
@@ -946,7 +946,7 @@ def _fixed_params(args) -> str:
     """The operating point without the parameter that varies."""
     parts = {
         "ratio": f"a = {args.ratio:g}",
-        "speed": f"V = {args.speeds:g} m/s",
+        "speed": f"V = {args.speed:g} m/s",
         "curvature": f"kappa = {args.curvature:g} 1/m",
     }
     parts.pop(args.param, None)
@@ -978,7 +978,7 @@ def _cmd_rlocus(args) -> int:
         ax = cplt.axes[0, 0]
         ax.set_title(
             f"gain locus of g*(k1, k2), k1 = {float(g.k1):.4f}, k2 = {float(g.k2):.4f}"
-            f"\na = {args.ratio:g}, V = {args.speeds:g} m/s, kappa = {args.curvature:g}"
+            f"\na = {args.ratio:g}, V = {args.speed:g} m/s, kappa = {args.curvature:g}"
             f" 1/m, {args.model} model; square: g = 1",
             fontsize=10,
         )
@@ -1057,7 +1057,7 @@ def _cmd_simulate(args) -> int:
     cmp = compare_linear_nonlinear(
         veh,
         g,
-        speed=args.speeds,
+        speed=args.speed,
         curvature=args.curvature if args.path == "arc" else 0.0,
         initial_state=(args.x0, args.y0, math.radians(args.psi0)),
         duration=args.duration,
@@ -1103,7 +1103,7 @@ def _cmd_simulate(args) -> int:
             res,
             args.csv,
             gains=g,
-            speed=args.speeds,
+            speed=args.speed,
             curvature=args.curvature if args.path == "arc" else 0.0,
         )
         print(f"wrote {args.csv}")
@@ -1206,9 +1206,9 @@ def _cmd_compare(args) -> int:
     )
 
     _check_out(args.out)
-    if args.speeds < COMPARE_MIN_SPEED:
+    if args.speed < COMPARE_MIN_SPEED:
         raise ValueError(
-            f"--speed must be >= {COMPARE_MIN_SPEED:g} m/s, got {args.speeds:g} (the "
+            f"--speed must be >= {COMPARE_MIN_SPEED:g} m/s, got {args.speed:g} (the "
             "manoeuvre lasts its length / speed; slower runs are beyond the budget: "
             "call fws_control.controller_comparison.compare from Python for them)"
         )
@@ -1226,14 +1226,12 @@ def _cmd_compare(args) -> int:
         "circle": lambda: constant_radius(),
     }[args.manoeuvre]()
     veh = _vehicle(args)
-    ctrls = default_controllers(
-        veh, speed=args.speeds, ratio=args.ratio, pole=args.pole
-    )
+    ctrls = default_controllers(veh, speed=args.speed, ratio=args.ratio, pole=args.pole)
     cmp = compare(
         veh,
         course,
         ctrls,
-        speed=args.speeds,
+        speed=args.speed,
         offset=args.offset,
         delay=args.delay,
         actuator_time_constant=args.steering_lag,
@@ -1243,7 +1241,7 @@ def _cmd_compare(args) -> int:
     plt.close(cplt.figure)
     lag = "none" if args.steering_lag is None else f"{args.steering_lag:g} s"
     print(
-        f"{course.name}, V = {args.speeds:g} m/s, delay {args.delay:g} s, steering "
+        f"{course.name}, V = {args.speed:g} m/s, delay {args.delay:g} s, steering "
         f"lag {lag}, initial offset {args.offset:g} m"
     )
     print(cmp.to_markdown())
@@ -1263,7 +1261,7 @@ def _cmd_delay_margin(args) -> int:
         )
     plant = LateralPlant(
         veh,
-        speed=args.speeds,
+        speed=args.speed,
         curvature=args.curvature,
         model=args.model,
         steering_lag=None if lag is None else (lag[0] if len(lag) == 1 else lag),
@@ -1271,7 +1269,7 @@ def _cmd_delay_margin(args) -> int:
     cd = critical_delay(plant, g)
     design = "given gains" if args.k1 is not None else f"lambda0 = {args.pole:g} design"
     print(
-        f"V = {args.speeds:g} m/s, kappa = {args.curvature:g} 1/m, a = {args.ratio:g}, "
+        f"V = {args.speed:g} m/s, kappa = {args.curvature:g} 1/m, a = {args.ratio:g}, "
         f"k1 = {float(g.k1):.6f} rad/m, k2 = {float(g.k2):.6f} ({design}, "
         f"{args.model} model)"
     )
