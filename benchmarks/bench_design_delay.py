@@ -12,7 +12,10 @@ load before and after:
 3. the numbers of ``docs/design_delay.md``: the 20 m/s straight-road case
    with Autoware's delay and lag (4 states), the double-root design
    lambda0 = -1, the best of the double-root family and the most-stable
-   gains (fixed a = 0 and a free in [-0.5, 0.5]).
+   gains (fixed a = 0 and a free in [-0.5, 0.5]);
+4. :func:`fws_control.pareto_front` of the 20 m/s case (5 points per front,
+   from the most-stable design), its CPU time and the front;
+5. :func:`fws_control.schedule_gains` of the lagged plant over 10-30 m/s.
 
 Run: ``python benchmarks/bench_design_delay.py``
 """
@@ -90,6 +93,36 @@ def main() -> None:
             f"k1 = {best.gains.k1:.6f}, k2 = {best.gains.k2:.4f}, "
             f"a = {best.gains.ratio:.4f}; critical delay {best.critical_delay:.3f} s; "
             f"{best.roots.size} roots within 0.5 1/s; certified {best.certified}"
+        )
+    best = fws.most_stable_gains(plant, delay=tau, ratio=0.0)
+    t = best_of(lambda: fws.pareto_front(plant, delay=tau, points=5, design=best))
+    front = fws.pareto_front(plant, delay=tau, points=5, design=best)
+    print(
+        f"pareto_front, 4 states, 5 points per front: {t:.2f} s CPU "
+        f"({front.evaluations} root evaluations, {front.dropped} dominated dropped)"
+    )
+    for m, dec, k1, k2 in zip(
+        front.margin, front.margin_decay, front.margin_gains.k1,
+        front.margin_gains.k2, strict=True,
+    ):  # fmt: skip
+        print(
+            f"  margin {m:.3f} s: decay {dec:.4f} 1/s at k1 = {k1:.6f}, k2 = {k2:.4f}"
+        )
+    for eff, dec, k2 in zip(
+        front.effort, front.effort_decay, front.effort_gains.k2, strict=True
+    ):
+        print(f"  effort |k1| = {eff:.6f} rad/m: decay {dec:.4f} 1/s at k2 = {k2:.4f}")
+    sch = fws.schedule_gains(
+        VEH, speeds=[10.0, 15.0, 20.0, 25.0, 30.0], delay=tau, steering_lag=lag
+    )
+    print("schedule_gains, lag 0.27 s, delay 0.24 s, a = 0:")
+    for v, k1, k2, al, cd in zip(
+        sch.speeds, sch.k1, sch.k2, sch.abscissa, sch.critical_delay, strict=True
+    ):
+        print(
+            f"  V = {v:4.1f} m/s: k1 = {k1:.6f} (k1 V^2 = {k1 * v * v:.4f}), "
+            f"k2 = {k2:.4f} (k2 V = {k2 * v:.4f}), abscissa {al:.4f} 1/s, "
+            f"critical delay {cd:.3f} s"
         )
     print(machine_line())
 

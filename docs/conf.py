@@ -199,6 +199,7 @@ _EXAMPLE_RANK = collections.defaultdict(
                 "plot_root_loci.py",
                 "plot_any_plant.py",
                 "plot_delay.py",
+                "plot_design_delay.py",
                 "plot_fws_vs_4ws.py",
                 "plot_spline_course.py",
                 "plot_ratio_sweep.py",

@@ -158,6 +158,12 @@ if TYPE_CHECKING:
         as_plant as as_plant,
         loop_matrices as loop_matrices,
     )
+    from .rear_limits import (
+        RearLimitBand as RearLimitBand,
+        RearSaturation as RearSaturation,
+        rear_limit_band as rear_limit_band,
+        rear_saturation as rear_saturation,
+    )
     from .robust import (
         BoundaryPiece as BoundaryPiece,
         ParameterBox as ParameterBox,
@@ -171,6 +177,10 @@ if TYPE_CHECKING:
         gain_locus as gain_locus,
         gain_loop as gain_loop,
         parameter_locus as parameter_locus,
+    )
+    from .schedule import (
+        GainSchedule as GainSchedule,
+        schedule_gains as schedule_gains,
     )
     from .simulation import (
         SimulationResult as SimulationResult,
@@ -187,6 +197,10 @@ if TYPE_CHECKING:
         is_stable as is_stable,
         stability_boundaries as stability_boundaries,
         stability_verdict as stability_verdict,
+    )
+    from .tradeoff import (
+        ParetoFront as ParetoFront,
+        pareto_front as pareto_front,
     )
     from .turning import (
         TurningGeometry as TurningGeometry,

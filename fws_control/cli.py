@@ -9,11 +9,14 @@ Subcommands::
     fws-control simulate  --path arc --curvature 0.1 --y0 -5 --out sim.png
     fws-control delay-margin --speed 20 --ratio 0.5 --pole -1 --steering-lag 0.27
     fws-control compare   --manoeuvre iso3888-1 --speed 20 --delay 0.24
+    fws-control design    --speed 20 --delay 0.24 --steering-lag 0.27 --json
     fws-control reproduce --out figures
 
 Angles are given and printed in degrees (also in the CSV of ``simulate``);
-everything else is SI. Every subcommand defaults to the curvature
-:data:`DEFAULT_CURVATURE` (0.1 1/m, the paper's Fig. 7 curve).
+everything else is SI. Every subcommand but ``design`` defaults to the
+curvature :data:`DEFAULT_CURVATURE` (0.1 1/m, the paper's Fig. 7 curve);
+``design`` defaults to a straight road (its defaults are the 20 m/s case
+with Autoware's delay and steering lag).
 
 Exit status: 0 success; 1 an unexpected failure (one line on stderr; run
 with ``--debug`` or ``FWS_CONTROL_DEBUG=1`` for the traceback); 2 invalid
@@ -610,7 +613,142 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_reproduce)
+    _add_design_parser(sub)
     return parser
+
+
+def _add_design_parser(sub) -> None:
+    p = sub.add_parser(
+        "design",
+        help="most-stable or robust gains for a delay and a steering lag",
+        description="Gains for the delayed, lagged loop: 'most-stable' minimises "
+        "the spectral abscissa at one speed (most_stable_gains, certified); "
+        "'robust' maximises the worst-case decay over the speeds --speed LOW HIGH "
+        "and the delays 0 to --delay (robust_gains). Prints a table (or JSON with "
+        "--json) and, with --out, draws the chart of the design.",
+    )
+    p.add_argument(
+        "--method", choices=("most-stable", "robust"), default="most-stable",
+        help="most-stable (one speed) or robust (a speed interval) (most-stable)",
+    )  # fmt: skip
+    p.add_argument(
+        "--speed", nargs="+", type=_finite, default=[20.0], metavar="V", dest="speeds",
+        help="V [m/s]; robust: LOW HIGH (20)",
+    )  # fmt: skip
+    p.add_argument("--curvature", type=_finite, default=0.0, help="kappa [1/m] (0)")
+    p.add_argument("--ratio", type=_finite, default=0.0, help="a (0)")
+    p.add_argument(
+        "--delay", type=_finite, default=0.24, help="input delay tau [s] (0.24)"
+    )
+    p.add_argument(
+        "--steering-lag", type=_finite, default=0.27,
+        help="first-order steering time constant [s], both axles (0.27)",
+    )  # fmt: skip
+    p.add_argument(
+        "--grid", type=lambda t: _positive_int(t, low=4, high=40), default=10,
+        help="start grid points per gain axis, 4 to 40 (10)",
+    )  # fmt: skip
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument("--out", type=Path, help="PNG file of the chart (none)")
+    _add_vehicle(p)
+    p.set_defaults(func=_cmd_design)
+
+
+def _design_numbers(args) -> tuple[dict, object]:
+    """The design the arguments ask for, as a dict of plain numbers, and its plot."""
+    import numpy as np
+
+    from .plant import LateralPlant
+
+    veh = _vehicle(args)
+    if args.method == "most-stable":
+        from .delay_design import most_stable_gains
+
+        if len(args.speeds) != 1:
+            raise ValueError(
+                f"--speed takes one speed for most-stable, got {len(args.speeds)}"
+            )
+        plant = LateralPlant(
+            veh, speed=args.speeds[0], curvature=args.curvature,
+            steering_lag=args.steering_lag,
+        )  # fmt: skip
+        d = most_stable_gains(plant, delay=args.delay, ratio=args.ratio, grid=args.grid)
+        out = {
+            "method": "most-stable",
+            "speed": args.speeds[0],
+            "delay": d.delay,
+            "k1": float(d.gains.k1),
+            "k2": float(d.gains.k2),
+            "ratio": float(d.gains.ratio),
+            "abscissa": d.abscissa,
+            "critical_delay": d.critical_delay,
+            "certified": d.certified,
+        }
+        return out, d.plot
+    from .robust import robust_gains
+
+    if len(args.speeds) != 2 or not args.speeds[0] < args.speeds[1]:
+        raise ValueError(
+            f"--speed takes LOW HIGH (LOW < HIGH) for robust, got {args.speeds}"
+        )
+    box = {
+        "speed": tuple(args.speeds),
+        "delay": (0.0, args.delay),
+        "steering_lag": args.steering_lag,
+        "curvature": args.curvature,
+    }
+    # the start grid spans about twice the scaled most-stable gains of the
+    # Autoware case (k1 V^2 = 0.62 m/s^2, k2 V = 2.2 m/s at 20 m/s) at the
+    # slower speed, where the gains are largest (k1 ~ 1/V^2, k2 ~ 1/V)
+    v = args.speeds[0]
+    k1 = np.linspace(0.0, 1.5 / v**2, args.grid)
+    k2 = np.linspace(0.0, 5.0 / v, args.grid)
+    r = robust_gains(veh, ratio=args.ratio, box=box, k1=k1, k2=k2)
+    out = {
+        "method": "robust",
+        "speed": list(args.speeds),
+        "delay": [0.0, args.delay],
+        "k1": float(r.gains.k1),
+        "k2": float(r.gains.k2),
+        "ratio": float(r.gains.ratio),
+        "abscissa": r.abscissa,
+        "worst": r.worst,
+    }
+    return out, r.region.plot
+
+
+def _cmd_design(args) -> int:
+    import json
+
+    if args.out is not None:
+        _check_out(args.out)
+    out, plot = _design_numbers(args)
+    if args.json:
+        print(json.dumps(out))
+    else:
+        rows = [(k, v) for k, v in out.items() if k != "worst"]
+        rows += [(f"worst {k}", v) for k, v in out.get("worst", {}).items()]
+        for k, v in rows:
+            text = f"{v:.6g}" if isinstance(v, float) else str(v)
+            print(f"{k:>16}  {text}")
+    if args.out is not None:
+        import matplotlib.pyplot as plt
+
+        fig = plot().figure
+        _save_quiet(fig, args.out, args.json)
+        plt.close(fig)
+    return 0
+
+
+def _save_quiet(fig, out: Path, quiet: bool) -> None:
+    """Save the figure; with --json keep stdout to the JSON line."""
+    if not quiet:
+        _save(fig, out)
+        return
+    from .files import atomic_write
+
+    with atomic_write(Path(out)) as fh:
+        fig.savefig(fh, format="png", dpi=110)
 
 
 def _vehicle(args):

@@ -133,6 +133,10 @@ RECORD_CLASSES = {
     "BoundaryPiece": "result record (kind, k1, k2, omega, parameters)",
     "RobustRegion": "result record of robust_region",
     "RobustDesign": "result record of robust_gains",
+    "ParetoFront": "result record of pareto_front",
+    "GainSchedule": "schedule record: speeds and the gains at each (the data)",
+    "RearLimitBand": "result record of rear_limit_band",
+    "RearSaturation": "result record of rear_saturation",
     "ChartPanel": "result record (title, charts, labels)",
     "TurningGeometry": "result record of steady_turn / turning_radius",
     "LinearNonlinearComparison": "result record of compare_linear_nonlinear",
@@ -196,6 +200,14 @@ POSITIONAL_EXCEPTIONS = {
     "Path.placed": (
         {"start", "start_heading"},
         "the new placement is the data (mirrors the record fields)",
+    ),
+    "RearLimitBand.allows": (
+        {"ratio"},
+        "evaluates the band at given ratios: the ratio is the data",
+    ),
+    "GainSchedule.at": (
+        {"speed"},
+        "evaluates the schedule at given speeds [m/s]: the speed is the data",
     ),
     "DelayMarginChart.tolerates": (
         {"delay"},
@@ -859,7 +871,24 @@ def _plot_factories():
         lagged = fws.LateralPlant(veh, speed=20.0, steering_lag=0.27)
         return fws.most_stable_gains(lagged, delay=0.24, ratio=0.0, grid=4).plot
 
+    def pareto():
+        fast = fws.LateralPlant(veh, speed=20.0)
+        return fws.pareto_front(fast, delay=0.24, points=2, grid=4).plot
+
+    def schedule():
+        return fws.GainSchedule(
+            speeds=[10.0, 20.0], k1=[0.01, 0.004], k2=[0.3, 0.2], ratio=[0.0, 0.0]
+        ).plot
+
+    def rear_band():
+        return fws.rear_limit_band(
+            veh, front_angle=np.linspace(0.02, 0.6, 20), rear_limit=0.05
+        ).plot
+
     return {
+        "RearLimitBand.plot": rear_band,
+        "ParetoFront.plot": pareto,
+        "GainSchedule.plot": schedule,
         "RobustRegion.plot": robust,
         "MostStableDesign.plot": most_stable,
         "KinematicDesignLimit.plot": design_limit,

@@ -84,6 +84,7 @@ def test_every_example_is_covered():
     tested = {
         "plot_any_plant.py",
         "plot_delay.py",
+        "plot_design_delay.py",
         "plot_dynamic.py",
         "plot_fws_vs_4ws.py",
         "plot_quick_start.py",
@@ -432,3 +433,33 @@ def test_dynamic(tmp_path):
         p = np.linalg.eigvals(A - np.outer(b, [g.k1, g.k2, 0.0, 0.0]))
         drift = np.max(np.abs(p[np.argsort(-p.real)][:2] + 1.0))
         assert side * (drift - 0.25) > 0
+
+
+def test_design_delay(tmp_path):
+    out = run_example("plot_design_delay.py", tmp_path)
+    k1, k2, alpha = floats_after("most stable: k1 =", out)[:3]
+    # the printed gains' rightmost root, by a 12th-order Pade loop written here
+    # (straight kinematic plant at 20 m/s, 0.27 s lag on each axle, a = 0)
+    V, f, lag, tau = 20.0, 2.7, 0.27, 0.24
+    A = np.zeros((4, 4))
+    A[0, 1] = A[0, 3] = V
+    A[1, 2], A[1, 3] = V / f, -V / f
+    A[2, 2] = A[3, 3] = -1.0 / lag
+    b = np.array([0.0, 0.0, 1.0 / lag, 0.0])
+    P = ct.ss(ct.tf(*ct.pade(tau, 12)))
+    K = np.array([k1, k2, 0.0, 0.0])
+    top = np.hstack([A - P.D[0, 0] * np.outer(b, K), np.outer(b, P.C[0])])
+    bottom = np.hstack([-np.outer(P.B[:, 0], K), P.A])
+    ref = np.max(np.linalg.eigvals(np.vstack([top, bottom])).real)
+    assert alpha == pytest.approx(ref, abs=2e-4)  # printed to 4 decimals
+    assert alpha == pytest.approx(-0.9156, abs=1e-4)
+    assert "certified True" in out
+    # the front: margins from the knee to three times it, and the decay
+    # rates of docs/design_delay.md at 2.460 s and 3.690 s
+    rows = [
+        floats_after("delay margin", ln)
+        for ln in out.splitlines()
+        if "delay margin" in ln
+    ]
+    assert [r[0] for r in rows] == pytest.approx([1.230, 2.460, 3.690], abs=1e-3)
+    assert [r[1] for r in rows] == pytest.approx([0.9156, 0.2912, 0.1858], abs=1e-4)

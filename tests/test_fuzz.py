@@ -71,7 +71,7 @@ Deliberately excluded (with the reason)
   ``BoundaryCurve``, ``CriticalDelay``, ``StabilityChart``, ``StabilityVerdict``,
   ``ControllerComparison``, ``DelayMarginChart``, ``TurningGeometry``,
   ``LinearNonlinearComparison``, ``SimulationResult``, ``TrackingMetrics``,
-  ``MostStableDesign``,
+  ``MostStableDesign``, ``ParetoFront``, ``RearLimitBand``, ``RearSaturation``,
   ``Projection``: their fields are fuzzed through the functions that build
   them.
 * The arguments ``name`` (a label passed to python-control), ``ax`` and
@@ -135,6 +135,9 @@ EXCLUDED = {
     "RobustRegion": "result record",
     "RobustDesign": "result record",
     "MostStableDesign": "result record",
+    "ParetoFront": "result record",
+    "RearLimitBand": "result record",
+    "RearSaturation": "result record",
     "vehicles": "a module (example vehicle data sets, no callables)",
 }
 
@@ -412,6 +415,32 @@ CASES: dict[str, Case] = {
         fws.most_stable_gains,
         dict(plant=PLANT),
         dict(delay=0.3, ratio=-1.0, grid=4, margin=0.5),
+        examples=3,
+    ),
+    "pareto_front": Case(
+        fws.pareto_front,
+        dict(plant=PLANT),
+        dict(delay=0.3, ratio=-1.0, points=2, directions=5, grid=4),
+        examples=3,
+    ),
+    "rear_limit_band": Case(
+        fws.rear_limit_band,
+        dict(vehicle=VEH),
+        dict(front_angle=np.array([0.0, 0.1, 0.3]), rear_limit=0.05),
+        post=finite_or_inf,
+    ),
+    "rear_saturation": Case(
+        fws.rear_saturation, dict(result=RESULT), dict(rear_limit=0.05)
+    ),
+    "GainSchedule": Case(
+        fws.GainSchedule,
+        {},
+        dict(speeds=[10.0, 20.0], k1=[0.01, 0.004], k2=[0.3, 0.2], ratio=[0.0, 0.0]),
+    ),
+    "schedule_gains": Case(
+        fws.schedule_gains,
+        dict(plant=VEH),
+        dict(speeds=[10.0, 20.0], delay=0.3, ratio=0.0, grid=4),
         examples=3,
     ),
     "double_root_gains": Case(

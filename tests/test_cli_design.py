@@ -1,0 +1,100 @@
+"""``fws-control design``: its numbers are those of the library calls."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+
+import numpy as np
+import pytest
+
+import fws_control as fws
+from fws_control.cli import main
+
+PNG = b"\x89PNG\r\n\x1a\n"
+VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+
+
+def _run(args, capsys):
+    try:
+        code = main([str(a) for a in args])
+    except SystemExit as exc:  # argparse's refusal of an option value
+        code = exc.code
+    cap = capsys.readouterr()
+    return subprocess.CompletedProcess(args, code, cap.out, cap.err)
+
+
+@pytest.fixture(scope="module")
+def library_design():
+    plant = fws.LateralPlant(VEH, speed=20.0, steering_lag=0.27)
+    return fws.most_stable_gains(plant, delay=0.24, ratio=0.0, grid=6)
+
+
+def test_help(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["design", "--help"])
+    assert exc.value.code == 0
+    assert capsys.readouterr().out.startswith("usage: fws-control design")
+
+
+def test_json_matches_most_stable_gains(capsys, library_design, tmp_path):
+    out = tmp_path / "design.png"
+    p = _run(["design", "--speed", 20, "--grid", 6, "--json", "--out", out], capsys)
+    assert p.returncode == 0, p.stderr
+    data = json.loads(p.stdout)  # one JSON line, nothing else on stdout
+    d = library_design
+    assert data["method"] == "most-stable"
+    assert data["k1"] == float(d.gains.k1) and data["k2"] == float(d.gains.k2)
+    assert data["abscissa"] == d.abscissa
+    assert data["critical_delay"] == d.critical_delay
+    assert data["certified"] is True
+    # the 20 m/s case of docs/design_delay.md
+    assert data["abscissa"] == pytest.approx(-0.9156, abs=1e-4)
+    assert out.read_bytes().startswith(PNG)
+
+
+def test_table_prints_the_same_numbers(capsys, library_design):
+    p = _run(["design", "--speed", 20, "--grid", 6], capsys)
+    assert p.returncode == 0, p.stderr
+    rows = dict(line.split(None, 1) for line in p.stdout.strip().splitlines())
+    assert float(rows["k1"]) == pytest.approx(float(library_design.gains.k1), rel=1e-5)
+    assert float(rows["abscissa"]) == pytest.approx(library_design.abscissa, rel=1e-5)
+    assert float(rows["critical_delay"]) == pytest.approx(
+        library_design.critical_delay, rel=1e-5
+    )
+
+
+def test_robust_matches_robust_gains(capsys):
+    args = ["design", "--method", "robust", "--speed", 10, 30, "--grid", 6]
+    p = _run([*args, "--json"], capsys)
+    assert p.returncode == 0, p.stderr
+    data = json.loads(p.stdout)
+    box = {
+        "speed": (10.0, 30.0),
+        "delay": (0.0, 0.24),
+        "steering_lag": 0.27,
+        "curvature": 0.0,
+    }
+    r = fws.robust_gains(
+        VEH, ratio=0.0, box=box, k1=np.linspace(0.0, 0.015, 6),
+        k2=np.linspace(0.0, 0.5, 6),
+    )  # fmt: skip
+    assert data["k1"] == float(r.gains.k1) and data["k2"] == float(r.gains.k2)
+    assert data["abscissa"] == r.abscissa
+    assert data["worst"] == r.worst
+    assert data["abscissa"] < 0.0
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["--speed", 10, 20], "--speed takes one speed"),
+        (["--method", "robust", "--speed", 20], "--speed takes LOW HIGH"),
+        (["--grid", 2], "--grid"),
+        (["--out", "x.pdf"], "--out must be a .png"),
+    ],
+)
+def test_bad_input_is_one_line_and_status_2(capsys, args, words):
+    p = _run(["design", *args], capsys)
+    assert p.returncode == 2
+    assert words in p.stderr and len(p.stderr.strip().splitlines()) == 1
