@@ -562,6 +562,19 @@ class _Quasi:
         batch = 2 * k + 4
         todo, rest = starts[:batch], starts[batch:]
         first = known is None
+        extra_done = None
+        if extra is not None and first:
+            # one Newton run for the first batch and the extra starts (their
+            # roots are matched after the batches, as if run then)
+            extra = extra[extra.imag >= 0.0]
+            todo = todo[todo.imag >= 0.0]
+            s, ok, err = self.newton(np.concatenate([todo, extra]))
+            n = todo.size
+            self._polish_into(todo, found, found_err, retries, (s[:n], ok[:n], err[:n]))
+            extra_done = (s[n:], ok[n:], err[n:])
+            first = False
+            todo, rest = rest[:batch], rest[batch:]
+            batch *= 2
         while todo.size:
             if not first:
                 z = np.array(found, dtype=complex)
@@ -576,7 +589,7 @@ class _Quasi:
             todo, rest = rest[:batch], rest[batch:]
             batch *= 2
         if extra is not None:
-            self._polish_into(extra, found, found_err, retries)
+            self._polish_into(extra, found, found_err, retries, extra_done)
         roots = np.array(found, dtype=complex)
         errs = np.array(found_err)
         # a root within its error (or 1e-7) of the real axis is real (a
@@ -589,10 +602,13 @@ class _Quasi:
             roots[np.lexsort((-roots.imag, -roots.real))], found, found_err
         )
 
-    def _polish_into(self, starts, found, found_err, retries) -> None:
-        """Newton from `starts`; new roots (upper half plane) appended to `found`."""
+    def _polish_into(self, starts, found, found_err, retries, done=None) -> None:
+        """Newton from `starts`; new roots (upper half plane) appended to `found`.
+
+        `done`: the Newton results of the upper-half `starts`, if run already.
+        """
         starts = starts[starts.imag >= 0.0]
-        s, ok, err = self.newton(starts)
+        s, ok, err = self.newton(starts) if done is None else done
         # each root stands for its conjugate pair: keep the upper one
         s = np.where(s.imag < 0.0, np.conj(s), s)
 
