@@ -246,15 +246,6 @@ def _cheb(N: int) -> tuple[np.ndarray, np.ndarray]:
     return x, Dm
 
 
-def _quasi(cp: AffinePolynomial, k1, k2, delay, s):
-    d = horner(cp.open_loop, s)
-    q = k1 * horner(cp.n1, s) + k2 * horner(cp.n2, s)
-    dd = horner(np.polyder(cp.open_loop), s)
-    dq = k1 * horner(np.polyder(cp.n1), s) + k2 * horner(np.polyder(cp.n2), s)
-    e = np.exp(-s * delay)
-    return d + e * q, dd + e * (dq - delay * q)
-
-
 #: Delays [s] the Chebyshev discretisation of :func:`rightmost_roots` takes.
 _MIN_CHEB_DELAY, _MAX_CHEB_DELAY = 1.0e-6, 1.0e3
 #: Most roots asked for, and most starting nodes: the discretisation doubles
@@ -306,9 +297,10 @@ def rightmost_roots(
     e^{-s\tau}q(s)`; a start that lands on a root already found is restarted
     with that root deflated (Newton on :math:`D(s)/\prod(s - r_i)`), so that
     the two roots a small delay splits off a double root are both found.
-    The nodes are doubled until two successive discretisations give the
-    same `n` rightmost roots; the result is the polished roots, each a root
-    of :math:`D` to rounding.
+    The nodes are doubled until the finer discretisation adds no root among
+    the `n` rightmost: its eigenvalues start Newton only where they are no
+    root found already (to 1e-6 relative) and lie right enough to matter.
+    The result is the polished roots, each a root of :math:`D` to rounding.
 
     Parameters
     ----------
@@ -324,8 +316,8 @@ def rightmost_roots(
     nodes : int, optional
         Chebyshev nodes of the first discretisation, 4 to 100. The nodes are
         doubled until the polished `n` rightmost roots agree (to 1e-8
-        relative) between two successive discretisations, at most five
-        times.
+        relative) between two successive discretisations, at least once and
+        at most five times.
     speed, curvature, model : optional
         With a :class:`Vehicle` only, as in :func:`linearize`.
 
@@ -379,16 +371,21 @@ def rightmost_roots(
     # start at least so fine that the matrix has a few eigenvalues per root
     # asked for
     N = max(N, min(_MAX_NODES, -(-2 * k // m)))
-    previous = None
-    for _ in range(6):
-        # the undelayed roots start Newton too: a small delay only moves them
-        # a little, and splits a double root into two close ones
-        roots = quasi.polish(_spectrum(A, A1, tau, N), lam0, k)
-        if previous is not None and _same_rightmost(previous, roots, k):
-            return roots[:k]
-        previous, N = roots, 2 * N
+    # the undelayed roots start Newton too: a small delay only moves them a
+    # little, and splits a double root into two close ones
+    previous = quasi.polish(_spectrum(A, A1, tau, N), k, extra=lam0)
+    for _ in range(5):
+        N *= 2
+        # the finer discretisation starts from the roots found so far: Newton
+        # runs only from its eigenvalues that are no known root and lie right
+        # enough to matter; a new root among the k rightmost means the
+        # coarser one had missed it
+        roots = quasi.polish(_spectrum(A, A1, tau, N), k, known=previous)
+        if _same_rightmost(previous.roots, roots.roots, k):
+            return roots.roots[:k]
+        previous = roots
     raise RuntimeError(
-        f"rightmost_roots did not converge with {N // 2} Chebyshev nodes for n={k} "
+        f"rightmost_roots did not converge with {N} Chebyshev nodes for n={k} "
         "roots; ask for fewer roots (n) or a larger nodes"
     )
 
@@ -397,9 +394,10 @@ def _spectrum(A: np.ndarray, A1: np.ndarray, tau: float, N: int):
     """Eigenvalues of the Chebyshev discretisation with `N` nodes.
 
     Upper half plane and real axis only (the rest are their conjugates),
-    rightmost first. All of them start Newton: the discretisation has
-    spurious eigenvalues (``|s| tau`` of the order of ``N``) that can lie
-    right of true roots, e.g. of the far roots of a loop with a tiny delay.
+    rightmost first. They start Newton in batches from the right, past the
+    `n`-th root found: the discretisation has spurious eigenvalues (``|s|
+    tau`` of the order of ``N``) that can lie right of true roots, e.g. of
+    the far roots of a loop with a tiny delay.
     """
     m = A.shape[0]
     _, Dm = _cheb(N)
@@ -434,6 +432,15 @@ def _same_rightmost(coarse: np.ndarray, fine: np.ndarray, k: int) -> bool:
     )
 
 
+@dataclass(frozen=True)
+class _Polished:
+    """Polished roots: all of them rightmost first, and the upper-half ones found."""
+
+    roots: np.ndarray
+    found: list[complex]
+    found_err: list[float]
+
+
 class _Quasi:
     r"""``D(s) = d(s) + e^{-s tau} q(s)`` of one loop, and Newton's method on it."""
 
@@ -457,9 +464,11 @@ class _Quasi:
         self.tau = tau
 
     def _horner(self, c, s):
-        out = np.broadcast_to(c[:, 0], (c.shape[0], s.size)).astype(s.dtype)
+        out = np.empty((c.shape[0], s.size), dtype=s.dtype)
+        out[...] = c[:, 0]
         for k in range(1, c.shape[1]):
-            out = out * s + c[:, k]
+            out *= s
+            out += c[:, k]
         return out
 
     def value(self, s):
@@ -475,13 +484,16 @@ class _Quasi:
         d_size, q_size = self._horner(self.sizes, a)
         return np.abs(f) / (d_size + np.abs(np.exp(-s * self.tau)) * q_size)
 
-    def newton(self, s, known=None, steps: int = 40):
+    def newton(self, s, known=None, steps: int = 20):
         """Newton from the starts `s` (array); the `known` roots deflated.
 
         Returns the end points, whether each is a root (relative residual of
         :math:`D` below 1e-11) and its error estimate (the size of one more,
         undeflated, Newton step: about the distance to the root, also to a
-        multiple one, on which Newton converges only linearly).
+        multiple one, on which Newton converges only linearly). A start
+        not converged in `steps` steps is a far, spurious one (an eigenvalue
+        start near a root converges in a few); a root it would have reached
+        is an eigenvalue of the finer discretisation.
         """
         s = np.array(s, dtype=complex)
         active = np.ones(s.shape, dtype=bool)
@@ -517,32 +529,67 @@ class _Quasi:
             )
         return s, ok, np.where(ok, err, np.inf)
 
-    def polish(self, starts: np.ndarray, extra: np.ndarray, k: int) -> np.ndarray:
+    def polish(
+        self,
+        starts: np.ndarray,
+        k: int,
+        *,
+        extra: np.ndarray | None = None,
+        known: _Polished | None = None,
+    ) -> _Polished:
         """Distinct roots from the starts, conjugates added, rightmost first.
 
         Newton starts from the `starts` (sorted by decreasing real part) in
         batches, until `k` roots are found and the next start lies well left
         of the `k`-th (the rest, further left, would only find roots further
         left), then from each of `extra`. A multiple root (to rounding) is
-        returned once.
+        returned once. The `known` roots (of a coarser discretisation) are
+        taken as found: a start within 1e-6 (relative) of one is that root
+        and starts no Newton, and so does a first batch that lies well left
+        of the `k`-th known root.
         """
-        found: list[complex] = []
-        found_err: list[float] = []
+        if known is None:
+            found: list[complex] = []
+            found_err: list[float] = []
+        else:
+            found, found_err = list(known.found), list(known.found_err)
+            starts = starts[starts.imag >= 0.0]
+            if found:
+                z = np.array(found)
+                gap = np.min(np.abs(starts[:, None] - z[None, :]), axis=1)
+                starts = starts[gap > 1e-6 * (1.0 + np.abs(starts))]
         retries: dict[int, int] = {}
         batch = 2 * k + 4
         todo, rest = starts[:batch], starts[batch:]
-        while True:
-            self._polish_into(todo, found, found_err, retries)
-            if rest.size == 0:
-                break
-            z = np.array(found, dtype=complex)
-            # a complex root stands for itself and its conjugate
-            re = np.sort(np.repeat(z.real, np.where(z.imag > 0, 2, 1)))[::-1]
-            if re.size >= k and rest[0].real < re[k - 1] - 0.1 * (1.0 + abs(re[k - 1])):
-                break
+        first = known is None
+        extra_done = None
+        if extra is not None and first:
+            # one Newton run for the first batch and the extra starts (their
+            # roots are matched after the batches, as if run then)
+            extra = extra[extra.imag >= 0.0]
+            todo = todo[todo.imag >= 0.0]
+            s, ok, err = self.newton(np.concatenate([todo, extra]))
+            n = todo.size
+            self._polish_into(todo, found, found_err, retries, (s[:n], ok[:n], err[:n]))
+            extra_done = (s[n:], ok[n:], err[n:])
+            first = False
             todo, rest = rest[:batch], rest[batch:]
             batch *= 2
-        self._polish_into(extra, found, found_err, retries)
+        while todo.size:
+            if not first:
+                z = np.array(found, dtype=complex)
+                # a complex root stands for itself and its conjugate
+                re = np.sort(np.repeat(z.real, np.where(z.imag > 0, 2, 1)))[::-1]
+                if re.size >= k and todo[0].real < re[k - 1] - 0.1 * (
+                    1.0 + abs(re[k - 1])
+                ):
+                    break
+            self._polish_into(todo, found, found_err, retries)
+            first = False
+            todo, rest = rest[:batch], rest[batch:]
+            batch *= 2
+        if extra is not None:
+            self._polish_into(extra, found, found_err, retries, extra_done)
         roots = np.array(found, dtype=complex)
         errs = np.array(found_err)
         # a root within its error (or 1e-7) of the real axis is real (a
@@ -551,12 +598,17 @@ class _Quasi:
         small = np.abs(roots.imag) <= 1e-7 * (1.0 + np.abs(roots)) + 10.0 * errs
         roots = np.where(small, roots.real + 0j, roots)
         roots = np.concatenate([roots, np.conj(roots[~small & (roots.imag > 0)])])
-        return roots[np.lexsort((-roots.imag, -roots.real))]
+        return _Polished(
+            roots[np.lexsort((-roots.imag, -roots.real))], found, found_err
+        )
 
-    def _polish_into(self, starts, found, found_err, retries) -> None:
-        """Newton from `starts`; new roots (upper half plane) appended to `found`."""
+    def _polish_into(self, starts, found, found_err, retries, done=None) -> None:
+        """Newton from `starts`; new roots (upper half plane) appended to `found`.
+
+        `done`: the Newton results of the upper-half `starts`, if run already.
+        """
         starts = starts[starts.imag >= 0.0]
-        s, ok, err = self.newton(starts)
+        s, ok, err = self.newton(starts) if done is None else done
         # each root stands for its conjugate pair: keep the upper one
         s = np.where(s.imag < 0.0, np.conj(s), s)
 
@@ -590,19 +642,6 @@ class _Quasi:
             if good2 and match(z2, e2) < 0 and z2.imag >= -10.0 * e2:
                 found.append(z2)
                 found_err.append(e2)
-
-
-def _newton(cp: AffinePolynomial, k1, k2, tau, s):
-    """Polish a root of D(s) = d(s) + e^{-s tau} q(s) by Newton's method."""
-    for _ in range(30):
-        f, df = _quasi(cp, k1, k2, tau, s)
-        if df == 0:
-            break
-        step = f / df
-        s = s - step
-        if abs(step) <= 1e-14 * max(1.0, abs(s)):
-            break
-    return s
 
 
 def _tail_phase(roots_d: np.ndarray, w_max: float) -> float:

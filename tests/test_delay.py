@@ -392,8 +392,8 @@ def check_chart_against_rightmost_root(plant, ratio, k1, k2, tau, points, seed):
 
 
 def test_delayed_chart_two_state_curved_against_rightmost_root():
-    # 2,000 random points, 0 disagreements (about 8 ms per rightmost root:
-    # a sample the suite's time allows)
+    # 2,000 random points, 0 disagreements (about 3 ms of CPU per rightmost
+    # root, benchmarks/bench_rightmost.py: a sample the suite's time allows)
     plant = fws.LateralPlant(VEH, speed=5.0, curvature=0.1)
     check_chart_against_rightmost_root(
         plant, -1.0, np.linspace(-0.05, 0.4, 301), np.linspace(0.0, 1.8, 301),
@@ -404,8 +404,8 @@ def test_delayed_chart_two_state_curved_against_rightmost_root():
 @pytest.mark.parametrize(("ratio", "tau", "seed"), [(0.0, 0.24, 2), (0.5, 0.1, 3)])
 def test_delayed_chart_lagged_against_rightmost_root(ratio, tau, seed):
     # The 4-state plant with the Autoware-like lag 0.27 s; 2 x 1000 random
-    # points, 0 disagreements (about 15 ms per rightmost root: a sample the
-    # suite's time allows)
+    # points, 0 disagreements (about 5 ms of CPU per rightmost root,
+    # benchmarks/bench_rightmost.py: a sample the suite's time allows)
     plant = fws.LateralPlant(VEH, speed=5.0, curvature=0.1, steering_lag=0.27)
     k1 = np.linspace(-0.05, 0.35, 301)
     k2 = np.linspace(-0.2, 1.5, 301) if ratio == 0.0 else np.linspace(-1, 1.5, 301)

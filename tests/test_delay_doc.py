@@ -262,3 +262,27 @@ def test_figs_6_to_9_peaks_with_the_actuator(text):
                     printed,
                     peaks[j],
                 )
+
+
+def test_method_of_steps_against_the_pade_reference(text):
+    """The printed max |e - e_ref| of the page's code block, recomputed.
+
+    The reference is python-control's simulation of the loop with Pade blocks
+    (``simulate_reference``); the largest difference is where the Pade blocks
+    ring, before t = delay, so the block's first second holds it.
+    """
+    from fws_control.simulation import simulate_reference
+
+    m = re.search(r"^# max \|e - e_ref\| = ([\d.e+-]+) m$", text, flags=re.M)
+    assert m is not None
+    veh = fws.Vehicle(wheelbase=F, rear_to_cg=1.35)
+    g = fws.double_root_gains(
+        fws.LateralPlant(veh, speed=5.0, curvature=0.1), ratio=-1.0, pole=-1.0
+    )
+    path = fws.Arc(curvature=0.1)
+    kw = dict(speed=5.0, initial_state=(0.0, -5.0, 0.0), duration=1.0, dt=0.05)
+    fast = fws.simulate(veh, path, g, delay=0.2, **kw)
+    ref = simulate_reference(veh, path, g, delay=0.2, **kw)
+    gap = np.abs(fast.e - ref.outputs[list(ref.output_labels).index("e")])
+    assert f"{gap.max():.1e}" == m[1]
+    assert fast.t[np.argmax(gap)] < 0.2
