@@ -171,7 +171,14 @@ def test_closed_form_numbers(prose):
 
 
 def test_delayed_stable_fractions(prose):
-    """10.08 %, 5.08 %, 1.67 % of the default grid: chart and Pade(10)."""
+    """10.08 %, 5.08 %, 1.67 % of the default grid: chart and Pade(10).
+
+    The chart's fraction is the quoted one; the chart's verdicts are checked
+    point by point against the eigenvalues of a Pade(10) loop at 4,000 grid
+    points drawn with a fixed seed (all 160,801 points cost over a minute of
+    eigenvalues and check the same verdicts), away from the boundary where
+    the Pade approximation itself is the less accurate of the two.
+    """
     m = re.search(
         r"shrinks from ([\d.]+) % of the grid without delay to ([\d.]+) % at "
         r"0\.24 s and ([\d.]+) % at 0\.5 s",
@@ -187,6 +194,10 @@ def test_delayed_stable_fractions(prose):
         ch = fws.stability_chart(plant, ratio=-1.0, delay=tau)
         assert _matches(f"{q:.2f}", 100.0 * ch.stable_fraction), (tau, q)
         K = np.stack(np.meshgrid(ch.k1, ch.k2), axis=-1)
+        pick = np.random.default_rng(173).choice(K.shape[0] * K.shape[1], 4000)
+        rows, cols = np.unravel_index(pick, K.shape[:2])
+        K = K[rows, cols]
+        verdict = np.asarray(ch.stable)[rows, cols]
         if tau == 0.0:
             M = A - b[:, None] * K[..., None, :]
         else:
@@ -198,8 +209,12 @@ def test_delayed_stable_fractions(prose):
             M[..., :2, 2:] = b[:, None] * Cp[0]
             M[..., 2:, :2] = -Bp[:, 0][:, None] * K[..., None, :]
             M[..., 2:, 2:] = Ap
-        frac = np.mean(np.max(np.linalg.eigvals(M).real, axis=-1) < 0.0)
-        assert 100.0 * frac == pytest.approx(q, abs=0.02), (tau, frac)
+        top = np.max(np.linalg.eigvals(M).real, axis=-1)
+        clear = np.abs(top) > 1e-3  # not on the boundary
+        assert np.count_nonzero(clear) > 3900
+        assert np.count_nonzero(verdict[clear] != (top[clear] < 0.0)) == 0, tau
+        # the sample holds stable points, not only the unstable bulk
+        assert np.count_nonzero(top[clear] < 0.0) > 20
 
 
 def test_largest_surviving_double_roots(prose):
