@@ -48,6 +48,7 @@ import contextlib
 import inspect
 import os
 import sys
+import threading
 import time
 import warnings
 from collections.abc import Callable, Iterator
@@ -209,14 +210,24 @@ def _quiet() -> bool:
 
 
 class _Notice:
-    """State of the notice: one announcement per process, plans, CPU time."""
+    """Whether this process has announced a compilation (once per process)."""
 
     announced = False
-    depth = 0  # nesting of our kernels' compilations in progress
-    start = 0.0
-    seconds = 0.0  # CPU time of our compilations in the current plan
-    plans: list = []  # estimate callbacks of the active first_use contexts
-    pending_line = False  # the announcement wants its closing line
+
+
+class _ThreadNotice(threading.local):
+    """Each thread's first_use blocks and compilations (Dask runs chunks in
+    threads; numba compiles one kernel at a time, under its lock)."""
+
+    def __init__(self):
+        self.depth = 0  # nesting of our kernels' compilations in progress
+        self.start = 0.0
+        self.seconds = 0.0  # CPU time of our compilations in the block
+        self.plans = []  # estimate callbacks of the active first_use blocks
+        self.pending_line = False  # the announcement wants its closing line
+
+
+_local = _ThreadNotice()
 
 
 def _ours(dispatcher: Any) -> bool:
@@ -228,7 +239,7 @@ def _announce() -> None:
     _Notice.announced = True
     if _quiet():
         return
-    estimate = _Notice.plans[0]() if _Notice.plans else None
+    estimate = _local.plans[0]() if _local.plans else None
     about = f"about {estimate:.0f} s of CPU; " if estimate else ""
     where = cache_dir()
     cached = f"cached in {where}" if where else "not cached: no writable folder"
@@ -237,18 +248,18 @@ def _announce() -> None:
         f"{QUIET_VARIABLE}=1 silences this)\n"
     )
     sys.stderr.flush()
-    _Notice.pending_line = True
+    _local.pending_line = True
 
 
 def _close() -> None:
-    if _Notice.pending_line:
-        _Notice.pending_line = False
+    if _local.pending_line:
+        _local.pending_line = False
         if not _quiet():
             sys.stderr.write(
-                f"fws_control: compiled in {_Notice.seconds:.1f} s of CPU\n"
+                f"fws_control: compiled in {_local.seconds:.1f} s of CPU\n"
             )
             sys.stderr.flush()
-    _Notice.seconds = 0.0
+    _local.seconds = 0.0
 
 
 if numba is not None:
@@ -259,20 +270,20 @@ if numba is not None:
         # Only inside a first_use block (the engine's entry points): a
         # kernel called directly, e.g. to test it, compiles silently.
         def on_start(self, ev):
-            if not _Notice.plans or not _ours(ev.data.get("dispatcher")):
+            if not _local.plans or not _ours(ev.data.get("dispatcher")):
                 return
-            if _Notice.depth == 0:
-                _Notice.start = time.process_time()
+            if _local.depth == 0:
+                _local.start = time.process_time()
                 if not _Notice.announced:
                     _announce()
-            _Notice.depth += 1
+            _local.depth += 1
 
         def on_end(self, ev):
-            if not _Notice.plans or not _ours(ev.data.get("dispatcher")):
+            if not _local.plans or not _ours(ev.data.get("dispatcher")):
                 return
-            _Notice.depth -= 1
-            if _Notice.depth == 0:
-                _Notice.seconds += time.process_time() - _Notice.start
+            _local.depth -= 1
+            if _local.depth == 0:
+                _local.seconds += time.process_time() - _local.start
 
     _event.register("numba:compile", _Listener())
 
@@ -299,12 +310,12 @@ def first_use(estimate: Callable[[], float] | None = None) -> Iterator[None]:
     >>> with first_use(lambda: 1.0):
     ...     pass                       # nothing compiled: nothing printed
     """
-    _Notice.plans.append(estimate or (lambda: 0.0))
+    _local.plans.append(estimate or (lambda: 0.0))
     try:
         yield
     finally:
-        _Notice.plans.pop()
-        if not _Notice.plans:
+        _local.plans.pop()
+        if not _local.plans:
             _close()
 
 
