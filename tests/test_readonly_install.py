@@ -1,10 +1,11 @@
 """The compiled engine where numba cannot write its cache.
 
-A root-owned, read-only install used by an account without a writable home
-(a service, a container, ``nobody``) leaves numba no cache folder: no
-``__pycache__`` next to the package, no ``~/.cache/numba``. Its decorator
-then raises ``RuntimeError: cannot cache function ...: no locator
-available``; the engine must compile uncached instead, with one warning.
+An account without a writable home (a service, a container, ``nobody``)
+leaves the engine no cache folder: no ``~/.cache/fws_control`` and no
+``NUMBA_CACHE_DIR`` (the package's own folder is never used, see
+:mod:`fws_control.simulation.compilation`). numba's cache then raises
+``RuntimeError: cannot cache function ...: no locator available``; the
+engine must compile uncached instead, with one warning.
 
 References: numba's own ``cache=False`` compile of the same function (the
 fast test), and, as an account that cannot write the package nor its home
@@ -25,28 +26,28 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fws_control.simulation import compiled
+from fws_control.simulation import compilation, compiled
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_no_cache_folder_compiles_uncached_with_one_warning(monkeypatch):
     numba = pytest.importorskip("numba", reason="the extra 'fast' (numba)")
-    from numba.core import caching
 
-    # numba's view of a read-only install without a home: no locator fits
-    monkeypatch.setattr(caching.CacheImpl, "_locator_classes", [])
-    monkeypatch.setattr(compiled, "_CACHING", True)
+    # no writable cache folder: no locator of the engine's cache fits
+    monkeypatch.setattr(compilation._KernelCacheImpl, "_locator_classes", [])
+    monkeypatch.setattr(compilation, "_CACHING", True)
 
     def hypot3(x, y, z):
         return (x * x + y * y + z * z) ** 0.5
 
     with pytest.raises(RuntimeError, match="no locator available"):
-        numba.njit(cache=True)(hypot3)
+        compilation._KernelCache(hypot3)
     with pytest.warns(RuntimeWarning, match="no writable cache folder") as seen:
         first = compiled._jit(hypot3)
         second = compiled._jit(lambda x: 2.0 * x)
     assert len(seen) == 1  # one warning, not one per kernel
+    assert compilation.cache_dir() is None
     assert first(2.0, 3.0, 6.0) == 7.0 and second(1.5) == 3.0
     reference = numba.njit(cache=False)(hypot3)
     rng = np.random.default_rng(1)

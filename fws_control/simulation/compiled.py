@@ -87,7 +87,6 @@ still imports; :func:`integrate_compiled` raises :class:`ImportError`.
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -104,6 +103,7 @@ from ..gains import SteeringGains
 from ..paths import Arc, Clothoid, Path, PathChain, Straight
 from ..validation import check_positive
 from ..vehicle import Vehicle
+from .compilation import compile_seconds, first_use, jit
 from .engine import (
     PEAK_SIGNALS,
     SIGNALS,
@@ -122,6 +122,8 @@ except ImportError:  # pragma: no cover - exercised only without numba
 
 __all__ = [
     "available",
+    "compiling",
+    "STAGES",
     "CurvatureTable",
     "curvature_table",
     "compiled_support",
@@ -190,43 +192,12 @@ def available() -> bool:
     return numba is not None
 
 
-# Whether the kernels are compiled with numba's on-disk cache. It turns
-# False, with one :class:`RuntimeWarning`, where numba finds no writable
-# cache folder (a read-only install used by an account without a writable
-# home: no ``__pycache__`` next to this file, no ``~/.cache/numba``, no
-# ``NUMBA_CACHE_DIR``); the kernels are then compiled in every process.
-_CACHING = True
-
-
 def _jit(fn, inline="never"):
-    # cache=True: the compilation (seconds) is paid once per machine and
-    # numba version, not once per process. Without numba the kernels stay
-    # plain Python (importable, never called by integrate_compiled).
-    global _CACHING
-    if numba is None:  # pragma: no cover
-        return fn
-    # error_model="numpy": a division by zero gives inf or NaN as in numpy
-    # (and the solver then rejects the step or fails the run), instead of
-    # raising ZeroDivisionError out of the whole batch (e.g. V = 1e300).
-    options = dict(nogil=True, error_model="numpy", inline=inline)
-    if _CACHING:
-        try:
-            return numba.njit(cache=True, **options)(fn)
-        except RuntimeError as exc:
-            # numba looks for its cache folder when the decorator runs and
-            # raises "cannot cache function ...: no locator available" if
-            # none is writable; the engine then works uncached
-            if "cannot cache" not in str(exc):
-                raise
-            _CACHING = False
-            warnings.warn(
-                f"numba finds no writable cache folder ({exc}); the compiled "
-                "engine is compiled in every process (about 20 s of CPU). Set "
-                "NUMBA_CACHE_DIR to a writable folder to keep the compilation.",
-                RuntimeWarning,
-                stacklevel=3,
-            )
-    return numba.njit(cache=False, **options)(fn)
+    # compilation.jit: numba.njit(nogil=True, error_model="numpy") with the
+    # on-disk cache in fws_control's own folder (compilation.cache_dir), so
+    # that the compilation (seconds) is paid once per machine and numba
+    # version, not once per process, and never written into the package.
+    return jit(fn, inline=inline)
 
 
 def _jit_inline(fn):
@@ -250,6 +221,69 @@ def _jit_inline(fn):
     # Not for _curvature, _wrap_lap and _feedforward_angle: inlined into
     # the right-hand side as well, they made the integration 1.07x slower.
     return _jit(fn, inline="always")
+
+
+#: The compiled engine's stages, each compiled on its first use: the
+#: per-run drivers of :data:`METHODS` (integration, events, dense output),
+#: the output signals and the exact peaks.
+STAGES = (*METHODS, "signals", "peaks")
+
+# CPU seconds each stage takes to compile with an empty cache, for the
+# notice's estimate: rounded from the stage times that
+# benchmarks/bench_first_use.py prints (numba 0.68; they vary with the
+# machine and its load, by 2-3x on a busy one).
+_STAGE_SECONDS = {"DOP853": 12.0, "Radau": 10.0, "signals": 1.0, "peaks": 6.0}
+
+
+def _stage_kernel(stage):
+    # the top-level kernel of a stage (module globals, defined below)
+    return {
+        "DOP853": _solve_batch,
+        "Radau": _solve_batch_radau,
+        "signals": _signals_batch,
+        "peaks": _peaks_batch,
+    }[stage]
+
+
+def compiling(*stages: str) -> Any:
+    """Context of a call that runs the compiled `stages`, for the notice.
+
+    numba compiles a stage's kernels the first time a call needs them (a
+    DOP853 run compiles neither Radau nor, unless asked, the signals and
+    peaks). The first compilation in a process is announced on standard
+    error with the CPU time the `stages` still to compile take, and closed
+    with the time it took (see
+    :mod:`~fws_control.simulation.compilation`); nothing is printed when
+    they load from the cache.
+
+    Parameters
+    ----------
+    *stages : str
+        Names in :data:`STAGES`.
+
+    Returns
+    -------
+    context manager
+
+    Raises
+    ------
+    ValueError
+        For a name not in :data:`STAGES`.
+
+    Examples
+    --------
+    >>> from fws_control.simulation.compiled import compiling
+    >>> with compiling("DOP853", "signals"):
+    ...     pass
+    """
+    for stage in stages:
+        if stage not in STAGES:
+            raise ValueError(f"stages must be in {STAGES}, got {stage!r}")
+
+    def estimate():
+        return sum(compile_seconds(_stage_kernel(s), _STAGE_SECONDS[s]) for s in stages)
+
+    return first_use(estimate)
 
 
 # --------------------------------------------------------------------------
@@ -1135,7 +1169,12 @@ def _drivers(method):
                     dense_ready = True
                 if n_rec == rec.shape[0]:
                     grown = np.empty((max(2 * n_rec, 16), rec.shape[1]))
-                    grown[:n_rec] = rec[:n_rec]
+                    # element by element: numba compiles an array-to-slice
+                    # assignment with its shape-mismatch error, whose string
+                    # formatting cost a fifth of this driver's compilation
+                    for r_ in range(n_rec):
+                        for c_ in range(rec.shape[1]):
+                            grown[r_, c_] = rec[r_, c_]
                     rec = grown
                 row = rec[n_rec]
                 row[0] = t_old
@@ -2801,10 +2840,11 @@ def integrate_compiled(
     # (room for ~64 steps per run; the kernel doubles it when needed)
     rec = np.empty((64 * n if keep else 0, 2 + (_NPOW + 1) * m))
     solve = _solve_batch_radau if q[_Q_METHOD] == _RADAU else _solve_batch
-    rec = solve(
-        Y0, P, q, table.breaks, table.coefs, t_eval, rtol, atol, out, codes, t_stop,
-        stats, rec, offsets, keep,
-    )  # fmt: skip
+    with compiling(METHODS[int(q[_Q_METHOD])]):
+        rec = solve(
+            Y0, P, q, table.breaks, table.coefs, t_eval, rtol, atol, out, codes,
+            t_stop, stats, rec, offsets, keep,
+        )  # fmt: skip
     if keep:
         solution.append(
             CompiledSolution(
@@ -2915,9 +2955,10 @@ def compiled_outputs(
         pose = np.array([2.0, *path.start, path.start_heading, path.kappa])
     else:
         pose = np.zeros(5)
-    _signals_batch(
-        st, P, q, table.breaks, table.coefs, float(vehicle.rear_to_cg), pose, out
-    )
+    with compiling("signals"):
+        _signals_batch(
+            st, P, q, table.breaks, table.coefs, float(vehicle.rear_to_cg), pose, out
+        )
     S = out[:, 3]
     valid = np.isfinite(S)
     if pose[0] == 0.0:
@@ -3079,9 +3120,10 @@ def compiled_peaks(
         )
     values = np.empty((n, _N_PEAK))
     times = np.empty((n, _N_PEAK))
-    _peaks_batch(
-        np.ascontiguousarray(solution.records), solution.offsets, Y0, P, q,
-        table.breaks, table.coefs, float(vehicle.rear_to_cg), t_eval, signals,
-        np.ascontiguousarray(t_stop, dtype=float), values, times,
-    )  # fmt: skip
+    with compiling("peaks"):
+        _peaks_batch(
+            np.ascontiguousarray(solution.records), solution.offsets, Y0, P, q,
+            table.breaks, table.coefs, float(vehicle.rear_to_cg), t_eval, signals,
+            np.ascontiguousarray(t_stop, dtype=float), values, times,
+        )  # fmt: skip
     return values, times

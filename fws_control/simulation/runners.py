@@ -288,6 +288,20 @@ def _run_compiled(
     are its own, so a failure needs no isolation. `out`: the chunk's rows of
     the batch's signals, written in place (then returned as the signals).
     """
+    from .compiled import compiled_method, compiling
+
+    # the first compilation in a process is announced once, with the time
+    # of the three stages this call compiles (nothing when they are cached)
+    with compiling(compiled_method(opts["method"]), "signals", "peaks"):
+        return _run_compiled_stages(
+            vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, out
+        )
+
+
+def _run_compiled_stages(
+    vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, out
+):
+    # _run_compiled's integration, signals and exact peaks
     from .compiled import (
         compiled_method,
         compiled_outputs,

@@ -1,0 +1,162 @@
+"""CPU cost of the first compiled ``simulate`` in a fresh environment, and later.
+
+Runs the paper's 15 s curve scenario (``PAPER_SCENARIOS["curve_5"]``: arc
+1/10 m, 5 m/s, start (0, -5 m, 0), feedforward; the double-root design at
+ratio -1, pole -1) in fresh interpreters, ``python -c`` as a user would:
+
+- **cold**: numba's cache in a new empty folder (``NUMBA_CACHE_DIR``, a
+  fresh temporary folder for each run), so the engine's kernels compile;
+  printed with the compilation time of each stage (from numba's compile
+  events: the stages' top kernels and everything they compile) and the
+  first-use notice the process wrote on standard error;
+- **warm**: three more processes on the cache the cold run filled; the best
+  of 3.
+
+Each time is the process's own CPU time (user + system, all threads, from
+``resource.getrusage``) up to its first result, the imports included, and
+the CPU time of the ``simulate`` call alone. The machine load (load
+averages from ``os.getloadavg()``) is printed before and after: CPU times
+stretch on a busy machine too (shared caches and cores).
+
+Targets: cold <= 10 s, warm <= 1 s of CPU to the first result.
+
+Run: ``python benchmarks/bench_first_use.py [--cold 1]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from timing import machine_line
+
+ROOT = Path(__file__).resolve().parents[1]
+
+# One user's first call. The stage of each of fws_control's compilations is
+# its top kernel (a kernel compiled while no other one of ours compiles).
+_CHILD = r"""
+import resource, time
+def cpu():
+    ru = resource.getrusage(resource.RUSAGE_SELF)
+    return ru.ru_utime + ru.ru_stime
+stages = {}
+try:
+    from numba.core import event
+except ImportError:
+    event = None
+if event is not None:
+    class Stages(event.Listener):
+        depth = 0
+        def on_start(self, ev):
+            fn = ev.data["dispatcher"].py_func
+            if not fn.__module__.startswith("fws_control."):
+                return
+            if Stages.depth == 0:
+                Stages.name, Stages.t0 = fn.__name__, time.process_time()
+            Stages.depth += 1
+        def on_end(self, ev):
+            fn = ev.data["dispatcher"].py_func
+            if not fn.__module__.startswith("fws_control."):
+                return
+            Stages.depth -= 1
+            if Stages.depth == 0:
+                name = Stages.name
+                stages[name] = stages.get(name, 0.0) + time.process_time() - Stages.t0
+    event.register("numba:compile", Stages())
+import fws_control as fws
+veh = fws.Vehicle(wheelbase=WHEELBASE, rear_to_cg=REAR_TO_CG)
+g = fws.double_root_gains(veh, speed=SPEED, curvature=CURVATURE, ratio=-1.0, pole=-1.0)
+before = cpu()
+res = fws.simulate(veh, fws.Arc(curvature=CURVATURE), g, speed=SPEED,
+                   initial_state=INITIAL, duration=DURATION, feedforward=True)
+after = cpu()
+import json
+print(json.dumps({"total": after, "simulate": after - before, "stages": stages,
+                  "engine": res.engine, "status": str(res.status)}))
+"""
+
+# the top kernels' names (their stage in compiled.STAGES)
+_STAGE_OF = {
+    "solve_batch": "DOP853 or Radau driver",
+    "_signals_batch": "signals",
+    "_peaks_batch": "peaks",
+}
+
+
+def child_code() -> str:
+    from fws_control.paper.data import PAPER_VEHICLE
+    from fws_control.paper.scenarios import PAPER_SCENARIOS
+
+    sc = PAPER_SCENARIOS["curve_5"]
+    values = {
+        "WHEELBASE": PAPER_VEHICLE.wheelbase,
+        "REAR_TO_CG": PAPER_VEHICLE.rear_to_cg,
+        "SPEED": sc.speed,
+        "CURVATURE": sc.curvature,
+        "INITIAL": sc.initial_state,
+        "DURATION": sc.duration,
+    }
+    code = _CHILD
+    for name, value in values.items():
+        code = code.replace(name, repr(value))
+    return code
+
+
+def run(code: str, cache: str) -> tuple[dict, str]:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(
+        [str(ROOT), *filter(None, [env.get("PYTHONPATH")])]
+    )
+    env["NUMBA_CACHE_DIR"] = cache
+    env.pop("FWS_CONTROL_QUIET", None)
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=env, cwd=tempfile.gettempdir(),
+        capture_output=True, text=True, check=True, timeout=1800,
+    )  # fmt: skip
+    return json.loads(out.stdout.strip().splitlines()[-1]), out.stderr
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--cold", type=int, default=1, help="cold runs (each >= 10 s)")
+    args = parser.parse_args()
+    code = child_code()
+    print(machine_line())
+    with tempfile.TemporaryDirectory(prefix="fws-first-use-") as tmp:
+        best_cold = None
+        for i in range(args.cold):
+            cache = os.path.join(tmp, f"cache{i}")  # a new empty folder
+            cold, notice = run(code, cache)
+            print(
+                f"cold (empty cache) : {cold['total']:6.2f} s of CPU to the first "
+                f"result, simulate {cold['simulate']:6.2f} s (engine "
+                f"{cold['engine']}, status {cold['status']})"
+            )
+            for name, sec in cold["stages"].items():
+                print(f"    compiled {_STAGE_OF.get(name, name):24s} {sec:6.2f} s")
+            for line in notice.splitlines():
+                print(f"    stderr: {line}")
+            if best_cold is None or cold["total"] < best_cold["total"]:
+                best_cold, warm_cache = cold, cache
+        warm = [run(code, warm_cache)[0] for _ in range(3)]
+        best = min(warm, key=lambda r: r["total"])
+        print(
+            f"warm (cached), best of 3: {best['total']:6.3f} s of CPU to the "
+            f"first result, simulate {best['simulate']:6.3f} s (all: "
+            + ", ".join(f"{r['total']:.3f}" for r in warm)
+            + ")"
+        )
+        print(
+            f"targets: cold {best_cold['total']:.2f} / 10 s = "
+            f"{best_cold['total'] / 10:.2f}, warm {best['total']:.3f} / 1 s"
+        )
+    print(machine_line())
+
+
+if __name__ == "__main__":
+    main()

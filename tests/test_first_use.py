@@ -1,0 +1,312 @@
+"""First use of the compiled engine: the notice, the cache folder, uninstall.
+
+References: numba's own cache counters (``dispatcher.stats``: a cache miss
+is a compilation, a hit a load) for when the notice must and must not be
+printed; numba's documented rule for the folder under ``NUMBA_CACHE_DIR``
+(``<parent folder>_<sha1 of the source folder>``) and the XDG rule for the
+user cache, written out here; the files on disk; and ``pip`` itself, which
+installs the built wheel into a fresh environment and uninstalls it, after
+which ``import fws_control`` must fail.
+"""
+
+from __future__ import annotations
+
+import base64
+import hashlib
+import json
+import os
+import site
+import subprocess
+import sys
+import textwrap
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from fws_control.simulation import compilation, compiled
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = ROOT / "fws_control"
+
+numba = pytest.importorskip("numba", reason="the extra 'fast' (numba)")
+
+
+def _env(**updates: str) -> dict:
+    """This checkout first on the path, none of the cache settings inherited."""
+    drop = ("NUMBA_CACHE_DIR", "XDG_CACHE_HOME", compilation.QUIET_VARIABLE)
+    env = {k: v for k, v in os.environ.items() if k not in drop}
+    env["PYTHONPATH"] = str(ROOT)
+    env.update(updates)
+    return env
+
+
+def _python(code: str, env: dict, cwd: Path) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(code)],
+        env=env, cwd=cwd, capture_output=True, text=True, timeout=900, check=False,
+    )  # fmt: skip
+
+
+def _subfolder(source_dir: Path) -> str:
+    # numba's get_suitable_cache_subpath, written out from its definition
+    digest = hashlib.sha1(str(source_dir).encode()).hexdigest()
+    return f"{source_dir.name}_{digest}"
+
+
+# A kernel of the package compiled inside a first_use block (the notice is
+# only for fws_control's kernels: a user's own numba function compiled first
+# must not trigger it), and numba's cache counters printed.
+_SMALL = """
+import math, numba
+numba.njit(lambda x: x + 1.0)(1.0)            # a user's function: no notice
+from fws_control.simulation import compiled
+from fws_control.simulation.compilation import first_use
+with first_use(lambda: 3.0):
+    assert compiled._atan(1.0) == math.atan(1.0)
+stats = compiled._atan.stats
+print(sum(stats.cache_hits.values()), sum(stats.cache_misses.values()))
+"""
+
+
+def test_notice_on_a_compilation_only_and_once(tmp_path):
+    cache = tmp_path / "cache"
+    folder = cache / _subfolder(PACKAGE / "simulation")
+    cold = _python(_SMALL, _env(NUMBA_CACHE_DIR=str(cache)), tmp_path)
+    assert cold.returncode == 0, cold.stderr[-2000:]
+    assert cold.stdout.split() == ["0", "1"]  # numba: one compilation, no load
+    lines = cold.stderr.splitlines()
+    assert len(lines) == 2, cold.stderr
+    assert lines[0].startswith("fws_control: compiling the simulation engine")
+    assert "about 3 s of CPU" in lines[0]
+    assert f"cached in {folder}" in lines[0]
+    assert "FWS_CONTROL_QUIET=1" in lines[0]
+    seconds = float(lines[1].split("compiled in ")[1].split(" s of CPU")[0])
+    assert 0.0 < seconds < 60.0
+    assert list(folder.glob("compiled._atan-*.nbi"))
+
+    # a second process loads the kernel: numba counts a hit, nothing printed
+    warm = _python(_SMALL, _env(NUMBA_CACHE_DIR=str(cache)), tmp_path)
+    assert warm.returncode == 0, warm.stderr[-2000:]
+    assert warm.stdout.split() == ["1", "0"]
+    assert warm.stderr == ""
+
+    # quiet: compiled (a miss) and cached, nothing printed
+    other = tmp_path / "quiet"
+    quiet = _python(
+        _SMALL, _env(NUMBA_CACHE_DIR=str(other), FWS_CONTROL_QUIET="1"), tmp_path
+    )
+    assert quiet.returncode == 0, quiet.stderr[-2000:]
+    assert quiet.stdout.split() == ["0", "1"]
+    assert quiet.stderr == ""
+    assert list((other / folder.name).glob("compiled._atan-*.nbi"))
+
+
+def test_cache_folder_outside_the_package(tmp_path):
+    home = tmp_path / "home"
+    home.mkdir()
+    code = """
+    from fws_control.simulation import compiled
+    from fws_control.simulation.compilation import cache_dir
+    compiled._atan(0.5)
+    print(cache_dir())
+    """
+    sub = _subfolder(PACKAGE / "simulation")
+    cases = [
+        # (environment, the folder expected: XDG's rule, numba's rule)
+        ({"HOME": str(home)}, home / ".cache" / "fws_control" / sub),
+        (
+            {"HOME": str(home), "XDG_CACHE_HOME": str(tmp_path / "xdg")},
+            tmp_path / "xdg" / "fws_control" / sub,
+        ),
+        (
+            {"HOME": str(home), "NUMBA_CACHE_DIR": str(tmp_path / "nb")},
+            tmp_path / "nb" / sub,
+        ),
+    ]
+    if sys.platform != "linux":
+        print("the XDG folders are Linux's: only NUMBA_CACHE_DIR checked")
+        cases = cases[2:]
+    for updates, expected in cases:
+        run = _python(code, _env(**updates), tmp_path)
+        assert run.returncode == 0, run.stderr[-2000:]
+        assert run.stdout.strip() == str(expected)
+        assert list(expected.glob("compiled._atan-*.nbi")), expected
+    # numba wrote nothing into the package (its default: __pycache__ there)
+    assert not [p for p in PACKAGE.rglob("*") if p.suffix in (".nbi", ".nbc")]
+
+
+def test_compile_seconds_counts_what_is_still_to_compile(tmp_path, monkeypatch):
+    monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path))
+
+    def cube(x):
+        return x * x * x
+
+    first = compilation.jit(cube)
+    assert compilation.compile_seconds(first, 5.0) == 5.0
+    assert not list(tmp_path.rglob("*.nbi"))
+    assert first(2.0) == 8.0
+    assert compilation.compile_seconds(first, 5.0) == 0.0  # compiled here
+    assert len(list(tmp_path.rglob("*.nbi"))) == 1
+    again = compilation.jit(cube)  # as in a new process: on disk only
+    assert not again.overloads
+    assert compilation.compile_seconds(again, 5.0) == 0.0
+
+
+def test_compiling_names_its_stages():
+    with pytest.raises(ValueError, match=r"stages must be in .*'BDF'"):
+        compiled.compiling("DOP853", "BDF")
+    with pytest.raises(ValueError, match="inline must be 'never' or 'always'"):
+        compilation.jit(lambda x: x, inline="sometimes")
+
+
+# --------------------------------------------------------------------------
+# pip install, one compiled simulate, pip uninstall
+
+# Run in the fresh environment: a DOP853 integration alone first (it must
+# compile neither Radau's driver nor the signals or the peaks: numba's
+# compile events name what compiles), then one default simulate.
+_INSTALLED = """
+import json, sys
+import numpy as np
+from numba.core import event
+import fws_control as fws
+from fws_control.simulation import compiled
+from fws_control.simulation.compilation import cache_dir
+
+compiled_names = []
+
+class Names(event.Listener):
+    def on_start(self, ev):
+        compiled_names.append(ev.data["dispatcher"].py_func.__name__)
+
+    def on_end(self, ev):
+        pass
+
+event.register("numba:compile", Names())
+veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+g = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
+compiled.integrate_compiled(
+    veh, fws.Arc(curvature=0.1), g, speed=np.array([5.0]), feedforward=True,
+    path_state=np.array([[0.0, -5.0, 0.0]]), t_eval=np.linspace(0.0, 1.0, 3),
+    time_constant=None)
+alone = list(compiled_names)
+res = fws.simulate(veh, fws.Arc(curvature=0.1), g, speed=5.0,
+                   initial_state=(0.0, -5.0, 0.0), duration=15.0)
+print(json.dumps({"file": fws.__file__, "status": str(res.status),
+                  "alone": alone, "all": compiled_names,
+                  "cache": cache_dir()}))
+"""
+
+
+def _wheel(folder: Path) -> Path:
+    """A wheel of this checkout's package, as setuptools builds it (offline).
+
+    The package's files (``*.py`` and ``py.typed``, no ``__pycache__``) and
+    the dist-info pip needs: METADATA, WHEEL and RECORD (each file's SHA-256
+    and size, as the wheel format specifies). Built here rather than with
+    ``pip wheel``: that needs the build backend of pyproject.toml
+    (setuptools >= 77) in the environment or from the network.
+    """
+    version = "0.0.0.dev0"
+    info = f"fws_control-{version}.dist-info"
+    files = {
+        p.relative_to(ROOT).as_posix(): p.read_bytes()
+        for p in sorted(PACKAGE.rglob("*"))
+        if p.is_file()
+        and "__pycache__" not in p.parts
+        and (p.suffix == ".py" or p.name == "py.typed")
+    }
+    files[f"{info}/METADATA"] = (
+        f"Metadata-Version: 2.1\nName: fws-control\nVersion: {version}\n"
+    ).encode()
+    files[f"{info}/WHEEL"] = (
+        b"Wheel-Version: 1.0\nGenerator: tests\nRoot-Is-Purelib: true\n"
+        b"Tag: py3-none-any\n"
+    )
+    record = []
+    for name, data in files.items():
+        digest = base64.urlsafe_b64encode(hashlib.sha256(data).digest())
+        record.append(f"{name},sha256={digest.rstrip(b'=').decode()},{len(data)}")
+    record.append(f"{info}/RECORD,,")
+    files[f"{info}/RECORD"] = ("\n".join(record) + "\n").encode()
+    path = folder / f"fws_control-{version}-py3-none-any.whl"
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as whl:
+        for name, data in files.items():
+            whl.writestr(name, data)
+    return path
+
+
+def test_pip_uninstall_leaves_no_package_that_imports(tmp_path):
+    """Install the wheel into a fresh environment, simulate, uninstall.
+
+    About 20-60 s of CPU: one compilation of the engine for the fresh
+    install.
+    """
+    wheel = _wheel(tmp_path)
+    venv = tmp_path / "venv"
+    subprocess.run(
+        [sys.executable, "-m", "venv", "--without-pip", str(venv)],
+        check=True, timeout=300,
+    )  # fmt: skip
+    python = venv / "bin" / "python"
+    purelib = "import sysconfig; print(sysconfig.get_paths()['purelib'])"
+    sp = Path(
+        subprocess.run(
+            [str(python), "-c", purelib], capture_output=True, text=True,
+            check=True, timeout=60,
+        ).stdout.strip()
+    )  # fmt: skip
+    # the dependencies (and pip) from this interpreter's site-packages, as
+    # plain path entries: the .pth files there (this checkout's editable
+    # install among them) are not run in the new environment
+    (sp / "_dependencies.pth").write_text("\n".join(site.getsitepackages()) + "\n")
+    home = tmp_path / "home"
+    home.mkdir()
+    env = {
+        k: v
+        for k, v in os.environ.items()
+        if k not in ("PYTHONPATH", "NUMBA_CACHE_DIR", "XDG_CACHE_HOME")
+    }
+    env.update(HOME=str(home), PYTHONNOUSERSITE="1")
+
+    def run(*args):
+        return subprocess.run(
+            [str(python), *args], env=env, cwd=tmp_path, capture_output=True,
+            text=True, timeout=900, check=False,
+        )  # fmt: skip
+
+    before = run("-c", "import fws_control")
+    assert before.returncode != 0, "fws_control imports before the install"
+    # --ignore-installed: this checkout's own install, seen through the
+    # dependencies' folder, is neither counted nor touched
+    install = run("-m", "pip", "install", "--no-deps", "--no-index",
+                  "--ignore-installed", "-q", str(wheel))  # fmt: skip
+    assert install.returncode == 0, install.stderr[-2000:]
+    simulated = run("-c", _INSTALLED)
+    assert simulated.returncode == 0, simulated.stderr[-3000:]
+    out = json.loads(simulated.stdout.strip().splitlines()[-1])
+    assert Path(out["file"]).is_relative_to(sp)
+    assert out["status"] == "ok"
+    # what the DOP853 integration alone compiled
+    assert "run_impl" in out["alone"] and "dop853_step" in out["alone"]
+    for name in ("_radau_step", "_signals_batch", "_peaks_batch", "_refine_peak"):
+        assert name not in out["alone"], name
+    assert "_signals_batch" in out["all"] and "_peaks_batch" in out["all"]
+    assert "_radau_step" not in out["all"]
+    # the notice, once, for the whole first call
+    assert simulated.stderr.count("compiling the simulation engine") == 1
+    # the kernels went to the user cache, none into the installed package
+    cache = Path(out["cache"])
+    assert cache.is_relative_to(home / ".cache" / "fws_control")
+    assert list(cache.glob("*.nbi")) and list(cache.glob("*.nbc"))
+    assert not [p for p in (sp / "fws_control").rglob("*.nb[ic]")]
+
+    uninstall = run("-m", "pip", "uninstall", "-y", "-q", "fws-control")
+    assert uninstall.returncode == 0, uninstall.stderr[-2000:]
+    assert not (sp / "fws_control").exists(), sorted(
+        str(p) for p in (sp / "fws_control").rglob("*")
+    )
+    after = run("-c", "import fws_control")
+    assert after.returncode != 0
+    assert "ModuleNotFoundError: No module named 'fws_control'" in after.stderr
