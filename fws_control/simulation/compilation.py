@@ -75,6 +75,23 @@ _APP = "fws_control"
 _CACHING = True
 
 
+def _kernel_sources_stamp() -> tuple:
+    """(mtime, size) of every source a kernel may inline, in a fixed order."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    files = sorted(
+        os.path.join(here, name) for name in os.listdir(here) if name.endswith(".py")
+    )
+    files.append(os.path.join(os.path.dirname(here), "equations.py"))
+    stamp = []
+    for name in files:
+        try:
+            st = os.stat(name)
+        except OSError:  # (equations.py absent: nothing inlined from it)
+            continue
+        stamp.append((os.path.basename(name), st.st_mtime, st.st_size))
+    return tuple(stamp)
+
+
 def _cache_root() -> str:
     """The folder under which every install keeps its cache folder."""
     if numba.config.CACHE_DIR:
@@ -102,6 +119,14 @@ if numba is not None:
 
         def get_cache_path(self):
             return self._cache_path
+
+        def get_source_stamp(self):
+            # numba stamps a cache entry with its own source file only, but
+            # a kernel inlines functions of other modules (the equations,
+            # the solver helpers): with that stamp alone an edit of
+            # equations.py would load kernels compiled with the old
+            # equations. The stamp of every kernel source invalidates them.
+            return _kernel_sources_stamp()
 
     class _KernelCacheImpl(_caching.CompileResultCacheImpl):
         _locator_classes = [_KernelLocator]
