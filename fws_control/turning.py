@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
+from . import equations
 from .layout import grid_margins
 from .models import check_steering
 from .reprs import summary_repr
@@ -127,7 +128,8 @@ def steady_turn(vehicle: Vehicle, delta_f, delta_r) -> TurningGeometry:
     check_steering(df)
     df, dr = np.broadcast_arrays(df, dr)
     f, d = vehicle.wheelbase, vehicle.rear_to_cg
-    kappa = np.sin(df - dr) / (f * np.cos(df))
+    # the path curvature of R: the yaw rate of eq. (10) per unit speed
+    kappa = equations.yaw_rate(1.0, f, df, dr)
     with np.errstate(divide="ignore", invalid="ignore"):
         t = np.where(kappa != 0.0, 1.0 / kappa, np.inf)
         rear = np.abs(t)
