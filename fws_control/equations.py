@@ -319,8 +319,9 @@ def no_slip_body_state(speed, wheelbase, rear_to_cg, delta_f, delta_r):
     Examples
     --------
     >>> from fws_control.equations import no_slip_body_state
-    >>> [round(float(v), 6) for v in no_slip_body_state(10.0, 2.7, 1.35, 0.1, 0.0)]
-    [0.500828, 0.370987]
+    >>> vy, r = no_slip_body_state(10.0, 2.7, 1.35, 0.1, 0.0)
+    >>> round(float(r), 6), round(float(vy), 6)     # 10 tan(0.1) / 2.7, 1.35 r
+    (0.37161, 0.501673)
     """
     tan_f, tan_r = np.tan(delta_f), np.tan(delta_r)
     r = speed * (tan_f - tan_r) / wheelbase
