@@ -25,10 +25,13 @@ state as a first-order lag whose rate is clipped,
 which the simulators insert between controller and vehicle whenever a rate
 limit is set.
 
-The numeric control law lives in :func:`steering_command` and
-:func:`steering_command_rate` (numpy, broadcasting); the
-:class:`control.NonlinearIOSystem` blocks and the fast simulator both call
-them, so the law has one implementation.
+The law's equations are written once, in :mod:`fws_control.equations`
+(:func:`~fws_control.equations.steering_law`,
+:func:`~fws_control.equations.feedback_command` and their rates);
+:func:`steering_command` and :func:`steering_command_rate` add the checks,
+the dynamic feedforward and the angle limits. The
+:class:`control.NonlinearIOSystem` blocks and the numpy engine call these,
+the compiled engine the same equations compiled by numba.
 """
 
 from __future__ import annotations

@@ -4,8 +4,8 @@ The kinematic model of the paper assumes that the wheels roll without
 slipping sideways. This module adds the lateral tyre dynamics: lateral
 velocity and yaw rate become states, driven by the tyre forces at both axles.
 
-Conventions (one implementation here; :mod:`fws_control.symbolic` re-derives
-them):
+Conventions (the equations are written once, in :mod:`fws_control.equations`,
+which the functions here call; :mod:`fws_control.symbolic` re-derives them):
 
 * Body frame at the centre of gravity G; ``l_f = wheelbase - rear_to_cg``,
   ``l_r = rear_to_cg``.

@@ -449,11 +449,8 @@ def test_compiled_equation_equals_numpy_bit_for_bit(name):
         pytest.skip("numba is not installed: no compiled equations to compare")
     import numba
 
-    # the compiled engine's own versions where it has them, else the same
-    # function compiled with the same globals replacement
-    fn = compiled._EQUATIONS.get(name) or compiled._compile_equation(
-        getattr(equations, name)
-    )
+    # the compiled engine's own version
+    fn = compiled._EQUATIONS[name]
     assert isinstance(fn, numba.core.dispatcher.Dispatcher)
     n = 10_000
     args = _random_arguments(name, n, np.random.default_rng(26))

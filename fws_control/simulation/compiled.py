@@ -10,7 +10,8 @@ every run its **own** integration, at compiled speed:
   eqs. 17-19; the paper's law of eqs. 24-29 with the curvature feedforward
   and the steering-angle limits; optionally the rate-limited first-order
   steering actuator of :func:`~fws_control.steering_actuator`) is compiled
-  with numba;
+  with numba, from the same functions of :mod:`fws_control.equations` that
+  the numpy engine and the analysis call;
 - it is integrated by a line-by-line port of scipy's
   :class:`~scipy.integrate.DOP853` (same Butcher tableau taken from scipy
   itself, same initial step selection, step-size control, error norm and
@@ -309,40 +310,42 @@ _MAX_SWITCHES = 100_000
 # --------------------------------------------------------------------------
 # The equations of fws_control.equations, compiled
 
-# name -> compiled equation, for the equations that call one another
-_EQUATIONS: dict[str, Any] = {}
+
+def _compile_equations() -> dict[str, Any]:
+    # Every function of fws_control.equations, compiled by numba for float
+    # scalars: the same functions as the numpy engine and the analysis
+    # call. numba resolves the names a function calls in its globals, so
+    # the functions are compiled from copies sharing one globals dict in
+    # which the equations that others call (path_frame_derivatives calls
+    # yaw_rate) are their compiled versions (numba reads the names when it
+    # first compiles, after the dict is complete). Inlined into every kernel
+    # (see _jit_inline): the kernels' own copies of these lines were part of
+    # them.
+    names = [n for n in equations.__all__ if callable(getattr(equations, n))]
+    shared = dict(vars(equations))
+    out = {}
+    for name in names:
+        fn = getattr(equations, name)
+        clone = types.FunctionType(
+            fn.__code__, shared, fn.__name__, fn.__defaults__, fn.__closure__
+        )
+        clone.__qualname__ = fn.__qualname__
+        clone.__doc__ = fn.__doc__
+        out[name] = _jit_inline(clone)
+    shared.update(out)
+    return out
 
 
-def _compile_equation(fn):
-    # The same function as the numpy engine and the analysis call, compiled
-    # by numba for float scalars. numba resolves the names a function calls
-    # in its globals: the equations that this one calls
-    # (path_frame_derivatives calls yaw_rate) are given there as their
-    # compiled versions, so fn's globals are copied with those replaced.
-    # Inlined into every kernel (see _jit_inline): the kernels' own copies
-    # of these lines were part of them.
-    glb = dict(fn.__globals__)
-    glb.update(_EQUATIONS)
-    clone = types.FunctionType(
-        fn.__code__, glb, fn.__name__, fn.__defaults__, fn.__closure__
-    )
-    clone.__qualname__ = fn.__qualname__
-    clone.__doc__ = fn.__doc__
-    compiled = _jit_inline(clone)
-    _EQUATIONS[fn.__name__] = compiled
-    return compiled
-
-
-# (in the order in which they call one another)
-_yaw_rate = _compile_equation(equations.yaw_rate)
-_path_frame_derivatives = _compile_equation(equations.path_frame_derivatives)
-_cg_lateral_velocity = _compile_equation(equations.cg_lateral_velocity)
-_yaw_acceleration = _compile_equation(equations.yaw_acceleration)
-_lateral_acceleration = _compile_equation(equations.lateral_acceleration)
-_feedforward = _compile_equation(equations.feedforward_angle)
-_feedforward_rate = _compile_equation(equations.feedforward_angle_rate)
-_feedback_angle = _compile_equation(equations.feedback_angle)
-_feedback_command = _compile_equation(equations.feedback_command)
+#: name -> compiled function of :mod:`fws_control.equations`
+_EQUATIONS = _compile_equations()
+_yaw_rate = _EQUATIONS["yaw_rate"]
+_path_frame_derivatives = _EQUATIONS["path_frame_derivatives"]
+_cg_lateral_velocity = _EQUATIONS["cg_lateral_velocity"]
+_yaw_acceleration = _EQUATIONS["yaw_acceleration"]
+_lateral_acceleration = _EQUATIONS["lateral_acceleration"]
+_feedforward = _EQUATIONS["feedforward_angle"]
+_feedforward_rate = _EQUATIONS["feedforward_angle_rate"]
+_feedback_command = _EQUATIONS["feedback_command"]
 
 
 # --------------------------------------------------------------------------
