@@ -17,6 +17,7 @@ from typing import Any, cast
 import numpy as np
 
 from .hints import RealArrayLike
+from . import equations
 from .models import check_inputs, check_result, check_steering, yaw_rate
 from .validation import check_type
 from .vehicle import Vehicle
@@ -90,11 +91,8 @@ def yaw_acceleration(
         speed=speed,
     )
     check_steering(df)
-    cf = np.cos(df)
     with np.errstate(over="ignore", invalid="ignore"):
-        out = (V / vehicle.wheelbase) * (
-            np.cos(dr) / cf**2 * rf - np.cos(df - dr) / cf * rr
-        )
+        out = equations.yaw_acceleration(V, vehicle.wheelbase, df, dr, rf, rr)
     check_result(
         "yaw acceleration",
         out,
@@ -168,7 +166,9 @@ def lateral_acceleration(
     # the inputs passed the checks of yaw_rate and yaw_acceleration
     dr, rr, V = (np.asarray(v, dtype=float) for v in (delta_r, delta_r_rate, speed))
     with np.errstate(over="ignore", invalid="ignore"):
-        out = V * (psi_dot + rr) * np.cos(dr) + d * psi_ddot
+        out = equations.lateral_acceleration(
+            V, d, dr, rr, psi_dot, psi_ddot
+        )
     check_result(
         "lateral acceleration",
         out,

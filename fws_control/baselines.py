@@ -49,6 +49,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from . import equations
 from .controllers import FEEDFORWARDS
 from .gains import SteeringGains
 from .models import STEERING_INPUTS, check_inputs
@@ -396,10 +397,11 @@ class StateFeedback(LateralController):
         e = np.asarray(e, dtype=float)
         theta = np.asarray(theta, dtype=float)
         K = self.K
-        df = -K[0, 0] * e - K[0, 1] * theta
-        dr = -K[1, 0] * e - K[1, 1] * theta
+        df = equations.feedback_angle(e, theta, K[0, 0], K[0, 1])
+        dr = equations.feedback_angle(e, theta, K[1, 0], K[1, 1])
         if self.feedforward:
-            df = df + np.arctan(np.asarray(curvature, dtype=float) * vehicle.wheelbase)
+            kappa = np.asarray(curvature, dtype=float)
+            df = df + equations.feedforward_angle(vehicle.wheelbase, kappa)
         return df, dr
 
     def steering_rate(  # noqa: D102 - exact: linear law plus the feedforward's rate
@@ -408,16 +410,16 @@ class StateFeedback(LateralController):
         K = self.K
         e_dot = np.asarray(e_dot, dtype=float)
         theta_dot = np.asarray(theta_dot, dtype=float)
-        rf = -K[0, 0] * e_dot - K[0, 1] * theta_dot
-        rr = -K[1, 0] * e_dot - K[1, 1] * theta_dot
+        rf = equations.feedback_angle(e_dot, theta_dot, K[0, 0], K[0, 1])
+        rr = equations.feedback_angle(e_dot, theta_dot, K[1, 0], K[1, 1])
         if self.feedforward:
             s_arr = np.asarray(s, dtype=float)
             length = float(getattr(path, "length", math.inf))
             if math.isfinite(length) and not path.closed:
                 s_arr = np.clip(s_arr, 0.0, length)
-            fk = vehicle.wheelbase * np.asarray(curvature, dtype=float)
+            kappa = np.asarray(curvature, dtype=float)
             kdot = np.asarray(path.curvature_rate(s_arr), dtype=float) * s_dot
-            rf = rf + vehicle.wheelbase * kdot / (1.0 + fk**2)
+            rf = rf + equations.feedforward_angle_rate(vehicle.wheelbase, kappa, kdot)
         return rf, rr
 
 

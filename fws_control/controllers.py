@@ -25,10 +25,13 @@ state as a first-order lag whose rate is clipped,
 which the simulators insert between controller and vehicle whenever a rate
 limit is set.
 
-The numeric control law lives in :func:`steering_command` and
-:func:`steering_command_rate` (numpy, broadcasting); the
-:class:`control.NonlinearIOSystem` blocks and the fast simulator both call
-them, so the law has one implementation.
+The law's equations are written once, in :mod:`fws_control.equations`
+(:func:`~fws_control.equations.steering_law`,
+:func:`~fws_control.equations.feedback_command` and their rates);
+:func:`steering_command` and :func:`steering_command_rate` add the checks,
+the dynamic feedforward and the angle limits. The
+:class:`control.NonlinearIOSystem` blocks and the numpy engine call these,
+the compiled engine the same equations compiled by numba.
 """
 
 from __future__ import annotations
@@ -39,6 +42,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from . import equations
 from .dynamics import dynamic_feedforward, dynamic_feedforward_derivative
 from .gains import SteeringGains
 from .models import STEERING_INPUTS, check_inputs, check_result
@@ -198,11 +202,15 @@ def steering_command(
     feedforward = check_feedforward(feedforward, speed=speed)
     e_, th_, k_ = check_inputs(e=e, theta=theta, curvature=curvature)
     with np.errstate(over="ignore", invalid="ignore"):
-        fb = -gains.k1 * e_ - gains.k2 * th_
-        delta_f = fb
-        delta_r = gains.ratio * fb
         if feedforward == "kinematic":
-            delta_f = fb + np.arctan(vehicle.wheelbase * k_)
+            delta_f, delta_r = equations.steering_law(
+                e_, th_, k_, vehicle.wheelbase, gains.k1, gains.k2, gains.ratio
+            )
+        else:
+            fb, delta_r = equations.feedback_command(
+                e_, th_, gains.k1, gains.k2, gains.ratio
+            )
+            delta_f = fb
     if feedforward == "dynamic":
         ff_f, ff_r = dynamic_feedforward(
             vehicle, speed=speed, curvature=curvature, tyre=tyre
@@ -291,13 +299,17 @@ def steering_command_rate(
         curvature_rate=curvature_rate,
     )
     with np.errstate(over="ignore", invalid="ignore"):
-        fb_rate = -gains.k1 * er - gains.k2 * thr
-        rate_f = fb_rate
-        rate_r = gains.ratio * fb_rate
         if feedforward == "kinematic":
-            fk = vehicle.wheelbase * k_
-            # 1 + fk^2 overflows to inf for a huge curvature: the term -> 0
-            rate_f = fb_rate + vehicle.wheelbase * kr / (1.0 + fk**2)
+            # 1 + (f kappa)^2 overflows to inf for a huge curvature: the
+            # feedforward's rate -> 0
+            rate_f, rate_r = equations.steering_law_rate(
+                er, thr, k_, kr, vehicle.wheelbase, gains.k1, gains.k2, gains.ratio
+            )
+        else:
+            fb_rate, rate_r = equations.feedback_command(
+                er, thr, gains.k1, gains.k2, gains.ratio
+            )
+            rate_f = fb_rate
     if feedforward == "dynamic":
         d_f, d_r = dynamic_feedforward_derivative(
             vehicle, speed=speed, curvature=curvature, tyre=tyre

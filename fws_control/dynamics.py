@@ -4,8 +4,8 @@ The kinematic model of the paper assumes that the wheels roll without
 slipping sideways. This module adds the lateral tyre dynamics: lateral
 velocity and yaw rate become states, driven by the tyre forces at both axles.
 
-Conventions (one implementation here; :mod:`fws_control.symbolic` re-derives
-them):
+Conventions (the equations are written once, in :mod:`fws_control.equations`,
+which the functions here call; :mod:`fws_control.symbolic` re-derives them):
 
 * Body frame at the centre of gravity G; ``l_f = wheelbase - rear_to_cg``,
   ``l_r = rear_to_cg``.
@@ -48,6 +48,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from . import equations
 from .exceptions import SingularStateError
 from .models import STEERING_INPUTS
 from .validation import check_finite, check_nonzero, check_scalar, check_type
@@ -90,8 +91,8 @@ GRAVITY = 9.81
 
 #: Shape factor C of the simplified magic formula for lateral force
 #: (Pacejka, *Tyre and Vehicle Dynamics*, 3rd ed., 2012: C ~ 1.3 for the
-#: lateral force of car tyres).
-MAGIC_SHAPE = 1.3
+#: lateral force of car tyres); defined in :mod:`fws_control.equations`.
+MAGIC_SHAPE = equations.MAGIC_SHAPE
 
 #: Tyre models: ``"linear"`` (F = C alpha) and ``"magic"`` (saturating).
 TYRES = ("linear", "magic")
@@ -151,9 +152,7 @@ def slip_angles(vehicle: Vehicle, v_y, yaw_rate, delta_f, delta_r, *, speed):
     """
     l_f = vehicle.wheelbase - vehicle.rear_to_cg
     l_r = vehicle.rear_to_cg
-    alpha_f = delta_f - np.arctan2(v_y + l_f * yaw_rate, speed)
-    alpha_r = delta_r - np.arctan2(v_y - l_r * yaw_rate, speed)
-    return alpha_f, alpha_r
+    return equations.slip_angles(speed, l_f, l_r, v_y, yaw_rate, delta_f, delta_r)
 
 
 def axle_loads(vehicle: Vehicle) -> tuple[float, float]:
@@ -181,9 +180,8 @@ def tyre_force(slip, *, stiffness: float, peak: float | None = None):
     0.08
     """
     if peak is None:
-        return stiffness * np.asarray(slip)
-    b = stiffness / (MAGIC_SHAPE * peak)
-    return peak * np.sin(MAGIC_SHAPE * np.arctan(b * np.asarray(slip)))
+        return equations.linear_tyre_force(np.asarray(slip), stiffness)
+    return equations.magic_tyre_force(np.asarray(slip), stiffness, peak)
 
 
 def _forces(vehicle: Vehicle, alpha_f, alpha_r, tyre: str):
@@ -225,13 +223,11 @@ def body_derivatives(
         vehicle, v_y, yaw_rate, delta_f, delta_r, speed=speed
     )
     f_f, f_r = _forces(vehicle, alpha_f, alpha_r, tyre)
-    lat_f = f_f * np.cos(delta_f)
-    lat_r = f_r * np.cos(delta_r)
     l_f = vehicle.wheelbase - vehicle.rear_to_cg
-    l_r = vehicle.rear_to_cg
-    vy_dot = (lat_f + lat_r) / vehicle.mass - speed * yaw_rate
-    r_dot = (l_f * lat_f - l_r * lat_r) / vehicle.yaw_inertia
-    return vy_dot, r_dot
+    return equations.body_derivatives(
+        speed, vehicle.mass, vehicle.yaw_inertia, l_f, vehicle.rear_to_cg,
+        yaw_rate, f_f, f_r, delta_f, delta_r,
+    )  # fmt: skip
 
 
 def dynamic_path_derivatives(
@@ -267,11 +263,9 @@ def dynamic_path_derivatives(
     vy_dot, r_dot = body_derivatives(
         vehicle, v_y, yaw_rate, delta_f, delta_r, speed=speed, tyre=tyre
     )
-    v_r = v_y - vehicle.rear_to_cg * yaw_rate  # lateral velocity of R
-    sin_t, cos_t = np.sin(theta), np.cos(theta)
-    s_dot = (speed * cos_t - v_r * sin_t) / (1.0 - curvature * e)
-    e_dot = speed * sin_t + v_r * cos_t
-    theta_dot = yaw_rate - curvature * s_dot
+    s_dot, e_dot, theta_dot = equations.dynamic_path_kinematics(
+        speed, vehicle.rear_to_cg, curvature, e, theta, v_y, yaw_rate
+    )
     return s_dot, e_dot, theta_dot, vy_dot, r_dot
 
 
@@ -312,10 +306,9 @@ def dynamic_global_derivatives(
     vy_dot, r_dot = body_derivatives(
         vehicle, v_y, yaw_rate, delta_f, delta_r, speed=speed, tyre=tyre
     )
-    v_r = v_y - vehicle.rear_to_cg * yaw_rate  # lateral velocity of R
-    sin_p, cos_p = np.sin(psi), np.cos(psi)
-    x_dot = speed * cos_p - v_r * sin_p
-    y_dot = speed * sin_p + v_r * cos_p
+    x_dot, y_dot = equations.dynamic_global_kinematics(
+        speed, vehicle.rear_to_cg, psi, v_y, yaw_rate
+    )
     # psi_dot = r, broadcast to the shape of the other rates
     return x_dot, y_dot, yaw_rate + 0.0 * x_dot, vy_dot, r_dot
 
@@ -612,7 +605,7 @@ def _axle_reach(vehicle: Vehicle, speed: float, tyre: str, front: bool) -> float
         top, rising = peak, float(np.tan(np.pi / (2 * MAGIC_SHAPE)) / b)
 
     def margin(kappa):
-        beta = float(np.arctan(f * kappa)) if front else 0.0
+        beta = float(equations.feedforward_angle(f, kappa)) if front else 0.0
         hi = min(rising, np.pi / 2 - beta)
         best = minimize_scalar(
             lambda a: (
@@ -755,7 +748,11 @@ def _steady_angles(vehicle: Vehicle, u, kappa, tyre: str):
     need = vehicle.mass * u**2 * kappa / f
     peak_f, peak_r = _axle_peaks(vehicle, tyre)
     delta_f = _solve_axle(
-        np.arctan(f * kappa), need * l_r, vehicle.cornering_front, peak_f, "front"
+        equations.feedforward_angle(f, kappa),
+        need * l_r,
+        vehicle.cornering_front,
+        peak_f,
+        "front",
     )
     delta_r = _solve_axle(
         np.zeros_like(need), need * l_f, vehicle.cornering_rear, peak_r, "rear"
@@ -801,8 +798,9 @@ def dynamic_feedforward_derivative(
     for delta, base, base_rate, q, stiff, peak in (
         (
             delta_f,
-            np.arctan(f * kappa),
-            f / (1.0 + (f * kappa) ** 2),
+            equations.feedforward_angle(f, kappa),
+            # d/d kappa of the feedforward angle
+            equations.feedforward_angle_rate(f, kappa, 1.0),
             vehicle.mass * u**2 * vehicle.rear_to_cg / f,
             vehicle.cornering_front,
             peak_f,
@@ -902,8 +900,7 @@ def path_jacobians(
     # d(atan2(w, u))/dw = u / (u^2 + w^2) for the axle's lateral speed w
     w_f, w_r = v_y + l_f * r, v_y - l_r * r
     g_f, g_r = u / (u**2 + w_f**2), u / (u**2 + w_r**2)
-    alpha_f = delta_f - np.arctan2(w_f, u)
-    alpha_r = delta_r - np.arctan2(w_r, u)
+    alpha_f, alpha_r = equations.slip_angles(u, l_f, l_r, v_y, r, delta_f, delta_r)
     c_f = _slope(alpha_f, vehicle.cornering_front, peak_f)
     c_r = _slope(alpha_r, vehicle.cornering_rear, peak_r)
     force_f = tyre_force(alpha_f, stiffness=vehicle.cornering_front, peak=peak_f)

@@ -22,6 +22,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from . import equations
+from .equations import path_frame_derivatives
 from .exceptions import SingularStateError
 from .validation import (
     check_finite,
@@ -142,24 +144,6 @@ def check_result(what: str, value, **inputs) -> None:
         )
 
 
-def _yaw_rate(speed, wheelbase, delta_f, delta_r):
-    """Eq. (10) without checks; broadcasts (the single implementation)."""
-    return speed * np.sin(delta_f - delta_r) / (wheelbase * np.cos(delta_f))
-
-
-def path_frame_derivatives(speed, wheelbase, curvature, e, theta, delta_f, delta_r):
-    r"""Right-hand side of the corrected eqs. (17)-(19), broadcasting.
-
-    Returns ``(s_dot, e_dot, theta_dot)``. No singularity checks: callers
-    that integrate many runs at once detect singular states themselves
-    (:func:`path_frame_model` raises :class:`SingularStateError`).
-    """
-    s_dot = speed * np.cos(theta + delta_r) / (1.0 - curvature * e)
-    e_dot = speed * np.sin(theta + delta_r)
-    theta_dot = -curvature * s_dot + _yaw_rate(speed, wheelbase, delta_f, delta_r)
-    return s_dot, e_dot, theta_dot
-
-
 def yaw_rate(
     vehicle: Vehicle, delta_f, delta_r, *, speed: float | np.ndarray
 ) -> float | np.ndarray:
@@ -207,7 +191,7 @@ def yaw_rate(
     df, dr, V = check_inputs(delta_f=delta_f, delta_r=delta_r, speed=speed)
     check_steering(df)
     with np.errstate(over="ignore", invalid="ignore"):
-        out = _yaw_rate(V, vehicle.wheelbase, df, dr)
+        out = equations.yaw_rate(V, vehicle.wheelbase, df, dr)
     check_result("yaw rate", out, delta_f=df, delta_r=dr, speed=V)
     return float(out) if np.ndim(out) == 0 else out
 
@@ -248,7 +232,7 @@ def feedforward_steering(vehicle: Vehicle, *, curvature) -> float | np.ndarray:
     check_type("vehicle", vehicle, Vehicle)
     k = check_finite("curvature", curvature)
     with np.errstate(over="ignore"):  # arctan(inf) = pi/2 is the right limit
-        out = np.arctan(np.asarray(k) * vehicle.wheelbase)
+        out = equations.feedforward_angle(vehicle.wheelbase, np.asarray(k))
     return float(out) if np.ndim(out) == 0 else out
 
 
@@ -259,11 +243,7 @@ def _global_update(t, x, u, params):
     delta_f, delta_r = u[0], u[1]
     check_steering(delta_f)
     return np.array(
-        [
-            speed * math.cos(psi + delta_r),
-            speed * math.sin(psi + delta_r),
-            _yaw_rate(speed, f, delta_f, delta_r),
-        ]
+        equations.global_frame_derivatives(speed, f, psi, delta_f, delta_r), dtype=float
     )
 
 

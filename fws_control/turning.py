@@ -37,6 +37,7 @@ import control as ct
 import numpy as np
 
 from .hints import RatioLike, RealArrayLike
+from . import equations
 from .layout import grid_margins
 from .models import check_steering
 from .reprs import summary_repr
@@ -137,7 +138,8 @@ def steady_turn(
     df, dr = np.broadcast_arrays(df, dr)
     f = vehicle.wheelbase
     d = vehicle.cg_distance(needed_by="steady_turn (the radius of G)")
-    kappa = np.sin(df - dr) / (f * np.cos(df))
+    # the path curvature of R: the yaw rate of eq. (10) per unit speed
+    kappa = equations.yaw_rate(1.0, f, df, dr)
     with np.errstate(divide="ignore", invalid="ignore"):
         t = np.where(kappa != 0.0, 1.0 / kappa, np.inf)
         rear = np.abs(t)

@@ -10,7 +10,8 @@ every run its **own** integration, at compiled speed:
   eqs. 17-19; the paper's law of eqs. 24-29 with the curvature feedforward
   and the steering-angle limits; optionally the rate-limited first-order
   steering actuator of :func:`~fws_control.steering_actuator`) is compiled
-  with numba;
+  with numba, from the same functions of :mod:`fws_control.equations` that
+  the numpy engine and the analysis call;
 - it is integrated by a line-by-line port of scipy's
   :class:`~scipy.integrate.DOP853` (same Butcher tableau taken from scipy
   itself, same initial step selection, step-size control, error norm and
@@ -87,6 +88,7 @@ still imports; :func:`integrate_compiled` raises :class:`ImportError`.
 from __future__ import annotations
 
 import math
+import types
 from dataclasses import dataclass
 from typing import Any
 
@@ -98,6 +100,7 @@ import numpy as np
 from scipy.integrate import DOP853, Radau
 from scipy.integrate._ivp import dop853_coefficients as _dop
 
+from .. import equations
 from ..controllers import steering_command
 from ..gains import SteeringGains
 from ..paths import Arc, Clothoid, Path, PathChain, Straight
@@ -339,6 +342,47 @@ _MAX_SWITCHES = 100_000
 
 
 # --------------------------------------------------------------------------
+# The equations of fws_control.equations, compiled
+
+
+def _compile_equations() -> dict[str, Any]:
+    # Every function of fws_control.equations, compiled by numba for float
+    # scalars: the same functions as the numpy engine and the analysis
+    # call. numba resolves the names a function calls in its globals, so
+    # the functions are compiled from copies sharing one globals dict in
+    # which the equations that others call (path_frame_derivatives calls
+    # yaw_rate) are their compiled versions (numba reads the names when it
+    # first compiles, after the dict is complete). Inlined into every kernel
+    # (see _jit_inline): the kernels' own copies of these lines were part of
+    # them.
+    names = [n for n in equations.__all__ if callable(getattr(equations, n))]
+    shared = dict(vars(equations))
+    out = {}
+    for name in names:
+        fn = getattr(equations, name)
+        clone = types.FunctionType(
+            fn.__code__, shared, fn.__name__, fn.__defaults__, fn.__closure__
+        )
+        clone.__qualname__ = fn.__qualname__
+        clone.__doc__ = fn.__doc__
+        out[name] = _jit_inline(clone)
+    shared.update(out)
+    return out
+
+
+#: name -> compiled function of :mod:`fws_control.equations`
+_EQUATIONS = _compile_equations()
+_yaw_rate = _EQUATIONS["yaw_rate"]
+_path_frame_derivatives = _EQUATIONS["path_frame_derivatives"]
+_cg_lateral_velocity = _EQUATIONS["cg_lateral_velocity"]
+_yaw_acceleration = _EQUATIONS["yaw_acceleration"]
+_lateral_acceleration = _EQUATIONS["lateral_acceleration"]
+_feedforward = _EQUATIONS["feedforward_angle"]
+_feedforward_rate = _EQUATIONS["feedforward_angle_rate"]
+_feedback_command = _EQUATIONS["feedback_command"]
+
+
+# --------------------------------------------------------------------------
 # The closed loop
 
 
@@ -374,7 +418,7 @@ def _feedforward_angle(kappa, q):
     curvature of -0.0 gets the angle of +0.0."""
     if kappa == q[_Q_KAPPA0]:
         return q[_Q_FF_ANGLE0]
-    return math.atan(q[_Q_WHEELBASE] * kappa)
+    return _feedforward(q[_Q_WHEELBASE], kappa)
 
 
 @_jit
@@ -395,11 +439,10 @@ def _curvature(s, q, breaks, coefs):
 
 @_jit_inline
 def _raw_command(e, theta, kappa, p, q):
-    fb = -p[_P_K1] * e - p[_P_K2] * theta
-    cf = fb
+    cf, cr = _feedback_command(e, theta, p[_P_K1], p[_P_K2], p[_P_RATIO])
     if q[_Q_FF] != 0.0:
-        cf = fb + _feedforward_angle(kappa, q)
-    return cf, p[_P_RATIO] * fb
+        cf = cf + _feedforward_angle(kappa, q)
+    return cf, cr
 
 
 @_jit_inline
@@ -473,11 +516,9 @@ def closed_loop_rhs(t, y, p, q, breaks, coefs, out):
         df, dr = y[3], y[4]
     else:
         df, dr = cf, cr
-    V = p[_P_SPEED]
-    s_dot = V * math.cos(th + dr) / (1.0 - kappa * e)
-    out[0] = s_dot
-    out[1] = V * math.sin(th + dr)
-    out[2] = -kappa * s_dot + V * math.sin(df - dr) / (q[_Q_WHEELBASE] * math.cos(df))
+    out[0], out[1], out[2] = _path_frame_derivatives(
+        p[_P_SPEED], q[_Q_WHEELBASE], kappa, e, th, df, dr
+    )
     if tau > 0.0:
         rf = (cf - df) / tau
         rr = (cr - dr) / tau
@@ -527,8 +568,7 @@ def closed_loop_jac(t, y, p, q, breaks, coefs, out):
     # d(cf, cr)/d(s, e, theta)
     cf_s = 0.0
     if q[_Q_FF] != 0.0:
-        lk = wheelbase * kappa
-        cf_s = wheelbase * slope / (1.0 + lk * lk)
+        cf_s = _feedforward_rate(wheelbase, kappa, slope)
     cf_e, cf_th = -p[_P_K1], -p[_P_K2]
     a = p[_P_RATIO]
     cr_s, cr_e, cr_th = 0.0, a * cf_e, a * cf_th
@@ -1426,48 +1466,34 @@ def _point_signals(s, e, th, df_s, dr_s, V, k1, k2, a, q, breaks, coefs, d_cg):
         kappa, dkappa = _curvature_and_rate(s, q, breaks, coefs)
     else:
         kappa, dkappa = _curvature(s, q, breaks, coefs), 0.0
-    fb = -k1 * e - k2 * th
-    raw_f = fb
+    raw_f, raw_r = _feedback_command(e, th, k1, k2, a)
     if ff:
-        raw_f = fb + _feedforward_angle(kappa, q)
-    raw_r = a * fb
+        raw_f = raw_f + _feedforward_angle(kappa, q)
     cf = min(max(raw_f, -mf), mf)
     cr = min(max(raw_r, -mr), mr)
     if tau > 0.0:
         df, dr = df_s, dr_s
     else:
         df, dr = cf, cr
-    # (sine and cosine of one angle next to each other: one sincos call)
-    s_dot = V * math.cos(th + dr) / (1.0 - kappa * e)
-    e_dot = V * math.sin(th + dr)
-    sin_fr = math.sin(df - dr)
-    cos_fr = math.cos(df - dr)
-    sin_r = math.sin(dr)
-    cos_r = math.cos(dr)
-    cos_f = math.cos(df)
-    psi_dot = V * sin_fr / (f * cos_f)
-    th_dot = -kappa * s_dot + psi_dot
+    s_dot, e_dot, th_dot = _path_frame_derivatives(V, f, kappa, e, th, df, dr)
+    psi_dot = _yaw_rate(V, f, df, dr)
     if tau > 0.0:
         rf = min(max((cf - df) / tau, -q[_Q_RATE_F]), q[_Q_RATE_F])
         rr = min(max((cr - dr) / tau, -q[_Q_RATE_R]), q[_Q_RATE_R])
     else:
         # steering_command_rate: chain rule, 0 where an angle is clipped
-        fb_rate = -k1 * e_dot - k2 * th_dot
-        rf = fb_rate
+        rf, rr = _feedback_command(e_dot, th_dot, k1, k2, a)
         if ff:
-            k_rate = dkappa * s_dot
-            rf = fb_rate + f * k_rate / (1.0 + (f * kappa) ** 2)
-        rr = a * fb_rate
+            rf = rf + _feedforward_rate(f, kappa, dkappa * s_dot)
         if abs(raw_f) > mf:
             rf = 0.0
         if abs(raw_r) > mr:
             rr = 0.0
     if not abs(df) < 0.5 * math.pi:
         return df, dr, rf, rr, np.nan, np.nan, psi_dot, False
-    psi_ddot = (V / f) * (cos_r / cos_f**2 * rf - cos_fr / cos_f * rr)
-    lat = V * (psi_dot + rr) * cos_r + d_cg * psi_ddot
-    # G moves with R's velocity V (cos dr, sin dr) plus r x (l_r, 0)
-    vy = V * sin_r + d_cg * psi_dot
+    psi_ddot = _yaw_acceleration(V, f, df, dr, rf, rr)
+    lat = _lateral_acceleration(V, d_cg, dr, rr, psi_dot, psi_ddot)
+    vy = _cg_lateral_velocity(V, d_cg, dr, psi_dot)
     return df, dr, rf, rr, lat, vy, psi_dot, True
 
 
@@ -2581,17 +2607,13 @@ def shared_parameters(
     q[_Q_MAX_STEP] = float(max_step)
     q[_Q_METHOD] = float(METHODS.index(method))
     # a curvature equal to the first piece's constant term (every s of an
-    # arc or a straight) takes its feedforward angle from here; the kernels'
-    # own atan, so the angle is the one they would compute
+    # arc or a straight) takes its feedforward angle from here, computed by
+    # the kernels' own compiled equation, so the angle is the one they would
+    # compute
     k0 = float(table.coefs[0, 0])
     q[_Q_KAPPA0] = k0
-    q[_Q_FF_ANGLE0] = _atan(vehicle.wheelbase * k0)
+    q[_Q_FF_ANGLE0] = _feedforward(vehicle.wheelbase, k0)
     return q
-
-
-@_jit
-def _atan(x):
-    return math.atan(x)
 
 
 def compiled_method(method: Any) -> str | None:

@@ -34,6 +34,7 @@ import numpy as np
 from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, OdeSolver, Radau
 from scipy.optimize import brentq
 
+from .. import equations
 from ..acceleration import lateral_acceleration
 from ..baselines import saturate
 from ..controllers import (
@@ -49,7 +50,7 @@ from ..dynamics import (
     slip_angles,
 )
 from ..gains import SteeringGains
-from ..models import path_frame_derivatives, yaw_rate
+from ..models import yaw_rate
 from ..paths import Arc, Path, Straight
 from ..validation import MAX_ANGLE, check_finite, check_positive
 from ..vehicle import Vehicle
@@ -1121,7 +1122,7 @@ class _Engine:
                     speed=self.speed, tyre=self.tyre,
                 )  # fmt: skip
             else:
-                s_dot, e_dot, th_dot = path_frame_derivatives(
+                s_dot, e_dot, th_dot = equations.path_frame_derivatives(
                     self.speed, self.vehicle.wheelbase, kappa, e, th, df, dr
                 )
         if self.tau is None:
@@ -1570,11 +1571,10 @@ def _initial_body_state(vehicle, Y, cmd, speed, body_state) -> None:
     Given values where `body_state` is finite; elsewhere the no-slip motion
     at the initial steering `cmd` (both slip angles zero).
     """
-    f, l_r = vehicle.wheelbase, vehicle.rear_to_cg
     with np.errstate(invalid="ignore"):
-        tan_f, tan_r = np.tan(cmd[0]), np.tan(cmd[1])
-    r0 = speed * (tan_f - tan_r) / f
-    vy0 = speed * tan_r + l_r * r0
+        vy0, r0 = equations.no_slip_body_state(
+            speed, vehicle.wheelbase, vehicle.rear_to_cg, cmd[0], cmd[1]
+        )
     if body_state is not None:
         given = np.isfinite(np.asarray(body_state, dtype=float))
         vy0 = np.where(given[:, 0], body_state[:, 0], vy0)
@@ -1741,7 +1741,7 @@ def compute_outputs(
         r = np.full(df.shape, np.nan)
         r[ok] = yaw_rate(vehicle, df[ok], dr[ok], speed=V[ok])
         # G moves with R's velocity V (cos dr, sin dr) plus r x (l_r, 0)
-        v_y = V * np.sin(dr) + vehicle.rear_to_cg * r
+        v_y = equations.cg_lateral_velocity(V, vehicle.rear_to_cg, dr, r)
         slip_f = slip_r = np.where(ok, 0.0, np.nan)
         acc[ok] = lateral_acceleration(
             vehicle,

@@ -17,6 +17,7 @@ from __future__ import annotations
 import control as ct
 import numpy as np
 
+from .. import equations
 from ..baselines import LateralController, saturate
 from ..controllers import path_tracking_controller, steering_actuator
 from ..dynamics import dynamic_global_model
@@ -363,8 +364,12 @@ def reference_initial_state(
         if speed is None:
             raise TypeError("reference_initial_state needs speed= for model='dynamic'")
         if not np.all(np.isfinite(body)):  # rolling without slip, as the engine
-            r0 = speed * (np.tan(u0[0]) - np.tan(u0[1])) / vehicle.wheelbase
-            body = np.array([speed * np.tan(u0[1]) + vehicle.rear_to_cg * r0, r0])
+            body = np.array(
+                equations.no_slip_body_state(
+                    speed, vehicle.wheelbase, vehicle.rear_to_cg, u0[0], u0[1]
+                ),
+                dtype=float,
+            )
         parts.append(body)
     if check_delay(delay) > 0.0:
         for u in u0:

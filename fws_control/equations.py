@@ -1,0 +1,447 @@
+r"""The model and control-law equations, each written once.
+
+Small plain functions of numbers: no argument checks, no objects, no
+package imports (only numpy), so that every layer of the package can call
+them. Each function works in two worlds with the same text:
+
+- on numpy arrays, broadcasting, in the analysis and in the numpy engine
+  (:mod:`fws_control.simulation.engine`);
+- compiled unchanged by ``numba.njit`` on float scalars, in the compiled
+  engine (:mod:`fws_control.simulation.compiled`), which therefore computes
+  the same operations in the same order.
+
+For that they use only operations that both numpy and numba give for arrays
+and scalars alike (``np.sin``, ``np.cos``, ``np.arctan``, ``np.arctan2``,
+arithmetic) and no Python ``if`` on a value. The checks (finite inputs, the
+singular steering angle :math:`|\delta_f| = \pi/2`, the centre of curvature
+:math:`1 - \kappa e = 0`) belong to the callers.
+:mod:`fws_control.symbolic` re-derives the equations with sympy and is the
+independent reference for them (``tests/test_equations.py``).
+
+Symbols (paper names): :math:`V` `speed`, :math:`f` `wheelbase`, :math:`d`
+(:math:`l_r`) `rear_to_cg`, :math:`l_f` `front_to_cg`, :math:`\kappa_C`
+`curvature`, :math:`e_C, \theta_C` `e`, `theta`, :math:`a` `ratio`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "MAGIC_SHAPE",
+    "yaw_rate",
+    "global_frame_derivatives",
+    "path_frame_derivatives",
+    "cg_lateral_velocity",
+    "yaw_acceleration",
+    "lateral_acceleration",
+    "feedforward_angle",
+    "feedforward_angle_rate",
+    "feedback_angle",
+    "feedback_command",
+    "steering_law",
+    "steering_law_rate",
+    "no_slip_body_state",
+    "slip_angles",
+    "linear_tyre_force",
+    "magic_tyre_force",
+    "body_derivatives",
+    "dynamic_path_kinematics",
+    "dynamic_global_kinematics",
+]
+
+#: Shape factor :math:`c` of the simplified magic formula
+#: :math:`F = D\sin(c\arctan(B\alpha))` (:func:`magic_tyre_force`).
+MAGIC_SHAPE = 1.3
+
+
+# --------------------------------------------------------------------------
+# Kinematic single-track model
+
+
+def yaw_rate(speed, wheelbase, delta_f, delta_r):
+    r"""Yaw rate of the kinematic model, paper eq. (10).
+
+    .. math:: \dot\psi = \frac{V\sin(\delta_f-\delta_r)}{f\cos\delta_f}
+
+    Examples
+    --------
+    >>> from fws_control.equations import yaw_rate
+    >>> round(float(yaw_rate(5.0, 2.7, 0.1, 0.0)), 6)    # V tan(0.1) / f
+    0.185805
+    """
+    return speed * np.sin(delta_f - delta_r) / (wheelbase * np.cos(delta_f))
+
+
+def global_frame_derivatives(speed, wheelbase, psi, delta_f, delta_r):
+    r"""Rear-axle point R in the global frame, paper eqs. (8)-(10).
+
+    .. math::
+        \dot x_R = V\cos(\psi+\delta_r),\quad
+        \dot y_R = V\sin(\psi+\delta_r),\quad
+        \dot\psi = \frac{V\sin(\delta_f-\delta_r)}{f\cos\delta_f}
+
+    Returns ``(x_dot, y_dot, psi_dot)``.
+
+    Examples
+    --------
+    >>> from fws_control.equations import global_frame_derivatives
+    >>> [round(float(v), 6) for v in global_frame_derivatives(5.0, 2.7, 0.0, 0.0, 0.0)]
+    [5.0, 0.0, 0.0]
+    """
+    return (
+        speed * np.cos(psi + delta_r),
+        speed * np.sin(psi + delta_r),
+        yaw_rate(speed, wheelbase, delta_f, delta_r),
+    )
+
+
+def path_frame_derivatives(speed, wheelbase, curvature, e, theta, delta_f, delta_r):
+    r"""Path-frame kinematics, the corrected paper eqs. (17)-(19).
+
+    .. math::
+        \dot s = \frac{V\cos(\theta+\delta_r)}{1-\kappa e},\quad
+        \dot e = V\sin(\theta+\delta_r),\quad
+        \dot\theta = -\kappa\dot s + \frac{V\sin(\delta_f-\delta_r)}{f\cos\delta_f}
+
+    (the paper's eq. (17) lacks the factor :math:`V`). Returns ``(s_dot,
+    e_dot, theta_dot)``.
+
+    Examples
+    --------
+    >>> from fws_control.equations import path_frame_derivatives
+    >>> out = path_frame_derivatives(5.0, 2.7, 0.1, 0.0, 0.0, 0.0, 0.0)
+    >>> [round(float(v), 6) for v in out]     # s_dot = V, theta_dot = -kappa V
+    [5.0, 0.0, -0.5]
+    """
+    s_dot = speed * np.cos(theta + delta_r) / (1.0 - curvature * e)
+    e_dot = speed * np.sin(theta + delta_r)
+    theta_dot = -curvature * s_dot + yaw_rate(speed, wheelbase, delta_f, delta_r)
+    return s_dot, e_dot, theta_dot
+
+
+def cg_lateral_velocity(speed, rear_to_cg, delta_r, yaw_rate):
+    r"""Lateral velocity of G in the vehicle frame, from paper eq. (11).
+
+    G moves with the velocity of R, :math:`V(\cos\delta_r, \sin\delta_r)`
+    in the vehicle frame, plus :math:`\dot\psi\times(d, 0)`:
+
+    .. math:: v_y = V\sin\delta_r + d\,\dot\psi
+
+    Examples
+    --------
+    >>> from fws_control.equations import cg_lateral_velocity
+    >>> float(cg_lateral_velocity(5.0, 1.35, 0.0, 0.2))
+    0.27
+    """
+    return speed * np.sin(delta_r) + rear_to_cg * yaw_rate
+
+
+def yaw_acceleration(speed, wheelbase, delta_f, delta_r, delta_f_rate, delta_r_rate):
+    r"""Time derivative of the yaw rate of eq. (10) at constant speed.
+
+    .. math::
+        \ddot\psi = \frac{V}{f}\left(
+        \frac{\cos\delta_r}{\cos^2\delta_f}\dot\delta_f
+        - \frac{\cos(\delta_f-\delta_r)}{\cos\delta_f}\dot\delta_r\right)
+
+    Examples
+    --------
+    >>> from fws_control.equations import yaw_acceleration
+    >>> round(float(yaw_acceleration(5.0, 2.7, 0.0, 0.0, 0.27, 0.0)), 6)
+    0.5
+    """
+    cf = np.cos(delta_f)
+    return (speed / wheelbase) * (
+        np.cos(delta_r) / cf**2 * delta_f_rate
+        - np.cos(delta_f - delta_r) / cf * delta_r_rate
+    )
+
+
+def lateral_acceleration(
+    speed, rear_to_cg, delta_r, delta_r_rate, yaw_rate, yaw_acceleration
+):
+    r"""Lateral acceleration of the centre of gravity G, paper eq. (13).
+
+    .. math:: a_G^{lat} = V(\dot\psi + \dot\delta_r)\cos\delta_r + d\,\ddot\psi
+
+    for the yaw rate :math:`\dot\psi` (eq. 10, :func:`yaw_rate`) and its
+    derivative :math:`\ddot\psi` (:func:`yaw_acceleration`), at constant
+    speed.
+
+    Examples
+    --------
+    Steady cornering on a radius of 10 m with front steering only gives
+    :math:`V^2/R`:
+
+    >>> import numpy as np
+    >>> from fws_control.equations import lateral_acceleration, yaw_rate
+    >>> r = yaw_rate(5.0, 2.7, np.arctan(0.1 * 2.7), 0.0)
+    >>> round(float(lateral_acceleration(5.0, 0.0, 0.0, 0.0, r, 0.0)), 9)
+    2.5
+    """
+    return (
+        speed * (yaw_rate + delta_r_rate) * np.cos(delta_r)
+        + rear_to_cg * yaw_acceleration
+    )
+
+
+# --------------------------------------------------------------------------
+# The paper's control law
+
+
+def feedforward_angle(wheelbase, curvature):
+    r"""Front feedforward angle, paper eq. (26): :math:`\delta_f^{FF} =
+    \arctan(\kappa_C f)` (and :math:`\delta_r^{FF} = 0`, eq. 27).
+
+    Examples
+    --------
+    >>> from fws_control.equations import feedforward_angle
+    >>> round(float(feedforward_angle(2.7, 0.1)), 6)
+    0.263712
+    """
+    return np.arctan(wheelbase * curvature)
+
+
+def feedforward_angle_rate(wheelbase, curvature, curvature_rate):
+    r"""Time derivative of :func:`feedforward_angle`.
+
+    .. math:: \dot\delta_f^{FF} = \frac{f\dot\kappa}{1 + (f\kappa)^2}
+
+    with :math:`\dot\kappa = \kappa'(s)\dot s`; with the slope
+    :math:`\kappa'(s)` for `curvature_rate` it is the derivative along the
+    path instead.
+
+    Examples
+    --------
+    >>> from fws_control.equations import feedforward_angle_rate
+    >>> float(feedforward_angle_rate(2.0, 0.0, 0.5))
+    1.0
+    """
+    fk = wheelbase * curvature
+    return wheelbase * curvature_rate / (1.0 + fk**2)
+
+
+def feedback_angle(e, theta, k_e, k_theta):
+    r"""Linear feedback angle of paper eqs. (28)-(29).
+
+    .. math:: \delta^{FB} = -k_e e_C - k_\theta\theta_C
+
+    (:math:`k_1, k_2` for the front, :math:`k_3, k_4` for the rear angle.)
+
+    Examples
+    --------
+    >>> from fws_control.equations import feedback_angle
+    >>> float(feedback_angle(2.0, 0.0, 0.1, 0.5))
+    -0.2
+    """
+    return -k_e * e - k_theta * theta
+
+
+def feedback_command(e, theta, k1, k2, ratio):
+    r"""The feedback part of the law with :math:`\delta_r = a\delta_f`.
+
+    .. math::
+        \delta_f^{FB} = -k_1 e_C - k_2\theta_C,\qquad
+        \delta_r^{FB} = a\,\delta_f^{FB}
+
+    (eqs. 28-29 with :math:`k_3 = a k_1`, :math:`k_4 = a k_2`). Returns
+    ``(delta_f_fb, delta_r_fb)``. Applied to the rates :math:`(\dot e,
+    \dot\theta)` it gives the rates of the feedback angles.
+
+    Examples
+    --------
+    >>> from fws_control.equations import feedback_command
+    >>> [float(v) for v in feedback_command(2.0, 0.0, 0.1, 0.5, -1.0)]
+    [-0.2, 0.2]
+    """
+    fb = feedback_angle(e, theta, k1, k2)
+    return fb, ratio * fb
+
+
+def steering_law(e, theta, curvature, wheelbase, k1, k2, ratio):
+    r"""The paper's law with the curvature feedforward, eqs. (24)-(29).
+
+    .. math::
+        \delta_f = \arctan(\kappa_C f) - k_1 e_C - k_2\theta_C,\qquad
+        \delta_r = a(-k_1 e_C - k_2\theta_C)
+
+    unclipped. Returns ``(delta_f, delta_r)``; without the feedforward the
+    law is :func:`feedback_command`.
+
+    Examples
+    --------
+    >>> from fws_control.equations import steering_law
+    >>> out = steering_law(1.0, 0.0, 0.1, 2.7, 0.1, 0.5, -1.0)
+    >>> [round(float(v), 6) for v in out]
+    [0.163712, 0.1]
+    """
+    fb_f, fb_r = feedback_command(e, theta, k1, k2, ratio)
+    return fb_f + feedforward_angle(wheelbase, curvature), fb_r
+
+
+def steering_law_rate(
+    e_rate, theta_rate, curvature, curvature_rate, wheelbase, k1, k2, ratio
+):
+    r"""Time derivative of :func:`steering_law` (chain rule).
+
+    .. math::
+        \dot\delta_f = \frac{f\dot\kappa}{1+(f\kappa)^2} - k_1\dot e
+        - k_2\dot\theta,\qquad \dot\delta_r = a(-k_1\dot e - k_2\dot\theta)
+
+    Without the feedforward the rate is :func:`feedback_command` of the
+    rates.
+
+    Examples
+    --------
+    >>> from fws_control.equations import steering_law_rate
+    >>> out = steering_law_rate(-1.0, 0.0, 0.0, 0.0, 2.7, 0.1, 0.5, -1.0)
+    >>> [round(float(v), 6) for v in out]
+    [0.1, -0.1]
+    """
+    rate_f, rate_r = feedback_command(e_rate, theta_rate, k1, k2, ratio)
+    return rate_f + feedforward_angle_rate(wheelbase, curvature, curvature_rate), rate_r
+
+
+# --------------------------------------------------------------------------
+# Dynamic single-track model (see fws_control.dynamics for the conventions)
+
+
+def no_slip_body_state(speed, wheelbase, rear_to_cg, delta_f, delta_r):
+    r"""Lateral velocity of G and yaw rate with both slip angles zero.
+
+    .. math::
+        r = \frac{u(\tan\delta_f - \tan\delta_r)}{f},\qquad
+        v_y = u\tan\delta_r + l_r r
+
+    (R moves along its wheel plane, F along its own.) Returns ``(v_y, r)``.
+
+    Examples
+    --------
+    >>> from fws_control.equations import no_slip_body_state
+    >>> vy, r = no_slip_body_state(10.0, 2.7, 1.35, 0.1, 0.0)
+    >>> round(float(r), 6), round(float(vy), 6)     # 10 tan(0.1) / 2.7, 1.35 r
+    (0.37161, 0.501673)
+    """
+    tan_f, tan_r = np.tan(delta_f), np.tan(delta_r)
+    r = speed * (tan_f - tan_r) / wheelbase
+    return speed * tan_r + rear_to_cg * r, r
+
+
+def slip_angles(speed, front_to_cg, rear_to_cg, v_y, yaw_rate, delta_f, delta_r):
+    r"""Slip angles ``(alpha_f, alpha_r)`` of the front and rear axle [rad].
+
+    .. math::
+        \alpha_f = \delta_f - \operatorname{atan2}(v_y + l_f r, u),\qquad
+        \alpha_r = \delta_r - \operatorname{atan2}(v_y - l_r r, u)
+
+    Examples
+    --------
+    >>> from fws_control.equations import slip_angles
+    >>> [float(v) for v in slip_angles(10.0, 1.35, 1.35, 0.0, 0.0, 0.1, -0.1)]
+    [0.1, -0.1]
+    """
+    alpha_f = delta_f - np.arctan2(v_y + front_to_cg * yaw_rate, speed)
+    alpha_r = delta_r - np.arctan2(v_y - rear_to_cg * yaw_rate, speed)
+    return alpha_f, alpha_r
+
+
+def linear_tyre_force(slip, stiffness):
+    r"""Linear axle force :math:`F = C\alpha` [N].
+
+    Examples
+    --------
+    >>> from fws_control.equations import linear_tyre_force
+    >>> float(linear_tyre_force(0.01, 8e4))
+    800.0
+    """
+    return stiffness * slip
+
+
+def magic_tyre_force(slip, stiffness, peak):
+    r"""Saturating axle force, the simplified magic formula [N].
+
+    .. math:: F = D\sin(c\arctan(B\alpha)),\qquad B = \frac{C}{cD}
+
+    with :math:`D` = `peak`, :math:`c` = :data:`MAGIC_SHAPE`: slope
+    `stiffness` at zero slip, saturating at `peak`.
+
+    Examples
+    --------
+    >>> from fws_control.equations import magic_tyre_force
+    >>> round(float(magic_tyre_force(1e-6, 8e4, 5e3)), 6)    # C alpha
+    0.08
+    """
+    b = stiffness / (MAGIC_SHAPE * peak)
+    return peak * np.sin(MAGIC_SHAPE * np.arctan(b * slip))
+
+
+def body_derivatives(
+    speed, mass, yaw_inertia, front_to_cg, rear_to_cg, yaw_rate,
+    force_f, force_r, delta_f, delta_r,
+):  # fmt: skip
+    r"""Lateral and yaw equations of motion ``(v_y_dot, r_dot)``.
+
+    .. math::
+        m(\dot v_y + u r) = F_f\cos\delta_f + F_r\cos\delta_r, \qquad
+        I_z \dot r = l_f F_f\cos\delta_f - l_r F_r\cos\delta_r
+
+    for the axle forces :math:`F_f, F_r` (normal to the wheel planes) of
+    the slip angles of :func:`slip_angles`.
+
+    Examples
+    --------
+    >>> from fws_control.equations import body_derivatives
+    >>> out = body_derivatives(10.0, 1500.0, 2500.0, 1.35, 1.35, 0.0, 800.0,
+    ...                        0.0, 0.0, 0.0)
+    >>> [round(float(v), 6) for v in out]         # F_f/m, l_f F_f/I_z
+    [0.533333, 0.432]
+    """
+    lat_f = force_f * np.cos(delta_f)
+    lat_r = force_r * np.cos(delta_r)
+    vy_dot = (lat_f + lat_r) / mass - speed * yaw_rate
+    r_dot = (front_to_cg * lat_f - rear_to_cg * lat_r) / yaw_inertia
+    return vy_dot, r_dot
+
+
+def dynamic_path_kinematics(speed, rear_to_cg, curvature, e, theta, v_y, yaw_rate):
+    r"""Path-frame errors of R for the dynamic model ``(s_dot, e_dot, theta_dot)``.
+
+    R moves with the body-frame velocity :math:`(u, v_y - l_r r)`:
+
+    .. math::
+        \dot s = \frac{u\cos\theta - (v_y - l_r r)\sin\theta}{1 - \kappa e},
+        \quad \dot e = u\sin\theta + (v_y - l_r r)\cos\theta,
+        \quad \dot\theta = r - \kappa\dot s
+
+    Examples
+    --------
+    >>> from fws_control.equations import dynamic_path_kinematics
+    >>> out = dynamic_path_kinematics(10.0, 1.35, 0.0, 0.0, 0.0, 0.0, 0.0)
+    >>> [float(v) for v in out]
+    [10.0, 0.0, 0.0]
+    """
+    v_r = v_y - rear_to_cg * yaw_rate  # lateral velocity of R
+    sin_t, cos_t = np.sin(theta), np.cos(theta)
+    s_dot = (speed * cos_t - v_r * sin_t) / (1.0 - curvature * e)
+    e_dot = speed * sin_t + v_r * cos_t
+    theta_dot = yaw_rate - curvature * s_dot
+    return s_dot, e_dot, theta_dot
+
+
+def dynamic_global_kinematics(speed, rear_to_cg, psi, v_y, yaw_rate):
+    r"""Global velocity of R for the dynamic model ``(x_dot, y_dot)``.
+
+    .. math::
+        \dot x = u\cos\psi - (v_y - l_r r)\sin\psi,\quad
+        \dot y = u\sin\psi + (v_y - l_r r)\cos\psi
+
+    Examples
+    --------
+    >>> from fws_control.equations import dynamic_global_kinematics
+    >>> [float(v) for v in dynamic_global_kinematics(10.0, 1.35, 0.0, 0.0, 0.0)]
+    [10.0, 0.0]
+    """
+    v_r = v_y - rear_to_cg * yaw_rate  # lateral velocity of R
+    sin_p, cos_p = np.sin(psi), np.cos(psi)
+    return speed * cos_p - v_r * sin_p, speed * sin_p + v_r * cos_p
