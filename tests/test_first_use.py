@@ -63,8 +63,8 @@ numba.njit(lambda x: x + 1.0)(1.0)            # a user's function: no notice
 from fws_control.simulation import compiled
 from fws_control.simulation.compilation import first_use
 with first_use(lambda: 3.0):
-    assert compiled._atan(1.0) == math.atan(1.0)
-stats = compiled._atan.stats
+    assert compiled._wrap_lap(7.5, 2.0) == 7.5 % 2.0
+stats = compiled._wrap_lap.stats
 print(sum(stats.cache_hits.values()), sum(stats.cache_misses.values()))
 """
 
@@ -83,7 +83,7 @@ def test_notice_on_a_compilation_only_and_once(tmp_path):
     assert "FWS_CONTROL_QUIET=1" in lines[0]
     seconds = float(lines[1].split("compiled in ")[1].split(" s of CPU")[0])
     assert 0.0 < seconds < 60.0
-    assert list(folder.glob("compiled._atan-*.nbi"))
+    assert list(folder.glob("compiled._wrap_lap-*.nbi"))
 
     # a second process loads the kernel: numba counts a hit, nothing printed
     warm = _python(_SMALL, _env(NUMBA_CACHE_DIR=str(cache)), tmp_path)
@@ -99,7 +99,7 @@ def test_notice_on_a_compilation_only_and_once(tmp_path):
     assert quiet.returncode == 0, quiet.stderr[-2000:]
     assert quiet.stdout.split() == ["0", "1"]
     assert quiet.stderr == ""
-    assert list((other / folder.name).glob("compiled._atan-*.nbi"))
+    assert list((other / folder.name).glob("compiled._wrap_lap-*.nbi"))
 
 
 def test_cache_folder_outside_the_package(tmp_path):
@@ -108,7 +108,7 @@ def test_cache_folder_outside_the_package(tmp_path):
     code = """
     from fws_control.simulation import compiled
     from fws_control.simulation.compilation import cache_dir
-    compiled._atan(0.5)
+    compiled._wrap_lap(0.5, 2.0)
     print(cache_dir())
     """
     sub = _subfolder(PACKAGE / "simulation")
@@ -133,7 +133,7 @@ def test_cache_folder_outside_the_package(tmp_path):
         run = _python(code, _env(**updates), tmp_path)
         assert run.returncode == 0, run.stderr[-2000:]
         assert run.stdout.strip() == str(expected)
-        assert list(expected.glob("compiled._atan-*.nbi")), expected
+        assert list(expected.glob("compiled._wrap_lap-*.nbi")), expected
     # numba wrote nothing into the package (its default: __pycache__ there)
     after = {p for p in PACKAGE.rglob("*") if p.suffix in (".nbi", ".nbc")}
     assert not after - before
