@@ -769,7 +769,7 @@ def test_compare_table_recomputed_from_results():
             k_e=float(g0.k1) / F, k_theta=float(g0.k2) / F
         ),
     }
-    cmp = fws.compare(VEH, m, controllers, speed=V, offset=0.5)
+    cmp = fws.compare(fws.LateralPlant(VEH, speed=V), m, controllers, offset=0.5)
     assert cmp.labels == tuple(controllers)
     tab = cmp.table
 
@@ -803,8 +803,9 @@ def test_compare_table_recomputed_from_results():
         assert bool(col("completed")[i]) is True
         assert col("cones")[i] == cones_hit_brute(m, r.x, r.y, r.psi, F)
     # the peaks do not depend on the output grid (exact peaks)
-    fine = fws.compare(VEH, m, {"rwf": controllers["rear-wheel feedback"]},
-                       speed=V, offset=0.5, dt=0.001)  # fmt: skip
+    fine = fws.compare(fws.LateralPlant(VEH, speed=V), m,
+                       {"rwf": controllers["rear-wheel feedback"]},
+                       offset=0.5, dt=0.001)  # fmt: skip
     for name in tab:
         if "RMS" in name:
             continue
@@ -817,10 +818,9 @@ def test_compare_table_recomputed_from_results():
     # ... and the engine's own SteeringGains path (not StateFeedback) agrees
     # to integration accuracy
     direct = fws.simulate(
-        VEH,
+        fws.LateralPlant(VEH, speed=V),
         m.path,
         g,
-        speed=V,
         initial_state=(m.start_x, 0.5, 0.0),
         duration=cmp.results[0].t[-1],
     )
@@ -856,7 +856,7 @@ PP_RATE_RUN = dict(
 def _pp_rate_run():
     p = PP_RATE_RUN
     res = fws.simulate(
-        VEH, p["path"], p["ctrl"], speed=p["speed"],
+        fws.LateralPlant(VEH, speed=p["speed"]), p["path"], p["ctrl"],
         initial_state=p["initial_state"], duration=4.0, dt=0.002,
     )  # fmt: skip
     assert res.status == "ok"
@@ -962,7 +962,11 @@ def test_saturate_respects_vehicle_limits():
     ctrl = fws.PurePursuit(lookahead=3.0, ratio=-0.5)
     path = fws.Straight()
     res = fws.simulate(
-        veh, path, ctrl, speed=5.0, initial_state=(0.0, -4.0, 0.0), duration=4.0
+        fws.LateralPlant(veh, speed=5.0),
+        path,
+        ctrl,
+        initial_state=(0.0, -4.0, 0.0),
+        duration=4.0,
     )
     raw_f, raw_r = ctrl.steering(
         veh, path, s=res.s, e=res.e, theta=res.theta, curvature=0 * res.s, speed=5.0
@@ -1010,10 +1014,9 @@ def test_saturate_respects_vehicle_limits():
         ),
         (
             lambda: fws.simulate(
-                VEH,
+                fws.LateralPlant(VEH, speed=5.0),
                 fws.Straight(),
                 "pure pursuit",
-                speed=5.0,
                 initial_state=(0, 1, 0),
                 duration=1.0,
             ),  # fmt: skip
@@ -1022,10 +1025,9 @@ def test_saturate_respects_vehicle_limits():
         ),
         (
             lambda: fws.simulate_batch(
-                VEH,
+                fws.LateralPlant(VEH, speed=5.0),
                 fws.Straight(),
                 object(),
-                speed=5.0,
                 initial_state=(0, 1, 0),
                 duration=1.0,
             ),  # fmt: skip
@@ -1046,10 +1048,9 @@ def test_saturate_respects_vehicle_limits():
         ),
         (
             lambda: fws.simulate(
-                VEH,
+                fws.LateralPlant(VEH, speed=5.0),
                 fws.Straight(),
                 fws.PurePursuit(lookahead=np.array([1.0, 2.0])),
-                speed=5.0,
                 initial_state=(0, 1, 0),
                 duration=1.0,
             ),  # fmt: skip
@@ -1057,7 +1058,9 @@ def test_saturate_respects_vehicle_limits():
             "simulate_batch",
         ),
         (
-            lambda: fws.compare(VEH, fws.double_lane_change(), {"x": 3}, speed=10.0),
+            lambda: fws.compare(
+                fws.LateralPlant(VEH, speed=10.0), fws.double_lane_change(), {"x": 3}
+            ),
             TypeError,
             "controllers",
         ),

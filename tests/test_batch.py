@@ -24,10 +24,9 @@ def _gains(speed, curvature, ratio, pole=-1.0):
 
 def _single(i, batch, path, feedforward=True, duration=10.0, dt=0.05):
     return fws.simulate(
-        VEH,
+        fws.LateralPlant(VEH, speed=float(batch.speed[i])),
         path,
         fws.SteeringGains(batch.k1[i], batch.k2[i], batch.ratio[i]),
-        speed=float(batch.speed[i]),
         initial_state=batch.initial_state[i],
         duration=duration,
         feedforward=feedforward,
@@ -44,7 +43,12 @@ def test_batch_agrees_with_simulate_with_per_run_gains_speeds_and_states():
     )
     path = Arc(0.02)
     batch = fws.simulate_batch(
-        VEH, path, g, speed=speeds, initial_state=x0, duration=10.0, dt=0.05
+        fws.LateralPlant(VEH, speed=speeds),
+        path,
+        g,
+        initial_state=x0,
+        duration=10.0,
+        dt=0.05,
     )
     assert batch.e.shape == (6, 201) and len(batch) == 6
     assert batch.status.tolist() == ["ok"] * 6
@@ -78,10 +82,9 @@ def _stopping_batch():
     ]
     x0 = [(0.0, -5.0, 0.0), (0.0, -1.0, 0.0), (0.0, 5.0, math.pi / 2), (0.0, -5.0, 0.0)]
     batch = fws.simulate_batch(
-        VEH,
+        fws.LateralPlant(VEH, speed=5.0),
         Arc(0.1),
         gains,
-        speed=5.0,
         initial_state=x0,
         duration=6.0,
         dt=0.01,
@@ -125,23 +128,25 @@ def test_gains_sequence_equals_array_gains_and_broadcasting():
     seq = [fws.SteeringGains(g.k1[i], g.k2[i], g.ratio[i]) for i in range(3)]
     kw = {"duration": 5.0, "feedforward": False, "dt": 0.1}
     a = fws.simulate_batch(
-        VEH, Straight(), g, speed=20.0, initial_state=(0.0, 2.0, 0.0), **kw
+        fws.LateralPlant(VEH, speed=20.0),
+        Straight(),
+        g,
+        initial_state=(0.0, 2.0, 0.0),
+        **kw,
     )
     b = fws.simulate_batch(
-        VEH,
+        fws.LateralPlant(VEH, speed=[20.0] * 3),
         Straight(),
         seq,
-        speed=[20.0] * 3,
         initial_state=[(0.0, 2.0, 0.0)] * 3,
         **kw,
     )
     np.testing.assert_array_equal(a.e, b.e)
     # one gain, several initial states
     c = fws.simulate_batch(
-        VEH,
+        fws.LateralPlant(VEH, speed=20.0),
         Straight(),
         seq[0],
-        speed=20.0,
         initial_state=[(0.0, 1.0, 0.0), (0.0, 2.0, 0.0)],
         **kw,
     )
@@ -211,10 +216,9 @@ def test_progress_bar_only_when_asked(capsys):
 def _two_ratio_batch(dt=0.1, duration=3.0):
     g = _gains(5.0, 0.1, np.array([-1.0, 0.0]))
     batch = fws.simulate_batch(
-        VEH,
+        fws.LateralPlant(VEH, speed=5.0),
         Arc(0.1),
         g,
-        speed=5.0,
         initial_state=(0, -5, 0),
         duration=duration,
         dt=dt,
@@ -225,7 +229,12 @@ def _two_ratio_batch(dt=0.1, duration=3.0):
 def test_batch_is_never_squeezed_and_runs_are():
     g = _gains(5.0, 0.1, -1.0)
     one = fws.simulate_batch(
-        VEH, Arc(0.1), g, speed=5.0, initial_state=(0, -5, 0), duration=3.0, dt=0.1
+        fws.LateralPlant(VEH, speed=5.0),
+        Arc(0.1),
+        g,
+        initial_state=(0, -5, 0),
+        duration=3.0,
+        dt=0.1,
     )
     # a batch of one run keeps its run axis, for every per-run attribute
     assert not one.squeeze and len(one) == 1
@@ -301,10 +310,9 @@ def test_to_pandas_keeps_gains_speed_status_and_runs_without_samples():
     ratios = np.array([-0.5, 0.5])
     g = _gains(speeds, 0.1, ratios)
     sub = fws.simulate_batch(
-        VEH,
+        fws.LateralPlant(VEH, speed=speeds),
         Arc(0.1),
         g,
-        speed=speeds,
         initial_state=[(0, -2, 0), (0, -3, 0.1)],
         duration=2.0,
         dt=0.5,
@@ -430,8 +438,9 @@ def test_expand_runs_keeps_the_model_and_tyre_of_the_simulated_runs():
     car = fws.vehicles.BMW_320I
     g = fws.double_root_gains(car, speed=20.0, ratio=0.0, pole=-1.0)
     sub = fws.simulate_batch(
-        car, Straight(), g, speed=20.0, initial_state=(0.0, 1.0, 0.0),
-        duration=2.0, dt=0.5, model="dynamic", tyre="magic",
+        fws.LateralPlant(car, speed=20.0, model="dynamic", tyre="magic"),
+        Straight(), g, initial_state=(0.0, 1.0, 0.0),
+        duration=2.0, dt=0.5,
     )  # fmt: skip
     full = expand_runs(
         sub, positions=[1], k1=[np.nan, g.k1], k2=[np.nan, g.k2],
@@ -467,10 +476,18 @@ def test_plot_keeps_the_bulk_visible_when_a_stopped_run_diverges():
 def test_plot_of_a_straight_road_is_not_a_flat_line_and_overlays_one_path():
     g = fws.SteeringGains(0.1, 0.5, 0.0)
     res = fws.simulate(
-        VEH, Straight(), g, speed=5.0, initial_state=(0.0, 1.0, 0.0), duration=15.0
+        fws.LateralPlant(VEH, speed=5.0),
+        Straight(),
+        g,
+        initial_state=(0.0, 1.0, 0.0),
+        duration=15.0,
     )
     other = fws.simulate(
-        VEH, Straight(), g, speed=5.0, initial_state=(0.0, -1.0, 0.0), duration=15.0
+        fws.LateralPlant(VEH, speed=5.0),
+        Straight(),
+        g,
+        initial_state=(0.0, -1.0, 0.0),
+        duration=15.0,
     )
     cplt = res.plot(labels="e0 = 1 m")
     try:

@@ -83,8 +83,9 @@ def test_max_steps_raises_the_budget():
     # the run is the one simulate gives for the same request
     res = cmp.results[0]
     ref = fws.simulate(
-        VEH, course.path, g["paper"], initial_state=(0.0, 0.0, 0.0),
-        duration=float(res.t[-1]), delay=0.05, speed=10.0,
+        fws.LateralPlant(VEH, speed=10.0),
+        course.path, g["paper"], initial_state=(0.0, 0.0, 0.0),
+        duration=float(res.t[-1]), delay=0.05,
     )  # fmt: skip
     np.testing.assert_allclose(res.e, ref.e, atol=1e-9)
 
@@ -93,7 +94,7 @@ def test_max_steps_raises_the_budget():
 def test_max_steps_range(bad):
     g = {"st": fws.Stanley()}
     with pytest.raises(ValueError, match="max_steps"):
-        fws.compare(VEH, COURSE, g, speed=20.0, max_steps=bad)
+        fws.compare(fws.LateralPlant(VEH, speed=20.0), COURSE, g, max_steps=bad)
 
 
 def test_stability_chart_refuses_a_delay_beyond_its_budget():

@@ -46,7 +46,7 @@ def test_row_matches_a_fresh_run(speed, condition, label):
         if condition == "ideal"
         else {"delay": 0.24, "actuator_time_constant": 0.27}
     )
-    cmp = fws.compare(veh, course, {label: ctrl}, speed=speed, **kw)
+    cmp = fws.compare(fws.LateralPlant(veh, speed=speed), course, {label: ctrl}, **kw)
     row = _page_row(f"{speed:g}", condition, label)
     r = cmp.results[0]
     # independent recomputation from the run's signals: the exact peaks lie

@@ -130,8 +130,8 @@ def test_exact_peaks_as_numpy_engine(name):
     at = np.unique(np.concatenate([[0.0], times, [end]]))
     veh, path, g, kw = CASES[name]
     kw = {k: v for k, v in kw.items() if k != "dt"}
-    there = fws.simulate(veh, path, g, speed=5.0, duration=end, t_eval=at, **kw,
-                         engine="numpy")  # fmt: skip
+    there = fws.simulate(fws.LateralPlant(veh, speed=5.0), path, g, duration=end,
+                         t_eval=at, **kw, engine="numpy")  # fmt: skip
     for j, sig in enumerate(PEAK_SIGNALS):
         k = int(np.searchsorted(at, times[j]))
         value = abs(there.signals[0, SIGNALS.index(sig), k])
@@ -187,8 +187,8 @@ def test_fine_grid_samples_as_nodes_give_the_same_peaks(name):
                                   np.linspace(3.0, 3.05, 40)]))  # fmt: skip
     veh, path, g, kw = CASES[name]
     kw = {k: v for k, v in kw.items() if k != "dt"}
-    mixed = fws.simulate(veh, path, g, speed=5.0, duration=15.0, t_eval=t, **kw,
-                         engine="compiled")  # fmt: skip
+    mixed = fws.simulate(fws.LateralPlant(veh, speed=5.0), path, g, duration=15.0,
+                         t_eval=t, **kw, engine="compiled")  # fmt: skip
     for sig in PEAK_SIGNALS:
         assert getattr(mixed.peaks, sig).value == pytest.approx(
             getattr(ref.peaks, sig).value, rel=tol, abs=1e-14
@@ -326,7 +326,8 @@ def test_auto_engine_dynamic_model_and_table_failure(monkeypatch):
         raise ValueError("not within tol")
 
     monkeypatch.setattr(compiled, "curvature_table", refuse)
-    res = fws.simulate(VEH, SPLINE, _gains(VEH, curvature=0.0), speed=5.0,
+    res = fws.simulate(fws.LateralPlant(VEH, speed=5.0), SPLINE,
+                       _gains(VEH, curvature=0.0),
                        initial_state=(0, 1, 0), duration=2.0)  # fmt: skip
     assert res.engine == "numpy"
 

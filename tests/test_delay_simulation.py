@@ -39,7 +39,7 @@ def test_decays_below_and_grows_above_the_critical_delay(name):
     windows = [(10.0, 15.0), (30.0, 35.0)]
     for factor in (0.9, 1.1):
         res = fws.simulate(
-            VEH, path, g, speed=V, initial_state=x0, duration=40.0,
+            fws.LateralPlant(VEH, speed=V), path, g, initial_state=x0, duration=40.0,
             delay=factor * tc.delay, dt=0.01,
         )  # fmt: skip
         assert res.ok, res.message
@@ -80,7 +80,8 @@ def test_delayed_engine_agrees_with_the_pade_reference():
 def test_command_is_held_until_the_delay_then_follows_the_delayed_state():
     g = fws.SteeringGains(0.1, 0.5, ratio=0.0)
     res = fws.simulate(
-        VEH, fws.Straight(), g, speed=5.0, initial_state=(0.0, 1.0, 0.0),
+        fws.LateralPlant(VEH, speed=5.0),
+        fws.Straight(), g, initial_state=(0.0, 1.0, 0.0),
         duration=2.0, delay=0.5, dt=0.01, feedforward=False,
     )  # fmt: skip
     held = res.t < 0.5 - 1e-9
@@ -110,8 +111,9 @@ def test_pure_steering_lag_matches_the_linear_lagged_plant():
     g = fws.SteeringGains(0.05, 0.5, ratio=-0.5)
     e0 = 1e-3
     res = fws.simulate(
-        VEH, fws.Straight(), g, speed=5.0, initial_state=(0.0, e0, 0.0),
-        duration=15.0, actuator_time_constant=0.27, feedforward=False, dt=0.05,
+        fws.LateralPlant(VEH, speed=5.0, steering_lag=0.27),
+        fws.Straight(), g, initial_state=(0.0, e0, 0.0),
+        duration=15.0, feedforward=False, dt=0.05,
     )  # fmt: skip
     cl = fws.closed_loop(plant, g)
     # the actuator starts at the command: wheel angles -k1 e0 and -a k1 e0
@@ -128,7 +130,8 @@ def test_pure_steering_lag_matches_the_linear_lagged_plant():
 def test_bad_delay_is_refused(bad):
     with pytest.raises((ValueError, TypeError), match="delay"):
         fws.simulate(
-            VEH, fws.Straight(), fws.SteeringGains(0.1, 0.5, 0.0), speed=5.0,
+            fws.LateralPlant(VEH, speed=5.0),
+            fws.Straight(), fws.SteeringGains(0.1, 0.5, 0.0),
             initial_state=(0.0, 1.0, 0.0), duration=1.0, delay=bad,
         )  # fmt: skip
 
@@ -143,7 +146,8 @@ def test_batch_command_follows_each_runs_delayed_samples_also_after_a_stop():
     k1, k2 = np.array([0.1, 0.2, 0.05]), np.array([0.5, 0.8, 0.4])
     g = fws.SteeringGains(k1, k2, ratio=np.array([0.0, -0.5, 0.5]))
     res = fws.simulate_batch(
-        VEH, fws.Straight(length=40.0), g, speed=np.array([5.0, 8.0, 20.0]),
+        fws.LateralPlant(VEH, speed=np.array([5.0, 8.0, 20.0])),
+        fws.Straight(length=40.0), g,
         initial_state=(0.0, 1.0, 0.0), duration=4.0, delay=tau, dt=dt,
         feedforward=False, engine="numpy",
     )  # fmt: skip
@@ -169,8 +173,8 @@ def test_batch_command_follows_each_runs_delayed_samples_also_after_a_stop():
         rate = res.delta_f_rate[i][k]
         np.testing.assert_allclose(rate, fd, atol=2e-4 * np.max(np.abs(rate)))
         alone = fws.simulate(
-            VEH, fws.Straight(length=40.0),
-            fws.SteeringGains(k1[i], k2[i], ratio=g.ratio[i]), speed=res.speed[i],
+            fws.LateralPlant(VEH, speed=res.speed[i]), fws.Straight(length=40.0),
+            fws.SteeringGains(k1[i], k2[i], ratio=g.ratio[i]),
             initial_state=(0.0, 1.0, 0.0), duration=4.0, delay=tau, dt=dt,
             feedforward=False, engine="numpy",
         )  # fmt: skip

@@ -188,10 +188,9 @@ def _result():
     global _RES
     if _RES is None:
         _RES = fws.simulate(
-            VEH,
+            fws.LateralPlant(VEH, speed=5.0),
             fws.Straight(),
             fws.SteeringGains(0.1, 0.5, ratio=0.0),
-            speed=5.0,
             initial_state=(0.0, 1.0, 0.0),
             duration=3.0,
             dt=0.1,
@@ -308,7 +307,7 @@ def gains_placed(result, call) -> bool:
     if not isinstance(plant, fws.LateralPlant) or np.ndim(pole) or np.ndim(a):
         return True
     V, k, f = float(plant.speed), float(plant.curvature), plant.vehicle.wheelbase
-    c = 1.0 + (f * k) ** 2 if plant.model == "exact" else 1.0
+    c = 1.0 + (f * k) ** 2 if plant.model == "kinematic" else 1.0
     A = np.array([[0.0, V], [-V * k * k, 0.0]])
     b = np.array([[0.0, V], [c * V / f, -V / f]]) @ np.array([1.0, float(a)])
     ev = np.linalg.eigvals(A - np.outer(b, [float(result.k1), float(result.k2)]))
@@ -386,13 +385,15 @@ CASES: dict[str, Case] = {
         post=elementwise,
     ),
     "linearize": Case(
-        fws.linearize, dict(plant=VEH), dict(speed=5.0, curvature=0.1, model="exact")
+        fws.linearize,
+        dict(plant=VEH),
+        dict(speed=5.0, curvature=0.1, model="kinematic"),
     ),
     "closed_loop": Case(fws.closed_loop, PG),
     "LateralPlant": Case(
         fws.LateralPlant,
         dict(vehicle=VEH, speed=5.0),
-        dict(curvature=0.1, model="exact", steering_lag=None),
+        dict(curvature=0.1, model="kinematic", steering_lag=None),
     ),
     "as_plant": Case(fws.as_plant, dict(plant=VEH), dict(speed=5.0, curvature=0.1)),
     "loop_matrices": Case(fws.loop_matrices, dict(plant=PLANT)),

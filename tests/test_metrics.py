@@ -77,7 +77,12 @@ def test_tracking_metrics_single_and_batch_agree_with_direct_computation():
     ratios = np.array([-1.0, 0.0, 0.5])
     g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=ratios, pole=-1.0)
     batch = fws.simulate_batch(
-        VEH, Arc(0.1), g, speed=5.0, initial_state=(0, -5, 0), duration=15.0, dt=0.01
+        fws.LateralPlant(VEH, speed=5.0),
+        Arc(0.1),
+        g,
+        initial_state=(0, -5, 0),
+        duration=15.0,
+        dt=0.01,
     )
     m = fws.tracking_metrics(batch)
     assert m.status.tolist() == ["ok"] * 3
@@ -152,7 +157,11 @@ def test_settling_band_must_be_finite_and_positive(band):
 def test_tracking_metrics_checks_band_and_result_type():
     g = fws.SteeringGains(0.1, 0.5, ratio=0.0)
     res = fws.simulate(
-        VEH, Straight(), g, speed=5.0, initial_state=(0, 1, 0), duration=2.0
+        fws.LateralPlant(VEH, speed=5.0),
+        Straight(),
+        g,
+        initial_state=(0, 1, 0),
+        duration=2.0,
     )
     with pytest.raises(ValueError, match="band"):
         fws.tracking_metrics(res, band=float("nan"))
@@ -167,7 +176,7 @@ def test_tracking_metrics_checks_band_and_result_type():
 def _sweep(signals):
     g = fws.SteeringGains(k1=[0.1, 0.2, -0.1], k2=[0.5, 0.5, 0.4], ratio=0.0)
     return fws.simulate_batch(
-        VEH, Straight(), g, speed=5.0, initial_state=(0.0, 1.0, 0.0),
+        fws.LateralPlant(VEH, speed=5.0), Straight(), g, initial_state=(0.0, 1.0, 0.0),
         duration=10.0, dt=0.001, signals=signals,
     )  # fmt: skip
 

@@ -118,13 +118,14 @@ def test_peaks_against_a_fine_grid_within_its_sampling_error(name):
 def test_batch_peaks_equal_single_run_peaks_and_not_simulated_runs_are_nan():
     g = fws.double_root_gains(VEH, speed=20.0, ratio=np.array([0.9, 1.05]), pole=-2.0)
     batch = fws.simulate_batch(
-        VEH, fws.Straight(), g, speed=20.0, initial_state=(0, 2, 0), duration=5.0,
+        fws.LateralPlant(VEH, speed=20.0),
+        fws.Straight(), g, initial_state=(0, 2, 0), duration=5.0,
         feedforward=False, dt=0.1, chunk_size=1,
     )  # fmt: skip
     for i in range(2):
         single = fws.simulate(
-            VEH, fws.Straight(), fws.SteeringGains(g.k1[i], g.k2[i], g.ratio[i]),
-            speed=20.0,
+            fws.LateralPlant(VEH, speed=20.0),
+            fws.Straight(), fws.SteeringGains(g.k1[i], g.k2[i], g.ratio[i]),
             initial_state=(0, 2, 0), duration=5.0, feedforward=False, dt=0.01,
         )  # fmt: skip
         np.testing.assert_allclose(
@@ -144,7 +145,8 @@ def test_batch_peaks_equal_single_run_peaks_and_not_simulated_runs_are_nan():
 
 def test_sample_peaks_of_a_result_without_exact_peaks_are_marked():
     res = fws.simulate(
-        VEH, fws.Straight(), fws.SteeringGains(0.1, 0.5, 0.0), speed=5.0,
+        fws.LateralPlant(VEH, speed=5.0),
+        fws.Straight(), fws.SteeringGains(0.1, 0.5, 0.0),
         initial_state=(0, 1, 0), duration=3.0, dt=0.5,
     )  # fmt: skip
     import dataclasses
@@ -163,7 +165,10 @@ def test_sample_peaks_of_a_result_without_exact_peaks_are_marked():
 def fig5d_pole3():
     return {
         dt: fig5_peak_lateral_accel(
-            model="exact", poles={5.0: (-1.0,), 20.0: (-3.0,)}, dt=dt, progress=False
+            model="kinematic",
+            poles={5.0: (-1.0,), 20.0: (-3.0,)},
+            dt=dt,
+            progress=False,
         )["d"]
         for dt in (0.1, 0.01)
     }
@@ -184,7 +189,8 @@ def test_fig5d_pole_3_min_over_ratio_is_the_exact_peak(fig5d_pole3):
     # the sampling error of a smooth maximum, 1e-6 relative here)
     g = fws.double_root_gains(VEH, speed=20.0, curvature=0.01, ratio=a, pole=-3.0)
     ref = fws.simulate(
-        VEH, fws.Arc(0.01), g, speed=20.0, initial_state=(0, -10, 0), duration=1.0,
+        fws.LateralPlant(VEH, speed=20.0),
+        fws.Arc(0.01), g, initial_state=(0, -10, 0), duration=1.0,
         dt=1e-4,
     )  # fmt: skip
     peak = float(fine.peak_lateral_accel[0, j])

@@ -99,8 +99,9 @@ def _run(tau, rate, duration, engine, rtol, atol, method="auto"):
     g = fws.double_root_gains(VEH, speed=SPEED, curvature=KAPPA, ratio=RATIO,
                               pole=-1.0)  # fmt: skip
     res = fws.simulate(
-        veh, fws.Arc(KAPPA), g, speed=SPEED, initial_state=(0.0, E0, 0.0),
-        duration=duration, dt=DT_OUT, actuator_time_constant=tau, engine=engine,
+        fws.LateralPlant(veh, speed=SPEED, steering_lag=tau),
+        fws.Arc(KAPPA), g, initial_state=(0.0, E0, 0.0),
+        duration=duration, dt=DT_OUT, engine=engine,
         method=method, rtol=rtol, atol=atol,
     )  # fmt: skip
     assert res.status == "ok", res.message
@@ -297,9 +298,9 @@ def test_auto_capped_dop853_gives_each_run_its_own_accuracy():
     assert u_bound > AGREE
     veh = dataclasses.replace(VEH, max_steer_rate_front=0.2, max_steer_rate_rear=0.2)
     g0 = fws.SteeringGains(g.k1[0], g.k2[0], g.ratio[0])
-    res = fws.simulate(veh, fws.Arc(KAPPA), g0, speed=SPEED, duration=15.0,
-                       initial_state=(0.0, E0, 0.0), dt=DT_OUT,
-                       actuator_time_constant=0.05)  # fmt: skip
+    res = fws.simulate(fws.LateralPlant(veh, speed=SPEED, steering_lag=0.05),
+                       fws.Arc(KAPPA), g0, duration=15.0,
+                       initial_state=(0.0, E0, 0.0), dt=DT_OUT)  # fmt: skip
     assert res.engine == "compiled"
     ref, tol = _check_reference(g0, 0.05, 0.2, 15.0, 1e-3, 1e-10, 1e-12)
     assert np.max(np.abs(res.delta_f_rate)) == pytest.approx(0.2, rel=1e-9)
@@ -321,17 +322,19 @@ def test_compiled_radau_gives_each_run_its_own_accuracy():
     np.testing.assert_array_equal(batch.run_peak[0], alone.run_peak[0])
     assert u_alone == u_batch <= 10.0, u_alone
     capped = fws.simulate_batch(
-        VEH, fws.Arc(KAPPA), fws.SteeringGains(g.k1[:1], g.k2[:1], g.ratio[:1]),
-        speed=SPEED, initial_state=(0.0, E0, 0.0), duration=15.0, dt=DT_OUT,
-        actuator_time_constant=0.05, progress=False,
+        fws.LateralPlant(VEH, speed=SPEED, steering_lag=0.05),
+        fws.Arc(KAPPA), fws.SteeringGains(g.k1[:1], g.k2[:1], g.ratio[:1]),
+        initial_state=(0.0, E0, 0.0), duration=15.0, dt=DT_OUT,
+        progress=False,
     )  # fmt: skip
     assert capped.method == "DOP853"
     np.testing.assert_allclose(alone.run_peak[0], capped.run_peak[0], rtol=1e-9)
     # the runs that stop, stop where the capped DOP853 runs stop
     stop = batch.status == "singular_steering"
     dop = fws.simulate_batch(
-        VEH, fws.Arc(KAPPA), g, speed=SPEED, initial_state=(0.0, E0, 0.0),
-        duration=15.0, dt=DT_OUT, actuator_time_constant=0.05, progress=False,
+        fws.LateralPlant(VEH, speed=SPEED, steering_lag=0.05),
+        fws.Arc(KAPPA), g, initial_state=(0.0, E0, 0.0),
+        duration=15.0, dt=DT_OUT, progress=False,
     )  # fmt: skip
     assert np.array_equal(dop.status == "singular_steering", stop)
     np.testing.assert_allclose(batch.t_stop[stop], dop.t_stop[stop], rtol=1e-7)

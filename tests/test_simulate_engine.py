@@ -121,7 +121,8 @@ def test_mixed_batch_runs_are_identical_to_runs_alone():
     assert batch.status.tolist() == ["ok", "ok", "singular_steering", "ok", "ok"]
     for i, g in enumerate(gains):
         alone = fws.simulate(
-            VEH, ARC, g, speed=5.0, initial_state=x0[i], duration=15.0,
+            fws.LateralPlant(VEH, speed=5.0),
+            ARC, g, initial_state=x0[i], duration=15.0,
             engine="compiled",
         )  # fmt: skip
         T = alone.t.size
@@ -133,7 +134,12 @@ def test_mixed_batch_runs_are_identical_to_runs_alone():
     # the stop is where the numpy engine stops too: both stop 1e-3 rad before
     # |delta_f| = pi/2, the compiled engine no later (to a few ulp)
     ref = fws.simulate(
-        VEH, ARC, stops, speed=5.0, initial_state=x0[2], duration=15.0, engine="numpy"
+        fws.LateralPlant(VEH, speed=5.0),
+        ARC,
+        stops,
+        initial_state=x0[2],
+        duration=15.0,
+        engine="numpy",
     )
     assert ref.status == "singular_steering"
     assert batch.t_stop[2] == pytest.approx(ref.t_stop, abs=1e-4)

@@ -39,7 +39,7 @@ def _reference(vehicle, path, gains, speed, x0, t, feedforward=True, **kw):
     return dict(zip(sys.output_labels, resp.outputs, strict=True))
 
 
-@pytest.mark.parametrize("model", ["exact", "paper"])
+@pytest.mark.parametrize("model", ["kinematic", "paper"])
 @pytest.mark.parametrize("name", list(SCENARIOS))
 def test_fast_engine_agrees_with_interconnected_reference(name, model):
     V, kappa, y0, ff = SCENARIOS[name]
@@ -50,10 +50,9 @@ def test_fast_engine_agrees_with_interconnected_reference(name, model):
             VEH, speed=V, curvature=kappa, ratio=a, pole=-1.0, model=model
         )
         res = fws.simulate(
-            VEH,
+            fws.LateralPlant(VEH, speed=V),
             path,
             g,
-            speed=V,
             initial_state=(0.0, y0, 0.0),
             duration=10.0,
             feedforward=ff,
@@ -71,10 +70,9 @@ def test_fast_engine_agrees_with_interconnected_reference(name, model):
             t_ref = np.linspace(0.0, 0.999 * res.t_stop, 21)
             ref = _reference(VEH, path, g, V, [0.0, y0, 0.0], t_ref, ff)
             near = fws.simulate(
-                VEH,
+                fws.LateralPlant(VEH, speed=V),
                 path,
                 g,
-                speed=V,
                 initial_state=(0.0, y0, 0.0),
                 duration=t_ref[-1],
                 feedforward=ff,
@@ -147,7 +145,13 @@ def _fd_lateral_accel(res, d):
 def test_lateral_acceleration_and_rates_match_finite_differences(path, V, x0, ff):
     g = fws.SteeringGains(k1=0.15, k2=0.8, ratio=-0.5)
     res = fws.simulate(
-        VEH, path, g, speed=V, initial_state=x0, duration=8.0, feedforward=ff, dt=2e-3
+        fws.LateralPlant(VEH, speed=V),
+        path,
+        g,
+        initial_state=x0,
+        duration=8.0,
+        feedforward=ff,
+        dt=2e-3,
     )
     assert res.ok
     fd = _fd_lateral_accel(res, VEH.rear_to_cg)
@@ -166,10 +170,9 @@ def test_singular_steering_at_start_is_reported_not_raised():
     g = fws.double_root_gains(VEH, speed=5.0, curvature=0.0, ratio=0.5, pole=-2.0)
     assert g.k1 * 2.0 > math.pi / 2
     res = fws.simulate(
-        VEH,
+        fws.LateralPlant(VEH, speed=5.0),
         Straight(),
         g,
-        speed=5.0,
         initial_state=(0.0, 2.0, 0.0),
         duration=10.0,
         feedforward=False,
@@ -185,10 +188,9 @@ def test_singular_steering_during_run_stops_there():
     # k2 < 0 feeds the heading back positively: delta_f runs to pi/2
     g = fws.SteeringGains(k1=0.1, k2=-0.5, ratio=0.0)
     res = fws.simulate(
-        VEH,
+        fws.LateralPlant(VEH, speed=5.0),
         Straight(),
         g,
-        speed=5.0,
         initial_state=(0.0, 1.0, 0.0),
         duration=10.0,
         feedforward=False,
@@ -216,10 +218,9 @@ def test_singular_curvature_when_driving_into_the_centre():
         print("numba is not installed: the compiled engine's stop not tested")
     for engine, stop in engines:
         res = fws.simulate(
-            VEH,
+            fws.LateralPlant(VEH, speed=5.0),
             Arc(0.1),
             g,
-            speed=5.0,
             initial_state=(0.0, 5.0, math.pi / 2),
             duration=3.0,
             feedforward=False,
@@ -233,10 +234,9 @@ def test_singular_curvature_when_driving_into_the_centre():
 def test_end_of_open_path():
     g = fws.SteeringGains(0.0, 0.0, 0.0)
     res = fws.simulate(
-        VEH,
+        fws.LateralPlant(VEH, speed=5.0),
         Straight(length=20.0),
         g,
-        speed=5.0,
         initial_state=(0.0, 1.0, 0.0),
         duration=10.0,
         feedforward=False,
@@ -250,10 +250,9 @@ def test_angle_saturation_agrees_with_reference():
     lim = fws.Vehicle(2.7, 1.35, max_steer_front=0.15, max_steer_rear=0.05)
     g = fws.double_root_gains(lim, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
     res = fws.simulate(
-        lim,
+        fws.LateralPlant(lim, speed=5.0),
         Arc(0.1),
         g,
-        speed=5.0,
         initial_state=(0.0, -5.0, 0.0),
         duration=10.0,
         dt=0.05,
@@ -270,15 +269,13 @@ def test_rate_limited_actuator_agrees_with_reference_and_limits_rates():
     g = fws.double_root_gains(lim, speed=5.0, curvature=0.0, ratio=-0.5, pole=-1.0)
     x0 = (0.0, 2.0, 0.0)
     res = fws.simulate(
-        lim,
+        fws.LateralPlant(lim, speed=5.0, steering_lag=0.1),
         Straight(),
         g,
-        speed=5.0,
         initial_state=x0,
         duration=10.0,
         feedforward=False,
         dt=1e-3,
-        actuator_time_constant=0.1,
     )
     assert res.ok
     assert np.max(np.abs(res.delta_f_rate)) == pytest.approx(0.2)
@@ -304,7 +301,11 @@ def test_psi_keeps_the_given_branch_and_is_continuous():
     g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
     psi0 = 2 * math.pi + 0.1
     res = fws.simulate(
-        VEH, Arc(0.1), g, speed=5.0, initial_state=(0.0, -5.0, psi0), duration=20.0
+        fws.LateralPlant(VEH, speed=5.0),
+        Arc(0.1),
+        g,
+        initial_state=(0.0, -5.0, psi0),
+        duration=20.0,
     )
     assert res.psi[0] == pytest.approx(psi0)
     assert np.max(np.abs(np.diff(res.psi))) < 0.05
@@ -323,10 +324,9 @@ def _curve_run(**kw):
 def test_simulate_is_a_squeezed_batch_of_one():
     g, res = _curve_run(dt=0.1)
     batch = fws.simulate_batch(
-        VEH,
+        fws.LateralPlant(VEH, speed=5.0),
         Arc(0.1),
         g,
-        speed=5.0,
         initial_state=(0.0, -5.0, 0.0),
         duration=5.0,
         dt=0.1,
@@ -508,7 +508,12 @@ def test_reversing_agrees_with_interconnected_reference(kappa):
     V, path = -3.0, _path(kappa)
     g = fws.double_root_gains(VEH, speed=V, curvature=kappa, ratio=-0.5, pole=-0.8)
     res = fws.simulate(
-        VEH, path, g, speed=V, initial_state=(0.0, -1.0, 0.1), duration=8.0, dt=0.05
+        fws.LateralPlant(VEH, speed=V),
+        path,
+        g,
+        initial_state=(0.0, -1.0, 0.1),
+        duration=8.0,
+        dt=0.05,
     )
     assert res.ok and res.s[-1] < -10.0  # it really drove backwards
     ref = _reference(VEH, path, g, V, [0.0, -1.0, 0.1], res.t)

@@ -142,10 +142,9 @@ def test_loose_tolerances_still_stop_at_the_singular_steering_angle(rtol, atol, 
 def test_identical_runs_stop_together_and_none_runs_on_past_the_singularity():
     g = fws.SteeringGains(k1=[0.1, 0.1, 0.1], k2=[-0.5, -0.5, 0.5], ratio=0.0)
     res = fws.simulate_batch(
-        VEH,
+        fws.LateralPlant(VEH, speed=5.0),
         Straight(),
         g,
-        speed=5.0,
         initial_state=(0.0, 1.0, 0.0),
         duration=10.0,
         feedforward=False,
@@ -166,7 +165,9 @@ GAIN = fws.SteeringGains(0.1, 0.5, 0.0)
 def _good_runs_alone():
     """The reference: the four good runs, without the failing one."""
     good = np.array([0, 2, 3, 4])
-    return good, fws.simulate_batch(VEH, Straight(), GAIN, speed=SPEEDS[good], **BATCH)
+    return good, fws.simulate_batch(
+        fws.LateralPlant(VEH, speed=SPEEDS[good]), Straight(), GAIN, **BATCH
+    )
 
 
 def _check_isolated(res, good, ref):
@@ -182,7 +183,11 @@ def test_a_failing_run_takes_only_itself_out(chunk_size):
     good, ref = _good_runs_alone()
     with time_limit(30), np.errstate(all="ignore"):
         res = fws.simulate_batch(
-            VEH, Straight(), GAIN, speed=SPEEDS, chunk_size=chunk_size, **BATCH
+            fws.LateralPlant(VEH, speed=SPEEDS),
+            Straight(),
+            GAIN,
+            chunk_size=chunk_size,
+            **BATCH,
         )
     _check_isolated(res, good, ref)
 
@@ -191,7 +196,8 @@ def test_a_failing_run_takes_only_itself_out_on_dask(dask_client):
     good, ref = _good_runs_alone()
     with time_limit(60), np.errstate(all="ignore"):
         res = fws.simulate_batch(
-            VEH, Straight(), GAIN, speed=SPEEDS, chunk_size=2, client=dask_client,
+            fws.LateralPlant(VEH, speed=SPEEDS),
+            Straight(), GAIN, chunk_size=2, client=dask_client,
             **BATCH,
         )  # fmt: skip
     _check_isolated(res, good, ref)
@@ -199,10 +205,12 @@ def test_a_failing_run_takes_only_itself_out_on_dask(dask_client):
 
 def test_lost_dask_tasks_are_marked_and_finished_chunks_kept(dask_client):
     speeds = np.array([5.0, 6.0, 7.0, 8.0, 9.0])
-    local = fws.simulate_batch(VEH, Straight(), GAIN, speed=speeds, **BATCH)
+    local = fws.simulate_batch(
+        fws.LateralPlant(VEH, speed=speeds), Straight(), GAIN, **BATCH
+    )
     with time_limit(60), pytest.warns(RuntimeWarning, match="3 runs of 2 lost"):
         res = fws.simulate_batch(
-            VEH, Straight(), GAIN, speed=speeds, chunk_size=2,
+            fws.LateralPlant(VEH, speed=speeds), Straight(), GAIN, chunk_size=2,
             client=LosingClient(dask_client), **BATCH,
         )  # fmt: skip
     assert res.status.tolist() == ["ok", "ok", "failed", "failed", "failed"]
@@ -220,7 +228,9 @@ def test_a_closed_dask_client_raises_before_any_work():
         client = distributed.Client(cluster)
         client.close()
     with time_limit(30), pytest.raises(RuntimeError, match="closed"):
-        fws.simulate_batch(VEH, Straight(), GAIN, speed=5.0, client=client, **BATCH)
+        fws.simulate_batch(
+            fws.LateralPlant(VEH, speed=5.0), Straight(), GAIN, client=client, **BATCH
+        )
 
 
 # --------------------------------------------------------------------------
@@ -241,7 +251,8 @@ def test_oversized_output_is_refused_at_once_with_the_way_out(kw, runs, samples)
     g = fws.SteeringGains(np.full(runs, 0.1), 0.5, 0.0)
     with time_limit(10), pytest.raises(ValueError) as info:
         fws.simulate_batch(
-            VEH, Straight(), g, speed=5.0, initial_state=(0, 1, 0), duration=15.0,
+            fws.LateralPlant(VEH, speed=5.0),
+            Straight(), g, initial_state=(0, 1, 0), duration=15.0,
             **kw,
         )  # fmt: skip
     msg = str(info.value)
@@ -254,7 +265,8 @@ def test_oversized_output_is_refused_at_once_with_the_way_out(kw, runs, samples)
     if runs == 1:  # simulate and the reference refuse it the same way
         with time_limit(10), pytest.raises(ValueError, match="budget of 2 GiB"):
             fws.simulate(
-                VEH, Straight(), GAIN, speed=5.0, initial_state=(0, 1, 0),
+                fws.LateralPlant(VEH, speed=5.0),
+                Straight(), GAIN, initial_state=(0, 1, 0),
                 duration=15.0, **kw,
             )  # fmt: skip
         with time_limit(10), pytest.raises(ValueError, match="budget of 2 GiB"):
@@ -333,7 +345,8 @@ def test_max_steps_marks_a_run_failed_instead_of_running_on(monkeypatch):
     # (MAX_STEPS is the numpy engine's budget: the compiled engine steps each
     # run alone and has none)
     res = fws.simulate_batch(
-        VEH, Straight(), GAIN, speed=np.array([5.0, 1e6]), chunk_size=2, **BATCH,
+        fws.LateralPlant(VEH, speed=np.array([5.0, 1e6])),
+        Straight(), GAIN, chunk_size=2, **BATCH,
         engine="numpy",
     )  # fmt: skip
     assert res.status.tolist() == ["ok", "failed"]
@@ -428,7 +441,8 @@ def test_to_pandas_without_pandas_names_the_extra_that_installs_it(monkeypatch):
         return real_import(name, *args, **kwargs)
 
     res = fws.simulate(
-        VEH, Straight(), GAIN, speed=5.0, initial_state=(0.0, 1.0, 0.0),
+        fws.LateralPlant(VEH, speed=5.0),
+        Straight(), GAIN, initial_state=(0.0, 1.0, 0.0),
         duration=1.0,
     )  # fmt: skip
     monkeypatch.setattr(builtins, "__import__", no_pandas)
@@ -451,7 +465,7 @@ def test_to_pandas_csv_round_trip_keeps_every_run_and_its_status(tmp_path):
     kw = {"initial_state": (0.0, 1.0, 0.0), "duration": 6.0, "dt": 0.5}
     with np.errstate(all="ignore"):
         sub = fws.simulate_batch(
-            VEH, Straight(), g, speed=speeds, feedforward=False, **kw
+            fws.LateralPlant(VEH, speed=speeds), Straight(), g, feedforward=False, **kw
         )
     res = expand_runs(
         sub, positions=[0, 1, 3], k1=[0.1, 0.1, np.nan, 0.1],
@@ -501,7 +515,8 @@ def test_an_error_of_the_simulation_itself_still_raises_on_dask(dask_client):
     # the centre of the arc has no unique projection: raised as it is locally
     with time_limit(60), pytest.raises(fws.AmbiguousProjectionError):
         fws.simulate_batch(
-            VEH, Arc(0.1), GAIN, speed=5.0, chunk_size=1, client=dask_client,
+            fws.LateralPlant(VEH, speed=5.0),
+            Arc(0.1), GAIN, chunk_size=1, client=dask_client,
             initial_state=[(0.0, 1.0, 0.0), (0.0, 10.0, 0.0)], duration=1.0,
         )  # fmt: skip
 

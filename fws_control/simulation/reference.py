@@ -434,7 +434,7 @@ def simulate_reference(
     >>> ref = simulate_reference(veh, fws.Straight(), g, speed=5.0,
     ...                          initial_state=(0.0, 2.0, 0.0), duration=5.0,
     ...                          delay=0.2)
-    >>> fast = fws.simulate(veh, fws.Straight(), g, speed=5.0,
+    >>> fast = fws.simulate(fws.LateralPlant(veh, speed=5.0), fws.Straight(), g,
     ...                     initial_state=(0.0, 2.0, 0.0), duration=5.0, delay=0.2)
     >>> bool(abs(ref.outputs[4] - fast.e).max() < 1e-3)
     True
