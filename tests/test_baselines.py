@@ -448,10 +448,10 @@ def test_closed_loop_on_arc_matches_reference_and_own_loop(kind):
         if kind == "pp"
         else fws.Stanley(gain=1.0, softening=0.1, ratio=a)
     )
-    kw = dict(speed=V, initial_state=x0, duration=6.0, dt=0.05)
-    res = fws.simulate(VEH, path, ctrl, **kw)
+    kw = dict(initial_state=x0, duration=6.0, dt=0.05)
+    res = fws.simulate(fws.LateralPlant(VEH, speed=V), path, ctrl, **kw)
     assert res.status == "ok"
-    ref = simulate_reference(VEH, path, ctrl, **kw)
+    ref = simulate_reference(VEH, path, ctrl, speed=V, **kw)
     out = dict(zip(ref.output_labels, ref.outputs, strict=True))
     # fast engine vs python-control interconnect: measured <= 1.1e-9 m
     for name in ("x", "y", "e", "theta", "delta_f", "delta_r"):
@@ -931,14 +931,15 @@ def test_per_run_parameters_in_batch_equal_separate_runs():
     path = fws.Arc(curvature=0.05)
     lds = np.array([3.0, 5.0, 8.0])
     ratios = np.array([0.0, -0.3, 0.4])
-    kw = dict(speed=5.0, initial_state=(0.0, -1.0, 0.0), duration=5.0, dt=0.05)
+    kw = dict(initial_state=(0.0, -1.0, 0.0), duration=5.0, dt=0.05)
+    plant = fws.LateralPlant(VEH, speed=5.0)
     batch = fws.simulate_batch(
-        VEH, path, fws.PurePursuit(lookahead=lds, ratio=ratios), **kw
+        plant, path, fws.PurePursuit(lookahead=lds, ratio=ratios), **kw
     )
     assert batch.e.shape == (3, 101)
     finals = []
     for i, (ld, a) in enumerate(zip(lds, ratios, strict=True)):
-        one = fws.simulate(VEH, path, fws.PurePursuit(lookahead=ld, ratio=a), **kw)
+        one = fws.simulate(plant, path, fws.PurePursuit(lookahead=ld, ratio=a), **kw)
         for name in ("x", "y", "psi", "e", "theta", "delta_f", "delta_r"):
             np.testing.assert_allclose(
                 getattr(batch, name)[i], getattr(one, name), rtol=0, atol=1e-8
@@ -1187,7 +1188,7 @@ def test_saturate_keeps_nan_array_elements_in_place():
     [
         (dict(speed=1e-300), "speed"),
         (dict(offset=[0.0, 1.0]), "offset"),
-        (dict(actuator_time_constant=1e-300), "actuator_time_constant"),
+        (dict(steering_lag=1e-300), "steering_lag"),
         (dict(dt=1e300), "dt"),
     ],
 )
@@ -1197,5 +1198,9 @@ def test_issue13_compare_ranges_named(kw, arg):
     veh = fws.Vehicle(2.7, 1.35)
     m = fws.constant_radius(radius=40.0, turns=0.05)
     g = {"4ws": fws.SteeringGains(0.1, 0.5, ratio=0.0)}
+    kw = {"speed": 5.0, "dt": 0.1, **kw}
+    plant = fws.LateralPlant(
+        veh, speed=kw.pop("speed"), steering_lag=kw.pop("steering_lag", None)
+    )
     with pytest.raises(ValueError, match=rf"\b{arg} must be"):
-        fws.compare(veh, m, g, **{"speed": 5.0, "dt": 0.1, **kw})
+        fws.compare(plant, m, g, **kw)

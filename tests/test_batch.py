@@ -152,41 +152,39 @@ def test_gains_sequence_equals_array_gains_and_broadcasting():
     )
     assert c.e.shape == (2, 51)
     np.testing.assert_allclose(c.e[1], a.e[0], atol=1e-9)
-    base = {"speed": 5.0, "initial_state": (0, 2, 0), "duration": 5.0}
+    base = {"initial_state": (0, 2, 0), "duration": 5.0}
+    plant = fws.LateralPlant(VEH, speed=5.0)
+    two = fws.LateralPlant(VEH, speed=[5.0, 20.0])
     with pytest.raises(ValueError, match="same number of runs"):
-        fws.simulate_batch(VEH, Straight(), g, **{**base, "speed": [5.0, 20.0]})
+        fws.simulate_batch(two, Straight(), g, **base)
     with pytest.raises(TypeError, match="SteeringGains"):
-        fws.simulate_batch(VEH, Straight(), [(0.1, 0.2, 0.0)], **base)
+        fws.simulate_batch(plant, Straight(), [(0.1, 0.2, 0.0)], **base)
     with pytest.raises(ValueError, match="chunk_size"):
-        fws.simulate_batch(VEH, Straight(), g, **base, chunk_size=0)
+        fws.simulate_batch(plant, Straight(), g, **base, chunk_size=0)
     with pytest.raises(ValueError, match="chunk_size"):
-        fws.simulate_batch(VEH, Straight(), g, **base, chunk_size=1.5)
+        fws.simulate_batch(plant, Straight(), g, **base, chunk_size=1.5)
     # options are keyword-only
     with pytest.raises(TypeError):
-        fws.simulate_batch(VEH, Straight(), g, 5.0, (0, 2, 0), 5.0)
+        fws.simulate_batch(plant, Straight(), g, (0, 2, 0), 5.0)
 
 
 def test_chunks_give_the_same_runs():
     ratios = np.linspace(-1.0, 0.5, 5)
     g = _gains(5.0, 0.1, ratios)
-    kw = {"speed": 5.0, "initial_state": (0, -5, 0), "duration": 8.0, "dt": 0.05}
-    one = fws.simulate_batch(VEH, Arc(0.1), g, **kw)
-    split = fws.simulate_batch(VEH, Arc(0.1), g, **kw, chunk_size=2)
+    kw = {"initial_state": (0, -5, 0), "duration": 8.0, "dt": 0.05}
+    plant = fws.LateralPlant(VEH, speed=5.0)
+    one = fws.simulate_batch(plant, Arc(0.1), g, **kw)
+    split = fws.simulate_batch(plant, Arc(0.1), g, **kw, chunk_size=2)
     np.testing.assert_allclose(split.e, one.e, rtol=0, atol=1e-6)
 
 
 def test_dask_local_cluster_matches_local_run(dask_client):
     ratios = np.linspace(-1.0, 0.5, 5)
     g = _gains(5.0, 0.1, ratios)
-    kw = {
-        "speed": 5.0,
-        "initial_state": (0, -5, 0),
-        "duration": 8.0,
-        "dt": 0.05,
-        "chunk_size": 2,
-    }
-    local = fws.simulate_batch(VEH, Arc(0.1), g, **kw)
-    remote = fws.simulate_batch(VEH, Arc(0.1), g, client=dask_client, **kw)
+    kw = {"initial_state": (0, -5, 0), "duration": 8.0, "dt": 0.05, "chunk_size": 2}
+    plant = fws.LateralPlant(VEH, speed=5.0)
+    local = fws.simulate_batch(plant, Arc(0.1), g, **kw)
+    remote = fws.simulate_batch(plant, Arc(0.1), g, client=dask_client, **kw)
     # same chunks, same arithmetic: identical, and in the original run order
     np.testing.assert_array_equal(remote.e, local.e)
     np.testing.assert_array_equal(remote.ratio, ratios)
@@ -196,15 +194,15 @@ def test_dask_local_cluster_matches_local_run(dask_client):
 def test_progress_bar_only_when_asked(capsys):
     g = _gains(20.0, 0.0, np.array([-1.0, 0.0]))
     kw = {
-        "speed": 20.0,
         "initial_state": (0.0, 2.0, 0.0),
         "duration": 2.0,
         "feedforward": False,
         "chunk_size": 1,
     }
-    fws.simulate_batch(VEH, Straight(), g, **kw)  # pytest: no TTY
+    plant = fws.LateralPlant(VEH, speed=20.0)
+    fws.simulate_batch(plant, Straight(), g, **kw)  # pytest: no TTY
     assert capsys.readouterr().err == ""
-    fws.simulate_batch(VEH, Straight(), g, **kw, progress=True)
+    fws.simulate_batch(plant, Straight(), g, **kw, progress=True)
     err = capsys.readouterr().err
     assert "simulate_batch" in err and "2/2" in err
 

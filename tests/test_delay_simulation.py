@@ -64,16 +64,17 @@ def test_delayed_engine_agrees_with_the_pade_reference():
     here (measured 3.5e-5 m for a 0.2 s delay on the paper's curve).
     """
     g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
-    kw = dict(speed=5.0, initial_state=(0.0, -1.0, 0.0), duration=6.0, dt=0.05)
+    kw = dict(initial_state=(0.0, -1.0, 0.0), duration=6.0, dt=0.05)
     path = fws.Arc(curvature=0.1)
-    ref = simulate_reference(VEH, path, g, delay=0.3, **kw)
-    fast = fws.simulate(VEH, path, g, delay=0.3, **kw)
+    ref = simulate_reference(VEH, path, g, speed=5.0, delay=0.3, **kw)
+    plant = fws.LateralPlant(VEH, speed=5.0)
+    fast = fws.simulate(plant, path, g, delay=0.3, **kw)
     e_ref = ref.outputs[list(ref.output_labels).index("e")]
     df_ref = ref.outputs[list(ref.output_labels).index("delta_f")]
     assert np.max(np.abs(fast.e - e_ref)) < 1e-4
     assert np.max(np.abs(fast.delta_f - df_ref)) < 2e-3
     # and the delay does something: the undelayed run differs by far more
-    plain = fws.simulate(VEH, path, g, **kw)
+    plain = fws.simulate(plant, path, g, **kw)
     assert np.max(np.abs(plain.e - fast.e)) > 1e-2
 
 

@@ -256,12 +256,13 @@ def test_huge_initial_heading_is_refused():
     assert np.spacing(1e300) > 2 * math.pi and np.spacing(1e6) < 1e-9
     veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     g = fws.SteeringGains(0.1, 0.5, ratio=0.0)
-    kw = dict(speed=5.0, duration=1.0)
+    kw = dict(duration=1.0)
+    plant = fws.LateralPlant(veh, speed=5.0)
     with pytest.raises(ValueError, match=r"initial_state heading psi .* 1e\+300"):
-        fws.simulate(veh, fws.Straight(), g, initial_state=(0.0, 1.0, 1e300), **kw)
+        fws.simulate(plant, fws.Straight(), g, initial_state=(0.0, 1.0, 1e300), **kw)
     with pytest.raises(ValueError, match="initial_state"):
         fws.simulate_batch(
-            veh, fws.Straight(), g, initial_state=[(0, 1, 0), (0, 1, -1e300)], **kw
+            plant, fws.Straight(), g, initial_state=[(0, 1, 0), (0, 1, -1e300)], **kw
         )
     with pytest.raises(ValueError, match="initial_errors"):
         fws.compare_linear_nonlinear(
@@ -270,9 +271,9 @@ def test_huge_initial_heading_is_refused():
     # a large heading that still names a direction runs, and is that direction
     turns = 1e5
     far = fws.simulate(
-        veh, fws.Straight(), g, initial_state=(0.0, 1.0, 2 * math.pi * turns), **kw
+        plant, fws.Straight(), g, initial_state=(0.0, 1.0, 2 * math.pi * turns), **kw
     )
-    near = fws.simulate(veh, fws.Straight(), g, initial_state=(0.0, 1.0, 0.0), **kw)
+    near = fws.simulate(plant, fws.Straight(), g, initial_state=(0.0, 1.0, 0.0), **kw)
     np.testing.assert_allclose(far.e, near.e, atol=1e-8)
 
 

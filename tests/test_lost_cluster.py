@@ -14,13 +14,19 @@ import time
 
 import numpy as np
 import pytest
-from conftest import CURVE_BATCH_KW, CURVE_GAINS_WITH_STOP, dask_distributed
+from conftest import (
+    CURVE_BATCH_KW,
+    CURVE_GAINS_WITH_STOP,
+    CURVE_SPEED,
+    dask_distributed,
+)
 
 import fws_control as fws
 from fws_control.paths import Arc
 from fws_control.simulation import runners
 
 VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+PLANT = fws.LateralPlant(VEH, speed=CURVE_SPEED)
 
 
 # Opened by the test once it is done: the chunks after the first wait for
@@ -56,7 +62,7 @@ def test_cluster_without_workers_gives_up_after_a_bounded_wait(monkeypatch):
     monkeypatch.setattr(runners, "_LOST_CLUSTER_WAIT", 1.0, raising=False)
     monkeypatch.setattr(runners, "_POLL_INTERVAL", 0.1, raising=False)
     kw = dict(CURVE_BATCH_KW, engine="numpy")  # two chunks of 4 and 2 runs
-    local = fws.simulate_batch(VEH, Arc(0.1), CURVE_GAINS_WITH_STOP, **kw)
+    local = fws.simulate_batch(PLANT, Arc(0.1), CURVE_GAINS_WITH_STOP, **kw)
     box = {}
     _GATE.clear()
     with (
@@ -85,7 +91,7 @@ def test_cluster_without_workers_gives_up_after_a_bounded_wait(monkeypatch):
             try:
                 with pytest.warns(RuntimeWarning, match="2 runs of 1 lost"):
                     box["res"] = fws.simulate_batch(
-                        VEH, Arc(0.1), CURVE_GAINS_WITH_STOP,
+                        PLANT, Arc(0.1), CURVE_GAINS_WITH_STOP,
                         client=_GatedClient(client), **kw,
                     )  # fmt: skip
             except BaseException as exc:  # reported by the main thread

@@ -120,8 +120,9 @@ def test_tracking_metrics_single_and_batch_agree_with_direct_computation():
 
 def test_tracking_metrics_of_stopped_run_has_nan_horizon_metrics():
     g = fws.SteeringGains(0.1, -0.5, 0.0)  # runs into |delta_f| = pi/2
-    kw = {"speed": 5.0, "initial_state": (0, 1, 0), "duration": 10.0}
-    res = fws.simulate(VEH, Straight(), g, feedforward=False, **kw)
+    kw = {"initial_state": (0, 1, 0), "duration": 10.0}
+    plant = fws.LateralPlant(VEH, speed=5.0)
+    res = fws.simulate(plant, Straight(), g, feedforward=False, **kw)
     m = fws.tracking_metrics(res)
     assert m.status == "singular_steering"
     assert math.isnan(m.settling_time) and math.isnan(m.rms_error)
@@ -132,7 +133,7 @@ def test_tracking_metrics_of_stopped_run_has_nan_horizon_metrics():
     # the same run in a batch (NaN tail after the stop): the same metrics, up
     # to the integration (the batch shares one solver's steps between its runs)
     both = fws.simulate_batch(
-        VEH,
+        plant,
         Straight(),
         [g, fws.SteeringGains(0.1, 0.5, 0.0)],
         feedforward=False,

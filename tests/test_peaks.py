@@ -21,29 +21,37 @@ def _case(name):
     """Runs whose lateral-acceleration (or other) peaks lie after t = 0."""
     if name == "curve_20, pole -3, a = 0.2":  # Fig. 5(d) minimum: peak at 52 ms
         g = fws.double_root_gains(VEH, speed=20.0, curvature=0.01, ratio=0.2, pole=-3.0)
-        return dict(path=fws.Arc(0.01), gains=g, speed=20.0, initial_state=(0, -10, 0))
+        return dict(
+            plant=fws.LateralPlant(VEH, speed=20.0),
+            path=fws.Arc(0.01),
+            controller=g,
+            initial_state=(0, -10, 0),
+        )
     if name == "straight_20, pole -2, a = 1.05":  # peak at 3 ms
         g = fws.double_root_gains(VEH, speed=20.0, ratio=1.05, pole=-2.0)
         return dict(
+            plant=fws.LateralPlant(VEH, speed=20.0),
             path=fws.Straight(),
-            gains=g,
-            speed=20.0,
+            controller=g,
             initial_state=(0, 2, 0),
             feedforward=False,
         )
     if name == "curve_5, a = -1, delay 0.1 s":  # |e| peaks at 0.17 s
         g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
         return dict(
-            path=fws.Arc(0.1), gains=g, speed=5.0, initial_state=(0, -5, 0), delay=0.1
+            plant=fws.LateralPlant(VEH, speed=5.0),
+            path=fws.Arc(0.1),
+            controller=g,
+            initial_state=(0, -5, 0),
+            delay=0.1,
         )
     if name == "curve_5, a = 0.5, actuator 0.27 s":  # rates peak at 0.3 s
         g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=0.5, pole=-1.0)
         return dict(
+            plant=fws.LateralPlant(VEH, speed=5.0, steering_lag=0.27),
             path=fws.Arc(0.1),
-            gains=g,
-            speed=5.0,
+            controller=g,
             initial_state=(0, -5, 0),
-            actuator_time_constant=0.27,
         )
     raise KeyError(name)
 
@@ -69,8 +77,7 @@ def _peaks(res):
 def test_peaks_do_not_change_when_the_output_step_is_refined_tenfold(name, coarse):
     kw = _case(name)
     runs = {
-        dt: fws.simulate(VEH, **kw, duration=15.0, dt=dt)
-        for dt in (coarse, coarse / 10)
+        dt: fws.simulate(**kw, duration=15.0, dt=dt) for dt in (coarse, coarse / 10)
     }
     (v1, t1), (v2, t2) = (_peaks(r) for r in runs.values())
     assert all(r.status == "ok" for r in runs.values())
@@ -97,9 +104,9 @@ def test_peaks_do_not_change_when_the_output_step_is_refined_tenfold(name, coars
 @pytest.mark.parametrize("name", CASES[:2])
 def test_peaks_against_a_fine_grid_within_its_sampling_error(name):
     kw = _case(name)
-    exact = fws.simulate(VEH, **kw, duration=2.0, dt=0.1)
+    exact = fws.simulate(**kw, duration=2.0, dt=0.1)
     dt = 1e-4
-    fine = fws.simulate(VEH, **kw, duration=2.0, dt=dt)
+    fine = fws.simulate(**kw, duration=2.0, dt=dt)
     v, when = _peaks(exact)
     for j, s in enumerate(PEAK_SIGNALS):
         x = np.abs(getattr(fine, s))
@@ -111,7 +118,7 @@ def test_peaks_against_a_fine_grid_within_its_sampling_error(name):
         assert abs(when[j] - fine.t[k]) <= dt, (s, when[j], fine.t[k])
     # the samples of a 10 ms grid miss the 0.052 s / 0.003 s peaks
     a = PEAK_SIGNALS.index("lateral_accel")
-    coarse = fws.simulate(VEH, **kw, duration=2.0, dt=0.01)
+    coarse = fws.simulate(**kw, duration=2.0, dt=0.01)
     assert v[a] > np.max(np.abs(coarse.lateral_accel)) * (1 + 5e-4)
 
 

@@ -316,9 +316,9 @@ def test_psi_keeps_the_given_branch_and_is_continuous():
 
 def _curve_run(**kw):
     g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
-    args = {"speed": 5.0, "initial_state": (0.0, -5.0, 0.0), "duration": 5.0}
+    args = {"initial_state": (0.0, -5.0, 0.0), "duration": 5.0}
     args.update(kw)
-    return g, fws.simulate(VEH, Arc(0.1), g, **args)
+    return g, fws.simulate(fws.LateralPlant(VEH, speed=5.0), Arc(0.1), g, **args)
 
 
 def test_simulate_is_a_squeezed_batch_of_one():
@@ -359,9 +359,10 @@ def test_simulate_is_a_squeezed_batch_of_one():
 
 def test_squeezed_stopped_run_ends_at_its_stop_and_the_batch_keeps_the_grid():
     g = fws.SteeringGains(k1=0.1, k2=-0.5, ratio=0.0)  # delta_f runs to pi/2
-    kw = {"speed": 5.0, "initial_state": (0.0, 1.0, 0.0), "duration": 10.0}
-    res = fws.simulate(VEH, Straight(), g, feedforward=False, **kw)
-    batch = fws.simulate_batch(VEH, Straight(), g, feedforward=False, **kw)
+    kw = {"initial_state": (0.0, 1.0, 0.0), "duration": 10.0}
+    plant = fws.LateralPlant(VEH, speed=5.0)
+    res = fws.simulate(plant, Straight(), g, feedforward=False, **kw)
+    batch = fws.simulate_batch(plant, Straight(), g, feedforward=False, **kw)
     assert res.status == "singular_steering"
     grid = np.linspace(0.0, 10.0, 1001)
     np.testing.assert_array_equal(batch.t, grid)
@@ -468,37 +469,38 @@ def test_to_time_response_matches_the_python_control_reference():
 
 def test_invalid_arguments():
     g = fws.SteeringGains(0.1, 0.5, 0.0)
-    kw = {"speed": 5.0, "initial_state": (0, 1, 0), "duration": 5.0}
+    kw = {"initial_state": (0, 1, 0), "duration": 5.0}
+    plant = fws.LateralPlant(VEH, speed=5.0)
     # everything after the gains is keyword-only: a positional call fails
     with pytest.raises(TypeError):
-        fws.simulate(VEH, Straight(), g, 5.0, (0, 1, 0), 5.0)
+        fws.simulate(plant, Straight(), g, (0, 1, 0), 5.0)
     with pytest.raises(TypeError):
         fws.closed_loop_system(VEH, Straight(), g, 5.0)
     with pytest.raises(TypeError, match="path"):
-        fws.simulate(VEH, "straight", g, **kw)
-    with pytest.raises(TypeError, match="vehicle"):
+        fws.simulate(plant, "straight", g, **kw)
+    with pytest.raises(TypeError, match="plant"):
         fws.simulate((2.7, 1.35), Straight(), g, **kw)
     with pytest.raises(ValueError, match="speed"):
-        fws.simulate(VEH, Straight(), g, **{**kw, "speed": 0.0})
+        fws.simulate(fws.LateralPlant(VEH, speed=0.0), Straight(), g, **kw)
     with pytest.raises(ValueError, match="duration"):
-        fws.simulate(VEH, Straight(), g, **{**kw, "duration": -1.0})
+        fws.simulate(plant, Straight(), g, **{**kw, "duration": -1.0})
     with pytest.raises(ValueError, match="initial_state"):
-        fws.simulate(VEH, Straight(), g, **{**kw, "initial_state": (0, 1)})
+        fws.simulate(plant, Straight(), g, **{**kw, "initial_state": (0, 1)})
     with pytest.raises(ValueError, match="simulate_batch"):
-        fws.simulate(VEH, Straight(), fws.SteeringGains([0.1, 0.2], 0.5, 0.0), **kw)
+        fws.simulate(plant, Straight(), fws.SteeringGains([0.1, 0.2], 0.5, 0.0), **kw)
     with pytest.raises(ValueError, match="simulate_batch"):
-        fws.simulate(VEH, Straight(), g, **{**kw, "speed": [5.0, 6.0]})
+        fws.simulate(fws.LateralPlant(VEH, speed=[5.0, 6.0]), Straight(), g, **kw)
     with pytest.raises(ValueError, match="simulate_batch"):
-        fws.simulate(VEH, Straight(), g, **{**kw, "initial_state": [(0, 1, 0)] * 2})
+        fws.simulate(plant, Straight(), g, **{**kw, "initial_state": [(0, 1, 0)] * 2})
     with pytest.raises(ValueError, match="t_eval"):
-        fws.simulate(VEH, Straight(), g, **kw, t_eval=[0.0, 6.0])
+        fws.simulate(plant, Straight(), g, **kw, t_eval=[0.0, 6.0])
     with pytest.raises(ValueError, match="method must be one of"):
-        fws.simulate(VEH, Straight(), g, **kw, method="Euler")
+        fws.simulate(plant, Straight(), g, **kw, method="Euler")
     with pytest.raises(ValueError, match="rtol"):
-        fws.simulate(VEH, Straight(), g, **kw, rtol=0.0)
+        fws.simulate(plant, Straight(), g, **kw, rtol=0.0)
     with pytest.raises(AmbiguousProjectionError):
         fws.simulate(
-            VEH, Arc(0.1), g, **{**kw, "initial_state": (0.0, 10.0, 0.0)}
+            plant, Arc(0.1), g, **{**kw, "initial_state": (0.0, 10.0, 0.0)}
         )  # the centre of the circle
 
 
@@ -531,12 +533,8 @@ _G13 = fws.SteeringGains(0.1, 0.5, ratio=0.0)
     [
         (fws.simulate, dict(duration=[1.0, 2.0]), ValueError, "duration"),
         (fws.simulate, dict(dt=np.eye(2)), ValueError, "dt"),
-        (
-            fws.simulate,
-            dict(actuator_time_constant=[0.1, 0.2]),
-            ValueError,
-            "actuator_time_constant",
-        ),  # fmt: skip
+        # a (front, rear) pair of different lags: one time constant is simulated
+        (fws.simulate, dict(steering_lag=[0.1, 0.2]), ValueError, "steering_lag"),
         (fws.simulate, dict(delay=1e-300), ValueError, "delay"),
         (fws.simulate_batch, dict(chunk_size=math.inf), ValueError, "chunk_size"),
         (fws.simulate_batch, dict(chunk_size=math.nan), ValueError, "chunk_size"),
@@ -560,18 +558,24 @@ def test_issue13_bad_run_options_name_the_argument(func, kw, exc, arg):
     # before: float() of an array, OverflowError for chunk_size=inf, a
     # progress flag read by its truth value, a hang (simulate) or a
     # ZeroDivisionError in control.pade (closed_loop_system) for 1e-300 s
-    base = dict(speed=5.0)
-    if func is not fws.closed_loop_system:
-        base.update(initial_state=(0.0, 1.0, 0.0), duration=2.0, dt=0.1)
+    if func is fws.closed_loop_system:
+        with pytest.raises(exc, match=rf"\b{arg}\b"):
+            func(VEH, Straight(), _G13, speed=5.0, **kw)
+        return
+    kw = dict(kw)
+    plant = fws.LateralPlant(VEH, speed=5.0, steering_lag=kw.pop("steering_lag", None))
+    base = dict(initial_state=(0.0, 1.0, 0.0), duration=2.0, dt=0.1)
     with pytest.raises(exc, match=rf"\b{arg}\b"):
-        func(VEH, Straight(), _G13, **{**base, **kw})
+        func(plant, Straight(), _G13, **{**base, **kw})
 
 
 def test_delay_floor_is_duration_over_1e4():
     # the floor is duration / 1e4 (each forced step costs about 1.7 ms of
     # Python right-hand sides: 1e4 steps about 17 s): 2 s / 1e4 = 2e-4 s
-    kw = dict(speed=5.0, initial_state=(0.0, 1.0, 0.0), duration=2.0, dt=0.1)
+    kw = dict(initial_state=(0.0, 1.0, 0.0), duration=2.0, dt=0.1)
     with pytest.raises(
         ValueError, match=r"delay must be 0 or >= duration/10000 = 0.0002 s"
     ):
-        fws.simulate(VEH, Straight(), _G13, delay=1.9e-4, **kw)
+        fws.simulate(
+            fws.LateralPlant(VEH, speed=5.0), Straight(), _G13, delay=1.9e-4, **kw
+        )

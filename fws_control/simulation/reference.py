@@ -220,7 +220,7 @@ def closed_loop_system(
     if tau is None:
         applied = src
     else:
-        syslist.append(steering_actuator(vehicle, time_constant=tau, name="actuator"))
+        syslist.append(steering_actuator(vehicle, steering_lag=tau, name="actuator"))
         connections += [
             ["actuator.delta_f_cmd", src["f"]],
             ["actuator.delta_r_cmd", src["r"]],
