@@ -362,15 +362,16 @@ def _resolve_plant(plant: Any, kwargs: dict) -> tuple:
         reject_unknown("compare", kwargs)
         if np.ndim(plant.speed) != 0:
             raise ValueError(
-                "plant.speed must be one speed for compare (one row per "
-                f"controller), got an array of shape {np.shape(plant.speed)}"
+                "plant.speed must be one speed in [0.1, 100] m/s for compare (one "
+                f"row per controller), got an array of shape {np.shape(plant.speed)}: "
+                f"{np.array2string(np.asarray(plant.speed), threshold=6)}"
             )
         lag = plant.steering_lag
         if lag is not None:
             if lag[0] != lag[1]:
                 raise ValueError(
                     "plant.steering_lag must hold one time constant for both "
-                    f"axles in the simulation (front == rear), got {lag!r}"
+                    f"axles in the simulation (front == rear >= 0.001 s), got {lag!r}"
                 )
             lag = lag[0]
         return plant.vehicle, plant.speed, lag, plant

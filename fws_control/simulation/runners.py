@@ -46,6 +46,7 @@ from ..metrics import HORIZON_METRICS, tracking_metrics
 from ..paths import Path
 from ..plant import LateralPlant
 from ..validation import (
+    MAX_SPEED,
     check_bool,
     check_delay,
     check_nonzero,
@@ -1346,8 +1347,10 @@ def simulate(
     )
     if isinstance(plant, LateralPlant) and np.ndim(speed) != 0:
         raise ValueError(
-            f"plant.speed must be one speed for simulate, got an array of shape "
-            f"{np.shape(speed)}; use simulate_batch for several runs"
+            "plant.speed must be one speed (a scalar, nonzero, at most "
+            f"{MAX_SPEED:g} m/s) for simulate, got an array of shape "
+            f"{np.shape(speed)}: {np.array2string(np.asarray(speed), threshold=6)}; "
+            "use simulate_batch for several runs"
         )
     return _simulate_run(
         vehicle,
