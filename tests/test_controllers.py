@@ -186,7 +186,7 @@ def test_actuator_step_response_matches_closed_form():
 
 
 def test_actuator_time_constant_must_be_positive():
-    with pytest.raises(ValueError, match="time_constant"):
+    with pytest.raises(ValueError, match="steering_lag"):
         fws.steering_actuator(VEH, steering_lag=0.0)
 
 

@@ -501,18 +501,11 @@ CASES: dict[str, Case] = {
     "compare": Case(
         fws.compare,
         dict(
-            vehicle=VEH,
+            plant=fws.LateralPlant(VEH, speed=5.0),
             manoeuvre=_Lazy(lambda: fws.constant_radius(radius=40.0, turns=0.05)),
             controllers=_Lazy(lambda: {"4ws": GAINS}),
         ),
-        dict(
-            speed=5.0,
-            offset=0.0,
-            delay=0.0,
-            actuator_time_constant=None,
-            dt=0.1,
-            max_steps=1000.0,
-        ),
+        dict(offset=0.0, delay=0.0, dt=0.1, max_steps=1000.0),
         post=lambda r, c: _finite_tree(r.table),
         examples=FEW,
     ),
@@ -605,18 +598,16 @@ CASES: dict[str, Case] = {
     "feedforward_feedback_controller": Case(
         fws.feedforward_feedback_controller, dict(vehicle=VEH, gains=GAINS)
     ),
-    "steering_actuator": Case(fws.steering_actuator, V, dict(time_constant=0.05)),
+    "steering_actuator": Case(fws.steering_actuator, V, dict(steering_lag=0.05)),
     "simulate": Case(
         fws.simulate,
-        dict(vehicle=VEH, path=ARC, gains=GAINS),
+        dict(plant=fws.LateralPlant(VEH, speed=5.0), path=ARC, controller=GAINS),
         dict(
-            speed=5.0,
             initial_state=(0.0, -1.0, 0.0),
             duration=2.0,
             feedforward=True,
             dt=0.1,
             t_eval=None,
-            actuator_time_constant=None,
             delay=0.0,
             method="DOP853",
             rtol=1e-6,
@@ -634,15 +625,17 @@ CASES: dict[str, Case] = {
     "projection_system": Case(fws.projection_system, dict(path=ARC)),
     "simulate_batch": Case(
         fws.simulate_batch,
-        dict(vehicle=VEH, path=ARC, gains=GAINS),
         dict(
-            speed=np.array([5.0, 4.0]),
+            plant=fws.LateralPlant(VEH, speed=np.array([5.0, 4.0])),
+            path=ARC,
+            controllers=GAINS,
+        ),
+        dict(
             initial_state=(0.0, -1.0, 0.0),
             duration=2.0,
             feedforward=True,
             dt=0.1,
             t_eval=None,
-            actuator_time_constant=None,
             delay=0.0,
             method="DOP853",
             rtol=1e-6,
@@ -896,10 +889,10 @@ TARGETED: dict[str, list[Probe]] = {
     ],
     "an array of designs where one design is expected": [
         Probe("compare", "controllers", "sweep of k1", _Lazy(lambda: {"4ws": _SWEEP})),
+        Probe("simulate", "controller", "sweep of k1", _SWEEP, post=refused),
         *(
             Probe(name, "gains", "sweep of k1", _SWEEP, post=refused)
             for name in (
-                "simulate",
                 "compare_linear_nonlinear",
                 "closed_loop",
                 "gain_loop",

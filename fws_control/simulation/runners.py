@@ -784,7 +784,7 @@ def _simulate_run(
     )
     if n_gains != 1:
         raise ValueError(
-            f"gains must be scalar for simulate (got {n_gains} designs); use "
+            f"controller must be scalar for simulate (got {n_gains} designs); use "
             "simulate_batch for several runs"
         )
     if np.size(speed) != 1:
