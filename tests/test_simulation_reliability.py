@@ -72,7 +72,9 @@ def test_bad_tolerances_are_refused_promptly_naming_argument_value_range(
     calls = (
         lambda: fws.simulate(PLANT, Arc(0.1), g, **PAPER, rtol=rtol, atol=atol),
         lambda: fws.simulate_batch(PLANT, Arc(0.1), g, **PAPER, rtol=rtol, atol=atol),
-        lambda: simulate_reference(VEH, Arc(0.1), g, **PAPER, rtol=rtol, atol=atol),
+        lambda: simulate_reference(
+            VEH, Arc(0.1), g, speed=5.0, **PAPER, rtol=rtol, atol=atol
+        ),
     )
     with time_limit(20):
         for call in calls:
@@ -86,7 +88,7 @@ def test_bad_tolerances_are_refused_promptly_naming_argument_value_range(
 def test_tolerances_at_the_ends_of_their_ranges_are_accepted():
     g = _paper_gains()
     kw = {**PAPER, "duration": 5.0}
-    ref = simulate_reference(VEH, Arc(0.1), g, **kw, rtol=1e-12, atol=1e-14)
+    ref = simulate_reference(VEH, Arc(0.1), g, speed=5.0, **kw, rtol=1e-12, atol=1e-14)
     e_ref = ref.outputs[ref.output_labels.index("e")]
     with time_limit(20):
         tight = fws.simulate(PLANT, Arc(0.1), g, **kw, rtol=100 * EPS, atol=1e-20)
