@@ -20,7 +20,7 @@ def main(n: int = 5000, seed: int = 1) -> None:
     worst = {"acker": 0.0, "place": 0.0, "poly": 0.0}
     used = 0
     for _ in range(n):
-        model = str(rng.choice(["exact", "paper"]))
+        model = str(rng.choice(["kinematic", "paper"]))
         V, k = rng.uniform(1, 40), rng.uniform(-0.3, 0.3)
         a, lam = rng.uniform(-2, 2), rng.uniform(-5, -0.1)
         plant = fws.LateralPlant(veh, speed=V, curvature=k, model=model)

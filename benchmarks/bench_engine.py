@@ -309,19 +309,20 @@ def main() -> None:
     t_floor = nfev * t_rhs
 
     # 1. simulate_batch, default engine (all signals, exact peaks)
-    batch_kw = dict(speed=sc.speed, initial_state=x0, duration=sc.duration,
+    plant = fws.LateralPlant(veh, speed=sc.speed)
+    batch_kw = dict(initial_state=x0, duration=sc.duration,
                     t_eval=t, progress=False)  # fmt: skip
     g4 = fws.SteeringGains(g.k1[:4], g.k2[:4], g.ratio[:4])  # warm-up
-    fws.simulate_batch(veh, sc.path, g4, **{**batch_kw, "t_eval": t[:101]})
+    fws.simulate_batch(plant, sc.path, g4, **{**batch_kw, "t_eval": t[:101]})
     out_b = {}
 
     def batch():
-        out_b["r"] = fws.simulate_batch(veh, sc.path, g, **batch_kw)
+        out_b["r"] = fws.simulate_batch(plant, sc.path, g, **batch_kw)
 
     reused = np.empty((n, len(SIGNALS), t.size))
 
     def batch_out():
-        fws.simulate_batch(veh, sc.path, g, **batch_kw, out=reused)
+        fws.simulate_batch(plant, sc.path, g, **batch_kw, out=reused)
 
     # 3. loop of solve_ivp with a scalar right-hand side
     idx = np.linspace(0, n - 1, min(args.loop_runs, n)).astype(int)
@@ -373,7 +374,7 @@ def main() -> None:
     # the previous result is kept alive meanwhile, so that its freeing (also
     # system time: 121 ms for 1.8 GB of 4 kB pages) is not in the split
     ru0 = resource.getrusage(resource.RUSAGE_SELF)
-    extra = fws.simulate_batch(veh, sc.path, g, **batch_kw)
+    extra = fws.simulate_batch(plant, sc.path, g, **batch_kw)
     ru1 = resource.getrusage(resource.RUSAGE_SELF)
     del extra
     split = ((ru1.ru_utime - ru0.ru_utime) / n, (ru1.ru_stime - ru0.ru_stime) / n,
@@ -392,7 +393,7 @@ def main() -> None:
     out_n = {}
 
     def numpy_batch():
-        out_n["r"] = fws.simulate_batch(veh, sc.path, gn, **batch_kw, engine="numpy")
+        out_n["r"] = fws.simulate_batch(plant, sc.path, gn, **batch_kw, engine="numpy")
 
     t_numpy = best_of(numpy_batch, repeat=args.repeat) / nn
     d_peaks = float(np.max(np.abs(rb.run_peak[sel] - out_n["r"].run_peak)
@@ -422,13 +423,13 @@ def main() -> None:
 
     t_one_full = best_of(one_full, repeat=max(args.repeat, 5), number=20)
     sg = fws.SteeringGains(float(g.k1[0]), float(g.k2[0]), float(g.ratio[0]))
-    sim_kw = dict(speed=sc.speed, initial_state=x0, duration=sc.duration)
-    one_default = fws.simulate(veh, sc.path, sg, **sim_kw)  # warm-up
-    t_sim = best_of(lambda: fws.simulate(veh, sc.path, sg, **sim_kw),
+    sim_kw = dict(initial_state=x0, duration=sc.duration)
+    one_default = fws.simulate(plant, sc.path, sg, **sim_kw)  # warm-up
+    t_sim = best_of(lambda: fws.simulate(plant, sc.path, sg, **sim_kw),
                     repeat=max(args.repeat, 5), number=20)  # fmt: skip
-    one_numpy = fws.simulate(veh, sc.path, sg, **sim_kw, engine="numpy")
+    one_numpy = fws.simulate(plant, sc.path, sg, **sim_kw, engine="numpy")
     d_sim = float(np.nanmax(np.abs(one_default.signals - one_numpy.signals)))
-    t_sim_n = best_of(lambda: fws.simulate(veh, sc.path, sg, **sim_kw,
+    t_sim_n = best_of(lambda: fws.simulate(plant, sc.path, sg, **sim_kw,
                                            engine="numpy"),
                       repeat=args.repeat, number=3)  # fmt: skip
 

@@ -145,10 +145,9 @@ def main() -> None:
     if args.runs * 1501 * 2 * 8 > MAX_OUTPUT_BYTES:
         try:  # refused before any work: the budget counts the kept signals
             fws.simulate_batch(
-                PAPER_VEHICLE,
+                fws.LateralPlant(PAPER_VEHICLE, speed=sc.speed),
                 sc.path,
                 g,
-                speed=sc.speed,
                 initial_state=sc.initial_state,
                 duration=sc.duration,
                 engine=args.engine,

@@ -257,8 +257,9 @@ def main() -> None:
 
     def simulate(tau, rate, engine, method="auto"):
         return fws.simulate(
-            vehicle(rate), sc.path, g, speed=sc.speed, initial_state=sc.initial_state,
-            duration=D, dt=DT_OUT, actuator_time_constant=tau, engine=engine,
+            fws.LateralPlant(vehicle(rate), speed=sc.speed, steering_lag=tau),
+            sc.path, g, initial_state=sc.initial_state,
+            duration=D, dt=DT_OUT, engine=engine,
             method=method, rtol=RTOL, atol=ATOL,
         )  # fmt: skip
 

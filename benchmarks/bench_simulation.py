@@ -64,18 +64,19 @@ def main() -> None:
         f"{t.size} output times"
     )
 
-    kw = {"speed": sc.speed, "initial_state": x0}
-    fws.simulate_batch(veh, path, g, **kw, duration=1.0, progress=False)  # warm-up
+    kw = {"initial_state": x0}
+    plant = fws.LateralPlant(veh, speed=sc.speed)
+    fws.simulate_batch(plant, path, g, **kw, duration=1.0, progress=False)  # warm-up
 
     def run_batch():
         return fws.simulate_batch(
-            veh, path, g, **kw, duration=sc.duration, t_eval=t, progress=False
+            plant, path, g, **kw, duration=sc.duration, t_eval=t, progress=False
         )
 
     def run_singles():
         return [
             fws.simulate(
-                veh,
+                plant,
                 path,
                 fws.SteeringGains(g.k1[i], g.k2[i], g.ratio[i]),
                 **kw,

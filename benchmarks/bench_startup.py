@@ -130,7 +130,7 @@ for name in FIGURES:
     plt.close(fig)
 from pathlib import Path
 t = T()
-_summary_text("exact", [Path(n + ".png") for n in FIGURES])
+_summary_text("kinematic", [Path(n + ".png") for n in FIGURES])
 print("summary", T() - t)
 """
 

@@ -46,11 +46,11 @@ def main() -> None:
     n = args.runs
     g = fws.double_root_gains(PAPER_VEHICLE, speed=5.0, curvature=0.1,
                               ratio=np.linspace(-1.0, 0.5, n), pole=-1.0)  # fmt: skip
-    base = dict(speed=5.0, initial_state=(0.0, -5.0, 0.0), dt=0.1,
-                actuator_time_constant=0.05, progress=False)  # fmt: skip
+    base = dict(initial_state=(0.0, -5.0, 0.0), dt=0.1, progress=False)
+    plant = fws.LateralPlant(PAPER_VEHICLE, speed=5.0, steering_lag=0.05)
 
     def run(**kw):
-        return fws.simulate_batch(PAPER_VEHICLE, fws.Arc(0.1), g, **base, **kw)
+        return fws.simulate_batch(plant, fws.Arc(0.1), g, **base, **kw)
 
     run(duration=2.0, method="DOP853", engine="compiled")  # numba warm-up
     print(f"{n} runs, CPU per run [ms], best of {args.repeat}:")

@@ -32,10 +32,9 @@ def run(speed, curvature, e0, ratios):
     plant = fws.LateralPlant(veh, speed=speed, curvature=curvature)
     gains = fws.double_root_gains(plant, ratio=ratios, pole=-1.0)
     return fws.simulate_batch(
-        veh,
+        fws.LateralPlant(veh, speed=speed),
         Arc(curvature=curvature),
         gains,
-        speed=speed,
         initial_state=(0.0, e0, 0.0),
         duration=15.0,
         dt=0.02,

@@ -31,7 +31,7 @@ import fws_control as fws
 from fws_control.paths import Arc
 
 veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-plant = fws.LateralPlant(veh, speed=5.0, curvature=0.1)  # model="exact"
+plant = fws.LateralPlant(veh, speed=5.0, curvature=0.1)  # model="kinematic"
 sys = fws.linearize(plant)
 print(sys)
 
@@ -70,7 +70,11 @@ print("paper's gains, true poles:", np.round(np.sort(poles.real), 3))
 # kinematic model with curvature feedforward and the feedback gains.
 
 res = fws.simulate(
-    veh, Arc(curvature=0.1), g, speed=5.0, initial_state=(0.0, -5.0, 0.0), duration=15.0
+    fws.LateralPlant(veh, speed=5.0),
+    Arc(curvature=0.1),
+    g,
+    initial_state=(0.0, -5.0, 0.0),
+    duration=15.0,
 )
 print(f"status: {res.status}, final lateral error {res.e[-1]:.1e} m")
 print(f"peak lateral acceleration of G: {np.max(np.abs(res.lateral_accel)):.2f} m/s^2")

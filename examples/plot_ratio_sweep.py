@@ -45,10 +45,9 @@ for title, speed, kappa, e0 in scenarios:
         plant = fws.LateralPlant(veh, speed=speed, curvature=kappa)
         gains = fws.double_root_gains(plant, ratio=ratios, pole=pole)
         batch = fws.simulate_batch(
-            veh,
+            fws.LateralPlant(veh, speed=speed),
             path,
             gains,
-            speed=speed,
             initial_state=(0.0, e0, 0.0),
             duration=15.0,
             feedforward=kappa != 0.0,

@@ -58,10 +58,9 @@ runs = {
 results = {}
 for label, ff in runs.items():
     results[label] = fws.simulate(
-        veh,
+        fws.LateralPlant(veh, speed=speed),
         course,
         g,
-        speed=speed,
         initial_state=(0.0, -3.0, 0.2),
         duration=course.length / speed,
         feedforward=ff,

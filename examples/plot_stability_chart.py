@@ -117,7 +117,7 @@ ax.legend()
 
 fig, ax = plt.subplots(figsize=(6, 5), layout="constrained")
 k2_wide = np.linspace(-1.0, 2.0, 451)
-for color, model in (("C0", "exact"), ("C3", "paper")):
+for color, model in (("C0", "kinematic"), ("C3", "paper")):
     plant = fws.LateralPlant(veh, speed=5.0, curvature=0.2, model=model)
     ch = fws.stability_chart(plant, ratio=0.5, k1=k1, k2=k2_wide, pole=-1.0)
     ch.plot(
@@ -132,7 +132,7 @@ for color, model in (("C0", "exact"), ("C3", "paper")):
 ax.legend(
     handles=[
         Patch(facecolor=c, alpha=0.4, label=f"{m} model")
-        for c, m in (("C0", "exact"), ("C3", "paper"))
+        for c, m in (("C0", "kinematic"), ("C3", "paper"))
     ],
     fontsize=8,
 )

@@ -136,7 +136,8 @@ class LateralController:
     ...     def steering(self, vehicle, path, *, s, e, theta, curvature, speed):
     ...         return -self.k * e, 0.0 * e
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> res = fws.simulate(veh, fws.Straight(), LateralOnly(), speed=5.0,
+    >>> plant = fws.LateralPlant(veh, speed=5.0)
+    >>> res = fws.simulate(plant, fws.Straight(), LateralOnly(),
     ...                    initial_state=(0.0, 1.0, 0.0), duration=1.0)
     >>> round(float(res.delta_f[0]), 6)
     -0.1

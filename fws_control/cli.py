@@ -195,6 +195,29 @@ def _finite(text: str) -> float:
     return v
 
 
+def _model_type(flag: str):
+    """The argparse type of a linearisation option such as ``--model``.
+
+    A deprecated name (``exact``) is read as its current name
+    (``kinematic``) with a one-line warning on stderr.
+    """
+
+    def model(text: str) -> str:
+        from .deprecation import LEGACY_MODELS, REMOVED_IN
+
+        if text in LEGACY_MODELS:
+            new = LEGACY_MODELS[text]
+            _say(
+                f"{PROG}: warning: {flag} {text} is deprecated and is removed in "
+                f"fws_control {REMOVED_IN}; use {flag} {new}"
+            )
+            return new
+        return text
+
+    model.__name__ = flag.lstrip("-").replace("-", "_")  # argparse's messages
+    return model
+
+
 def _angle_deg(text: str) -> float:
     """A finite angle in degrees whose magnitude names a direction."""
     from .validation import MAX_ANGLE
@@ -299,9 +322,11 @@ def _add_operating_point(p, curvature_default: float = DEFAULT_CURVATURE) -> Non
     )
     p.add_argument(
         "--model",
-        choices=("exact", "paper"),
-        default="exact",
-        help="linearisation: exact Jacobian or the paper's eq. (33) (exact)",
+        type=_model_type("--model"),
+        choices=("kinematic", "paper"),
+        default="kinematic",
+        help="linearisation: the exact Jacobian of the kinematic model or the "
+        "paper's eq. (33) (kinematic)",
     )
 
 
@@ -425,8 +450,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--design-model",
-        choices=("exact", "paper"),
-        help="model of the re-design (default --model); --model exact "
+        type=_model_type("--design-model"),
+        choices=("kinematic", "paper"),
+        help="model of the re-design (default --model); --model kinematic "
         "--design-model paper shows where the paper's gains put the true poles",
     )
     p.add_argument(
@@ -590,9 +616,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--model",
-        choices=("exact", "paper"),
-        default="exact",
-        help="linearisation of the charts and designs (exact)",
+        type=_model_type("--model"),
+        choices=("kinematic", "paper"),
+        default="kinematic",
+        help="linearisation of the charts and designs (kinematic)",
     )
     p.add_argument(
         "--quick",
@@ -874,7 +901,7 @@ def _cmd_gains(args) -> int:
         f"V = {args.speed:g} m/s, kappa = {args.curvature:g} 1/m, a = {args.ratio:g}, "
         f"lambda0 = {args.pole:g} 1/s, f = {veh.wheelbase:g} m"
     )
-    order = [args.model] + [m for m in ("exact", "paper") if m != args.model]
+    order = [args.model] + [m for m in ("kinematic", "paper") if m != args.model]
     for model in order:
         try:
             g = double_root_gains(
@@ -896,7 +923,7 @@ def _cmd_gains(args) -> int:
         print(f"{model} model{tag}:")
         print(f"  k1 = {float(g.k1):.6f} rad/m   k2 = {float(g.k2):.6f}")
         print(f"  k3 = {float(g.k3):.6f} rad/m   k4 = {float(g.k4):.6f}")
-        for lin in ("exact", "paper"):
+        for lin in ("kinematic", "paper"):
             poles = _closed_loop_poles(_plant(args, veh, lin), g, args.ratio)
             print(f"  closed-loop poles, {lin} linearisation: {_fmt_poles(poles)}")
     return 0
@@ -1204,6 +1231,7 @@ def _cmd_compare(args) -> int:
         obstacle_avoidance,
         slalom,
     )
+    from .plant import LateralPlant
 
     _check_out(args.out)
     if args.speed < COMPARE_MIN_SPEED:
@@ -1227,15 +1255,8 @@ def _cmd_compare(args) -> int:
     }[args.manoeuvre]()
     veh = _vehicle(args)
     ctrls = default_controllers(veh, speed=args.speed, ratio=args.ratio, pole=args.pole)
-    cmp = compare(
-        veh,
-        course,
-        ctrls,
-        speed=args.speed,
-        offset=args.offset,
-        delay=args.delay,
-        actuator_time_constant=args.steering_lag,
-    )
+    plant = LateralPlant(veh, speed=args.speed, steering_lag=args.steering_lag)
+    cmp = compare(plant, course, ctrls, offset=args.offset, delay=args.delay)
     cplt = cmp.plot()
     _save(cplt.figure, args.out)
     plt.close(cplt.figure)
@@ -1525,7 +1546,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     >>> main(["gains", "--speed", "5", "--curvature", "0", "--ratio", "-1",
     ...       "--pole", "-1e0"])  # doctest: +ELLIPSIS
     V = 5 m/s, kappa = 0 1/m, a = -1, lambda0 = -1 1/s, f = 2.7 m
-    exact model:
+    kinematic model:
     ...
     0
     """

@@ -315,7 +315,7 @@ def compare_linear_nonlinear(
     if p.model == "dynamic" or p.steering_lag is not None:
         # the nonlinear run here is the kinematic model without actuator
         raise ValueError(
-            "compare_linear_nonlinear compares the kinematic models ('exact', "
+            "compare_linear_nonlinear compares the kinematic models ('kinematic', "
             f"'paper') without a steering lag, got model={p.model!r}, "
             f"steering_lag={p.steering_lag!r}"
         )
@@ -360,10 +360,9 @@ def compare_linear_nonlinear(
     t = np.arange(0.0, duration + 0.5 * dt, dt)
     t = t[t <= duration]
     nl = simulate(
-        vehicle,
+        p,  # the kinematic models (both linearisations) simulate alike
         path,
         gains,
-        speed=speed,
         initial_state=initial_state,
         duration=duration,
         feedforward=feedforward,

@@ -46,6 +46,7 @@ from .baselines import (
     Stanley,
     StateFeedback,
 )
+from .deprecation import legacy_keyword, reject_unknown, warn_deprecated
 from .design import double_root_gains
 from .gains import SteeringGains
 from .manoeuvres import Manoeuvre
@@ -153,8 +154,8 @@ class ControllerComparison:
     >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     >>> m = fws.double_lane_change()
-    >>> cmp = fws.compare(veh, m, {"Stanley": fws.Stanley(gain=1.0)}, speed=10.0,
-    ...                   offset=0.3)
+    >>> plant = fws.LateralPlant(veh, speed=10.0)
+    >>> cmp = fws.compare(plant, m, {"Stanley": fws.Stanley(gain=1.0)}, offset=0.3)
     >>> cmp.labels, bool(cmp.table["completed"][0])
     (('Stanley',), True)
     """
@@ -343,41 +344,97 @@ def _time_scales(controllers: dict, *, speed: float, delay: float, tau) -> list:
     return scales
 
 
+def _resolve_plant(plant: Any, kwargs: dict) -> tuple:
+    """``(vehicle, speed, steering lag, plant or None)`` of a :func:`compare`
+    call; None for the deprecated Vehicle form (built after the checks)."""
+    if isinstance(plant, LateralPlant):
+        given = [
+            k
+            for k in ("speed", "steering_lag", "actuator_time_constant")
+            if k in kwargs
+        ]
+        if given:
+            raise TypeError(
+                f"compare(): {', '.join(k + '=' for k in given)} applies only to "
+                "the deprecated Vehicle form; the LateralPlant already holds its "
+                "speed and steering lag"
+            )
+        reject_unknown("compare", kwargs)
+        if np.ndim(plant.speed) != 0:
+            raise ValueError(
+                "plant.speed must be one speed in [0.1, 100] m/s for compare (one "
+                f"row per controller), got an array of shape {np.shape(plant.speed)}: "
+                f"{np.array2string(np.asarray(plant.speed), threshold=6)}"
+            )
+        lag = plant.steering_lag
+        if lag is not None:
+            if lag[0] != lag[1]:
+                raise ValueError(
+                    "plant.steering_lag must hold one time constant for both "
+                    f"axles in the simulation (front == rear >= 0.001 s), got {lag!r}"
+                )
+            lag = lag[0]
+        return plant.vehicle, plant.speed, lag, plant
+    if isinstance(plant, Vehicle):
+        if "speed" not in kwargs:
+            raise TypeError(
+                "compare(): plant must be a fws.LateralPlant (vehicle, speed, "
+                "steering lag), got a Vehicle without speed=; pass "
+                "fws.LateralPlant(vehicle, speed=...)"
+            )
+        warn_deprecated(
+            "compare(vehicle, manoeuvre, controllers, speed=...)",
+            "compare(plant, manoeuvre, controllers) and pass a "
+            "fws.LateralPlant(vehicle, speed=..., steering_lag=...) as the plant",
+        )
+        speed = kwargs.pop("speed")
+        lag = legacy_keyword(
+            kwargs, "actuator_time_constant", "steering_lag",
+            kwargs.pop("steering_lag", None),
+        )  # fmt: skip
+        reject_unknown("compare", kwargs)
+        return plant, speed, lag, None
+    raise TypeError(
+        "compare(): plant must be a fws.LateralPlant (vehicle, speed, steering "
+        f"lag), got {type(plant).__name__}"
+    )
+
+
 def compare(
-    vehicle: Vehicle,
+    plant: LateralPlant,
     manoeuvre: Manoeuvre,
     controllers: dict[str, Any],
     *,
-    speed: float,
     offset: float = 0.0,
     delay: float = 0.0,
-    actuator_time_constant: float | None = None,
     dt: float = 0.01,
     max_steps: float = COMPARE_MAX_STEPS,
+    **kwargs: Any,
 ) -> ControllerComparison:
     """Run every controller on the same plant and course; tabulate metrics.
 
     Parameters
     ----------
-    vehicle : Vehicle
-        Geometry and steering limits (shared by all runs).
+    plant : LateralPlant
+        The simulated system shared by all runs, as in
+        :func:`~fws_control.simulate`: the vehicle (geometry and steering
+        limits), one speed in [0.1, 100] m/s, the model and tyre, and the
+        steering lag (None, or one time constant >= 1e-3 s for both axles;
+        rate limits of the vehicle apply through it). Its curvature is not
+        used.
     manoeuvre : Manoeuvre
         The course (e.g. :func:`~fws_control.double_lane_change`).
     controllers : dict
         Label -> :class:`SteeringGains` (the paper's law with feedforward) or
         a :class:`~fws_control.LateralController`.
-    speed : float
-        Speed [m/s], in [0.1, 100].
     offset : float, optional
         Lateral offset [m] of R from the centre line at the start (the entry
         of the first gate, heading along the course); positive left; at
         most 10 m either way.
     delay : float, optional
         Input delay on the steering command [s] (all runs); 0 or at least
-        the run's duration / 1e4 (see :func:`~fws_control.simulate`).
-    actuator_time_constant : float, optional
-        Steering actuator time constant [s] (all runs), None or >= 1e-3 s;
-        rate limits of the vehicle apply through it.
+        the run's duration / 1e4 (see :func:`~fws_control.simulate`): a
+        property of the loop, not of the plant.
     dt : float, optional
         Output spacing [s], > 0 and at most a tenth of the run's duration.
     max_steps : float, optional
@@ -388,6 +445,12 @@ def compare(
         100 times it. A larger request raises ValueError before any run,
         saying the estimate; pass a larger `max_steps` to run it anyway
         (minutes to hours).
+    **kwargs
+        Deprecated calling form, accepted until fws_control 0.4 with a
+        :class:`FutureWarning`: a :class:`~fws_control.Vehicle` as `plant`
+        with ``speed=`` and ``steering_lag=`` (formerly
+        ``actuator_time_constant=``). Any other keyword raises
+        :class:`TypeError`.
 
     Returns
     -------
@@ -397,13 +460,13 @@ def compare(
     --------
     >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> cmp = fws.compare(veh, fws.double_lane_change(),
-    ...                   {"pure pursuit": fws.PurePursuit(lookahead=5.0)},
-    ...                   speed=10.0)
+    >>> cmp = fws.compare(fws.LateralPlant(veh, speed=10.0),
+    ...                   fws.double_lane_change(),
+    ...                   {"pure pursuit": fws.PurePursuit(lookahead=5.0)})
     >>> int(cmp.table["cones hit"][0])
     0
     """
-    check_type("vehicle", vehicle, Vehicle)
+    vehicle, speed, lag, plant = _resolve_plant(plant, kwargs)
     check_type("manoeuvre", manoeuvre, Manoeuvre)
     if not isinstance(controllers, dict) or not controllers:
         raise TypeError("controllers must be a non-empty dict of label -> controller")
@@ -422,15 +485,16 @@ def compare(
             f"offset must be within +-{_MAX_OFFSET:g} m of the centre line, "
             f"got {offset!r}"
         )
-    if actuator_time_constant is not None:
-        tau = check_scalar("actuator_time_constant", actuator_time_constant)
+    if lag is not None:
+        tau = check_scalar("steering_lag", lag)
         if tau < _MIN_TIME_CONSTANT:
             # a faster actuator is none: the stiff lag then breaks the solver
             # (1e-300 s: "Factor is exactly singular"); None models none
             raise ValueError(
-                f"actuator_time_constant must be None or >= {_MIN_TIME_CONSTANT:g} "
-                f"s, got {actuator_time_constant!r}"
+                f"steering_lag must be None or >= {_MIN_TIME_CONSTANT:g} s, got {lag!r}"
             )
+    if plant is None:  # the deprecated Vehicle form, checked above
+        plant = LateralPlant(vehicle, speed=V, steering_lag=lag)
     # Start at the first gate's entry (the approach is straight, so a delay's
     # held initial history is the straight-road command) and stop once R has
     # passed the last gate: the run covers the course and nothing else.
@@ -449,7 +513,7 @@ def compare(
     if not budget > 0.0:
         raise ValueError(f"max_steps must be > 0, got {max_steps!r}")
     tau_d = check_delay(delay)
-    tau_a = None if actuator_time_constant is None else tau
+    tau_a = None if lag is None else tau
     scales = _time_scales(controllers, speed=V, delay=tau_d, tau=tau_a)
     steps, what = max(
         ((duration / h, f"{w}: {duration:.3g} / {h:.3g} s") for h, w in scales),
@@ -484,15 +548,13 @@ def compare(
                 )
             c = StateFeedback.from_gains(c)
         res = simulate(
-            vehicle,
+            plant,
             path,
             c,
-            speed=V,
             initial_state=initial_state,
             duration=duration,
             dt=dt,
             delay=delay,
-            actuator_time_constant=actuator_time_constant,
         )
         labels.append(str(label))
         results.append(res)

@@ -38,11 +38,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from . import equations
+from .deprecation import legacy_keyword, reject_unknown
 from .dynamics import dynamic_feedforward, dynamic_feedforward_derivative
 from .gains import SteeringGains
 from .models import STEERING_INPUTS, check_inputs, check_result
@@ -545,8 +546,9 @@ def actuator_rate(
 def steering_actuator(
     vehicle: Vehicle,
     *,
-    time_constant: float = DEFAULT_ACTUATOR_TIME_CONSTANT,
+    steering_lag: float | None = None,
     name: str = "actuator",
+    **kwargs: Any,
 ) -> ct.NonlinearIOSystem:
     r"""Steering actuator with rate limits: a rate-clipped first-order lag.
 
@@ -563,11 +565,17 @@ def steering_actuator(
     ----------
     vehicle : Vehicle
         Rate limits.
-    time_constant : float, optional
-        :math:`\tau` [s], > 0. With a small :math:`\tau` the actuator follows
-        the command closely until the rate limit binds.
+    steering_lag : float, optional
+        :math:`\tau` [s], > 0, the plant's steering lag (the name
+        :class:`~fws_control.LateralPlant` and the simulation use); default
+        :data:`DEFAULT_ACTUATOR_TIME_CONSTANT`. With a small :math:`\tau` the
+        actuator follows the command closely until the rate limit binds.
     name : str, optional
         System name.
+    **kwargs
+        ``time_constant=``, the former name of `steering_lag`, accepted with
+        a :class:`FutureWarning` until fws_control 0.4; any other keyword
+        raises :class:`TypeError`.
 
     Returns
     -------
@@ -579,12 +587,16 @@ def steering_actuator(
     --------
     >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35, max_steer_rate_front=0.5)
-    >>> act = fws.steering_actuator(veh, time_constant=0.1)
+    >>> act = fws.steering_actuator(veh, steering_lag=0.1)
     >>> act.dynamics(0.0, [0.0, 0.0], [0.2, 0.01]).round(6)
     array([0.5, 0.1])
     """
     check_type("vehicle", vehicle, Vehicle)
-    tau = check_scalar("time_constant", check_positive("time_constant", time_constant))
+    steering_lag = legacy_keyword(kwargs, "time_constant", "steering_lag", steering_lag)
+    reject_unknown("steering_actuator", kwargs)
+    if steering_lag is None:
+        steering_lag = DEFAULT_ACTUATOR_TIME_CONSTANT
+    tau = check_scalar("steering_lag", check_positive("steering_lag", steering_lag))
 
     def update(t, x, u, params):
         rf, rr = actuator_rate(vehicle, u, x, time_constant=tau)

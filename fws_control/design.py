@@ -231,7 +231,7 @@ def double_root_gains(
             "state feedback, a different controller"
             + (
                 "; for model='dynamic', design on the kinematic plant "
-                "(replace(plant, model='exact')) and check the design here"
+                "(replace(plant, model='kinematic')) and check the design here"
                 if isinstance(p, LateralPlant) and p.model == "dynamic"
                 else ""
             )

@@ -309,7 +309,7 @@ def _design_poles(vehicle, ratio, pole, curvature, tyre, speeds):
     dyn = LateralPlant(
         vehicle, speed=speeds, curvature=curvature, model="dynamic", tyre=tyre
     )
-    kin = LateralPlant(vehicle, speed=speeds, curvature=curvature, model="exact")
+    kin = LateralPlant(vehicle, speed=speeds, curvature=curvature, model="kinematic")
     a = np.broadcast_to(
         np.asarray(resolve_ratio(dyn, ratio), dtype=float), speeds.shape
     )
@@ -495,7 +495,7 @@ def kinematic_design_limit(
     r"""Speed above which a kinematic double-root design fails on the dynamic plant.
 
     At every speed of the grid the gains are designed on the kinematic
-    plant (``LateralPlant(..., model="exact")``, :func:`double_root_gains`,
+    plant (``LateralPlant(..., model="kinematic")``, :func:`double_root_gains`,
     both poles at :math:`\lambda_0`) and applied to the dynamic plant
     (``model="dynamic"``, 4 states). The result records where the closed
     loop becomes unstable and where its two dominant poles drift more than

@@ -91,8 +91,8 @@ class SignalNotKeptError(ValueError, AttributeError):
     --------
     >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> res = fws.simulate_batch(veh, fws.Straight(),
-    ...                          fws.SteeringGains(0.1, 0.5, 0.0), speed=5.0,
+    >>> res = fws.simulate_batch(fws.LateralPlant(veh, speed=5.0), fws.Straight(),
+    ...                          fws.SteeringGains(0.1, 0.5, 0.0),
     ...                          initial_state=(0.0, 1.0, 0.0), duration=1.0,
     ...                          signals=("e",))
     >>> try:

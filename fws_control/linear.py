@@ -93,7 +93,7 @@ def linearize(
         as it is.
     speed, curvature, model : optional
         With a :class:`Vehicle` only: speed :math:`V` [m/s] (nonzero),
-        curvature :math:`\kappa_C` [1/m] (default 0) and ``"exact"``
+        curvature :math:`\kappa_C` [1/m] (default 0) and ``"kinematic"``
         (default: Jacobian of eqs. 18-19) or ``"paper"`` (eq. 33).
 
     Returns

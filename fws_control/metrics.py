@@ -155,7 +155,7 @@ def peak_abs(signal: RealArrayLike, *, name: str | None = None) -> float | np.nd
     >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     >>> g = fws.SteeringGains(k1=0.1, k2=0.5, ratio=0.0)
-    >>> res = fws.simulate(veh, fws.Straight(), g, speed=5.0,
+    >>> res = fws.simulate(fws.LateralPlant(veh, speed=5.0), fws.Straight(), g,
     ...                    initial_state=(0.0, 1.0, 0.0), duration=10.0, dt=1.0)
     >>> bool(peak_abs(res, name="delta_f_rate") > peak_abs(res.delta_f_rate))
     True
@@ -429,7 +429,7 @@ class TrackingMetrics:
     >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     >>> g = fws.SteeringGains(k1=[0.1, -0.1], k2=0.5, ratio=0.0)
-    >>> batch = fws.simulate_batch(veh, fws.Straight(), g, speed=5.0,
+    >>> batch = fws.simulate_batch(fws.LateralPlant(veh, speed=5.0), fws.Straight(), g,
     ...                            initial_state=(0.0, 1.0, 0.0), duration=10.0)
     >>> m = fws.tracking_metrics(batch)     # k1 < 0: e does not settle
     >>> m.status.tolist(), m.settling_time.round(2).tolist()
@@ -469,7 +469,8 @@ class TrackingMetrics:
         >>> import fws_control as fws
         >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
         >>> g = fws.SteeringGains(k1=[0.1, 0.2], k2=0.5, ratio=0.0)
-        >>> batch = fws.simulate_batch(veh, fws.Straight(), g, speed=5.0,
+        >>> plant = fws.LateralPlant(veh, speed=5.0)
+        >>> batch = fws.simulate_batch(plant, fws.Straight(), g,
         ...                            initial_state=(0.0, 1.0, 0.0),
         ...                            duration=10.0, signals="metrics")
         >>> df = fws.tracking_metrics(batch).to_pandas()
@@ -549,7 +550,7 @@ def tracking_metrics(
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     >>> g = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=-1.0,
     ...                           pole=-1.0)
-    >>> res = fws.simulate(veh, Arc(curvature=0.1), g, speed=5.0,
+    >>> res = fws.simulate(fws.LateralPlant(veh, speed=5.0), Arc(curvature=0.1), g,
     ...                    initial_state=(0.0, -5.0, 0.0), duration=15.0)
     >>> m = fws.tracking_metrics(res)
     >>> m.status, round(m.peak_lateral_accel, 2), round(m.settling_time, 2)

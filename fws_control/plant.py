@@ -88,9 +88,9 @@ class LateralPlant:
         \mathbf A = \begin{bmatrix}0 & V\\ -V\kappa^2 & 0\end{bmatrix},\quad
         \mathbf B = \begin{bmatrix}0 & V\\ cV/f & -V/f\end{bmatrix},
 
-    with :math:`c = 1 + f^2\kappa^2` for ``model="exact"`` (the Jacobian of
-    eqs. 18-19) and :math:`c = 1` for ``model="paper"`` (eq. 33, exact only on
-    a straight path).
+    with :math:`c = 1 + f^2\kappa^2` for ``model="kinematic"`` (the Jacobian
+    of eqs. 18-19) and :math:`c = 1` for ``model="paper"`` (eq. 33, exact only
+    on a straight path).
 
     ``model="dynamic"`` linearises the dynamic single-track model
     (:mod:`fws_control.dynamics`, tyre slip, states ``e, theta, v_y, r``) at
@@ -112,10 +112,15 @@ class LateralPlant:
     curvature : float or array_like, optional
         Path curvature :math:`\kappa_C` [1/m], default 0 (straight path),
         magnitude <= ``MAX_CURVATURE`` (1e6 1/m).
-    model : {"exact", "paper", "dynamic"}, optional
-        Linearisation, default ``"exact"``. ``"dynamic"`` needs the
-        vehicle's mass, yaw inertia and cornering stiffnesses and a `speed`
-        > 0 (forward driving).
+    model : {"kinematic", "paper", "dynamic"}, optional
+        Linearisation, default ``"kinematic"`` (the exact Jacobian of the
+        kinematic model). ``"paper"`` and ``"kinematic"`` are two
+        linearisations of the same nonlinear kinematic model, which is what
+        :func:`~fws_control.simulate` integrates for either. ``"dynamic"``
+        needs the vehicle's mass, yaw inertia and cornering stiffnesses and a
+        `speed` > 0 (forward driving). The former name ``"exact"`` of
+        ``"kinematic"`` is accepted with a :class:`FutureWarning` until
+        fws_control 0.4 (the plant's `model` then reads ``"kinematic"``).
     steering_lag : float or (float, float) or None, optional
         Time constants :math:`T_f, T_r` [s] of a first-order lag between the
         steering command and the wheel angle,
@@ -125,7 +130,10 @@ class LateralPlant:
         (the wheel angles) and its inputs ``delta_f, delta_r`` are the
         commands; the analysis then goes through the general engine (no
         double-root design: two gains cannot place four poles). Rate limits
-        remain a matter of the simulation.
+        remain a matter of the simulation, which runs one time constant for
+        both axles (a pair of different lags raises there). ``None`` in the
+        simulation: an actuator only if the vehicle has a rate limit, with
+        :data:`~fws_control.controllers.DEFAULT_ACTUATOR_TIME_CONSTANT`.
     tyre : {"linear", "magic"}, optional
         Tyre model of ``model="dynamic"`` (default ``"linear"``; ``"magic"``
         needs the vehicle's friction). The kinematic models take only
@@ -168,13 +176,13 @@ class LateralPlant:
     # must not silently mean a curvature
     _: KW_ONLY
     curvature: float | np.ndarray = 0.0
-    model: str = "exact"
+    model: str = "kinematic"
     steering_lag: float | tuple[float, float] | None = None
     tyre: str = "linear"
 
     def __post_init__(self) -> None:
         check_type("vehicle", self.vehicle, Vehicle)
-        check_model(self.model)
+        object.__setattr__(self, "model", check_model(self.model))
         if not isinstance(self.tyre, str) or self.tyre not in TYRES:
             raise ValueError(f"tyre must be one of {TYRES}, got {self.tyre!r}")
         if self.model == "dynamic":
@@ -224,7 +232,7 @@ class LateralPlant:
     def input_gain_factor(self) -> float | np.ndarray:
         r"""Factor :math:`c` of the front-steering entry :math:`cV/f` of B.
 
-        :math:`c = 1 + f^2\kappa^2` (exact) or 1 (paper, eq. 33).
+        :math:`c = 1 + f^2\kappa^2` (kinematic) or 1 (paper, eq. 33).
 
         Raises
         ------
@@ -233,7 +241,7 @@ class LateralPlant:
         """
         if self.model == "dynamic":
             raise ValueError(
-                "input_gain_factor is defined for model='exact' or 'paper', "
+                "input_gain_factor is defined for model='kinematic' or 'paper', "
                 "not for model='dynamic' (its B comes from the tyre forces)"
             )
         kappa = np.asarray(self.curvature, dtype=float)
@@ -401,7 +409,7 @@ def as_plant(
         `curvature`, `model`) to become a :class:`LateralPlant`.
     speed, curvature, model : optional
         Only with a :class:`Vehicle`: the operating point and linearisation
-        (defaults: curvature 0, ``"exact"``).
+        (defaults: curvature 0, ``"kinematic"``).
 
     Returns
     -------
@@ -444,7 +452,7 @@ def as_plant(
             plant,
             speed=speed,
             curvature=0.0 if curvature is None else curvature,
-            model="exact" if model is None else model,
+            model="kinematic" if model is None else model,
         )
     if isinstance(plant, (LateralPlant, _control_class("StateSpace"))):
         if given:

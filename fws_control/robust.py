@@ -269,7 +269,7 @@ class _Family:
                 plant,
                 speed=speed[0],
                 curvature=0.0,
-                model="exact" if model is None else model,
+                model="kinematic" if model is None else model,
             )
         else:
             if model is not None:
@@ -1028,7 +1028,7 @@ def robust_stable(
     depth : int, optional
         Most bisection rounds of the adaptive refinement, 0 to 12.
     model : str, optional
-        With a Vehicle only: ``"exact"`` (default), ``"paper"`` or
+        With a Vehicle only: ``"kinematic"`` (default), ``"paper"`` or
         ``"dynamic"``.
 
     Returns
@@ -1099,7 +1099,7 @@ def robust_region(
     depth : int, optional
         Most bisection rounds of the adaptive refinement, 0 to 12.
     model : str, optional
-        With a Vehicle only: ``"exact"`` (default), ``"paper"`` or
+        With a Vehicle only: ``"kinematic"`` (default), ``"paper"`` or
         ``"dynamic"``.
 
     Returns

@@ -363,9 +363,9 @@ def parameter_locus(
         plant's model this shows where a design made in one model puts the
         poles of the other, e.g. the paper's gains in the exact
         linearisation.
-    design_model : {"exact", "paper"}, optional
+    design_model : {"kinematic", "paper"}, optional
         Model used for the redesign (a :class:`LateralPlant` only); default
-        the plant's. With a ``model="dynamic"`` plant, ``"exact"`` shows
+        the plant's. With a ``model="dynamic"`` plant, ``"kinematic"`` shows
         where the kinematic double-root design puts the dynamic poles.
     speed, curvature, model : optional
         With a :class:`Vehicle` only, as in :func:`linearize`.
@@ -418,7 +418,7 @@ def parameter_locus(
     if design_model is not None:
         if not lateral:
             raise ValueError("design_model= needs a LateralPlant")
-        check_model(design_model)
+        design_model = check_model(design_model, name="design_model")
     vals = np.atleast_1d(check_finite("values", values)).astype(float)
     if vals.ndim != 1 or vals.size == 0:
         raise ValueError(

@@ -21,6 +21,8 @@ from functools import cache
 
 import sympy as sp
 
+from .deprecation import warn_deprecated
+
 __all__ = [
     "SYMBOLS",
     "global_frame_rhs",
@@ -102,10 +104,10 @@ def path_frame_rhs() -> sp.Matrix:
 
 
 @cache
-def jacobians(model: str = "exact") -> tuple[sp.Matrix, sp.Matrix]:
+def jacobians(model: str = "kinematic") -> tuple[sp.Matrix, sp.Matrix]:
     """``(A, B)`` of the ``(e, theta)`` dynamics at the feedforward point.
 
-    ``model="exact"`` differentiates :func:`path_frame_rhs` at
+    ``model="kinematic"`` differentiates :func:`path_frame_rhs` at
     ``e = theta = delta_r = 0, delta_f = atan(kappa*f)``; ``model="paper"``
     returns eq. (33) as printed.
     """
@@ -114,8 +116,11 @@ def jacobians(model: str = "exact") -> tuple[sp.Matrix, sp.Matrix]:
             sp.Matrix([[0, V], [-V * kappa**2, 0]]),
             sp.Matrix([[0, V], [V / f, -V / f]]),
         )
-    if model != "exact":
-        raise ValueError(f"model must be 'exact' or 'paper', got {model!r}")
+    if model == "exact":
+        warn_deprecated("model='exact'", "model='kinematic'")
+        model = "kinematic"
+    if model != "kinematic":
+        raise ValueError(f"model must be 'kinematic' or 'paper', got {model!r}")
     rhs = path_frame_rhs()[1:, :]
     point = {_e: 0, _theta: 0, _dr: 0, _df: sp.atan(kappa * f)}
     A = rhs.jacobian([_e, _theta]).subs(point)
@@ -124,7 +129,7 @@ def jacobians(model: str = "exact") -> tuple[sp.Matrix, sp.Matrix]:
 
 
 @cache
-def characteristic_polynomial(model: str = "exact") -> sp.Poly:
+def characteristic_polynomial(model: str = "kinematic") -> sp.Poly:
     """``det(lam*I - A - B*K)`` with ``K = -[[k1, k2], [a*k1, a*k2]]``."""
     A, B = jacobians(model)
     K = -sp.Matrix([[k1, k2], [a * k1, a * k2]])
@@ -132,7 +137,7 @@ def characteristic_polynomial(model: str = "exact") -> sp.Poly:
 
 
 @cache
-def double_root_gains(model: str = "exact") -> dict[sp.Symbol, sp.Expr]:
+def double_root_gains(model: str = "kinematic") -> dict[sp.Symbol, sp.Expr]:
     """``{k1: ..., k2: ...}`` matching ``(lam - lam0)**2`` (eqs. 39-40)."""
     p = characteristic_polynomial(model).all_coeffs()
     target = sp.Poly((lam - lam0) ** 2, lam).all_coeffs()

@@ -11,6 +11,8 @@ from typing import Any
 
 import numpy as np
 
+from .deprecation import LEGACY_MODELS, warn_deprecated
+
 __all__ = [
     "check_real",
     "check_finite",
@@ -32,7 +34,10 @@ __all__ = [
     "MAX_ANGLE",
 ]
 
-MODELS = ("exact", "paper", "dynamic")
+#: Linearisations of a plant: ``"kinematic"`` (the exact Jacobian of the
+#: kinematic model, eqs. 18-19), ``"paper"`` (the paper's eq. 33) and
+#: ``"dynamic"`` (the single-track model with tyres).
+MODELS = ("kinematic", "paper", "dynamic")
 
 #: Largest speed magnitude accepted by the plant models [m/s]. Far above any
 #: vehicle; it keeps products such as V^2 kappa^2 and m V^2 kappa finite in
@@ -224,10 +229,18 @@ def check_type(name: str, value: Any, cls: type, what: str | None = None) -> Any
     return value
 
 
-def check_model(model: Any) -> str:
-    """Return `model` if it names a known linearisation."""
+def check_model(model: Any, *, name: str = "model") -> str:
+    """Return `model` if it names a known linearisation (:data:`MODELS`).
+
+    The deprecated ``"exact"`` is returned as ``"kinematic"``, with a
+    :class:`FutureWarning`. `name` is the argument's name in messages.
+    """
+    if isinstance(model, str) and model in LEGACY_MODELS:
+        new = LEGACY_MODELS[model]
+        warn_deprecated(f"{name}={model!r}", f"{name}={new!r}")
+        return new
     if not isinstance(model, str) or model not in MODELS:
-        raise ValueError(f"model must be one of {MODELS}, got {_short(model)}")
+        raise ValueError(f"{name} must be one of {MODELS}, got {_short(model)}")
     return model
 
 

@@ -202,8 +202,10 @@ _SWEEP = fws.double_root_gains(
 CURVE_GAINS_WITH_STOP = fws.SteeringGains(
     np.append(_SWEEP.k1, 0.3), np.append(_SWEEP.k2, -2.0), np.append(_SWEEP.ratio, 0.0)
 )
+#: The curve batch's speed [m/s]: the plant's (fws.LateralPlant(vehicle,
+#: speed=CURVE_SPEED)); CURVE_BATCH_KW holds the other options.
+CURVE_SPEED = 5.0
 CURVE_BATCH_KW = {
-    "speed": 5.0,
     "initial_state": (0.0, -5.0, 0.0),
     "duration": 12.0,
     "dt": 0.05,

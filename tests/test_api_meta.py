@@ -94,6 +94,7 @@ POSITIONAL_DATA_NAMES = {
     "path",
     "gains",
     "controller",
+    "controllers",
     "result",
     # signals: time axis, a generic signal, steering angles and their rates,
     # path-frame errors and their rates, global pose, arc length
@@ -246,6 +247,19 @@ KWARGS_EXCEPTIONS = {
         "forwards the styling keywords of StabilityChart.plot and checks the"
         " names itself"
     ),
+    "simulate": (
+        "accepts the deprecated Vehicle form (speed=, model=, tyre=,"
+        " steering_lag=, actuator_time_constant=, gains=) until 0.4, with a"
+        " FutureWarning; rejects any other name"
+    ),
+    "simulate_batch": "as simulate",
+    "compare": (
+        "accepts the deprecated Vehicle form (speed=, steering_lag=,"
+        " actuator_time_constant=) until 0.4, with a FutureWarning"
+    ),
+    "steering_actuator": (
+        "accepts the deprecated time_constant= until 0.4, with a FutureWarning"
+    ),
 }
 
 # Spec 0.2: exact positional parameters and required keyword-only parameters
@@ -271,23 +285,22 @@ SPEC_SIGNATURES = {
         ("initial_state", "initial_errors", "duration", "feedforward", "dt", *VK),
     ),
     "simulate": (
-        ("vehicle", "path", "gains"),
+        ("plant", "path", "controller"),
         (
-            "speed",
             "initial_state",
             "duration",
+            "delay",
             "feedforward",
             "dt",
             "t_eval",
-            "actuator_time_constant",
             "method",
             "rtol",
             "atol",
         ),
     ),
     "simulate_batch": (
-        ("vehicle", "path", "gains"),
-        ("speed", "initial_state", "duration", "chunk_size", "client", "progress"),
+        ("plant", "path", "controllers"),
+        ("initial_state", "duration", "delay", "chunk_size", "client", "progress"),
     ),
 }
 SPEC_TOP_LEVEL = (
@@ -735,7 +748,30 @@ def _kwargs_calls():
         _, ax = plt.subplots()
         chart.draw(ax, bogus_kw=1)
 
-    return {"StabilityChart.draw": draw}
+    def simulate(batch=False):
+        veh, _, _ = _objects()
+        run = fws.simulate_batch if batch else fws.simulate
+        run(fws.LateralPlant(veh, speed=5.0), fws.Straight(),
+            fws.SteeringGains(0.1, 0.5, ratio=0.0), initial_state=(0.0, 1.0, 0.0),
+            duration=1.0, bogus_kw=1)  # fmt: skip
+
+    def compare():
+        veh, _, _ = _objects()
+        fws.compare(fws.LateralPlant(veh, speed=5.0), fws.constant_radius(),
+                    {"paper": fws.SteeringGains(0.05, 0.5, ratio=0.0)},
+                    bogus_kw=1)  # fmt: skip
+
+    def steering_actuator():
+        veh, _, _ = _objects()
+        fws.steering_actuator(veh, bogus_kw=1)
+
+    return {
+        "StabilityChart.draw": draw,
+        "simulate": simulate,
+        "simulate_batch": lambda: simulate(batch=True),
+        "compare": compare,
+        "steering_actuator": steering_actuator,
+    }
 
 
 @pytest.mark.parametrize("label", sorted(KWARGS_EXCEPTIONS))
@@ -781,12 +817,12 @@ def _analysis_calls():
         "parameter_locus": ((plant, g), {"parameter": "speed", "values": [1.0]}),
         "compare_linear_nonlinear": ((plant, g), {"duration": 1.0}),
         "simulate": (
-            (veh, fws.Straight(), g),
-            {"speed": 5.0, "initial_state": (0.0, 1.0, 0.0), "duration": 1.0},
+            (fws.LateralPlant(veh, speed=5.0), fws.Straight(), g),
+            {"initial_state": (0.0, 1.0, 0.0), "duration": 1.0},
         ),
         "simulate_batch": (
-            (veh, fws.Straight(), g),
-            {"speed": 5.0, "initial_state": (0.0, 1.0, 0.0), "duration": 1.0},
+            (fws.LateralPlant(veh, speed=5.0), fws.Straight(), g),
+            {"initial_state": (0.0, 1.0, 0.0), "duration": 1.0},
         ),
     }
 
@@ -825,10 +861,9 @@ def _plot_factories():
 
     def simulation():
         res = fws.simulate(
-            veh,
+            fws.LateralPlant(veh, speed=5.0),
             fws.Straight(),
             g,
-            speed=5.0,
             initial_state=(0.0, 1.0, 0.0),
             duration=2.0,
         )
@@ -855,7 +890,7 @@ def _plot_factories():
     def controller_comparison():
         m = fws.constant_radius(radius=20.0, turns=0.1)
         g = fws.SteeringGains(0.05, 0.5, ratio=0.0)
-        return fws.compare(veh, m, {"paper": g}, speed=5.0).plot
+        return fws.compare(fws.LateralPlant(veh, speed=5.0), m, {"paper": g}).plot
 
     def design_limit():
         return fws.kinematic_design_limit(

@@ -449,10 +449,10 @@ def test_closed_loop_on_arc_matches_reference_and_own_loop(kind):
         if kind == "pp"
         else fws.Stanley(gain=1.0, softening=0.1, ratio=a)
     )
-    kw = dict(speed=V, initial_state=x0, duration=6.0, dt=0.05)
-    res = fws.simulate(VEH, path, ctrl, **kw)
+    kw = dict(initial_state=x0, duration=6.0, dt=0.05)
+    res = fws.simulate(fws.LateralPlant(VEH, speed=V), path, ctrl, **kw)
     assert res.status == "ok"
-    ref = simulate_reference(VEH, path, ctrl, **kw)
+    ref = simulate_reference(VEH, path, ctrl, speed=V, **kw)
     out = dict(zip(ref.output_labels, ref.outputs, strict=True))
     # fast engine vs python-control interconnect: measured <= 1.1e-9 m
     for name in ("x", "y", "e", "theta", "delta_f", "delta_r"):
@@ -770,7 +770,7 @@ def test_compare_table_recomputed_from_results():
             k_e=float(g0.k1) / F, k_theta=float(g0.k2) / F
         ),
     }
-    cmp = fws.compare(VEH, m, controllers, speed=V, offset=0.5)
+    cmp = fws.compare(fws.LateralPlant(VEH, speed=V), m, controllers, offset=0.5)
     assert cmp.labels == tuple(controllers)
     tab = cmp.table
 
@@ -804,8 +804,9 @@ def test_compare_table_recomputed_from_results():
         assert bool(col("completed")[i]) is True
         assert col("cones")[i] == cones_hit_brute(m, r.x, r.y, r.psi, F)
     # the peaks do not depend on the output grid (exact peaks)
-    fine = fws.compare(VEH, m, {"rwf": controllers["rear-wheel feedback"]},
-                       speed=V, offset=0.5, dt=0.001)  # fmt: skip
+    fine = fws.compare(fws.LateralPlant(VEH, speed=V), m,
+                       {"rwf": controllers["rear-wheel feedback"]},
+                       offset=0.5, dt=0.001)  # fmt: skip
     for name in tab:
         if "RMS" in name:
             continue
@@ -818,10 +819,9 @@ def test_compare_table_recomputed_from_results():
     # ... and the engine's own SteeringGains path (not StateFeedback) agrees
     # to integration accuracy
     direct = fws.simulate(
-        VEH,
+        fws.LateralPlant(VEH, speed=V),
         m.path,
         g,
-        speed=V,
         initial_state=(m.start_x, 0.5, 0.0),
         duration=cmp.results[0].t[-1],
     )
@@ -857,7 +857,7 @@ PP_RATE_RUN = dict(
 def _pp_rate_run():
     p = PP_RATE_RUN
     res = fws.simulate(
-        VEH, p["path"], p["ctrl"], speed=p["speed"],
+        fws.LateralPlant(VEH, speed=p["speed"]), p["path"], p["ctrl"],
         initial_state=p["initial_state"], duration=4.0, dt=0.002,
     )  # fmt: skip
     assert res.status == "ok"
@@ -932,14 +932,15 @@ def test_per_run_parameters_in_batch_equal_separate_runs():
     path = fws.Arc(curvature=0.05)
     lds = np.array([3.0, 5.0, 8.0])
     ratios = np.array([0.0, -0.3, 0.4])
-    kw = dict(speed=5.0, initial_state=(0.0, -1.0, 0.0), duration=5.0, dt=0.05)
+    kw = dict(initial_state=(0.0, -1.0, 0.0), duration=5.0, dt=0.05)
+    plant = fws.LateralPlant(VEH, speed=5.0)
     batch = fws.simulate_batch(
-        VEH, path, fws.PurePursuit(lookahead=lds, ratio=ratios), **kw
+        plant, path, fws.PurePursuit(lookahead=lds, ratio=ratios), **kw
     )
     assert batch.e.shape == (3, 101)
     finals = []
     for i, (ld, a) in enumerate(zip(lds, ratios, strict=True)):
-        one = fws.simulate(VEH, path, fws.PurePursuit(lookahead=ld, ratio=a), **kw)
+        one = fws.simulate(plant, path, fws.PurePursuit(lookahead=ld, ratio=a), **kw)
         for name in ("x", "y", "psi", "e", "theta", "delta_f", "delta_r"):
             np.testing.assert_allclose(
                 getattr(batch, name)[i], getattr(one, name), rtol=0, atol=1e-8
@@ -963,7 +964,11 @@ def test_saturate_respects_vehicle_limits():
     ctrl = fws.PurePursuit(lookahead=3.0, ratio=-0.5)
     path = fws.Straight()
     res = fws.simulate(
-        veh, path, ctrl, speed=5.0, initial_state=(0.0, -4.0, 0.0), duration=4.0
+        fws.LateralPlant(veh, speed=5.0),
+        path,
+        ctrl,
+        initial_state=(0.0, -4.0, 0.0),
+        duration=4.0,
     )
     raw_f, raw_r = ctrl.steering(
         veh, path, s=res.s, e=res.e, theta=res.theta, curvature=0 * res.s, speed=5.0
@@ -1011,10 +1016,9 @@ def test_saturate_respects_vehicle_limits():
         ),
         (
             lambda: fws.simulate(
-                VEH,
+                fws.LateralPlant(VEH, speed=5.0),
                 fws.Straight(),
                 "pure pursuit",
-                speed=5.0,
                 initial_state=(0, 1, 0),
                 duration=1.0,
             ),  # fmt: skip
@@ -1023,10 +1027,9 @@ def test_saturate_respects_vehicle_limits():
         ),
         (
             lambda: fws.simulate_batch(
-                VEH,
+                fws.LateralPlant(VEH, speed=5.0),
                 fws.Straight(),
                 object(),
-                speed=5.0,
                 initial_state=(0, 1, 0),
                 duration=1.0,
             ),  # fmt: skip
@@ -1047,10 +1050,9 @@ def test_saturate_respects_vehicle_limits():
         ),
         (
             lambda: fws.simulate(
-                VEH,
+                fws.LateralPlant(VEH, speed=5.0),
                 fws.Straight(),
                 fws.PurePursuit(lookahead=np.array([1.0, 2.0])),
-                speed=5.0,
                 initial_state=(0, 1, 0),
                 duration=1.0,
             ),  # fmt: skip
@@ -1058,7 +1060,9 @@ def test_saturate_respects_vehicle_limits():
             "simulate_batch",
         ),
         (
-            lambda: fws.compare(VEH, fws.double_lane_change(), {"x": 3}, speed=10.0),
+            lambda: fws.compare(
+                fws.LateralPlant(VEH, speed=10.0), fws.double_lane_change(), {"x": 3}
+            ),
             TypeError,
             "controllers",
         ),
@@ -1185,7 +1189,7 @@ def test_saturate_keeps_nan_array_elements_in_place():
     [
         (dict(speed=1e-300), "speed"),
         (dict(offset=[0.0, 1.0]), "offset"),
-        (dict(actuator_time_constant=1e-300), "actuator_time_constant"),
+        (dict(steering_lag=1e-300), "steering_lag"),
         (dict(dt=1e300), "dt"),
     ],
 )
@@ -1195,5 +1199,9 @@ def test_issue13_compare_ranges_named(kw, arg):
     veh = PAPER_VEHICLE
     m = fws.constant_radius(radius=40.0, turns=0.05)
     g = {"4ws": fws.SteeringGains(0.1, 0.5, ratio=0.0)}
+    kw = {"speed": 5.0, "dt": 0.1, **kw}
+    plant = fws.LateralPlant(
+        veh, speed=kw.pop("speed"), steering_lag=kw.pop("steering_lag", None)
+    )
     with pytest.raises(ValueError, match=rf"\b{arg} must be"):
-        fws.compare(veh, m, g, **{"speed": 5.0, "dt": 0.1, **kw})
+        fws.compare(plant, m, g, **kw)

@@ -25,10 +25,9 @@ def _gains(speed, curvature, ratio, pole=-1.0):
 
 def _single(i, batch, path, feedforward=True, duration=10.0, dt=0.05):
     return fws.simulate(
-        VEH,
+        fws.LateralPlant(VEH, speed=float(batch.speed[i])),
         path,
         fws.SteeringGains(batch.k1[i], batch.k2[i], batch.ratio[i]),
-        speed=float(batch.speed[i]),
         initial_state=batch.initial_state[i],
         duration=duration,
         feedforward=feedforward,
@@ -45,7 +44,12 @@ def test_batch_agrees_with_simulate_with_per_run_gains_speeds_and_states():
     )
     path = Arc(0.02)
     batch = fws.simulate_batch(
-        VEH, path, g, speed=speeds, initial_state=x0, duration=10.0, dt=0.05
+        fws.LateralPlant(VEH, speed=speeds),
+        path,
+        g,
+        initial_state=x0,
+        duration=10.0,
+        dt=0.05,
     )
     assert batch.e.shape == (6, 201) and len(batch) == 6
     assert batch.status.tolist() == ["ok"] * 6
@@ -79,10 +83,9 @@ def _stopping_batch():
     ]
     x0 = [(0.0, -5.0, 0.0), (0.0, -1.0, 0.0), (0.0, 5.0, math.pi / 2), (0.0, -5.0, 0.0)]
     batch = fws.simulate_batch(
-        VEH,
+        fws.LateralPlant(VEH, speed=5.0),
         Arc(0.1),
         gains,
-        speed=5.0,
         initial_state=x0,
         duration=6.0,
         dt=0.01,
@@ -126,63 +129,63 @@ def test_gains_sequence_equals_array_gains_and_broadcasting():
     seq = [fws.SteeringGains(g.k1[i], g.k2[i], g.ratio[i]) for i in range(3)]
     kw = {"duration": 5.0, "feedforward": False, "dt": 0.1}
     a = fws.simulate_batch(
-        VEH, Straight(), g, speed=20.0, initial_state=(0.0, 2.0, 0.0), **kw
+        fws.LateralPlant(VEH, speed=20.0),
+        Straight(),
+        g,
+        initial_state=(0.0, 2.0, 0.0),
+        **kw,
     )
     b = fws.simulate_batch(
-        VEH,
+        fws.LateralPlant(VEH, speed=[20.0] * 3),
         Straight(),
         seq,
-        speed=[20.0] * 3,
         initial_state=[(0.0, 2.0, 0.0)] * 3,
         **kw,
     )
     np.testing.assert_array_equal(a.e, b.e)
     # one gain, several initial states
     c = fws.simulate_batch(
-        VEH,
+        fws.LateralPlant(VEH, speed=20.0),
         Straight(),
         seq[0],
-        speed=20.0,
         initial_state=[(0.0, 1.0, 0.0), (0.0, 2.0, 0.0)],
         **kw,
     )
     assert c.e.shape == (2, 51)
     np.testing.assert_allclose(c.e[1], a.e[0], atol=1e-9)
-    base = {"speed": 5.0, "initial_state": (0, 2, 0), "duration": 5.0}
+    base = {"initial_state": (0, 2, 0), "duration": 5.0}
+    plant = fws.LateralPlant(VEH, speed=5.0)
+    two = fws.LateralPlant(VEH, speed=[5.0, 20.0])
     with pytest.raises(ValueError, match="same number of runs"):
-        fws.simulate_batch(VEH, Straight(), g, **{**base, "speed": [5.0, 20.0]})
+        fws.simulate_batch(two, Straight(), g, **base)
     with pytest.raises(TypeError, match="SteeringGains"):
-        fws.simulate_batch(VEH, Straight(), [(0.1, 0.2, 0.0)], **base)
+        fws.simulate_batch(plant, Straight(), [(0.1, 0.2, 0.0)], **base)
     with pytest.raises(ValueError, match="chunk_size"):
-        fws.simulate_batch(VEH, Straight(), g, **base, chunk_size=0)
+        fws.simulate_batch(plant, Straight(), g, **base, chunk_size=0)
     with pytest.raises(ValueError, match="chunk_size"):
-        fws.simulate_batch(VEH, Straight(), g, **base, chunk_size=1.5)
+        fws.simulate_batch(plant, Straight(), g, **base, chunk_size=1.5)
     # options are keyword-only
     with pytest.raises(TypeError):
-        fws.simulate_batch(VEH, Straight(), g, 5.0, (0, 2, 0), 5.0)
+        fws.simulate_batch(plant, Straight(), g, (0, 2, 0), 5.0)
 
 
 def test_chunks_give_the_same_runs():
     ratios = np.linspace(-1.0, 0.5, 5)
     g = _gains(5.0, 0.1, ratios)
-    kw = {"speed": 5.0, "initial_state": (0, -5, 0), "duration": 8.0, "dt": 0.05}
-    one = fws.simulate_batch(VEH, Arc(0.1), g, **kw)
-    split = fws.simulate_batch(VEH, Arc(0.1), g, **kw, chunk_size=2)
+    kw = {"initial_state": (0, -5, 0), "duration": 8.0, "dt": 0.05}
+    plant = fws.LateralPlant(VEH, speed=5.0)
+    one = fws.simulate_batch(plant, Arc(0.1), g, **kw)
+    split = fws.simulate_batch(plant, Arc(0.1), g, **kw, chunk_size=2)
     np.testing.assert_allclose(split.e, one.e, rtol=0, atol=1e-6)
 
 
 def test_dask_local_cluster_matches_local_run(dask_client):
     ratios = np.linspace(-1.0, 0.5, 5)
     g = _gains(5.0, 0.1, ratios)
-    kw = {
-        "speed": 5.0,
-        "initial_state": (0, -5, 0),
-        "duration": 8.0,
-        "dt": 0.05,
-        "chunk_size": 2,
-    }
-    local = fws.simulate_batch(VEH, Arc(0.1), g, **kw)
-    remote = fws.simulate_batch(VEH, Arc(0.1), g, client=dask_client, **kw)
+    kw = {"initial_state": (0, -5, 0), "duration": 8.0, "dt": 0.05, "chunk_size": 2}
+    plant = fws.LateralPlant(VEH, speed=5.0)
+    local = fws.simulate_batch(plant, Arc(0.1), g, **kw)
+    remote = fws.simulate_batch(plant, Arc(0.1), g, client=dask_client, **kw)
     # same chunks, same arithmetic: identical, and in the original run order
     np.testing.assert_array_equal(remote.e, local.e)
     np.testing.assert_array_equal(remote.ratio, ratios)
@@ -192,15 +195,15 @@ def test_dask_local_cluster_matches_local_run(dask_client):
 def test_progress_bar_only_when_asked(capsys):
     g = _gains(20.0, 0.0, np.array([-1.0, 0.0]))
     kw = {
-        "speed": 20.0,
         "initial_state": (0.0, 2.0, 0.0),
         "duration": 2.0,
         "feedforward": False,
         "chunk_size": 1,
     }
-    fws.simulate_batch(VEH, Straight(), g, **kw)  # pytest: no TTY
+    plant = fws.LateralPlant(VEH, speed=20.0)
+    fws.simulate_batch(plant, Straight(), g, **kw)  # pytest: no TTY
     assert capsys.readouterr().err == ""
-    fws.simulate_batch(VEH, Straight(), g, **kw, progress=True)
+    fws.simulate_batch(plant, Straight(), g, **kw, progress=True)
     err = capsys.readouterr().err
     assert "simulate_batch" in err and "2/2" in err
 
@@ -212,10 +215,9 @@ def test_progress_bar_only_when_asked(capsys):
 def _two_ratio_batch(dt=0.1, duration=3.0):
     g = _gains(5.0, 0.1, np.array([-1.0, 0.0]))
     batch = fws.simulate_batch(
-        VEH,
+        fws.LateralPlant(VEH, speed=5.0),
         Arc(0.1),
         g,
-        speed=5.0,
         initial_state=(0, -5, 0),
         duration=duration,
         dt=dt,
@@ -226,7 +228,12 @@ def _two_ratio_batch(dt=0.1, duration=3.0):
 def test_batch_is_never_squeezed_and_runs_are():
     g = _gains(5.0, 0.1, -1.0)
     one = fws.simulate_batch(
-        VEH, Arc(0.1), g, speed=5.0, initial_state=(0, -5, 0), duration=3.0, dt=0.1
+        fws.LateralPlant(VEH, speed=5.0),
+        Arc(0.1),
+        g,
+        initial_state=(0, -5, 0),
+        duration=3.0,
+        dt=0.1,
     )
     # a batch of one run keeps its run axis, for every per-run attribute
     assert not one.squeeze and len(one) == 1
@@ -302,10 +309,9 @@ def test_to_pandas_keeps_gains_speed_status_and_runs_without_samples():
     ratios = np.array([-0.5, 0.5])
     g = _gains(speeds, 0.1, ratios)
     sub = fws.simulate_batch(
-        VEH,
+        fws.LateralPlant(VEH, speed=speeds),
         Arc(0.1),
         g,
-        speed=speeds,
         initial_state=[(0, -2, 0), (0, -3, 0.1)],
         duration=2.0,
         dt=0.5,
@@ -431,8 +437,9 @@ def test_expand_runs_keeps_the_model_and_tyre_of_the_simulated_runs():
     car = fws.vehicles.BMW_320I
     g = fws.double_root_gains(car, speed=20.0, ratio=0.0, pole=-1.0)
     sub = fws.simulate_batch(
-        car, Straight(), g, speed=20.0, initial_state=(0.0, 1.0, 0.0),
-        duration=2.0, dt=0.5, model="dynamic", tyre="magic",
+        fws.LateralPlant(car, speed=20.0, model="dynamic", tyre="magic"),
+        Straight(), g, initial_state=(0.0, 1.0, 0.0),
+        duration=2.0, dt=0.5,
     )  # fmt: skip
     full = expand_runs(
         sub, positions=[1], k1=[np.nan, g.k1], k2=[np.nan, g.k2],
@@ -468,10 +475,18 @@ def test_plot_keeps_the_bulk_visible_when_a_stopped_run_diverges():
 def test_plot_of_a_straight_road_is_not_a_flat_line_and_overlays_one_path():
     g = fws.SteeringGains(0.1, 0.5, 0.0)
     res = fws.simulate(
-        VEH, Straight(), g, speed=5.0, initial_state=(0.0, 1.0, 0.0), duration=15.0
+        fws.LateralPlant(VEH, speed=5.0),
+        Straight(),
+        g,
+        initial_state=(0.0, 1.0, 0.0),
+        duration=15.0,
     )
     other = fws.simulate(
-        VEH, Straight(), g, speed=5.0, initial_state=(0.0, -1.0, 0.0), duration=15.0
+        fws.LateralPlant(VEH, speed=5.0),
+        Straight(),
+        g,
+        initial_state=(0.0, -1.0, 0.0),
+        duration=15.0,
     )
     cplt = res.plot(labels="e0 = 1 m")
     try:

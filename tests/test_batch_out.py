@@ -19,6 +19,7 @@ from conftest import (
     CURVE_BATCH_KW,
     CURVE_GAINS_WITH_STOP,
     PAPER_VEHICLE,
+    CURVE_SPEED,
     LosingClient,
     traced_peak,
 )
@@ -31,6 +32,7 @@ from fws_control.paths import Arc
 from fws_control.simulation import SIGNALS, engine
 
 VEH = PAPER_VEHICLE
+PLANT = fws.LateralPlant(VEH, speed=CURVE_SPEED)
 PATH = Arc(0.1)
 # five designs of the paper's curve scenario and one that stops (conftest)
 GAINS = CURVE_GAINS_WITH_STOP
@@ -42,7 +44,7 @@ ENGINES = ["numpy", "compiled"]
 
 @pytest.fixture(scope="module", params=ENGINES)
 def fresh(request):
-    return fws.simulate_batch(VEH, PATH, GAINS, engine=request.param, **KW)
+    return fws.simulate_batch(PLANT, PATH, GAINS, engine=request.param, **KW)
 
 
 def _e_from_the_formulas(i: int) -> np.ndarray:
@@ -70,10 +72,10 @@ def test_out_receives_the_batch_bitwise_and_is_the_result(fresh, signals, chunk_
     kept = SIGNALS if signals is None else signals
     kw = {**KW, "chunk_size": chunk_size, "engine": fresh.engine}
     # (the numpy engine's runs share a chunk's steps: the same chunks)
-    fresh = fws.simulate_batch(VEH, PATH, GAINS, **kw)
+    fresh = fws.simulate_batch(PLANT, PATH, GAINS, **kw)
     # stale values everywhere: every entry must be written, the NaN tail too
     out = np.full((N, len(kept), T), 7.0)
-    res = fws.simulate_batch(VEH, PATH, GAINS, signals=signals, out=out, **kw)
+    res = fws.simulate_batch(PLANT, PATH, GAINS, signals=signals, out=out, **kw)
     rows = [SIGNALS.index(k) for k in kept]
     np.testing.assert_array_equal(out, fresh.signals[:, rows, :])
     assert np.shares_memory(res.signals, out)
@@ -88,10 +90,10 @@ def test_out_receives_the_batch_bitwise_and_is_the_result(fresh, signals, chunk_
 
 def test_one_out_reused_for_another_sweep_holds_only_the_new_one(fresh):
     out = np.empty((N, len(SIGNALS), T))
-    fws.simulate_batch(VEH, PATH, GAINS, engine=fresh.engine, out=out, **KW)
+    fws.simulate_batch(PLANT, PATH, GAINS, engine=fresh.engine, out=out, **KW)
     other = fws.SteeringGains(GAINS.k1[::-1], GAINS.k2[::-1], GAINS.ratio[::-1])
-    res = fws.simulate_batch(VEH, PATH, other, engine=fresh.engine, out=out, **KW)
-    alone = fws.simulate_batch(VEH, PATH, other, engine=fresh.engine, **KW)
+    res = fws.simulate_batch(PLANT, PATH, other, engine=fresh.engine, out=out, **KW)
+    alone = fws.simulate_batch(PLANT, PATH, other, engine=fresh.engine, **KW)
     np.testing.assert_array_equal(out, alone.signals)
     if fresh.engine == "compiled":  # each run its own steps: the same runs
         np.testing.assert_array_equal(out, fresh.signals[::-1])
@@ -102,7 +104,7 @@ def test_a_memory_map_streams_the_sweep_to_a_file(fresh, tmp_path):
     name = tmp_path / "sweep.npy"
     disk = np.lib.format.open_memmap(name, mode="w+", shape=(N, 1, T))
     res = fws.simulate_batch(
-        VEH, PATH, GAINS, engine=fresh.engine, signals=("e",), out=disk, **KW
+        PLANT, PATH, GAINS, engine=fresh.engine, signals=("e",), out=disk, **KW
     )
     disk.flush()
     del disk
@@ -119,16 +121,16 @@ def test_a_sweep_into_a_memory_map_holds_one_chunk_in_memory(engine_name, tmp_pa
     g = fws.double_root_gains(
         VEH, speed=5.0, curvature=0.1, ratio=np.linspace(-1.5, 0.6, n), pole=-1.0
     )
-    kw = {"speed": 5.0, "initial_state": (0.0, -5.0, 0.0), "duration": 5.0}
+    kw = {"initial_state": (0.0, -5.0, 0.0), "duration": 5.0}
     kw |= {"engine": engine_name, "progress": False}
     one = fws.SteeringGains(g.k1[:chunk], g.k2[:chunk], g.ratio[:chunk])
-    fws.simulate_batch(VEH, PATH, one, **{**kw, "duration": 0.5})  # warm caches
-    _, chunk_peak = traced_peak(lambda: fws.simulate_batch(VEH, PATH, one, **kw))
+    fws.simulate_batch(PLANT, PATH, one, **{**kw, "duration": 0.5})  # warm caches
+    _, chunk_peak = traced_peak(lambda: fws.simulate_batch(PLANT, PATH, one, **kw))
     disk = np.lib.format.open_memmap(
         tmp_path / "big.npy", mode="w+", shape=(n, len(SIGNALS), 501)
     )
     res, peak = traced_peak(
-        lambda: fws.simulate_batch(VEH, PATH, g, chunk_size=chunk, out=disk, **kw)
+        lambda: fws.simulate_batch(PLANT, PATH, g, chunk_size=chunk, out=disk, **kw)
     )
     assert res.ok.all()
     whole = n * len(SIGNALS) * 501 * 8
@@ -138,21 +140,21 @@ def test_a_sweep_into_a_memory_map_holds_one_chunk_in_memory(engine_name, tmp_pa
 
 def test_the_budget_does_not_count_a_given_out(monkeypatch):
     n = 8
-    kw = {"speed": 5.0, "initial_state": (0.0, -5.0, 0.0), "duration": 1.0}
+    kw = {"initial_state": (0.0, -5.0, 0.0), "duration": 1.0}
     g = fws.SteeringGains(np.full(n, 0.2), 0.9, -1.0)
     one_run = len(SIGNALS) * 101 * 8  # a chunk of one run, all signals
     monkeypatch.setattr(engine, "MAX_OUTPUT_BYTES", one_run)
     with pytest.raises(ValueError, match="budget"):
-        fws.simulate_batch(VEH, PATH, g, chunk_size=1, **kw)
+        fws.simulate_batch(PLANT, PATH, g, chunk_size=1, **kw)
     out = np.empty((n, len(SIGNALS), 101))
-    res = fws.simulate_batch(VEH, PATH, g, chunk_size=1, out=out, **kw)
+    res = fws.simulate_batch(PLANT, PATH, g, chunk_size=1, out=out, **kw)
     assert res.ok.all() and np.shares_memory(res.signals, out)
     # the chunk's working set still counts: two runs at once are refused
     with pytest.raises(
         ValueError, match=r"chunk_size=2: a chunk computes all 15 signals before "
         "it writes them into out"
     ):  # fmt: skip
-        fws.simulate_batch(VEH, PATH, g, chunk_size=2, out=out, **kw)
+        fws.simulate_batch(PLANT, PATH, g, chunk_size=2, out=out, **kw)
 
 
 # --------------------------------------------------------------------------
@@ -174,7 +176,7 @@ def test_an_out_of_another_shape_is_refused_naming_the_shape(shape):
     with pytest.raises(
         ValueError, match=needed + ".*got float64 of shape " + re.escape(str(shape))
     ):
-        fws.simulate_batch(VEH, PATH, GAINS, out=np.empty(shape), **KW)
+        fws.simulate_batch(PLANT, PATH, GAINS, out=np.empty(shape), **KW)
 
 
 @pytest.mark.parametrize("engine_name", ENGINES)
@@ -184,40 +186,40 @@ def test_an_out_of_another_dtype_is_refused(dtype, engine_name):
     out = np.empty((N, 1, T), dtype=dtype)
     with pytest.raises(ValueError, match=r"out must be a float64 array \(native"):
         fws.simulate_batch(
-            VEH, PATH, GAINS, signals=("e",), engine=engine_name, out=out, **KW
+            PLANT, PATH, GAINS, signals=("e",), engine=engine_name, out=out, **KW
         )
 
 
 def test_a_strided_or_read_only_out_is_refused():
     with pytest.raises(ValueError, match="out must be C-contiguous"):
-        fws.simulate_batch(VEH, PATH, GAINS, out=np.empty(_SHAPE, order="F"), **KW)
+        fws.simulate_batch(PLANT, PATH, GAINS, out=np.empty(_SHAPE, order="F"), **KW)
     with pytest.raises(ValueError, match="out must be C-contiguous"):
         wide = np.empty((N, len(SIGNALS), 2 * T))[:, :, ::2]
-        fws.simulate_batch(VEH, PATH, GAINS, out=wide, **KW)
+        fws.simulate_batch(PLANT, PATH, GAINS, out=wide, **KW)
     frozen = np.empty(_SHAPE)
     frozen.flags.writeable = False
     with pytest.raises(ValueError, match="out must be writeable"):
-        fws.simulate_batch(VEH, PATH, GAINS, out=frozen, **KW)
+        fws.simulate_batch(PLANT, PATH, GAINS, out=frozen, **KW)
 
 
 def test_an_out_that_is_not_an_array_or_with_metrics_only_is_refused():
     with pytest.raises(TypeError, match="out must be a numpy.ndarray.*got list"):
-        fws.simulate_batch(VEH, PATH, GAINS, out=np.empty(_SHAPE).tolist(), **KW)
+        fws.simulate_batch(PLANT, PATH, GAINS, out=np.empty(_SHAPE).tolist(), **KW)
     # a masked array's mask would not follow the chunks' writes
     masked = np.ma.masked_array(np.empty(_SHAPE), mask=True)
     with pytest.raises(TypeError, match="or a numpy.memmap, got MaskedArray"):
-        fws.simulate_batch(VEH, PATH, GAINS, out=masked, **KW)
+        fws.simulate_batch(PLANT, PATH, GAINS, out=masked, **KW)
     with pytest.raises(ValueError, match="out must be None with signals='metrics'"):
         fws.simulate_batch(
-            VEH, PATH, GAINS, signals="metrics", out=np.empty((N, 0, T)), **KW
+            PLANT, PATH, GAINS, signals="metrics", out=np.empty((N, 0, T)), **KW
         )
 
 
 def test_out_on_dask_receives_the_chunks_of_the_cluster(dask_client):
-    local = fws.simulate_batch(VEH, PATH, GAINS, signals=("e", "theta"), **KW)
+    local = fws.simulate_batch(PLANT, PATH, GAINS, signals=("e", "theta"), **KW)
     out = np.full((N, 2, T), 7.0)
     res = fws.simulate_batch(
-        VEH, PATH, GAINS, signals=("e", "theta"), client=dask_client, out=out, **KW
+        PLANT, PATH, GAINS, signals=("e", "theta"), client=dask_client, out=out, **KW
     )
     np.testing.assert_array_equal(out, local.signals)
     assert np.shares_memory(res.signals, out)
@@ -229,7 +231,7 @@ def test_an_out_that_holds_t_eval_gives_the_batch_and_its_times(fresh):
     grid = out[0, 0, :]
     grid[:] = fresh.t
     res = fws.simulate_batch(
-        VEH, PATH, GAINS, engine=fresh.engine, out=out, t_eval=grid,
+        PLANT, PATH, GAINS, engine=fresh.engine, out=out, t_eval=grid,
         **{k: v for k, v in KW.items() if k != "dt"},
     )  # fmt: skip
     np.testing.assert_array_equal(res.t, fresh.t)
@@ -238,11 +240,11 @@ def test_an_out_that_holds_t_eval_gives_the_batch_and_its_times(fresh):
 
 
 def test_lost_dask_tasks_leave_nan_in_out_not_stale_values(dask_client):
-    local = fws.simulate_batch(VEH, PATH, GAINS, signals=("e",), **KW)
+    local = fws.simulate_batch(PLANT, PATH, GAINS, signals=("e",), **KW)
     out = np.full((N, 1, T), 7.0)
     with pytest.warns(RuntimeWarning, match="2 runs of 1 lost"):
         res = fws.simulate_batch(
-            VEH, PATH, GAINS, signals=("e",), client=LosingClient(dask_client),
+            PLANT, PATH, GAINS, signals=("e",), client=LosingClient(dask_client),
             out=out, **KW,
         )  # fmt: skip
     np.testing.assert_array_equal(out[:4], local.signals[:4])

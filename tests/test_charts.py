@@ -18,7 +18,7 @@ def _eig_mask(veh, speed, curvature, ratio, k1, k2, model):
     A and B come from ct.linearize of the nonlinear path-frame model for the
     exact model (independent of linear.py) and from eq. (33) for the paper's.
     """
-    if model == "exact":
+    if model == "kinematic":
         sys = fws.path_frame_model(veh, speed=speed, curvature=curvature)
         u0 = [math.atan(curvature * veh.wheelbase), 0.0]
         lin = ct.linearize(sys, [0.0, 0.0, 0.0], u0)
@@ -35,15 +35,15 @@ def _eig_mask(veh, speed, curvature, ratio, k1, k2, model):
 
 
 CASES = [
-    (5.0, 0.0, -1.0, "exact"),
-    (5.0, 0.1, -1.0, "exact"),
+    (5.0, 0.0, -1.0, "kinematic"),
+    (5.0, 0.1, -1.0, "kinematic"),
     (5.0, 0.1, -1.0, "paper"),
-    (20.0, 0.01, 0.5, "exact"),
-    (5.0, 0.2, 1.0, "exact"),
+    (20.0, 0.01, 0.5, "kinematic"),
+    (5.0, 0.2, 1.0, "kinematic"),
     (5.0, 0.1, 1.0, "paper"),
-    (5.0, 0.0, 1.5, "exact"),
+    (5.0, 0.0, 1.5, "kinematic"),
     (20.0, 0.05, 1.5, "paper"),
-    (-5.0, 0.1, -0.5, "exact"),  # reversing: condition (35) flips
+    (-5.0, 0.1, -0.5, "kinematic"),  # reversing: condition (35) flips
     (-3.0, 0.0, 0.0, "paper"),
 ]
 
@@ -94,7 +94,11 @@ def test_default_grid_and_large_grid(veh):
 
 @pytest.mark.parametrize(
     "speed, curvature, ratio, model",
-    [(5.0, 0.1, -1.0, "exact"), (20.0, 0.01, 0.5, "paper"), (5.0, 0.1, 1.0, "paper")],
+    [
+        (5.0, 0.1, -1.0, "kinematic"),
+        (20.0, 0.01, 0.5, "paper"),
+        (5.0, 0.1, 1.0, "paper"),
+    ],
 )
 def test_boundaries_are_zero_sets(veh, speed, curvature, ratio, model):
     plant = fws.LateralPlant(veh, speed=speed, curvature=curvature, model=model)

@@ -77,7 +77,8 @@ def test_gains_straight_matches_eq41():
     assert float(m.group(2)) == pytest.approx(k2, abs=1e-6)
     m = re.search(r"k3 = (\S+) rad/m\s+k4 = (\S+)", p.stdout)
     assert float(m.group(1)) == pytest.approx(-0.5 * k1, abs=1e-6)
-    assert "closed-loop poles, exact linearisation: -1.000000, -1.000000" in p.stdout
+    poles = "closed-loop poles, kinematic linearisation: -1.000000, -1.000000"
+    assert poles in p.stdout
 
 
 def _in_process(args, capsys):
@@ -93,7 +94,7 @@ def test_gains_curved_shows_paper_model_error(capsys):
         capsys,
     )
     assert p.returncode == 0, p.stderr
-    first = p.stdout.split("exact model")[0]
+    first = p.stdout.split("kinematic model")[0]
     # Paper eq. (44), a = 0: k1 = f (lambda0^2/V^2 - kappa^2), k2 = -2 lambda0 f / V.
     m = re.search(r"k1 = (\S+) rad/m\s+k2 = (\S+)", first)
     assert float(m.group(1)) == pytest.approx(F * (1 / 25 - 0.01), abs=1e-6)
@@ -102,7 +103,9 @@ def test_gains_curved_shows_paper_model_error(capsys):
     # + kappa^2), c = 1 + f^2 kappa^2.
     c = 1 + F**2 * 0.01
     ref = np.sort(np.roots([1, 5 * c * 2 / 5, 25 * (c * (1 / 25 - 0.01) + 0.01)]).real)
-    line = re.search(r"paper model:.*?exact linearisation: ([^\n]+)", p.stdout, re.S)
+    line = re.search(
+        r"paper model:.*?kinematic linearisation: ([^\n]+)", p.stdout, re.S
+    )
     got = np.sort([float(x) for x in line.group(1).split(",")])
     np.testing.assert_allclose(got, ref, atol=1e-5)
 

@@ -28,10 +28,18 @@ def _duration(speed):
     return 1.1 * (COURSE.end_x - COURSE.start_x) / speed + 0.5
 
 
+def _plant(kw):
+    """The plant of a request (speed and steering lag) and its other options."""
+    kw = dict(kw)
+    lag = kw.pop("steering_lag", None)
+    return fws.LateralPlant(VEH, speed=kw.pop("speed"), steering_lag=lag), kw
+
+
 def _refusal(controllers, **kw):
+    plant, kw = _plant(kw)
     start = time.process_time()
     with pytest.raises(ValueError, match="max_steps=1000") as info:
-        fws.compare(VEH, COURSE, controllers, **kw)
+        fws.compare(plant, COURSE, controllers, **kw)
     assert time.process_time() - start < 1.0  # refused up front
     return str(info.value)
 
@@ -44,7 +52,7 @@ def _number(pattern, text):
     "controllers, kw, scale",
     [
         # actuator lag: the loop's time scale is T
-        ("default", dict(speed=20.0, actuator_time_constant=1e-3), 1e-3),
+        ("default", dict(speed=20.0, steering_lag=1e-3), 1e-3),
         # a 0.1 s delay at 1 m/s: steps at most the delay over 122 s
         ("default", dict(speed=1.0, delay=0.1), 0.1),
         # pure pursuit: dtheta/dt = -2 V theta / L_d
@@ -77,15 +85,17 @@ def test_many_samples_refused_with_the_estimate(kw):
 def test_max_steps_raises_the_budget():
     course = fws.constant_radius(radius=40.0, turns=0.05)
     g = {"paper": fws.double_root_gains(VEH, speed=10.0, ratio=0.0, pole=-1.0)}
-    kw = dict(speed=10.0, delay=0.05)
+    kw = dict(delay=0.05)
+    plant = fws.LateralPlant(VEH, speed=10.0)
     with pytest.raises(ValueError, match="max_steps=5 steps"):
-        fws.compare(VEH, course, g, max_steps=5, **kw)
-    cmp = fws.compare(VEH, course, g, max_steps=1e4, **kw)
+        fws.compare(plant, course, g, max_steps=5, **kw)
+    cmp = fws.compare(plant, course, g, max_steps=1e4, **kw)
     # the run is the one simulate gives for the same request
     res = cmp.results[0]
     ref = fws.simulate(
-        VEH, course.path, g["paper"], initial_state=(0.0, 0.0, 0.0),
-        duration=float(res.t[-1]), delay=0.05, speed=10.0,
+        fws.LateralPlant(VEH, speed=10.0),
+        course.path, g["paper"], initial_state=(0.0, 0.0, 0.0),
+        duration=float(res.t[-1]), delay=0.05,
     )  # fmt: skip
     np.testing.assert_allclose(res.e, ref.e, atol=1e-9)
 
@@ -94,7 +104,7 @@ def test_max_steps_raises_the_budget():
 def test_max_steps_range(bad):
     g = {"st": fws.Stanley()}
     with pytest.raises(ValueError, match="max_steps"):
-        fws.compare(VEH, COURSE, g, speed=20.0, max_steps=bad)
+        fws.compare(fws.LateralPlant(VEH, speed=20.0), COURSE, g, max_steps=bad)
 
 
 def test_stability_chart_refuses_a_delay_beyond_its_budget():

@@ -26,7 +26,7 @@ def test_linear_part_is_matrix_exponential(plant, design):
     cmp = fws.compare_linear_nonlinear(
         plant, design, initial_errors=(0.3, 0.05), duration=6.0
     )
-    assert (cmp.speed, cmp.curvature, cmp.model) == (5.0, 0.1, "exact")
+    assert (cmp.speed, cmp.curvature, cmp.model) == (5.0, 0.1, "kinematic")
     cl = fws.closed_loop(plant, design)
     x0 = np.array([0.3, 0.05])
     for i in (0, 50, 200, 599):
@@ -56,7 +56,7 @@ def test_paper_model_prediction_is_worse_on_curves(veh):
     # Each model's own lambda0 = -1 design, predicted by its own linearisation:
     # the exact model tracks the nonlinear run closer than eq. (33) does.
     gaps = {}
-    for model in ("exact", "paper"):
+    for model in ("kinematic", "paper"):
         plant = fws.LateralPlant(veh, speed=5.0, curvature=0.1, model=model)
         g = fws.double_root_gains(plant, ratio=-1.0, pole=-1.0)
         cmp = fws.compare_linear_nonlinear(
@@ -64,7 +64,7 @@ def test_paper_model_prediction_is_worse_on_curves(veh):
         )
         assert cmp.model == model
         gaps[model] = cmp.max_difference()["e"]
-    assert gaps["exact"] < 0.2 * gaps["paper"]
+    assert gaps["kinematic"] < 0.2 * gaps["paper"]
 
 
 def test_initial_state_and_initial_errors_agree(veh, plant, design):

@@ -42,12 +42,10 @@ def test_row_matches_a_fresh_run(speed, condition, label):
     veh = PAPER_VEHICLE
     course = fws.double_lane_change()
     ctrl = fws.default_controllers(veh, speed=speed)[label]
-    kw = (
-        {"offset": 0.5}
-        if condition == "ideal"
-        else {"delay": 0.24, "actuator_time_constant": 0.27}
-    )
-    cmp = fws.compare(veh, course, {label: ctrl}, speed=speed, **kw)
+    ideal = condition == "ideal"
+    kw = {"offset": 0.5} if ideal else {"delay": 0.24}
+    plant = fws.LateralPlant(veh, speed=speed, steering_lag=None if ideal else 0.27)
+    cmp = fws.compare(plant, course, {label: ctrl}, **kw)
     row = _page_row(f"{speed:g}", condition, label)
     r = cmp.results[0]
     # independent recomputation from the run's signals: the exact peaks lie

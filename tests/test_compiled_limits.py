@@ -76,7 +76,8 @@ def test_rate_limited_arc_finishes_and_agrees_with_numpy_engine():
     assert np.max(np.abs(r["DOP853"][0] - r["Radau"][0])) < TOL
     # the default engine through simulate finishes too
     res = fws.simulate(
-        veh, fws.Arc(0.048301143578173555), g, speed=24.270710307492635,
+        fws.LateralPlant(veh, speed=24.270710307492635),
+        fws.Arc(0.048301143578173555), g,
         initial_state=pose,
         duration=6.0,
     )  # fmt: skip

@@ -71,11 +71,11 @@ CASES = {
     ),
     "actuator": (
         VEH, ARC, _gains(VEH),
-        dict(initial_state=(0, -5, 0), dt=0.3, actuator_time_constant=0.05),
+        dict(initial_state=(0, -5, 0), dt=0.3, steering_lag=0.05),
     ),
     "angle_and_rate_limits": (
         LIM, ARC, _gains(LIM, pole=-2.0),
-        dict(initial_state=(0, -1, 0), dt=0.3, actuator_time_constant=0.05),
+        dict(initial_state=(0, -1, 0), dt=0.3, steering_lag=0.05),
     ),
     "angle_limits": (
         LIM, ARC, _gains(LIM, pole=-2.0), dict(initial_state=(0, -3, 0), dt=0.3)
@@ -102,10 +102,21 @@ NUMPY_TOL = {"angle_limits": 3e-9}
 TIME_TOL = {"angle_and_rate_limits": 1e-6}
 
 
+def _plant_and_options(veh, kw, **plant):
+    """The LateralPlant at 5 m/s with the lag ``kw["steering_lag"]``, and
+    the other options."""
+    kw = dict(kw)
+    lag = kw.pop("steering_lag", None)
+    return fws.LateralPlant(veh, speed=5.0, steering_lag=lag, **plant), kw
+
+
+PLANT = fws.LateralPlant(VEH, speed=5.0)
+
+
 def _run(name, engine, **extra):
     veh, path, g, kw = CASES[name]
-    kw = {"speed": 5.0, "duration": 15.0, **kw, **extra}
-    return fws.simulate(veh, path, g, **kw, engine=engine)
+    plant, kw = _plant_and_options(veh, {"duration": 15.0, **kw, **extra})
+    return fws.simulate(plant, path, g, **kw, engine=engine)
 
 
 @pytest.mark.parametrize("name", sorted(CASES))
@@ -130,9 +141,9 @@ def test_exact_peaks_as_numpy_engine(name):
     end = float(np.max(times)) + 1.0
     at = np.unique(np.concatenate([[0.0], times, [end]]))
     veh, path, g, kw = CASES[name]
-    kw = {k: v for k, v in kw.items() if k != "dt"}
-    there = fws.simulate(veh, path, g, speed=5.0, duration=end, t_eval=at, **kw,
-                         engine="numpy")  # fmt: skip
+    plant, kw = _plant_and_options(veh, {k: v for k, v in kw.items() if k != "dt"})
+    there = fws.simulate(plant, path, g, duration=end,
+                         t_eval=at, **kw, engine="numpy")  # fmt: skip
     for j, sig in enumerate(PEAK_SIGNALS):
         k = int(np.searchsorted(at, times[j]))
         value = abs(there.signals[0, SIGNALS.index(sig), k])
@@ -187,9 +198,9 @@ def test_fine_grid_samples_as_nodes_give_the_same_peaks(name):
                                   np.linspace(0.0, 0.5, 300),
                                   np.linspace(3.0, 3.05, 40)]))  # fmt: skip
     veh, path, g, kw = CASES[name]
-    kw = {k: v for k, v in kw.items() if k != "dt"}
-    mixed = fws.simulate(veh, path, g, speed=5.0, duration=15.0, t_eval=t, **kw,
-                         engine="compiled")  # fmt: skip
+    plant, kw = _plant_and_options(veh, {k: v for k, v in kw.items() if k != "dt"})
+    mixed = fws.simulate(plant, path, g, duration=15.0,
+                         t_eval=t, **kw, engine="compiled")  # fmt: skip
     for sig in PEAK_SIGNALS:
         assert getattr(mixed.peaks, sig).value == pytest.approx(
             getattr(ref.peaks, sig).value, rel=tol, abs=1e-14
@@ -208,9 +219,9 @@ def test_peaks_on_any_output_grid_as_numpy_engine(dt, ratio, pole, e0):
     grids) -- or a mix -- the peaks are the numpy engine's, which always
     uses its own nodes, and no output sample exceeds them."""
     g = _gains(VEH, ratio=ratio, pole=pole)
-    kw = dict(speed=5.0, initial_state=(0.0, e0, 0.0), duration=8.0, dt=dt)
-    got = fws.simulate(VEH, ARC, g, **kw, engine="compiled")
-    ref = fws.simulate(VEH, ARC, g, **kw, engine="numpy")
+    kw = dict(initial_state=(0.0, e0, 0.0), duration=8.0, dt=dt)
+    got = fws.simulate(PLANT, ARC, g, **kw, engine="compiled")
+    ref = fws.simulate(PLANT, ARC, g, **kw, engine="numpy")
     assert got.status == ref.status
     for sig in PEAK_SIGNALS:
         p, r = getattr(got.peaks, sig), getattr(ref.peaks, sig)
@@ -228,9 +239,9 @@ def test_singular_stop_peaks():
     the rates diverge there (large, finite); |e| peaks at the start as in
     the numpy engine, which stops nearer to pi/2."""
     g = fws.SteeringGains(0.5, -1.0, 0.0)  # positive feedback on theta
-    kw = dict(speed=5.0, initial_state=(0.0, -1.0, 0.0), duration=15.0, dt=0.3)
-    got = fws.simulate(VEH, ARC, g, **kw, engine="compiled")
-    ref = fws.simulate(VEH, ARC, g, **kw, engine="numpy")
+    kw = dict(initial_state=(0.0, -1.0, 0.0), duration=15.0, dt=0.3)
+    got = fws.simulate(PLANT, ARC, g, **kw, engine="compiled")
+    ref = fws.simulate(PLANT, ARC, g, **kw, engine="numpy")
     assert got.status == ref.status == "singular_steering"
     assert got.peaks.delta_f.value == pytest.approx(math.pi / 2 - 1e-3, abs=1e-9)
     assert got.peaks.delta_f.time == got.t_stop
@@ -248,11 +259,11 @@ def test_batch_peaks_are_each_run_alone():
     stops = fws.SteeringGains(0.5, -1.0, 0.0)
     gains = [fast, slow, stops]
     x0 = np.array([[0.0, -0.5, 0.0], [0.0, -2.0, 0.3], [0.0, -1.0, 0.0]])
-    kw = dict(speed=5.0, duration=15.0, engine="compiled")
-    batch = fws.simulate_batch(VEH, ARC, gains, initial_state=x0, **kw, chunk_size=2)
+    kw = dict(duration=15.0, engine="compiled")
+    batch = fws.simulate_batch(PLANT, ARC, gains, initial_state=x0, **kw, chunk_size=2)
     assert batch.peaks.exact
     for i, g in enumerate(gains):
-        alone = fws.simulate(VEH, ARC, g, initial_state=x0[i], **kw)
+        alone = fws.simulate(PLANT, ARC, g, initial_state=x0[i], **kw)
         for sig in PEAK_SIGNALS:
             assert getattr(batch.peaks, sig).value[i] == getattr(alone.peaks, sig).value
             assert getattr(batch.peaks, sig).time[i] == getattr(alone.peaks, sig).time
@@ -273,7 +284,7 @@ def _same(a, b):
     np.testing.assert_array_equal(a.run_peak_time, b.run_peak_time)
 
 
-CURVE = dict(speed=5.0, initial_state=(0.0, -5.0, 0.0), duration=5.0)
+CURVE = dict(initial_state=(0.0, -5.0, 0.0), duration=5.0)
 
 
 @pytest.mark.parametrize(
@@ -282,20 +293,20 @@ CURVE = dict(speed=5.0, initial_state=(0.0, -5.0, 0.0), duration=5.0)
         (None, {}, "compiled", "DOP853"),
         # an actuator over few of DOP853's stability-bound steps (3 s / (6.4
         # T) < 10, engine.LONG_RUN_STEPS): DOP853, compiled ...
-        (None, {"feedforward": False, "actuator_time_constant": 0.05,
+        (None, {"feedforward": False, "steering_lag": 0.05,
                 "duration": 3.0}, "compiled", "DOP853"),
         # ... over more (5 s) the numpy engine would take LSODA, the compiled
         # one runs DOP853 with its steps held to 3.2 T (runners._CAPPED_STEP)
-        (None, {"actuator_time_constant": 0.05}, "compiled", "DOP853"),
-        (None, {"method": "DOP853", "actuator_time_constant": 0.001}, "compiled",
+        (None, {"steering_lag": 0.05}, "compiled", "DOP853"),
+        (None, {"method": "DOP853", "steering_lag": 0.001}, "compiled",
          "DOP853"),
         # numpy's Radau range: capped DOP853 up to 2,500 steps (5 s / 3.2 ms:
         # 1,562; runners._RADAU_FROM_STEPS) ...
-        (None, {"actuator_time_constant": 0.001}, "compiled", "DOP853"),
+        (None, {"steering_lag": 0.001}, "compiled", "DOP853"),
         # ... beyond (5 s / 1.6 ms: 3,125 steps; 156,250) the compiled Radau
-        (None, {"actuator_time_constant": 0.0005}, "compiled", "Radau"),
-        (None, {"actuator_time_constant": 1e-5}, "compiled", "Radau"),
-        (None, {"method": "Radau", "actuator_time_constant": 0.05}, "compiled",
+        (None, {"steering_lag": 0.0005}, "compiled", "Radau"),
+        (None, {"steering_lag": 1e-5}, "compiled", "Radau"),
+        (None, {"method": "Radau", "steering_lag": 0.05}, "compiled",
          "Radau"),
         (None, {"delay": 0.1}, "numpy", "DOP853"),
         (None, {"method": "RK45"}, "numpy", "RK45"),
@@ -304,11 +315,11 @@ CURVE = dict(speed=5.0, initial_state=(0.0, -5.0, 0.0), duration=5.0)
 )  # fmt: skip
 def test_auto_engine_rule_and_bitwise_results(gains, kwargs, engine, method):
     g = _gains(VEH) if gains is None else gains
-    kw = {**CURVE, **kwargs}
+    plant, kw = _plant_and_options(VEH, {**CURVE, **kwargs})
     for run in (fws.simulate, fws.simulate_batch):
-        auto = run(VEH, ARC, g, **kw)
+        auto = run(plant, ARC, g, **kw)
         assert auto.engine == engine and auto.method == method
-        _same(auto, run(VEH, ARC, g, **kw, engine=engine))
+        _same(auto, run(plant, ARC, g, **kw, engine=engine))
         assert auto.peaks.exact
 
 
@@ -317,9 +328,10 @@ def test_auto_engine_dynamic_model_and_table_failure(monkeypatch):
                       yaw_inertia=2600.0, cornering_front=8.0e4,
                       cornering_rear=9.5e4)  # fmt: skip
     g = _gains(dyn)
-    res = fws.simulate(dyn, ARC, g, **CURVE, model="dynamic")
+    dynamic = fws.LateralPlant(dyn, speed=5.0, model="dynamic")
+    res = fws.simulate(dynamic, ARC, g, **CURVE)
     assert res.engine == "numpy"
-    _same(res, fws.simulate(dyn, ARC, g, **CURVE, model="dynamic", engine="numpy"))
+    _same(res, fws.simulate(dynamic, ARC, g, **CURVE, engine="numpy"))
     # a path whose curvature table misses its tolerance runs on numpy
     from fws_control.simulation import compiled
 
@@ -327,7 +339,8 @@ def test_auto_engine_dynamic_model_and_table_failure(monkeypatch):
         raise ValueError("not within tol")
 
     monkeypatch.setattr(compiled, "curvature_table", refuse)
-    res = fws.simulate(VEH, SPLINE, _gains(VEH, curvature=0.0), speed=5.0,
+    res = fws.simulate(fws.LateralPlant(VEH, speed=5.0), SPLINE,
+                       _gains(VEH, curvature=0.0),
                        initial_state=(0, 1, 0), duration=2.0)  # fmt: skip
     assert res.engine == "numpy"
 
@@ -344,14 +357,15 @@ def test_auto_engine_without_numba():
         veh = PAPER_VEHICLE
         g = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=-1.0,
                                   pole=-1.0)
-        kw = dict(speed=5.0, initial_state=(0.0, -5.0, 0.0), duration=2.0)
-        auto = fws.simulate(veh, fws.Arc(0.1), g, **kw)
-        ref = fws.simulate(veh, fws.Arc(0.1), g, **kw, engine="numpy")
+        kw = dict(initial_state=(0.0, -5.0, 0.0), duration=2.0)
+        plant = fws.LateralPlant(veh, speed=5.0)
+        auto = fws.simulate(plant, fws.Arc(0.1), g, **kw)
+        ref = fws.simulate(plant, fws.Arc(0.1), g, **kw, engine="numpy")
         assert auto.engine == "numpy", auto.engine
         assert np.array_equal(auto.signals, ref.signals)
         assert np.array_equal(auto.run_peak, ref.run_peak)
         try:
-            fws.simulate(veh, fws.Arc(0.1), g, **kw, engine="compiled")
+            fws.simulate(plant, fws.Arc(0.1), g, **kw, engine="compiled")
         except ValueError as exc:
             assert "numba is not installed" in str(exc), exc
         else:
@@ -382,10 +396,10 @@ def test_exact_peaks_as_numpy_engine_random(ratio, pole, e0, psi0, tau, dt):
     solvers' own error, 4.5e-11 m on the numpy engine, 4e-13 m on the
     compiled one), whatever the output step."""
     g = _gains(VEH, ratio=ratio, pole=pole)
-    kw = dict(speed=5.0, initial_state=(0.0, e0, psi0), duration=8.0, dt=dt,
-              actuator_time_constant=tau)  # fmt: skip
-    got = fws.simulate(VEH, ARC, g, **kw, engine="compiled")
-    ref = fws.simulate(VEH, ARC, g, **kw, engine="numpy")
+    kw = dict(initial_state=(0.0, e0, psi0), duration=8.0, dt=dt)
+    plant = fws.LateralPlant(VEH, speed=5.0, steering_lag=tau)
+    got = fws.simulate(plant, ARC, g, **kw, engine="compiled")
+    ref = fws.simulate(plant, ARC, g, **kw, engine="numpy")
     assert got.status == ref.status
     if got.status != "ok":  # the stops differ by the margin (tested above)
         return

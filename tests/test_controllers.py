@@ -167,7 +167,7 @@ def test_actuator_step_response_matches_closed_form():
     """Ramp at the rate limit, then the first-order lag (solved by hand)."""
     rmax, tau, c = 0.5, 0.1, 0.4
     veh = fws.Vehicle(2.7, 1.35, max_steer_rate_front=rmax, max_steer_rate_rear=rmax)
-    act = fws.steering_actuator(veh, time_constant=tau)
+    act = fws.steering_actuator(veh, steering_lag=tau)
     t = np.linspace(0.0, 2.0, 401)
     resp = ct.input_output_response(
         act,
@@ -187,8 +187,8 @@ def test_actuator_step_response_matches_closed_form():
 
 
 def test_actuator_time_constant_must_be_positive():
-    with pytest.raises(ValueError, match="time_constant"):
-        fws.steering_actuator(VEH, time_constant=0.0)
+    with pytest.raises(ValueError, match="steering_lag"):
+        fws.steering_actuator(VEH, steering_lag=0.0)
 
 
 # -- issue 13 item 7: types, non-finite values, flags, magnitudes -------------

@@ -42,13 +42,13 @@ VEH = fws.Vehicle(wheelbase=F, rear_to_cg=1.35)
 # --------------------------------------------------------------------------
 
 
-def kinematic_matrices(speed, curvature, lag=None, model="exact"):
+def kinematic_matrices(speed, curvature, lag=None, model="kinematic"):
     """A, B of the kinematic plant (paper eq. 33 with c = 1 + f^2 kappa^2).
 
     With a first-order steering lag T delta_act' = delta_cmd - delta_act per
     axle the wheel angles become states 3 and 4 and B feeds the commands.
     """
-    c = 1.0 + (F * curvature) ** 2 if model == "exact" else 1.0
+    c = 1.0 + (F * curvature) ** 2 if model == "kinematic" else 1.0
     A = np.array([[0.0, speed], [-speed * curvature**2, 0.0]])
     B = np.array([[0.0, speed], [c * speed / F, -speed / F]])
     if lag is None:
@@ -592,8 +592,9 @@ def test_double_root_delay_margin_depends_only_on_pole_and_speed_times_curvature
         assert double_root_delay_margin(2 * lam, 2 * vk) == pytest.approx(
             ref / 2, rel=1e-12
         )
-        for V, model, a in ((5.0, "exact", -1.0), (10.0, "paper", 0.0),
-                            (20.0, "exact", 0.5), (-10.0, "exact", 1.0)):  # fmt: skip
+        for V, model, a in ((5.0, "kinematic", -1.0), (10.0, "paper", 0.0),
+                            (20.0, "kinematic", 0.5),
+                            (-10.0, "kinematic", 1.0)):  # fmt: skip
             plant = fws.LateralPlant(VEH, speed=V, curvature=vk / V, model=model)
             g = fws.double_root_gains(plant, ratio=a, pole=lam)
             cd = fws.critical_delay(plant, g)

@@ -142,9 +142,9 @@ def test_delayed_nonlinear_simulation_decays_at_the_abscissa(design):
     # [8, 25] s (least squares, scanned on a 1e-3 grid) is the decay rate.
     assert np.sum(design.roots.real >= design.abscissa - 1e-4) == 3
     res = fws.simulate(
-        VEH, fws.Straight(), design.gains, speed=V,
+        fws.LateralPlant(VEH, speed=V, steering_lag=LAG), fws.Straight(), design.gains,
         initial_state=(0.0, 0.01, 0.0), duration=30.0, delay=TAU,
-        actuator_time_constant=LAG, feedforward=False, dt=0.01,
+        feedforward=False, dt=0.01,
     )  # fmt: skip
     assert res.ok, res.message
     m = (res.t >= 8.0) & (res.t <= 25.0)

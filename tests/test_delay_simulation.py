@@ -40,7 +40,7 @@ def test_decays_below_and_grows_above_the_critical_delay(name):
     windows = [(10.0, 15.0), (30.0, 35.0)]
     for factor in (0.9, 1.1):
         res = fws.simulate(
-            VEH, path, g, speed=V, initial_state=x0, duration=40.0,
+            fws.LateralPlant(VEH, speed=V), path, g, initial_state=x0, duration=40.0,
             delay=factor * tc.delay, dt=0.01,
         )  # fmt: skip
         assert res.ok, res.message
@@ -68,23 +68,25 @@ def test_delayed_engine_agrees_with_the_pade_reference():
     reference, which costs seconds per simulated second, show them.
     """
     g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
-    kw = dict(speed=5.0, initial_state=(0.0, -1.0, 0.0), duration=1.5, dt=0.05)
+    kw = dict(initial_state=(0.0, -1.0, 0.0), duration=1.5, dt=0.05)
     path = fws.Arc(curvature=0.1)
-    ref = simulate_reference(VEH, path, g, delay=0.3, **kw)
-    fast = fws.simulate(VEH, path, g, delay=0.3, **kw)
+    ref = simulate_reference(VEH, path, g, speed=5.0, delay=0.3, **kw)
+    plant = fws.LateralPlant(VEH, speed=5.0)
+    fast = fws.simulate(plant, path, g, delay=0.3, **kw)
     e_ref = ref.outputs[list(ref.output_labels).index("e")]
     df_ref = ref.outputs[list(ref.output_labels).index("delta_f")]
     assert np.max(np.abs(fast.e - e_ref)) < 1e-4
     assert np.max(np.abs(fast.delta_f - df_ref)) < 2e-3
     # and the delay does something: the undelayed run differs by far more
-    plain = fws.simulate(VEH, path, g, **kw)
+    plain = fws.simulate(plant, path, g, **kw)
     assert np.max(np.abs(plain.e - fast.e)) > 1e-2
 
 
 def test_command_is_held_until_the_delay_then_follows_the_delayed_state():
     g = fws.SteeringGains(0.1, 0.5, ratio=0.0)
     res = fws.simulate(
-        VEH, fws.Straight(), g, speed=5.0, initial_state=(0.0, 1.0, 0.0),
+        fws.LateralPlant(VEH, speed=5.0),
+        fws.Straight(), g, initial_state=(0.0, 1.0, 0.0),
         duration=2.0, delay=0.5, dt=0.01, feedforward=False,
     )  # fmt: skip
     held = res.t < 0.5 - 1e-9
@@ -114,8 +116,9 @@ def test_pure_steering_lag_matches_the_linear_lagged_plant():
     g = fws.SteeringGains(0.05, 0.5, ratio=-0.5)
     e0 = 1e-3
     res = fws.simulate(
-        VEH, fws.Straight(), g, speed=5.0, initial_state=(0.0, e0, 0.0),
-        duration=15.0, actuator_time_constant=0.27, feedforward=False, dt=0.05,
+        fws.LateralPlant(VEH, speed=5.0, steering_lag=0.27),
+        fws.Straight(), g, initial_state=(0.0, e0, 0.0),
+        duration=15.0, feedforward=False, dt=0.05,
     )  # fmt: skip
     cl = fws.closed_loop(plant, g)
     # the actuator starts at the command: wheel angles -k1 e0 and -a k1 e0
@@ -132,7 +135,8 @@ def test_pure_steering_lag_matches_the_linear_lagged_plant():
 def test_bad_delay_is_refused(bad):
     with pytest.raises((ValueError, TypeError), match="delay"):
         fws.simulate(
-            VEH, fws.Straight(), fws.SteeringGains(0.1, 0.5, 0.0), speed=5.0,
+            fws.LateralPlant(VEH, speed=5.0),
+            fws.Straight(), fws.SteeringGains(0.1, 0.5, 0.0),
             initial_state=(0.0, 1.0, 0.0), duration=1.0, delay=bad,
         )  # fmt: skip
 
@@ -147,7 +151,8 @@ def test_batch_command_follows_each_runs_delayed_samples_also_after_a_stop():
     k1, k2 = np.array([0.1, 0.2, 0.05]), np.array([0.5, 0.8, 0.4])
     g = fws.SteeringGains(k1, k2, ratio=np.array([0.0, -0.5, 0.5]))
     res = fws.simulate_batch(
-        VEH, fws.Straight(length=40.0), g, speed=np.array([5.0, 8.0, 20.0]),
+        fws.LateralPlant(VEH, speed=np.array([5.0, 8.0, 20.0])),
+        fws.Straight(length=40.0), g,
         initial_state=(0.0, 1.0, 0.0), duration=4.0, delay=tau, dt=dt,
         feedforward=False, engine="numpy",
     )  # fmt: skip
@@ -173,8 +178,8 @@ def test_batch_command_follows_each_runs_delayed_samples_also_after_a_stop():
         rate = res.delta_f_rate[i][k]
         np.testing.assert_allclose(rate, fd, atol=2e-4 * np.max(np.abs(rate)))
         alone = fws.simulate(
-            VEH, fws.Straight(length=40.0),
-            fws.SteeringGains(k1[i], k2[i], ratio=g.ratio[i]), speed=res.speed[i],
+            fws.LateralPlant(VEH, speed=res.speed[i]), fws.Straight(length=40.0),
+            fws.SteeringGains(k1[i], k2[i], ratio=g.ratio[i]),
             initial_state=(0.0, 1.0, 0.0), duration=4.0, delay=tau, dt=dt,
             feedforward=False, engine="numpy",
         )  # fmt: skip

@@ -13,7 +13,7 @@ import fws_control as fws
 from fws_control import symbolic as S
 
 VEH = PAPER_VEHICLE
-models = st.sampled_from(["exact", "paper"])
+models = st.sampled_from(["kinematic", "paper"])
 ratios = st.floats(-2.0, 2.0)
 curvatures = st.floats(-0.3, 0.3)
 speeds = st.floats(1.0, 40.0)
@@ -120,7 +120,7 @@ def test_closed_loop_polynomial_is_double_root(model, speed, curvature, ratio, p
     assert np.max(np.abs(poly - target)) <= 1e-9 * np.max(np.abs(target))
 
 
-@pytest.mark.parametrize("model", ["exact", "paper"])
+@pytest.mark.parametrize("model", ["kinematic", "paper"])
 def test_gains_equal_sympy_solution(rng, model):
     sol = S.double_root_gains(model)
     f1, f2 = lambdify(sol[S.SYMBOLS["k1"]]), lambdify(sol[S.SYMBOLS["k2"]])
@@ -134,7 +134,7 @@ def test_gains_equal_sympy_solution(rng, model):
 
 def test_front_wheel_steering_is_regular_at_ratio_zero():
     """No special case at a = 0: the gains are continuous through it."""
-    for model in ("exact", "paper"):
+    for model in ("kinematic", "paper"):
         plant = _plant(5.0, 0.1, model)
         at0 = fws.double_root_gains(plant, ratio=0.0, pole=-1.0)
         eps = fws.double_root_gains(plant, ratio=np.array([-1e-9, 1e-9]), pole=-1.0)
@@ -146,7 +146,7 @@ def test_front_wheel_steering_is_regular_at_ratio_zero():
     assert g.k2 == pytest.approx(2 * 2.7 / 5, rel=1e-14)
 
 
-@pytest.mark.parametrize("model", ["exact", "paper"])
+@pytest.mark.parametrize("model", ["kinematic", "paper"])
 def test_uncontrollable_design_is_refused(model):
     A, b = _single_input(VEH, 5.0, 0.0, 1.0, model)
     assert np.linalg.matrix_rank(ct.ctrb(A, b)) == 1  # the reason
@@ -163,7 +163,7 @@ def test_uncontrollable_design_is_refused(model):
 
 
 def test_ratio_one_on_curve_is_fine():
-    for model in ("exact", "paper"):
+    for model in ("kinematic", "paper"):
         plant = _plant(5.0, 0.1, model)
         g = fws.double_root_gains(plant, ratio=1.0, pole=-1.0)
         cl = fws.closed_loop(plant, g)
@@ -189,7 +189,7 @@ def test_bad_arguments(kwargs, name):
         "curvature": 0.1,
         "ratio": -1.0,
         "pole": -1.0,
-        "model": "exact",
+        "model": "kinematic",
         **kwargs,
     }
     with pytest.raises(ValueError, match=name):
@@ -216,7 +216,7 @@ def test_broadcast_equals_scalar_calls():
             assert g.k2[i, j] == pytest.approx(s.k2, rel=1e-14)
 
 
-@pytest.mark.parametrize("model", ["exact", "paper"])
+@pytest.mark.parametrize("model", ["kinematic", "paper"])
 def test_array_operating_points_equal_scalar_calls(model):
     """A LateralPlant holding arrays of speed and curvature broadcasts."""
     speeds = np.array([-10.0, -2.0, 3.0, 5.0, 20.0])[:, None]  # (5, 1)
@@ -256,9 +256,9 @@ def _nonlinear_AB(speed, curvature):
 
 @given(speed=speeds, curvature=curvatures, ratio=ratios, pole=poles)
 def test_K_and_from_K_against_acker(speed, curvature, ratio, pole):
-    assume(_well_posed(VEH, speed, curvature, ratio, "exact") > 1e-2)
+    assume(_well_posed(VEH, speed, curvature, ratio, "kinematic") > 1e-2)
     # (ill-conditioned designs are refused; held in the conditioning tests)
-    assume(_well_conditioned(VEH, speed, curvature, ratio, "exact", pole))
+    assume(_well_conditioned(VEH, speed, curvature, ratio, "kinematic", pole))
     A, B = _nonlinear_AB(speed, curvature)
     b = B @ np.array([1.0, ratio])
     row = np.ravel(ct.acker(A, b[:, None], [pole, pole]))
@@ -404,7 +404,7 @@ def test_issue_cases_refused_with_reason(kwargs, words):
     # the reference: the acker design's real closed loop misses the double
     # root by more than the refusal threshold (0.999: 8e-5; the others: the
     # pole at +0.48 and an unstable loop)
-    A, B = _matrices_ref(VEH, 5.0, float(plant.curvature), "exact")
+    A, B = _matrices_ref(VEH, 5.0, float(plant.curvature), "kinematic")
     b = B @ np.array([1.0, kwargs["ratio"]])
     k = np.asarray(ct.acker(A, b[:, None], [kwargs["pole"]] * 2)).ravel()
     cl = fws.closed_loop(plant, fws.SteeringGains(k[0], k[1], ratio=kwargs["ratio"]))
@@ -417,7 +417,7 @@ def test_slow_pole_on_straight_path_is_accepted():
     # double integrator), so the design is fine and stable.
     plant = fws.LateralPlant(VEH, speed=5.0)
     g = fws.double_root_gains(plant, ratio=-1.0, pole=-1e-12)
-    A, B = _matrices_ref(VEH, 5.0, 0.0, "exact")
+    A, B = _matrices_ref(VEH, 5.0, 0.0, "kinematic")
     ev = np.linalg.eigvals(A - np.outer(B @ [1.0, -1.0], [g.k1, g.k2]))
     assert np.allclose(ev, -1e-12, rtol=POLE_RTOL, atol=0.0)
     assert fws.is_stable(plant, g)

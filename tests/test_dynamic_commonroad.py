@@ -125,8 +125,8 @@ def test_closed_loop_agrees_with_commonroad_single_track(
     x0 = (0.0, -1.0, 0.0)
     t = np.linspace(0.0, 15.0, 301)
     res = fws.simulate(
-        veh, path, gains, speed=speed, initial_state=x0, duration=15.0, t_eval=t,
-        model="dynamic", actuator_time_constant=SERVO_T,
+        fws.LateralPlant(veh, speed=speed, model="dynamic", steering_lag=SERVO_T),
+        path, gains, initial_state=x0, duration=15.0, t_eval=t,
     )  # fmt: skip
     assert res.status == "ok"
     xg, yg, delta, v, psi, r, beta = _commonroad_loop(
@@ -161,7 +161,7 @@ def test_closed_loop_agrees_with_commonroad_single_track(
 
     # the kinematic model is far outside these tolerances: tyre slip matters
     kin = fws.simulate(
-        veh, path, gains, speed=speed, initial_state=x0, duration=15.0, t_eval=t,
-        actuator_time_constant=SERVO_T,
+        fws.LateralPlant(veh, speed=speed, steering_lag=SERVO_T),
+        path, gains, initial_state=x0, duration=15.0, t_eval=t,
     )  # fmt: skip
     assert np.max(np.abs(kin.e - e)) > 10 * tol_e

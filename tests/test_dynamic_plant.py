@@ -66,7 +66,7 @@ def test_magic_tyre_matrices(u, kappa):
 def test_closed_loop_engine_on_the_dynamic_plant(ratio, u):
     kappa = 0.01
     plant = fws.LateralPlant(VEH, speed=u, curvature=kappa, model="dynamic")
-    kin = replace(plant, model="exact")
+    kin = replace(plant, model="kinematic")
     g = fws.double_root_gains(kin, ratio=ratio, pole=-1.0)
     A_ref, B_ref = _reference(u, kappa)
     # u = [1, a]^T (-k1 e - k2 theta), written here from the control law
@@ -100,7 +100,7 @@ def test_stability_chart_on_the_dynamic_plant():
 
 def test_parameter_locus_of_the_kinematic_design():
     plant = fws.LateralPlant(VEH, speed=10.0, curvature=0.01, model="dynamic")
-    g = fws.double_root_gains(replace(plant, model="exact"), ratio=0.0, pole=-1.0)
+    g = fws.double_root_gains(replace(plant, model="kinematic"), ratio=0.0, pole=-1.0)
     speeds = np.array([5.0, 10.0, 30.0])
     pz = fws.parameter_locus(
         plant,
@@ -108,11 +108,11 @@ def test_parameter_locus_of_the_kinematic_design():
         parameter="speed",
         values=speeds,
         redesign_pole=-1.0,
-        design_model="exact",
+        design_model="kinematic",
     )
     for v, loci in zip(speeds, pz.loci, strict=True):
         p = replace(plant, speed=v)
-        gv = fws.double_root_gains(replace(p, model="exact"), ratio=0.0, pole=-1.0)
+        gv = fws.double_root_gains(replace(p, model="kinematic"), ratio=0.0, pole=-1.0)
         A_ref, B_ref = _reference(v, 0.01)
         A_cl = A_ref - np.outer(B_ref[:, 0], [gv.k1, gv.k2]) @ np.eye(4)[:2]
         np.testing.assert_allclose(
@@ -122,7 +122,7 @@ def test_parameter_locus_of_the_kinematic_design():
 
 def test_double_root_design_refuses_the_four_state_plant():
     plant = fws.LateralPlant(VEH, speed=10.0, model="dynamic")
-    with pytest.raises(ValueError, match="order 4.*model='exact'"):
+    with pytest.raises(ValueError, match="order 4.*model='kinematic'"):
         fws.double_root_gains(plant, ratio=0.0, pole=-1.0)
 
 
@@ -178,6 +178,6 @@ def test_operating_point_and_errors():
 
 def test_linear_nonlinear_comparison_refuses_the_dynamic_plant():
     plant = fws.LateralPlant(VEH, speed=10.0, model="dynamic")
-    g = fws.double_root_gains(replace(plant, model="exact"), ratio=0.0, pole=-1.0)
+    g = fws.double_root_gains(replace(plant, model="kinematic"), ratio=0.0, pole=-1.0)
     with pytest.raises(ValueError, match="compares the kinematic models"):
         fws.compare_linear_nonlinear(plant, g, duration=1.0)

@@ -131,8 +131,9 @@ def test_engine_matches_a_global_frame_loop_written_here(tyre, tau, ratio, speed
     t = np.linspace(0.0, 8.0, 81)
     x0 = (0.0, -1.5, 0.05)
     res = fws.simulate(
-        VEH, path, g, speed=speed, initial_state=x0, duration=8.0, t_eval=t,
-        model="dynamic", tyre=tyre, actuator_time_constant=tau,
+        fws.LateralPlant(VEH, speed=speed, model="dynamic", tyre=tyre,
+                         steering_lag=tau),
+        path, g, initial_state=x0, duration=8.0, t_eval=t,
     )  # fmt: skip
     ref = _global_loop(VEH, path, _paper_law(VEH, g), speed, x0, t, tyre=tyre, tau=tau)
     assert res.status == "ok" and res.model == "dynamic" and res.tyre == tyre
@@ -162,8 +163,9 @@ def test_baseline_controller_applies_unchanged():
     path = Arc(curvature=0.02)
     t = np.linspace(0.0, 6.0, 61)
     res = fws.simulate(
-        VEH, path, ctrl, speed=12.0, initial_state=(0.0, -1.0, 0.0), duration=6.0,
-        t_eval=t, model="dynamic",
+        fws.LateralPlant(VEH, speed=12.0, model="dynamic"),
+        path, ctrl, initial_state=(0.0, -1.0, 0.0), duration=6.0,
+        t_eval=t,
     )  # fmt: skip
 
     def command(s, e, th, k):
@@ -185,8 +187,9 @@ def test_given_initial_lateral_velocity_and_yaw_rate():
     t = np.linspace(0.0, 4.0, 41)
     body0 = (0.3, -0.1)
     res = fws.simulate(
-        VEH, Straight(), g, speed=15.0, initial_state=(0.0, 1.0, 0.0, *body0),
-        duration=4.0, t_eval=t, model="dynamic", feedforward=False,
+        fws.LateralPlant(VEH, speed=15.0, model="dynamic"),
+        Straight(), g, initial_state=(0.0, 1.0, 0.0, *body0),
+        duration=4.0, t_eval=t, feedforward=False,
     )  # fmt: skip
     ref = _global_loop(
         VEH, Straight(), _paper_law(VEH, g), 15.0, (0.0, 1.0, 0.0), t, body0=body0
@@ -196,14 +199,15 @@ def test_given_initial_lateral_velocity_and_yaw_rate():
     # the default start (three values) is rolling without slip: r = u tan(df)/f
     # with delta_r = 0, v_y = l_r r; given explicitly in a batch, the same run
     default = fws.simulate(
-        VEH, Straight(), g, speed=15.0, initial_state=(0.0, 1.0, 0.0),
-        duration=4.0, t_eval=t, model="dynamic", feedforward=False,
+        fws.LateralPlant(VEH, speed=15.0, model="dynamic"),
+        Straight(), g, initial_state=(0.0, 1.0, 0.0),
+        duration=4.0, t_eval=t, feedforward=False,
     )  # fmt: skip
     r0 = 15.0 * math.tan(-g.k1 * 1.0) / 2.7
     batch = fws.simulate_batch(
-        VEH, Straight(), g, speed=15.0,
+        fws.LateralPlant(VEH, speed=15.0, model="dynamic"), Straight(), g,
         initial_state=[(0.0, 1.0, 0.0, *body0), (0.0, 1.0, 0.0, 1.2 * r0, r0)],
-        duration=4.0, t_eval=t, model="dynamic", feedforward=False,
+        duration=4.0, t_eval=t, feedforward=False,
     )  # fmt: skip
     # (stacked runs share the solver's steps: agreement to the tolerance)
     np.testing.assert_allclose(batch.e[0], res.e, rtol=0, atol=1e-9)
@@ -218,11 +222,21 @@ def test_batch_of_speeds_and_ratios_equals_single_runs():
     g = fws.double_root_gains(
         VEH, speed=speeds, curvature=0.01, ratio=ratios, pole=-1.0
     )
-    kw = dict(initial_state=(0.0, -1.0, 0.0), duration=5.0, dt=0.1, model="dynamic")
-    batch = fws.simulate_batch(VEH, Arc(curvature=0.01), g, speed=speeds, **kw)
+    kw = dict(initial_state=(0.0, -1.0, 0.0), duration=5.0, dt=0.1)
+    batch = fws.simulate_batch(
+        fws.LateralPlant(VEH, speed=speeds, model="dynamic"),
+        Arc(curvature=0.01),
+        g,
+        **kw,
+    )
     for i in range(3):
         gi = fws.SteeringGains(g.k1[i], g.k2[i], g.ratio[i])
-        one = fws.simulate(VEH, Arc(curvature=0.01), gi, speed=speeds[i], **kw)
+        one = fws.simulate(
+            fws.LateralPlant(VEH, speed=speeds[i], model="dynamic"),
+            Arc(curvature=0.01),
+            gi,
+            **kw,
+        )
         np.testing.assert_allclose(batch.e[i], one.e, rtol=0, atol=1e-8)
         np.testing.assert_allclose(batch.v_y[i], one.v_y, rtol=0, atol=1e-8)
         assert batch.peaks.lateral_accel.value[i] == pytest.approx(
@@ -236,7 +250,8 @@ def test_kinematic_signals_of_the_new_columns():
     g = fws.double_root_gains(veh, speed=10.0, curvature=0.05, ratio=-0.5, pole=-1.0)
     t = np.linspace(0.0, 3.0, 3001)
     res = fws.simulate(
-        veh, Arc(curvature=0.05), g, speed=10.0, initial_state=(0.0, -1.0, 0.0),
+        fws.LateralPlant(veh, speed=10.0),
+        Arc(curvature=0.05), g, initial_state=(0.0, -1.0, 0.0),
         duration=3.0, t_eval=t,
     )  # fmt: skip
     h = t[1] - t[0]
@@ -254,13 +269,11 @@ def test_delay_combines_with_the_dynamic_model():
     # A delay of 0.05 s: the command of t - delay; the solution at delay -> 0
     # approaches the undelayed one linearly (first-order sensitivity).
     g = fws.double_root_gains(VEH, speed=15.0, curvature=0.02, ratio=0.0, pole=-1.0)
-    kw = dict(
-        speed=15.0, initial_state=(0.0, -1.0, 0.0), duration=5.0, dt=0.05,
-        model="dynamic",
-    )  # fmt: skip
-    base = fws.simulate(VEH, Arc(curvature=0.02), g, **kw)
-    d1 = fws.simulate(VEH, Arc(curvature=0.02), g, delay=0.02, **kw)
-    d2 = fws.simulate(VEH, Arc(curvature=0.02), g, delay=0.01, **kw)
+    kw = dict(initial_state=(0.0, -1.0, 0.0), duration=5.0, dt=0.05)
+    plant = fws.LateralPlant(VEH, speed=15.0, model="dynamic")
+    base = fws.simulate(plant, Arc(curvature=0.02), g, **kw)
+    d1 = fws.simulate(plant, Arc(curvature=0.02), g, delay=0.02, **kw)
+    d2 = fws.simulate(plant, Arc(curvature=0.02), g, delay=0.01, **kw)
     err1 = np.max(np.abs(d1.e - base.e))
     err2 = np.max(np.abs(d2.e - base.e))
     assert d1.status == "ok" and err1 > 1e-4
@@ -304,8 +317,9 @@ def test_kinematic_limit_error_shrinks_as_one_over_stiffness(ratio):
         )
         # stiff tyres make the slip dynamics fast (m u / C ~ 1e-4 s): Radau
         res = fws.simulate(
-            stiff, Arc(curvature=kappa), g, speed=u, initial_state=(0.0, -1.0, 0.0),
-            duration=6.0, t_eval=t, model="dynamic", method="Radau",
+            fws.LateralPlant(stiff, speed=u, model="dynamic"),
+            Arc(curvature=kappa), g, initial_state=(0.0, -1.0, 0.0),
+            duration=6.0, t_eval=t, method="Radau",
         )  # fmt: skip
         assert res.status == "ok"
         mine = np.stack([res.s, res.e, res.theta])
@@ -361,8 +375,9 @@ def test_simulated_steady_state_offset_equals_the_algebraic_one(ratio, speed):
     g = fws.double_root_gains(VEH, speed=speed, curvature=kappa, ratio=ratio, pole=-1.0)
     e_ss, th_ss, vy_ss, r_ss = _steady_state(VEH, g, speed, kappa)
     res = fws.simulate(
-        VEH, Arc(curvature=kappa), g, speed=speed, initial_state=(0.0, -1.0, 0.0),
-        duration=40.0, dt=0.5, model="dynamic",
+        fws.LateralPlant(VEH, speed=speed, model="dynamic"),
+        Arc(curvature=kappa), g, initial_state=(0.0, -1.0, 0.0),
+        duration=40.0, dt=0.5,
     )  # fmt: skip
     assert abs(e_ss) > 0.01  # a real offset, not zero
     assert res.e[-1] == pytest.approx(e_ss, abs=1e-6)
@@ -377,27 +392,35 @@ def test_simulated_steady_state_offset_equals_the_algebraic_one(ratio, speed):
 
 def test_invalid_model_arguments():
     g = fws.SteeringGains(0.1, 0.5, 0.0)
-    kw = dict(speed=10.0, initial_state=(0.0, 1.0, 0.0), duration=1.0)
+    kw = dict(initial_state=(0.0, 1.0, 0.0), duration=1.0)
+    # the plant refuses a bad model or tyre (its own vocabulary) before any run
     with pytest.raises(ValueError, match=r"model must be one of \('kinematic'"):
-        fws.simulate(VEH, Straight(), g, model="bicycle", **kw)
+        fws.LateralPlant(VEH, speed=10.0, model="bicycle")
     with pytest.raises(ValueError, match="tyre must be one of"):
-        fws.simulate(VEH, Straight(), g, model="dynamic", tyre="pacejka", **kw)
-    with pytest.raises(ValueError, match="tyre='magic' needs model='dynamic'"):
-        fws.simulate(VEH, Straight(), g, tyre="magic", **kw)
+        fws.LateralPlant(VEH, speed=10.0, model="dynamic", tyre="pacejka")
+    with pytest.raises(
+        ValueError, match="tyre='magic' applies only to model='dynamic'"
+    ):
+        fws.LateralPlant(VEH, speed=10.0, tyre="magic")
     bare = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.2)
     with pytest.raises(ValueError, match="needs Vehicle fields mass, yaw_inertia"):
-        fws.simulate(bare, Straight(), g, model="dynamic", **kw)
+        fws.LateralPlant(bare, speed=10.0, model="dynamic")
     no_mu = replace(VEH, friction=None)
     with pytest.raises(ValueError, match="friction"):
-        fws.simulate(no_mu, Straight(), g, model="dynamic", tyre="magic", **kw)
-    with pytest.raises(ValueError, match=r"speed must be > 0 for model='dynamic'.*-5"):
-        fws.simulate(VEH, Straight(), g, model="dynamic", **{**kw, "speed": -5.0})
+        fws.LateralPlant(no_mu, speed=10.0, model="dynamic", tyre="magic")
+    with pytest.raises(ValueError, match=r"speed.*-5"):
+        fws.LateralPlant(VEH, speed=-5.0, model="dynamic")
+    # a dynamic plant with an array speed: one negative speed is refused
+    with pytest.raises(ValueError, match=r"speed.*-5"):
+        fws.LateralPlant(VEH, speed=[10.0, -5.0], model="dynamic")
+    kinematic = fws.LateralPlant(VEH, speed=10.0)
     with pytest.raises(ValueError, match=r"initial_state must be .*model='kinematic'"):
-        fws.simulate(VEH, Straight(), g, **{**kw, "initial_state": (0, 1, 0, 0, 0)})
-    with pytest.raises(ValueError, match=r"got shape \(4,\)"):
         fws.simulate(
-            VEH, Straight(), g, model="dynamic", **{**kw, "initial_state": (0, 1, 0, 0)}
+            kinematic, Straight(), g, **{**kw, "initial_state": (0, 1, 0, 0, 0)}
         )
+    dynamic = fws.LateralPlant(VEH, speed=10.0, model="dynamic")
+    with pytest.raises(ValueError, match=r"got shape \(4,\)"):
+        fws.simulate(dynamic, Straight(), g, **{**kw, "initial_state": (0, 1, 0, 0)})
 
 
 # --------------------------------------------------------------------------
@@ -415,14 +438,17 @@ def test_invalid_model_arguments():
 def test_engine_matches_the_python_control_reference(tyre, tau, delay, ratio):
     path = Arc(curvature=0.02)
     g = fws.double_root_gains(VEH, speed=15.0, curvature=0.02, ratio=ratio, pole=-1.0)
-    kw = dict(
-        speed=15.0, initial_state=(0.0, -1.0, 0.05), duration=4.0, dt=0.1,
-        actuator_time_constant=tau, delay=delay, model="dynamic", tyre=tyre,
-    )  # fmt: skip
+    kw = dict(initial_state=(0.0, -1.0, 0.05), duration=4.0, dt=0.1, delay=delay)
     # (a Pade block of order 6 for the delay, stiff: looser solver tolerances)
     opts = {"pade_order": 6, "rtol": 1e-8, "atol": 1e-10} if delay else {}
-    ref = fws.simulation.simulate_reference(VEH, path, g, **kw, **opts)
-    res = fws.simulate(VEH, path, g, **kw)
+    ref = fws.simulation.simulate_reference(
+        VEH, path, g, speed=15.0, actuator_time_constant=tau, model="dynamic",
+        tyre=tyre, **kw, **opts,
+    )  # fmt: skip
+    plant = fws.LateralPlant(
+        VEH, speed=15.0, model="dynamic", tyre=tyre, steering_lag=tau
+    )
+    res = fws.simulate(plant, path, g, **kw)
     out = dict(zip(ref.output_labels, ref.outputs, strict=True))
     atol = 1e-6 if delay == 0.0 else 1e-5
     for name in (
@@ -468,8 +494,9 @@ def test_closed_form_offset_matches_simulation_to_order_kappa_squared(ratio, spe
         )
         e_cf, th_cf = fws.steady_state_offset(VEH, g, speed=speed, curvature=kappa)
         res = fws.simulate(
-            VEH, Arc(curvature=kappa), g, speed=speed, initial_state=(0.0, -1.0, 0.0),
-            duration=40.0, dt=0.5, model="dynamic",
+            fws.LateralPlant(VEH, speed=speed, model="dynamic"),
+            Arc(curvature=kappa), g, initial_state=(0.0, -1.0, 0.0),
+            duration=40.0, dt=0.5,
         )  # fmt: skip
         e_sim = res.e[-1]
         assert abs(res.e[-1] - res.e[-11]) < 1e-9  # settled
@@ -484,12 +511,10 @@ def test_closed_form_offset_matches_simulation_to_order_kappa_squared(ratio, spe
 def test_dynamic_feedforward_removes_the_offset(tyre):
     kappa, speed = 0.01, 20.0
     g = fws.double_root_gains(VEH, speed=speed, curvature=kappa, ratio=0.3, pole=-1.0)
-    kw = dict(
-        speed=speed, initial_state=(0.0, -1.0, 0.0), duration=30.0, dt=0.5,
-        model="dynamic", tyre=tyre,
-    )  # fmt: skip
-    kin_ff = fws.simulate(VEH, Arc(curvature=kappa), g, **kw)
-    dyn_ff = fws.simulate(VEH, Arc(curvature=kappa), g, feedforward="dynamic", **kw)
+    kw = dict(initial_state=(0.0, -1.0, 0.0), duration=30.0, dt=0.5)
+    plant = fws.LateralPlant(VEH, speed=speed, model="dynamic", tyre=tyre)
+    kin_ff = fws.simulate(plant, Arc(curvature=kappa), g, **kw)
+    dyn_ff = fws.simulate(plant, Arc(curvature=kappa), g, feedforward="dynamic", **kw)
     assert abs(kin_ff.e[-1]) > 0.5
     assert abs(dyn_ff.e[-1]) < 1e-9 and abs(dyn_ff.theta[-1]) < 1e-9
     assert dyn_ff.feedforward == "dynamic"
@@ -498,13 +523,13 @@ def test_dynamic_feedforward_removes_the_offset(tyre):
     assert dyn_ff.v_y[-1] == pytest.approx(VEH.rear_to_cg * kappa * speed, rel=1e-8)
     # the same loop as a python-control interconnection
     ref = fws.simulation.simulate_reference(
-        VEH, Arc(curvature=kappa), g, feedforward="dynamic",
-        **{**kw, "duration": 4.0},
+        VEH, Arc(curvature=kappa), g, feedforward="dynamic", speed=speed,
+        model="dynamic", tyre=tyre, **{**kw, "duration": 4.0},
     )  # fmt: skip
     out = dict(zip(ref.output_labels, ref.outputs, strict=True))
     np.testing.assert_allclose(dyn_ff.e[:9], out["e"], rtol=0, atol=1e-6)
     with pytest.raises(ValueError, match="feedforward must be True, False or one of"):
-        fws.simulate(VEH, Arc(curvature=kappa), g, feedforward="static", **kw)
+        fws.simulate(plant, Arc(curvature=kappa), g, feedforward="static", **kw)
 
 
 def test_metrics_and_plot_of_a_dynamic_result():
@@ -512,8 +537,9 @@ def test_metrics_and_plot_of_a_dynamic_result():
 
     g = fws.double_root_gains(VEH, speed=20.0, curvature=0.01, ratio=0.0, pole=-1.0)
     res = fws.simulate(
-        VEH, Arc(curvature=0.01), g, speed=20.0, initial_state=(0.0, -1.0, 0.0),
-        duration=10.0, dt=0.01, model="dynamic",
+        fws.LateralPlant(VEH, speed=20.0, model="dynamic"),
+        Arc(curvature=0.01), g, initial_state=(0.0, -1.0, 0.0),
+        duration=10.0, dt=0.01,
     )  # fmt: skip
     m = fws.tracking_metrics(res)
     # the metric is the exact peak; the samples lie at or below it
@@ -541,8 +567,8 @@ def test_default_start_rolls_without_slip(speed, ratio, e0, theta0):
     # acceleration at t = 0, and the kinematic yaw rate of the initial angles
     g = fws.SteeringGains(0.05, 0.4, ratio)
     res = fws.simulate(
-        VEH, Arc(curvature=0.01), g, speed=speed,
-        initial_state=(0.0, e0, theta0), duration=0.1, dt=0.05, model="dynamic",
+        fws.LateralPlant(VEH, speed=speed, model="dynamic"), Arc(curvature=0.01), g,
+        initial_state=(0.0, e0, theta0), duration=0.1, dt=0.05,
     )  # fmt: skip
     df, dr = res.delta_f[0], res.delta_r[0]
     assert abs(res.slip_front[0]) < 1e-14 and abs(res.slip_rear[0]) < 1e-14

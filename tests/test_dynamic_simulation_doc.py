@@ -147,8 +147,9 @@ def test_row_recomputed_independently(speed, schedule):
     # peak |a_y| from the tyre forces of a run sampled every 5 ms
     t = np.linspace(0.0, 20.0, 4001)
     res = fws.simulate(
-        veh, fws.Arc(curvature=D.CURVATURE), g, speed=speed,
-        initial_state=D.INITIAL_STATE, duration=20.0, t_eval=t, model="dynamic",
+        fws.LateralPlant(veh, speed=speed, model="dynamic"),
+        fws.Arc(curvature=D.CURVATURE), g,
+        initial_state=D.INITIAL_STATE, duration=20.0, t_eval=t,
     )  # fmt: skip
     lf, lr = veh.wheelbase - veh.rear_to_cg, veh.rear_to_cg
     af = res.delta_f - np.arctan((res.v_y + lf * res.yaw_rate) / speed)

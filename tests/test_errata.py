@@ -84,7 +84,7 @@ def _nonlinear_closed_loop_poles(speed, k, gains):
 def test_erratum_3_paper_gains_miss_the_double_root_on_a_curve(ratio):
     """V = 5 m/s, kappa = 0.1: paper gains for lam0 = -1 do not give -1, -1."""
     speed, k, lam0 = 5.0, 0.1, -1.0
-    exact_plant = fws.LateralPlant(VEH, speed=speed, curvature=k, model="exact")
+    exact_plant = fws.LateralPlant(VEH, speed=speed, curvature=k, model="kinematic")
     paper_plant = fws.LateralPlant(VEH, speed=speed, curvature=k, model="paper")
     paper = fws.double_root_gains(paper_plant, ratio=ratio, pole=lam0)
     exact = fws.double_root_gains(exact_plant, ratio=ratio, pole=lam0)
@@ -114,7 +114,7 @@ def test_erratum_3_exact_gains_at_ratio_zero_carry_one_over_c():
         S.SYMBOLS["curvature"]: kap,
         S.SYMBOLS["ratio"]: 0,
     }
-    D = S.characteristic_polynomial("exact").as_expr().subs(subs)
+    D = S.characteristic_polynomial("kinematic").as_expr().subs(subs)
     target = sp.expand((lam - lam0) ** 2)
     sol = sp.solve(sp.Poly(sp.expand(D - target), lam).all_coeffs(), [k1s, k2s])
     eq44 = (f * (lam0**2 / V**2 - kap**2), -2 * lam0 * f / V)
@@ -139,12 +139,12 @@ def test_erratum_4_ratio_one_on_curve_still_needs_k2_below_one():
     """a = 1, kappa != 0: k2 < 1 (paper's model), k2 < 1 + f k1 (exact)."""
     V, f, a, kap = (S.SYMBOLS[n] for n in ("speed", "wheelbase", "ratio", "curvature"))
     k1, k2, lam = (S.SYMBOLS[n] for n in ("k1", "k2", "lam"))
-    D = sp.Poly(S.characteristic_polynomial("exact").as_expr().subs(a, 1), lam)
+    D = sp.Poly(S.characteristic_polynomial("kinematic").as_expr().subs(a, 1), lam)
     _, p1, p0 = D.all_coeffs()
     assert sp.simplify(p1 - V * (k1 + f * kap**2 * k2)) == 0
     assert sp.simplify(p0 - V**2 * kap**2 * (f * k1 + 1 - k2)) == 0
     paper = fws.LateralPlant(VEH, speed=5.0, curvature=0.1, model="paper")
-    exact = fws.LateralPlant(VEH, speed=5.0, curvature=0.1, model="exact")
+    exact = fws.LateralPlant(VEH, speed=5.0, curvature=0.1, model="kinematic")
     # bound of the exact model at k1 = 0.5: 1 + 2.7 * 0.5 = 2.35
     for plant, k2_val, expected in (
         (paper, 0.9, True),
@@ -162,7 +162,7 @@ def test_erratum_4_ratio_one_on_curve_still_needs_k2_below_one():
 def test_erratum_5_ratio_one_straight_is_uncontrollable_and_eq42_is_wrong():
     V, f, a, kap = (S.SYMBOLS[n] for n in ("speed", "wheelbase", "ratio", "curvature"))
     k1, k2, lam0, lam = (S.SYMBOLS[n] for n in ("k1", "k2", "pole", "lam"))
-    for model in ("exact", "paper"):
+    for model in ("kinematic", "paper"):
         D = S.characteristic_polynomial(model).as_expr().subs({a: 1, kap: 0})
         assert sp.expand(D - lam * (lam + V * k1)) == 0
     # printed k1 = -2 lam0 / f in eq. (39): p1 = V k1 = -2 lam0 V / f != -2 lam0

@@ -137,7 +137,7 @@ def test_stability_chart(tmp_path):
     assert printed == pytest.approx(stable.mean(), abs=2e-3)
     # Both models' designs: exact gains satisfy eqs. (39)-(40) of the sympy
     # exact model, the paper's those of eq. (34) as printed.
-    for model in ("exact", "paper"):
+    for model in ("kinematic", "paper"):
         k1, k2 = floats_after(f"{model}: design", out)
         p = S.characteristic_polynomial(model).all_coeffs()
         vals = {S.V: 5.0, S.f: 2.7, S.kappa: 0.2, S.a: 0.5, S.k1: k1, S.k2: k2}
@@ -394,7 +394,7 @@ def test_doc_code_blocks_run(page, tmp_path, monkeypatch):
 def test_getting_started_numbers():
     """The numbers quoted in docs/getting_started.md, from sympy."""
     text = (ROOT / "docs" / "getting_started.md").read_text(encoding="utf-8")
-    gains = S.double_root_gains("exact")
+    gains = S.double_root_gains("kinematic")
     vals = {S.V: 5.0, S.f: 2.7, S.kappa: 0.1, S.a: -1.0, S.lam0: -1.0}
     k1 = float(gains[S.k1].subs(vals))
     k2 = float(gains[S.k2].subs(vals))

@@ -203,10 +203,9 @@ def test_fig5_points_match_direct_simulation():
     for ratio in (-1.0, 0.0):
         g = fws.double_root_gains(veh, speed=5.0, ratio=ratio, pole=-1.0)
         res = fws.simulate(
-            veh,
+            fws.LateralPlant(veh, speed=5.0),
             Straight(),
             g,
-            speed=5.0,
             initial_state=(0.0, 2.0, 0.0),
             duration=15.0,
             feedforward=False,
@@ -231,10 +230,9 @@ def test_response_figures_match_direct_simulation(n, curvature, y0):
     )
     path = Straight() if curvature == 0.0 else Arc(curvature=curvature)
     res = fws.simulate(
-        veh,
+        fws.LateralPlant(veh, speed=5.0),
         path,
         g,
-        speed=5.0,
         initial_state=(0.0, y0, 0.0),
         duration=15.0,
         feedforward=curvature != 0.0,
@@ -493,10 +491,9 @@ def test_actuator_responses_match_simulate_at_default_tolerance(panel, pole):
     ):
         line = styles[style]
         ref = fws.simulate(
-            veh,
+            fws.LateralPlant(veh, speed=20.0),
             Arc(curvature=0.01),
             g,
-            speed=20.0,
             initial_state=(0.0, -10.0, 0.0),
             duration=10.0,
             feedforward=True,

@@ -193,10 +193,9 @@ def _result():
     global _RES
     if _RES is None:
         _RES = fws.simulate(
-            VEH,
+            fws.LateralPlant(VEH, speed=5.0),
             fws.Straight(),
             fws.SteeringGains(0.1, 0.5, ratio=0.0),
-            speed=5.0,
             initial_state=(0.0, 1.0, 0.0),
             duration=3.0,
             dt=0.1,
@@ -313,7 +312,7 @@ def gains_placed(result, call) -> bool:
     if not isinstance(plant, fws.LateralPlant) or np.ndim(pole) or np.ndim(a):
         return True
     V, k, f = float(plant.speed), float(plant.curvature), plant.vehicle.wheelbase
-    c = 1.0 + (f * k) ** 2 if plant.model == "exact" else 1.0
+    c = 1.0 + (f * k) ** 2 if plant.model == "kinematic" else 1.0
     A = np.array([[0.0, V], [-V * k * k, 0.0]])
     b = np.array([[0.0, V], [c * V / f, -V / f]]) @ np.array([1.0, float(a)])
     ev = np.linalg.eigvals(A - np.outer(b, [float(result.k1), float(result.k2)]))
@@ -391,13 +390,15 @@ CASES: dict[str, Case] = {
         post=elementwise,
     ),
     "linearize": Case(
-        fws.linearize, dict(plant=VEH), dict(speed=5.0, curvature=0.1, model="exact")
+        fws.linearize,
+        dict(plant=VEH),
+        dict(speed=5.0, curvature=0.1, model="kinematic"),
     ),
     "closed_loop": Case(fws.closed_loop, PG),
     "LateralPlant": Case(
         fws.LateralPlant,
         dict(vehicle=VEH, speed=5.0),
-        dict(curvature=0.1, model="exact", steering_lag=None),
+        dict(curvature=0.1, model="kinematic", steering_lag=None),
     ),
     "as_plant": Case(fws.as_plant, dict(plant=VEH), dict(speed=5.0, curvature=0.1)),
     "loop_matrices": Case(fws.loop_matrices, dict(plant=PLANT)),
@@ -531,18 +532,11 @@ CASES: dict[str, Case] = {
     "compare": Case(
         fws.compare,
         dict(
-            vehicle=VEH,
+            plant=fws.LateralPlant(VEH, speed=5.0),
             manoeuvre=_Lazy(lambda: fws.constant_radius(radius=40.0, turns=0.05)),
             controllers=_Lazy(lambda: {"4ws": GAINS}),
         ),
-        dict(
-            speed=5.0,
-            offset=0.0,
-            delay=0.0,
-            actuator_time_constant=None,
-            dt=0.1,
-            max_steps=1000.0,
-        ),
+        dict(offset=0.0, delay=0.0, dt=0.1, max_steps=1000.0),
         post=lambda r, c: _finite_tree(r.table),
         examples=FEW,
     ),
@@ -635,18 +629,16 @@ CASES: dict[str, Case] = {
     "feedforward_feedback_controller": Case(
         fws.feedforward_feedback_controller, dict(vehicle=VEH, gains=GAINS)
     ),
-    "steering_actuator": Case(fws.steering_actuator, V, dict(time_constant=0.05)),
+    "steering_actuator": Case(fws.steering_actuator, V, dict(steering_lag=0.05)),
     "simulate": Case(
         fws.simulate,
-        dict(vehicle=VEH, path=ARC, gains=GAINS),
+        dict(plant=fws.LateralPlant(VEH, speed=5.0), path=ARC, controller=GAINS),
         dict(
-            speed=5.0,
             initial_state=(0.0, -1.0, 0.0),
             duration=2.0,
             feedforward=True,
             dt=0.1,
             t_eval=None,
-            actuator_time_constant=None,
             delay=0.0,
             method="DOP853",
             rtol=1e-6,
@@ -664,15 +656,17 @@ CASES: dict[str, Case] = {
     "projection_system": Case(fws.projection_system, dict(path=ARC)),
     "simulate_batch": Case(
         fws.simulate_batch,
-        dict(vehicle=VEH, path=ARC, gains=GAINS),
         dict(
-            speed=np.array([5.0, 4.0]),
+            plant=fws.LateralPlant(VEH, speed=np.array([5.0, 4.0])),
+            path=ARC,
+            controllers=GAINS,
+        ),
+        dict(
             initial_state=(0.0, -1.0, 0.0),
             duration=2.0,
             feedforward=True,
             dt=0.1,
             t_eval=None,
-            actuator_time_constant=None,
             delay=0.0,
             method="DOP853",
             rtol=1e-6,
@@ -926,10 +920,10 @@ TARGETED: dict[str, list[Probe]] = {
     ],
     "an array of designs where one design is expected": [
         Probe("compare", "controllers", "sweep of k1", _Lazy(lambda: {"4ws": _SWEEP})),
+        Probe("simulate", "controller", "sweep of k1", _SWEEP, post=refused),
         *(
             Probe(name, "gains", "sweep of k1", _SWEEP, post=refused)
             for name in (
-                "simulate",
                 "compare_linear_nonlinear",
                 "closed_loop",
                 "gain_loop",

@@ -162,22 +162,25 @@ def test_compare_refuses_an_array_of_designs_and_says_what_to_use():
     m = fws.constant_radius(radius=40.0, turns=0.05)
     sweep = fws.SteeringGains(k1=[0.1, 0.2], k2=0.5, ratio=0.0)
     with pytest.raises(ValueError) as info:
-        fws.compare(veh, m, {"sweep": sweep}, speed=5.0, dt=0.1)
+        fws.compare(fws.LateralPlant(veh, speed=5.0), m, {"sweep": sweep}, dt=0.1)
     msg = str(info.value)
     assert "controllers['sweep']" in msg and "k1 of shape (2,)" in msg
     assert "one design" in msg and "simulate_batch" in msg
     # the suggested function runs the sweep: one run per design, each the
     # run of that design alone
     batch = fws.simulate_batch(
-        veh, m.path, sweep, speed=5.0, initial_state=(0.0, 0.5, 0.0), duration=2.0
+        fws.LateralPlant(veh, speed=5.0),
+        m.path,
+        sweep,
+        initial_state=(0.0, 0.5, 0.0),
+        duration=2.0,
     )
     assert len(batch) == 2
     for i, k1 in enumerate((0.1, 0.2)):
         one = fws.simulate(
-            veh,
+            fws.LateralPlant(veh, speed=5.0),
             m.path,
             fws.SteeringGains(k1, 0.5, ratio=0.0),
-            speed=5.0,
             initial_state=(0.0, 0.5, 0.0),
             duration=2.0,
         )
@@ -203,13 +206,17 @@ def test_constant_radius_drives_its_turns():
     g = fws.double_root_gains(
         fws.LateralPlant(veh, speed=V, curvature=1.0 / R), ratio=0.0, pole=-1.0
     )
-    cmp = fws.compare(veh, m, {"paper": g}, speed=V)
+    cmp = fws.compare(fws.LateralPlant(veh, speed=V), m, {"paper": g})
     r = cmp.results[0]
     # three laps about the centre (0, R), read from x and y
     assert _swept(r, (0.0, R)) >= 3 * 2 * math.pi
     assert bool(cmp.table["completed"][0]) is True
     # a fraction of a turn is an open arc of that length: driven to its end
-    half = fws.compare(veh, fws.constant_radius(radius=R, turns=0.5), {"p": g}, speed=V)
+    half = fws.compare(
+        fws.LateralPlant(veh, speed=V),
+        fws.constant_radius(radius=R, turns=0.5),
+        {"p": g},
+    )
     swept = _swept(half.results[0], (0.0, R))
     assert swept == pytest.approx(math.pi, abs=0.02)
     assert bool(half.table["completed"][0]) is True
@@ -225,7 +232,9 @@ def test_completed_on_a_tight_circle_means_the_lap_was_driven():
     every = fws.default_controllers(veh, speed=V)
     names = ["paper, a = 0", "pure pursuit", "Stanley", "LQR (independent rear)"]
     cmp = fws.compare(
-        veh, fws.constant_radius(radius=R), {n: every[n] for n in names}, speed=V
+        fws.LateralPlant(veh, speed=V),
+        fws.constant_radius(radius=R),
+        {n: every[n] for n in names},
     )
     tracked = []
     for r in cmp.results:
@@ -248,12 +257,13 @@ def test_huge_initial_heading_is_refused():
     assert np.spacing(1e300) > 2 * math.pi and np.spacing(1e6) < 1e-9
     veh = PAPER_VEHICLE
     g = fws.SteeringGains(0.1, 0.5, ratio=0.0)
-    kw = dict(speed=5.0, duration=1.0)
+    kw = dict(duration=1.0)
+    plant = fws.LateralPlant(veh, speed=5.0)
     with pytest.raises(ValueError, match=r"initial_state heading psi .* 1e\+300"):
-        fws.simulate(veh, fws.Straight(), g, initial_state=(0.0, 1.0, 1e300), **kw)
+        fws.simulate(plant, fws.Straight(), g, initial_state=(0.0, 1.0, 1e300), **kw)
     with pytest.raises(ValueError, match="initial_state"):
         fws.simulate_batch(
-            veh, fws.Straight(), g, initial_state=[(0, 1, 0), (0, 1, -1e300)], **kw
+            plant, fws.Straight(), g, initial_state=[(0, 1, 0), (0, 1, -1e300)], **kw
         )
     with pytest.raises(ValueError, match="initial_errors"):
         fws.compare_linear_nonlinear(
@@ -262,9 +272,9 @@ def test_huge_initial_heading_is_refused():
     # a large heading that still names a direction runs, and is that direction
     turns = 1e5
     far = fws.simulate(
-        veh, fws.Straight(), g, initial_state=(0.0, 1.0, 2 * math.pi * turns), **kw
+        plant, fws.Straight(), g, initial_state=(0.0, 1.0, 2 * math.pi * turns), **kw
     )
-    near = fws.simulate(veh, fws.Straight(), g, initial_state=(0.0, 1.0, 0.0), **kw)
+    near = fws.simulate(plant, fws.Straight(), g, initial_state=(0.0, 1.0, 0.0), **kw)
     np.testing.assert_allclose(far.e, near.e, atol=1e-8)
 
 

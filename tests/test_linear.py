@@ -28,7 +28,7 @@ def test_exact_equals_control_linearize_of_path_frame_model(speed, curvature):
     ref = ct.linearize(nl, x0, u0, copy_names=True, eps=1e-8)
     tol = 1e-6 * abs(speed)
     idx = [ref.state_labels.index(n) for n in ("e", "theta")]
-    lin = fws.linearize(veh, speed=speed, curvature=curvature, model="exact")
+    lin = fws.linearize(veh, speed=speed, curvature=curvature, model="kinematic")
     np.testing.assert_allclose(lin.A, ref.A[np.ix_(idx, idx)], rtol=0, atol=tol)
     np.testing.assert_allclose(lin.B, ref.B[idx, :], rtol=0, atol=tol)
     assert ref.input_labels == lin.input_labels == ["delta_f", "delta_r"]
@@ -36,7 +36,7 @@ def test_exact_equals_control_linearize_of_path_frame_model(speed, curvature):
     np.testing.assert_allclose(ref.A[np.ix_(idx, [0])], 0.0, atol=tol)
 
 
-@pytest.mark.parametrize("model", ["exact", "paper"])
+@pytest.mark.parametrize("model", ["kinematic", "paper"])
 def test_matrices_equal_sympy(veh, rng, model):
     A_s, B_s = S.jacobians(model)
     fA, fB = lambdify(A_s), lambdify(B_s)
@@ -85,7 +85,7 @@ def test_names(veh):
     assert cl.state_labels == ["e", "theta"]
 
 
-@pytest.mark.parametrize("model", ["exact", "paper"])
+@pytest.mark.parametrize("model", ["kinematic", "paper"])
 def test_characteristic_polynomial_equals_sympy_and_eigenvalues(veh, rng, model):
     poly = S.characteristic_polynomial(model).all_coeffs()
     f1, f0 = lambdify(poly[1]), lambdify(poly[2])
@@ -110,7 +110,7 @@ def test_characteristic_polynomial_equals_sympy_and_eigenvalues(veh, rng, model)
         )
 
 
-@pytest.mark.parametrize("model", ["exact", "paper"])
+@pytest.mark.parametrize("model", ["kinematic", "paper"])
 def test_affine_parts_equal_sympy_derivatives(veh, rng, model):
     """open_loop, n1, n2 are p at k = 0 and the partial derivatives in k1, k2."""
     k1s, k2s = S.SYMBOLS["k1"], S.SYMBOLS["k2"]
@@ -133,7 +133,7 @@ def test_affine_parts_equal_sympy_derivatives(veh, rng, model):
 
 def test_affine_polynomial_evaluate_equals_polyval(veh, rng):
     """evaluate(s, k1, k2) and polynomials_at(s) against numpy.polyval."""
-    for V, k, a, model in ((5.0, 0.1, -1.0, "exact"), (-20.0, 0.02, 0.7, "paper")):
+    for V, k, a, model in ((5.0, 0.1, -1.0, "kinematic"), (-20.0, 0.02, 0.7, "paper")):
         cp = fws.characteristic_coefficients(
             fws.LateralPlant(veh, speed=V, curvature=k, model=model), ratio=a
         )
@@ -232,7 +232,7 @@ def test_as_plant_builds_and_passes_through(veh):
         veh,
         5.0,
         0.0,
-        "exact",
+        "kinematic",
     )
     plant = fws.as_plant(veh, speed=-3.0, curvature=0.2, model="paper")
     assert (plant.speed, plant.curvature, plant.model) == (-3.0, 0.2, "paper")

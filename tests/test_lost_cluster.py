@@ -19,6 +19,7 @@ from conftest import (
     CURVE_BATCH_KW,
     CURVE_GAINS_WITH_STOP,
     PAPER_VEHICLE,
+    CURVE_SPEED,
     dask_distributed,
 )
 
@@ -27,6 +28,7 @@ from fws_control.paths import Arc
 from fws_control.simulation import runners
 
 VEH = PAPER_VEHICLE
+PLANT = fws.LateralPlant(VEH, speed=CURVE_SPEED)
 
 
 # Opened by the test once it is done: the chunks after the first wait for
@@ -62,7 +64,7 @@ def test_cluster_without_workers_raises_after_a_bounded_wait(monkeypatch):
     monkeypatch.setattr(runners, "_LOST_CLUSTER_WAIT", 1.0, raising=False)
     monkeypatch.setattr(runners, "_POLL_INTERVAL", 0.1, raising=False)
     kw = dict(CURVE_BATCH_KW, engine="numpy")  # two chunks of 4 and 2 runs
-    local = fws.simulate_batch(VEH, Arc(0.1), CURVE_GAINS_WITH_STOP, **kw)
+    local = fws.simulate_batch(PLANT, Arc(0.1), CURVE_GAINS_WITH_STOP, **kw)
     box = {}
     _GATE.clear()
     with (
@@ -93,7 +95,7 @@ def test_cluster_without_workers_raises_after_a_bounded_wait(monkeypatch):
                     fws.ClusterLostError, match="no worker for 1 s: .*; 2 pending runs"
                 ) as info:
                     fws.simulate_batch(
-                        VEH, Arc(0.1), CURVE_GAINS_WITH_STOP,
+                        PLANT, Arc(0.1), CURVE_GAINS_WITH_STOP,
                         client=_GatedClient(client), **kw,
                     )  # fmt: skip
                 box["res"] = info.value.result

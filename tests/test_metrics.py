@@ -78,7 +78,12 @@ def test_tracking_metrics_single_and_batch_agree_with_direct_computation():
     ratios = np.array([-1.0, 0.0, 0.5])
     g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=ratios, pole=-1.0)
     batch = fws.simulate_batch(
-        VEH, Arc(0.1), g, speed=5.0, initial_state=(0, -5, 0), duration=15.0, dt=0.01
+        fws.LateralPlant(VEH, speed=5.0),
+        Arc(0.1),
+        g,
+        initial_state=(0, -5, 0),
+        duration=15.0,
+        dt=0.01,
     )
     m = fws.tracking_metrics(batch)
     assert m.status.tolist() == ["ok"] * 3
@@ -116,8 +121,9 @@ def test_tracking_metrics_single_and_batch_agree_with_direct_computation():
 
 def test_tracking_metrics_of_stopped_run_has_nan_horizon_metrics():
     g = fws.SteeringGains(0.1, -0.5, 0.0)  # runs into |delta_f| = pi/2
-    kw = {"speed": 5.0, "initial_state": (0, 1, 0), "duration": 10.0}
-    res = fws.simulate(VEH, Straight(), g, feedforward=False, **kw)
+    kw = {"initial_state": (0, 1, 0), "duration": 10.0}
+    plant = fws.LateralPlant(VEH, speed=5.0)
+    res = fws.simulate(plant, Straight(), g, feedforward=False, **kw)
     m = fws.tracking_metrics(res)
     assert m.status == "singular_steering"
     assert math.isnan(m.settling_time) and math.isnan(m.rms_error)
@@ -128,7 +134,7 @@ def test_tracking_metrics_of_stopped_run_has_nan_horizon_metrics():
     # the same run in a batch (NaN tail after the stop): the same metrics, up
     # to the integration (the batch shares one solver's steps between its runs)
     both = fws.simulate_batch(
-        VEH,
+        plant,
         Straight(),
         [g, fws.SteeringGains(0.1, 0.5, 0.0)],
         feedforward=False,
@@ -153,7 +159,11 @@ def test_settling_band_must_be_finite_and_positive(band):
 def test_tracking_metrics_checks_band_and_result_type():
     g = fws.SteeringGains(0.1, 0.5, ratio=0.0)
     res = fws.simulate(
-        VEH, Straight(), g, speed=5.0, initial_state=(0, 1, 0), duration=2.0
+        fws.LateralPlant(VEH, speed=5.0),
+        Straight(),
+        g,
+        initial_state=(0, 1, 0),
+        duration=2.0,
     )
     with pytest.raises(ValueError, match="band"):
         fws.tracking_metrics(res, band=float("nan"))
@@ -168,7 +178,7 @@ def test_tracking_metrics_checks_band_and_result_type():
 def _sweep(signals):
     g = fws.SteeringGains(k1=[0.1, 0.2, -0.1], k2=[0.5, 0.5, 0.4], ratio=0.0)
     return fws.simulate_batch(
-        VEH, Straight(), g, speed=5.0, initial_state=(0.0, 1.0, 0.0),
+        fws.LateralPlant(VEH, speed=5.0), Straight(), g, initial_state=(0.0, 1.0, 0.0),
         duration=10.0, dt=0.001, signals=signals,
     )  # fmt: skip
 

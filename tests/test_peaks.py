@@ -21,29 +21,37 @@ def _case(name):
     """Runs whose lateral-acceleration (or other) peaks lie after t = 0."""
     if name == "curve_20, pole -3, a = 0.2":  # Fig. 5(d) minimum: peak at 52 ms
         g = fws.double_root_gains(VEH, speed=20.0, curvature=0.01, ratio=0.2, pole=-3.0)
-        return dict(path=fws.Arc(0.01), gains=g, speed=20.0, initial_state=(0, -10, 0))
+        return dict(
+            plant=fws.LateralPlant(VEH, speed=20.0),
+            path=fws.Arc(0.01),
+            controller=g,
+            initial_state=(0, -10, 0),
+        )
     if name == "straight_20, pole -2, a = 1.05":  # peak at 3 ms
         g = fws.double_root_gains(VEH, speed=20.0, ratio=1.05, pole=-2.0)
         return dict(
+            plant=fws.LateralPlant(VEH, speed=20.0),
             path=fws.Straight(),
-            gains=g,
-            speed=20.0,
+            controller=g,
             initial_state=(0, 2, 0),
             feedforward=False,
         )
     if name == "curve_5, a = -1, delay 0.1 s":  # |e| peaks at 0.17 s
         g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
         return dict(
-            path=fws.Arc(0.1), gains=g, speed=5.0, initial_state=(0, -5, 0), delay=0.1
+            plant=fws.LateralPlant(VEH, speed=5.0),
+            path=fws.Arc(0.1),
+            controller=g,
+            initial_state=(0, -5, 0),
+            delay=0.1,
         )
     if name == "curve_5, a = 0.5, actuator 0.27 s":  # rates peak at 0.3 s
         g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=0.5, pole=-1.0)
         return dict(
+            plant=fws.LateralPlant(VEH, speed=5.0, steering_lag=0.27),
             path=fws.Arc(0.1),
-            gains=g,
-            speed=5.0,
+            controller=g,
             initial_state=(0, -5, 0),
-            actuator_time_constant=0.27,
         )
     raise KeyError(name)
 
@@ -69,8 +77,7 @@ def _peaks(res):
 def test_peaks_do_not_change_when_the_output_step_is_refined_tenfold(name, coarse):
     kw = _case(name)
     runs = {
-        dt: fws.simulate(VEH, **kw, duration=15.0, dt=dt)
-        for dt in (coarse, coarse / 10)
+        dt: fws.simulate(**kw, duration=15.0, dt=dt) for dt in (coarse, coarse / 10)
     }
     (v1, t1), (v2, t2) = (_peaks(r) for r in runs.values())
     assert all(r.status == "ok" for r in runs.values())
@@ -97,9 +104,9 @@ def test_peaks_do_not_change_when_the_output_step_is_refined_tenfold(name, coars
 @pytest.mark.parametrize("name", CASES[:2])
 def test_peaks_against_a_fine_grid_within_its_sampling_error(name):
     kw = _case(name)
-    exact = fws.simulate(VEH, **kw, duration=2.0, dt=0.1)
+    exact = fws.simulate(**kw, duration=2.0, dt=0.1)
     dt = 1e-4
-    fine = fws.simulate(VEH, **kw, duration=2.0, dt=dt)
+    fine = fws.simulate(**kw, duration=2.0, dt=dt)
     v, when = _peaks(exact)
     for j, s in enumerate(PEAK_SIGNALS):
         x = np.abs(getattr(fine, s))
@@ -111,20 +118,21 @@ def test_peaks_against_a_fine_grid_within_its_sampling_error(name):
         assert abs(when[j] - fine.t[k]) <= dt, (s, when[j], fine.t[k])
     # the samples of a 10 ms grid miss the 0.052 s / 0.003 s peaks
     a = PEAK_SIGNALS.index("lateral_accel")
-    coarse = fws.simulate(VEH, **kw, duration=2.0, dt=0.01)
+    coarse = fws.simulate(**kw, duration=2.0, dt=0.01)
     assert v[a] > np.max(np.abs(coarse.lateral_accel)) * (1 + 5e-4)
 
 
 def test_batch_peaks_equal_single_run_peaks_and_not_simulated_runs_are_nan():
     g = fws.double_root_gains(VEH, speed=20.0, ratio=np.array([0.9, 1.05]), pole=-2.0)
     batch = fws.simulate_batch(
-        VEH, fws.Straight(), g, speed=20.0, initial_state=(0, 2, 0), duration=5.0,
+        fws.LateralPlant(VEH, speed=20.0),
+        fws.Straight(), g, initial_state=(0, 2, 0), duration=5.0,
         feedforward=False, dt=0.1, chunk_size=1,
     )  # fmt: skip
     for i in range(2):
         single = fws.simulate(
-            VEH, fws.Straight(), fws.SteeringGains(g.k1[i], g.k2[i], g.ratio[i]),
-            speed=20.0,
+            fws.LateralPlant(VEH, speed=20.0),
+            fws.Straight(), fws.SteeringGains(g.k1[i], g.k2[i], g.ratio[i]),
             initial_state=(0, 2, 0), duration=5.0, feedforward=False, dt=0.01,
         )  # fmt: skip
         np.testing.assert_allclose(
@@ -144,7 +152,8 @@ def test_batch_peaks_equal_single_run_peaks_and_not_simulated_runs_are_nan():
 
 def test_sample_peaks_of_a_result_without_exact_peaks_are_marked():
     res = fws.simulate(
-        VEH, fws.Straight(), fws.SteeringGains(0.1, 0.5, 0.0), speed=5.0,
+        fws.LateralPlant(VEH, speed=5.0),
+        fws.Straight(), fws.SteeringGains(0.1, 0.5, 0.0),
         initial_state=(0, 1, 0), duration=3.0, dt=0.5,
     )  # fmt: skip
     import dataclasses
@@ -163,7 +172,10 @@ def test_sample_peaks_of_a_result_without_exact_peaks_are_marked():
 def fig5d_pole3():
     return {
         dt: fig5_peak_lateral_accel(
-            model="exact", poles={5.0: (-1.0,), 20.0: (-3.0,)}, dt=dt, progress=False
+            model="kinematic",
+            poles={5.0: (-1.0,), 20.0: (-3.0,)},
+            dt=dt,
+            progress=False,
         )["d"]
         for dt in (0.1, 0.01)
     }
@@ -184,7 +196,8 @@ def test_fig5d_pole_3_min_over_ratio_is_the_exact_peak(fig5d_pole3):
     # the sampling error of a smooth maximum, 1e-6 relative here)
     g = fws.double_root_gains(VEH, speed=20.0, curvature=0.01, ratio=a, pole=-3.0)
     ref = fws.simulate(
-        VEH, fws.Arc(0.01), g, speed=20.0, initial_state=(0, -10, 0), duration=1.0,
+        fws.LateralPlant(VEH, speed=20.0),
+        fws.Arc(0.01), g, initial_state=(0, -10, 0), duration=1.0,
         dt=1e-4,
     )  # fmt: skip
     peak = float(fine.peak_lateral_accel[0, j])

@@ -34,11 +34,11 @@ INPUTS = ["delta_f", "delta_r"]
 
 #: (speed, curvature, model): straight, curves, reversing, the paper's model.
 OPERATING_POINTS = [
-    (5.0, 0.0, "exact"),
-    (5.0, 0.1, "exact"),
-    (20.0, 0.01, "exact"),
-    (-3.0, 0.05, "exact"),
-    (-5.0, 0.0, "exact"),
+    (5.0, 0.0, "kinematic"),
+    (5.0, 0.1, "kinematic"),
+    (20.0, 0.01, "kinematic"),
+    (-3.0, 0.05, "kinematic"),
+    (-5.0, 0.0, "kinematic"),
     (5.0, 0.1, "paper"),
 ]
 RATIOS = [-1.0, 0.0, 0.5, 2.0]
@@ -50,19 +50,19 @@ POLES = [-1.0, -2.5]
 # --------------------------------------------------------------------------
 
 
-def gain_factor(curvature, model="exact"):
+def gain_factor(curvature, model="kinematic"):
     """c = 1 + f^2 kappa^2 (exact Jacobian) or 1 (paper, eq. 33)."""
-    return 1.0 + (F * np.asarray(curvature)) ** 2 if model == "exact" else 1.0
+    return 1.0 + (F * np.asarray(curvature)) ** 2 if model == "kinematic" else 1.0
 
 
-def kinematic_matrices(speed, curvature, model="exact"):
+def kinematic_matrices(speed, curvature, model="kinematic"):
     c = gain_factor(curvature, model)
     A = np.array([[0.0, speed], [-speed * curvature**2, 0.0]])
     B = np.array([[0.0, speed], [c * speed / F, -speed / F]])
     return A, B
 
 
-def hand_plant(speed, curvature, model="exact"):
+def hand_plant(speed, curvature, model="kinematic"):
     """The kinematic 2-state plant as a named ct.StateSpace, by hand."""
     A, B = kinematic_matrices(speed, curvature, model)
     return ct.ss(
@@ -133,7 +133,7 @@ def poly_from_roots(roots):
     return c.real
 
 
-def closed_form_p(speed, curvature, k1, k2, ratio, model="exact"):
+def closed_form_p(speed, curvature, k1, k2, ratio, model="kinematic"):
     """(p1, p0) of the 2-state plant and the scale of their terms."""
     V, kap, a = speed, curvature, ratio
     c = gain_factor(kap, model)
@@ -845,7 +845,7 @@ def test_two_state_engine_equals_closed_forms_on_random_points():
     for _ in range(25):
         V = rng.uniform(0.5, 40.0) * rng.choice([-1.0, 1.0])
         kap = rng.uniform(-0.3, 0.3)
-        model = rng.choice(["exact", "paper"])
+        model = rng.choice(["kinematic", "paper"])
         k1, k2, a = rng.uniform(-2.0, 2.0, (3, n))
         gains = fws.SteeringGains(k1, k2, a)
         p1, p0, s1, s0 = closed_form_p(V, kap, k1, k2, a, model)
@@ -1019,7 +1019,7 @@ def test_positional_operating_point_is_a_type_error():
 @pytest.mark.parametrize("keyword", ["speed", "curvature", "model"])
 @pytest.mark.parametrize("kind", ["LateralPlant", "StateSpace"])
 def test_vehicle_keywords_with_a_plant_are_a_type_error(keyword, kind):
-    kw = {keyword: {"speed": 5.0, "curvature": 0.1, "model": "exact"}[keyword]}
+    kw = {keyword: {"speed": 5.0, "curvature": 0.1, "model": "kinematic"}[keyword]}
     g = fws.SteeringGains(0.1, 0.5, -1.0)
     plant = {
         "LateralPlant": fws.LateralPlant(VEH, 5.0, curvature=0.1),

@@ -100,8 +100,9 @@ def _run(tau, rate, duration, engine, rtol, atol, method="auto"):
     g = fws.double_root_gains(VEH, speed=SPEED, curvature=KAPPA, ratio=RATIO,
                               pole=-1.0)  # fmt: skip
     res = fws.simulate(
-        veh, fws.Arc(KAPPA), g, speed=SPEED, initial_state=(0.0, E0, 0.0),
-        duration=duration, dt=DT_OUT, actuator_time_constant=tau, engine=engine,
+        fws.LateralPlant(veh, speed=SPEED, steering_lag=tau),
+        fws.Arc(KAPPA), g, initial_state=(0.0, E0, 0.0),
+        duration=duration, dt=DT_OUT, engine=engine,
         method=method, rtol=rtol, atol=atol,
     )  # fmt: skip
     assert res.status == "ok", res.message
@@ -237,9 +238,10 @@ def _batch_units(g, engine, tau=0.05, duration=15.0, rtol=1e-10, atol=1e-12, **k
     """Error of run 0 against the reference [tolerances], alone and in `g`."""
     ref, tol = _check_reference(fws.SteeringGains(g.k1[0], g.k2[0], g.ratio[0]),
                                 tau, math.inf, duration, 1e-3, rtol, atol)  # fmt: skip
-    common = dict(speed=SPEED, initial_state=(0.0, E0, 0.0), duration=duration,
-                  dt=DT_OUT, actuator_time_constant=tau, rtol=rtol, atol=atol,
+    common = dict(initial_state=(0.0, E0, 0.0), duration=duration,
+                  dt=DT_OUT, rtol=rtol, atol=atol,
                   progress=False, engine=engine, **kw)  # fmt: skip
+    plant = fws.LateralPlant(VEH, speed=SPEED, steering_lag=tau)
 
     def units(res):
         y = np.stack([res.s[0], res.e[0], res.theta[0], res.delta_f[0],
@@ -247,8 +249,8 @@ def _batch_units(g, engine, tau=0.05, duration=15.0, rtol=1e-10, atol=1e-12, **k
         return float(np.max(np.abs(y - ref) / tol))
 
     one = fws.SteeringGains(g.k1[:1], g.k2[:1], g.ratio[:1])
-    alone = fws.simulate_batch(VEH, fws.Arc(KAPPA), one, **common)
-    batch = fws.simulate_batch(VEH, fws.Arc(KAPPA), g, **common)
+    alone = fws.simulate_batch(plant, fws.Arc(KAPPA), one, **common)
+    batch = fws.simulate_batch(plant, fws.Arc(KAPPA), g, **common)
     assert batch.status[0] == "ok"
     assert set(batch.status[1::2]) == {"singular_steering"}  # stops in the mix
     return alone, batch, units(alone), units(batch)
@@ -266,16 +268,17 @@ def test_numpy_auto_stacks_lsoda_16_runs_per_chunk_within_the_tolerance():
     alone, batch, u_alone, u_batch = _batch_units(g, "numpy")
     assert alone.method == batch.method == "LSODA"
     assert u_alone <= AGREE and u_batch <= AGREE, (u_alone, u_batch)
-    kw = dict(speed=SPEED, initial_state=(0.0, E0, 0.0), duration=15.0,
-              dt=DT_OUT, actuator_time_constant=0.05, rtol=1e-10, atol=1e-12,
+    kw = dict(initial_state=(0.0, E0, 0.0), duration=15.0,
+              dt=DT_OUT, rtol=1e-10, atol=1e-12,
               progress=False, engine="numpy")  # fmt: skip
-    one_by_one = fws.simulate_batch(VEH, fws.Arc(KAPPA), g, chunk_size=1, **kw)
+    plant = fws.LateralPlant(VEH, speed=SPEED, steering_lag=0.05)
+    one_by_one = fws.simulate_batch(plant, fws.Arc(KAPPA), g, chunk_size=1, **kw)
     np.testing.assert_array_equal(one_by_one.e[0], alone.e[0])
     # the default chunking: the first 16 runs share one solver, the other 4
     # another -- the first run is bitwise the same in a batch of 16
     m = LSODA_MAX_RUNS
     first16 = fws.simulate_batch(
-        VEH, fws.Arc(KAPPA), fws.SteeringGains(g.k1[:m], g.k2[:m], g.ratio[:m]), **kw
+        plant, fws.Arc(KAPPA), fws.SteeringGains(g.k1[:m], g.k2[:m], g.ratio[:m]), **kw
     )
     np.testing.assert_array_equal(first16.e[0], batch.e[0])
     *_, u_dop = _batch_units(g, "numpy", method="DOP853")
@@ -298,9 +301,9 @@ def test_auto_capped_dop853_gives_each_run_its_own_accuracy():
     assert u_bound > AGREE
     veh = dataclasses.replace(VEH, max_steer_rate_front=0.2, max_steer_rate_rear=0.2)
     g0 = fws.SteeringGains(g.k1[0], g.k2[0], g.ratio[0])
-    res = fws.simulate(veh, fws.Arc(KAPPA), g0, speed=SPEED, duration=15.0,
-                       initial_state=(0.0, E0, 0.0), dt=DT_OUT,
-                       actuator_time_constant=0.05)  # fmt: skip
+    res = fws.simulate(fws.LateralPlant(veh, speed=SPEED, steering_lag=0.05),
+                       fws.Arc(KAPPA), g0, duration=15.0,
+                       initial_state=(0.0, E0, 0.0), dt=DT_OUT)  # fmt: skip
     assert res.engine == "compiled"
     ref, tol = _check_reference(g0, 0.05, 0.2, 15.0, 1e-3, 1e-10, 1e-12)
     assert np.max(np.abs(res.delta_f_rate)) == pytest.approx(0.2, rel=1e-9)
@@ -322,17 +325,19 @@ def test_compiled_radau_gives_each_run_its_own_accuracy():
     np.testing.assert_array_equal(batch.run_peak[0], alone.run_peak[0])
     assert u_alone == u_batch <= 10.0, u_alone
     capped = fws.simulate_batch(
-        VEH, fws.Arc(KAPPA), fws.SteeringGains(g.k1[:1], g.k2[:1], g.ratio[:1]),
-        speed=SPEED, initial_state=(0.0, E0, 0.0), duration=15.0, dt=DT_OUT,
-        actuator_time_constant=0.05, progress=False,
+        fws.LateralPlant(VEH, speed=SPEED, steering_lag=0.05),
+        fws.Arc(KAPPA), fws.SteeringGains(g.k1[:1], g.k2[:1], g.ratio[:1]),
+        initial_state=(0.0, E0, 0.0), duration=15.0, dt=DT_OUT,
+        progress=False,
     )  # fmt: skip
     assert capped.method == "DOP853"
     np.testing.assert_allclose(alone.run_peak[0], capped.run_peak[0], rtol=1e-9)
     # the runs that stop, stop where the capped DOP853 runs stop
     stop = batch.status == "singular_steering"
     dop = fws.simulate_batch(
-        VEH, fws.Arc(KAPPA), g, speed=SPEED, initial_state=(0.0, E0, 0.0),
-        duration=15.0, dt=DT_OUT, actuator_time_constant=0.05, progress=False,
+        fws.LateralPlant(VEH, speed=SPEED, steering_lag=0.05),
+        fws.Arc(KAPPA), g, initial_state=(0.0, E0, 0.0),
+        duration=15.0, dt=DT_OUT, progress=False,
     )  # fmt: skip
     assert np.array_equal(dop.status == "singular_steering", stop)
     np.testing.assert_allclose(batch.t_stop[stop], dop.t_stop[stop], rtol=1e-7)
@@ -352,10 +357,10 @@ def test_auto_rule_keeps_dop853_when_a_delay_bounds_the_steps(tau, method):
     assert choose_method(tau, 1e-8, duration=30.0) == "LSODA"
     assert choose_method(tau, 1e-8, duration=30.0, delay=0.24) == method
     g = fws.double_root_gains(VEH, speed=20.0, curvature=0.01, ratio=0.5, pole=-1.0)
-    kw = dict(speed=20.0, initial_state=(0.0, -10.0, 0.0), duration=30.0, dt=0.1,
-              delay=0.24, actuator_time_constant=tau)  # fmt: skip
-    res = fws.simulate(VEH, fws.Arc(0.01), g, rtol=1e-8, atol=1e-10, **kw)
-    ref = fws.simulate(VEH, fws.Arc(0.01), g, method="Radau", rtol=1e-12,
+    kw = dict(initial_state=(0.0, -10.0, 0.0), duration=30.0, dt=0.1, delay=0.24)
+    plant = fws.LateralPlant(VEH, speed=20.0, steering_lag=tau)
+    res = fws.simulate(plant, fws.Arc(0.01), g, rtol=1e-8, atol=1e-10, **kw)
+    ref = fws.simulate(plant, fws.Arc(0.01), g, method="Radau", rtol=1e-12,
                        atol=1e-14, **kw)  # fmt: skip
     assert res.method == method and res.status == ref.status == "ok"
     names = ("s", "e", "theta", "delta_f", "delta_r")

@@ -25,10 +25,15 @@ def _objects():
     g = fws.double_root_gains(plant, ratio=-1.0, pole=-1.0)
     chart = fws.stability_chart(plant, ratio=-1.0, k1=K, k2=K, pole=-1.0)
     res = fws.simulate(
-        VEH, fws.Arc(0.1), g, speed=5.0, initial_state=(0, -5, 0), duration=5.0
+        fws.LateralPlant(VEH, speed=5.0),
+        fws.Arc(0.1),
+        g,
+        initial_state=(0, -5, 0),
+        duration=5.0,
     )
     batch = fws.simulate_batch(
-        VEH, fws.Arc(0.1), fws.SteeringGains([g.k1, g.k1], g.k2, -1.0), speed=5.0,
+        fws.LateralPlant(VEH, speed=5.0),
+        fws.Arc(0.1), fws.SteeringGains([g.k1, g.k1], g.k2, -1.0),
         initial_state=(0, -5, 0), duration=5.0,
     )  # fmt: skip
     return {

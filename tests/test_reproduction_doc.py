@@ -26,7 +26,7 @@ from fws_control.paper.scenarios import (
 PAGE = Path(__file__).resolve().parents[1] / "docs" / "reproduction.md"
 
 
-def _table_rows(model="exact"):
+def _table_rows(model="kinematic"):
     text = PAGE.read_text(encoding="utf-8")
     start = text.index(f'### Figs. 6–9, λ0 = −1, `model="{model}"`')
     rows = {}
@@ -47,7 +47,7 @@ def _matches(printed: str, value: float) -> bool:
 
 @pytest.fixture(scope="module")
 def responses():
-    return fig6_to_9_responses(model="exact", dt=0.005)
+    return fig6_to_9_responses(model="kinematic", dt=0.005)
 
 
 def test_figs_6_to_9_table_matches_simulation(responses):
@@ -115,7 +115,7 @@ def _fig5_rows(model):
     return rows
 
 
-@pytest.mark.parametrize("model", ["exact", "paper"])
+@pytest.mark.parametrize("model", ["kinematic", "paper"])
 def test_fig5_min_over_ratio_and_peak_times(model):
     """The "min over a (at a)" column: exact peaks of the continuous solution.
 
@@ -132,7 +132,7 @@ def test_fig5_min_over_ratio_and_peak_times(model):
             k = int(np.nanargmin(row))
             assert _matches(value, float(row[k])), (panel, lam, value, row[k])
             assert float(at) == pytest.approx(sweep.ratios[k]), (panel, lam)
-    if model == "exact":
+    if model == "kinematic":
         text = PAGE.read_text(encoding="utf-8")
         ok = np.concatenate([sw.status.ravel() == "ok" for sw in fig5.values()])
         when = np.concatenate([sw.peak_time.ravel() for sw in fig5.values()])[ok]
@@ -198,7 +198,7 @@ def test_4_3_1_boundaries_depend_on_the_design_model_on_curves():
                 np.count_nonzero(
                     fws.is_stable(
                         fws.LateralPlant(
-                            PAPER_VEHICLE, speed=5.0, curvature=kappa, model="exact"
+                            PAPER_VEHICLE, speed=5.0, curvature=kappa, model="kinematic"
                         ),
                         fws.SteeringGains(k[None, :], k[:, None], float(a)),
                     )

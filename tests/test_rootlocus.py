@@ -54,7 +54,7 @@ def test_gain_loop_matches_state_space(veh, speed, curvature, ratio, k1, k2):
         np.testing.assert_allclose(_sorted(row), _sorted(ev), atol=1e-5)
 
 
-@pytest.mark.parametrize("model", ["exact", "paper"])
+@pytest.mark.parametrize("model", ["kinematic", "paper"])
 def test_gain_locus_at_one_is_closed_loop(veh, model):
     plant = fws.LateralPlant(veh, speed=20.0, curvature=0.01, model=model)
     g = fws.double_root_gains(plant, ratio=0.5, pole=-2.0)
@@ -92,7 +92,7 @@ CASES = [
 ]
 
 
-@pytest.mark.parametrize("model", ["exact", "paper"])
+@pytest.mark.parametrize("model", ["kinematic", "paper"])
 @pytest.mark.parametrize("name, values, speed, curvature", CASES)
 def test_parameter_locus_equals_closed_loop(veh, name, values, speed, curvature, model):
     g0 = fws.SteeringGains(0.05, 0.6, ratio=-1.0)
@@ -128,7 +128,7 @@ def test_ratio_locus_keeps_k1_k2_fixed(veh):
 def test_redesign_and_cross_model(veh):
     g0 = fws.SteeringGains(0.05, 0.6, ratio=-1.0)
     kap = np.linspace(0.0, 0.25, 11)
-    plant = fws.LateralPlant(veh, speed=5.0, curvature=0.0, model="exact")
+    plant = fws.LateralPlant(veh, speed=5.0, curvature=0.0, model="kinematic")
     same = fws.parameter_locus(
         plant, g0, parameter="curvature", values=kap, redesign_pole=-1.0
     )
@@ -145,7 +145,7 @@ def test_redesign_and_cross_model(veh):
         gp = fws.double_root_gains(
             veh, speed=5.0, curvature=k, ratio=-1.0, pole=-1.0, model="paper"
         )
-        cl = fws.closed_loop(veh, gp, speed=5.0, curvature=k, model="exact")
+        cl = fws.closed_loop(veh, gp, speed=5.0, curvature=k, model="kinematic")
         np.testing.assert_allclose(_sorted(row), _sorted(cl.poles()), atol=1e-9)
     # On a straight path both models agree; with curvature they do not.
     np.testing.assert_allclose(cross.loci[0], -1.0, atol=1e-6)

@@ -53,7 +53,7 @@ def test_scenarios_are_the_papers():
 def test_scenario_gains_mark_only_a_equal_one_on_straight_roads():
     ratios = np.array([-1.5, 0.0, 0.5, 1.0, 1.5])
     for name, sc in PAPER_SCENARIOS.items():
-        for model in ("exact", "paper"):
+        for model in ("kinematic", "paper"):
             k1, k2, ok = scenario_gains(name, ratios, -1.0, model)
             expect_ok = ~((ratios == 1.0) & (sc.curvature == 0.0))
             np.testing.assert_array_equal(ok, expect_ok)
@@ -72,8 +72,8 @@ def test_scenario_gains_sweep_through_ratio_one_equals_one_design_per_ratio():
     # poles that crosses ratio = 1 (and its refused neighbours) several times
     ratios = np.linspace(0.9, 1.1, 41).reshape(-1, 1) + np.zeros((1, 3))
     poles = np.array([-0.5, -1.0, -3.0])
-    plant = fws.LateralPlant(PAPER_VEHICLE, speed=5.0, curvature=0.0, model="exact")
-    k1, k2, ok = scenario_gains("straight_5", ratios, poles, "exact")
+    plant = fws.LateralPlant(PAPER_VEHICLE, speed=5.0, curvature=0.0, model="kinematic")
+    k1, k2, ok = scenario_gains("straight_5", ratios, poles, "kinematic")
     assert k1.shape == ratios.shape and 0 < (~ok).sum() < ok.size
     for idx in np.ndindex(ratios.shape):
         try:
@@ -99,10 +99,9 @@ def test_scenario_responses_keep_uncontrollable_rows_and_match_simulate():
             PAPER_VEHICLE, speed=20.0, curvature=0.0, ratio=r.ratios[i], pole=-1.0
         )
         single = fws.simulate(
-            PAPER_VEHICLE,
+            fws.LateralPlant(PAPER_VEHICLE, speed=20.0),
             Straight(),
             g,
-            speed=20.0,
             initial_state=(0, 2, 0),
             duration=4.0,
             feedforward=False,
@@ -138,10 +137,9 @@ def test_fig5_peaks_match_single_simulations_and_flag_stopped_runs():
             PAPER_VEHICLE, speed=20.0, curvature=0.01, ratio=-1.0, pole=lam
         )
         single = fws.simulate(
-            PAPER_VEHICLE,
+            fws.LateralPlant(PAPER_VEHICLE, speed=20.0),
             sc.path,
             g,
-            speed=20.0,
             initial_state=sc.initial_state,
             duration=4.0,
             dt=0.01,

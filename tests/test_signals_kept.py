@@ -15,6 +15,7 @@ from conftest import (
     CURVE_BATCH_KW,
     CURVE_GAINS_WITH_STOP,
     PAPER_VEHICLE,
+    CURVE_SPEED,
     LosingClient,
     traced_peak,
 )
@@ -29,6 +30,7 @@ from fws_control.simulation.engine import PEAK_SIGNALS
 matplotlib.use("Agg")
 
 VEH = PAPER_VEHICLE
+PLANT = fws.LateralPlant(VEH, speed=CURVE_SPEED)
 PATH = Arc(0.1)
 # five designs of the paper's curve scenario and one that stops (conftest)
 GAINS = CURVE_GAINS_WITH_STOP
@@ -38,12 +40,12 @@ ENGINES = ["numpy", "compiled"]
 
 @pytest.fixture(scope="module", params=ENGINES)
 def full(request):
-    return fws.simulate_batch(VEH, PATH, GAINS, engine=request.param, **KW)
+    return fws.simulate_batch(PLANT, PATH, GAINS, engine=request.param, **KW)
 
 
 def _batch(full, signals, **kw):
     return fws.simulate_batch(
-        VEH, PATH, GAINS, engine=full.engine, signals=signals, **{**KW, **kw}
+        PLANT, PATH, GAINS, engine=full.engine, signals=signals, **{**KW, **kw}
     )
 
 
@@ -161,7 +163,7 @@ def test_to_pandas_and_time_response_hold_the_kept_signals(full):
 @given(bad=st.text(max_size=12).filter(lambda s: s not in SIGNALS))
 def test_an_unknown_name_is_refused_naming_it_and_the_valid_names(bad):
     with pytest.raises(ValueError) as info:
-        fws.simulate_batch(VEH, PATH, GAINS, signals=("e", bad), **KW)
+        fws.simulate_batch(PLANT, PATH, GAINS, signals=("e", bad), **KW)
     msg = str(info.value)
     assert msg.startswith("signals") and repr(bad) in msg and repr(SIGNALS) in msg
 
@@ -178,7 +180,7 @@ def test_an_unknown_name_is_refused_naming_it_and_the_valid_names(bad):
 )
 def test_a_name_that_is_not_a_str_is_refused(bad):
     with pytest.raises(TypeError, match="signals must hold signal names"):
-        fws.simulate_batch(VEH, PATH, GAINS, signals=["e", bad], **KW)
+        fws.simulate_batch(PLANT, PATH, GAINS, signals=["e", bad], **KW)
 
 
 @pytest.mark.parametrize(
@@ -196,7 +198,7 @@ def test_a_name_that_is_not_a_str_is_refused(bad):
 )
 def test_bad_values_of_signals_are_refused(signals, error, match):
     with pytest.raises(error, match=match):
-        fws.simulate_batch(VEH, PATH, GAINS, signals=signals, **KW)
+        fws.simulate_batch(PLANT, PATH, GAINS, signals=signals, **KW)
 
 
 # --------------------------------------------------------------------------
@@ -205,30 +207,30 @@ def test_bad_values_of_signals_are_refused(signals, error, match):
 
 def test_the_budget_counts_the_kept_signals_only(monkeypatch):
     n, T = 8, 101  # 8 runs, duration 1 s at dt 0.01
-    kw = {"speed": 5.0, "initial_state": (0.0, -5.0, 0.0), "duration": 1.0}
+    kw = {"initial_state": (0.0, -5.0, 0.0), "duration": 1.0}
     g = fws.SteeringGains(np.full(n, 0.2), 0.9, -1.0)
     two = n * 2 * T * 8  # e and theta of all runs [bytes]
     one_run = 1 * len(SIGNALS) * T * 8  # a chunk of one run, all signals
     assert one_run < two < n * len(SIGNALS) * T * 8
     monkeypatch.setattr(engine, "MAX_OUTPUT_BYTES", two)
     with pytest.raises(ValueError, match="budget"):
-        fws.simulate_batch(VEH, PATH, g, **kw)  # all signals: refused
-    res = fws.simulate_batch(VEH, PATH, g, signals=("e", "theta"), chunk_size=1, **kw)
+        fws.simulate_batch(PLANT, PATH, g, **kw)  # all signals: refused
+    res = fws.simulate_batch(PLANT, PATH, g, signals=("e", "theta"), chunk_size=1, **kw)
     assert res.signals.nbytes == two and res.ok.all()
     # a third signal is over the budget again
     with pytest.raises(ValueError, match="budget"):
         fws.simulate_batch(
-            VEH, PATH, g, signals=("e", "theta", "x"), chunk_size=1, **kw
+            PLANT, PATH, g, signals=("e", "theta", "x"), chunk_size=1, **kw
         )
     # the working set of a chunk counts all its signals: 8 runs at once refused
     with pytest.raises(
         ValueError, match=r"chunk_size=8: a chunk computes all 15.*for each of 8 runs"
     ):
-        fws.simulate_batch(VEH, PATH, g, signals=("e", "theta"), chunk_size=8, **kw)
+        fws.simulate_batch(PLANT, PATH, g, signals=("e", "theta"), chunk_size=8, **kw)
     # only the metrics: no signal bytes at all
     monkeypatch.setattr(engine, "MAX_OUTPUT_BYTES", one_run)
     assert fws.simulate_batch(
-        VEH, PATH, g, signals="metrics", chunk_size=1, **kw
+        PLANT, PATH, g, signals="metrics", chunk_size=1, **kw
     ).ok.all()
 
 
@@ -237,16 +239,16 @@ def test_peak_memory_is_the_kept_data_and_one_chunk():
     g = fws.double_root_gains(
         VEH, speed=5.0, curvature=0.1, ratio=np.linspace(-1.5, 0.6, n), pole=-1.0
     )
-    kw = {"speed": 5.0, "initial_state": (0.0, -5.0, 0.0), "duration": 5.0}
+    kw = {"initial_state": (0.0, -5.0, 0.0), "duration": 5.0}
     kw |= {"engine": "numpy", "progress": False}
     one = fws.SteeringGains(g.k1[:chunk], g.k2[:chunk], g.ratio[:chunk])
-    fws.simulate_batch(VEH, PATH, one, **{**kw, "duration": 0.5})  # warm caches
+    fws.simulate_batch(PLANT, PATH, one, **{**kw, "duration": 0.5})  # warm caches
     # the working set of one chunk: the peak of simulating it alone with all
     # its signals (its full signals, states, dense solution, peaks)
-    _, chunk_peak = traced_peak(lambda: fws.simulate_batch(VEH, PATH, one, **kw))
+    _, chunk_peak = traced_peak(lambda: fws.simulate_batch(PLANT, PATH, one, **kw))
     res, peak = traced_peak(
         lambda: fws.simulate_batch(
-            VEH, PATH, g, signals=("e", "lateral_accel"), chunk_size=chunk, **kw
+            PLANT, PATH, g, signals=("e", "lateral_accel"), chunk_size=chunk, **kw
         )
     )
     kept = res.signals.nbytes
@@ -262,8 +264,10 @@ def test_peak_memory_is_the_kept_data_and_one_chunk():
 
 
 def test_signals_on_dask_equal_the_local_run(dask_client):
-    local = fws.simulate_batch(VEH, PATH, GAINS, signals=("e",), **KW)
-    res = fws.simulate_batch(VEH, PATH, GAINS, signals=("e",), client=dask_client, **KW)
+    local = fws.simulate_batch(PLANT, PATH, GAINS, signals=("e",), **KW)
+    res = fws.simulate_batch(
+        PLANT, PATH, GAINS, signals=("e",), client=dask_client, **KW
+    )
     np.testing.assert_array_equal(res.e, local.e)
     np.testing.assert_array_equal(res.run_metrics, local.run_metrics)
     np.testing.assert_array_equal(res.run_peak, local.run_peak)
@@ -272,9 +276,9 @@ def test_signals_on_dask_equal_the_local_run(dask_client):
 def test_lost_dask_tasks_keep_the_reduced_shape(dask_client):
     with pytest.warns(RuntimeWarning, match="2 runs of 1 lost"):
         res = fws.simulate_batch(
-            VEH, PATH, GAINS, signals=("e",), client=LosingClient(dask_client), **KW
+            PLANT, PATH, GAINS, signals=("e",), client=LosingClient(dask_client), **KW
         )
-    local = fws.simulate_batch(VEH, PATH, GAINS, signals=("e",), **KW)
+    local = fws.simulate_batch(PLANT, PATH, GAINS, signals=("e",), **KW)
     assert res.signals.shape == (6, 1, local.t.size)
     np.testing.assert_array_equal(res.e[:4], local.e[:4])
     assert res.status.tolist()[4:] == ["failed", "failed"]

@@ -20,7 +20,8 @@ pytest.importorskip(
 VEH = PAPER_VEHICLE
 ARC = fws.Arc(curvature=0.1)
 #: The paper's curve scenario: V = 5 m/s, kappa = 1/10, R(0) = (0, -5 m).
-CURVE = dict(speed=5.0, initial_state=(0.0, -5.0, 0.0), duration=15.0)
+PLANT = fws.LateralPlant(VEH, speed=5.0)
+CURVE = dict(initial_state=(0.0, -5.0, 0.0), duration=15.0)
 
 # Both engines integrate with DOP853 at rtol 1e-10, atol 1e-12; each one's
 # error to the exact solution is below 3e-10 on this scenario
@@ -40,8 +41,10 @@ def _close(a, b, tol):
 @pytest.mark.parametrize("feedforward", [True, False])
 def test_compiled_equals_numpy_engine_on_the_curve(ratio, feedforward):
     g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=ratio, pole=-1.0)
-    ref = fws.simulate(VEH, ARC, g, **CURVE, feedforward=feedforward, engine="numpy")
-    got = fws.simulate(VEH, ARC, g, **CURVE, feedforward=feedforward, engine="compiled")
+    ref = fws.simulate(PLANT, ARC, g, **CURVE, feedforward=feedforward, engine="numpy")
+    got = fws.simulate(
+        PLANT, ARC, g, **CURVE, feedforward=feedforward, engine="compiled"
+    )
     assert got.engine == "compiled" and ref.engine == "numpy"
     assert got.status == ref.status == "ok"
     assert got.t_stop == ref.t_stop == 15.0
@@ -71,9 +74,10 @@ def test_compiled_with_rate_limited_actuator_against_tight_reference():
         max_steer_rate_rear=0.2,
     )
     g = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=-1.0, pole=-2.0)
-    kw = dict(CURVE, initial_state=(0.0, -1.0, 0.0), actuator_time_constant=0.05)
-    ref = fws.simulate(veh, ARC, g, **kw, rtol=1e-13, atol=1e-15, engine="numpy")
-    got = fws.simulate(veh, ARC, g, **kw, engine="compiled")
+    kw = dict(CURVE, initial_state=(0.0, -1.0, 0.0))
+    plant = fws.LateralPlant(veh, speed=5.0, steering_lag=0.05)
+    ref = fws.simulate(plant, ARC, g, **kw, rtol=1e-13, atol=1e-15, engine="numpy")
+    got = fws.simulate(plant, ARC, g, **kw, engine="compiled")
     assert got.status == ref.status == "ok"
     # the limits bind (otherwise this would not test the switching)
     # (front angle and rate limits, rear rate limit)
@@ -93,8 +97,8 @@ def test_peaks_are_exact_and_at_least_the_sample_maxima():
     curve at the default output step, to 1e-9 of the numpy engine's, and
     never below the largest sample."""
     g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
-    ref = fws.simulate(VEH, ARC, g, **CURVE, engine="numpy")
-    got = fws.simulate(VEH, ARC, g, **CURVE, engine="compiled")
+    ref = fws.simulate(PLANT, ARC, g, **CURVE, engine="numpy")
+    got = fws.simulate(PLANT, ARC, g, **CURVE, engine="compiled")
     assert ref.peaks.exact and got.peaks.exact
     for name in PEAK_SIGNALS:
         x = np.abs(got.signals[0, SIGNALS.index(name)])
@@ -114,15 +118,16 @@ def test_mixed_batch_runs_are_identical_to_runs_alone():
     gains = [fast, slow, stops, slow, fast]
     x0 = np.array([[0.0, -0.5, 0.0], [0.0, -2.0, 0.3], [0.0, -1.0, 0.0],
                    [0.0, 1.0, 0.0], [0.0, 0.3, -0.05]])  # fmt: skip
-    kw = dict(speed=5.0, initial_state=x0, duration=15.0, engine="compiled")
-    batch = fws.simulate_batch(VEH, ARC, gains, **kw)
-    chunked = fws.simulate_batch(VEH, ARC, gains, **kw, chunk_size=2)
+    kw = dict(initial_state=x0, duration=15.0, engine="compiled")
+    batch = fws.simulate_batch(PLANT, ARC, gains, **kw)
+    chunked = fws.simulate_batch(PLANT, ARC, gains, **kw, chunk_size=2)
     np.testing.assert_array_equal(batch.signals, chunked.signals)
     assert batch.engine == "compiled" and batch.peaks.exact
     assert batch.status.tolist() == ["ok", "ok", "singular_steering", "ok", "ok"]
     for i, g in enumerate(gains):
         alone = fws.simulate(
-            VEH, ARC, g, speed=5.0, initial_state=x0[i], duration=15.0,
+            fws.LateralPlant(VEH, speed=5.0),
+            ARC, g, initial_state=x0[i], duration=15.0,
             engine="compiled",
         )  # fmt: skip
         T = alone.t.size
@@ -134,7 +139,12 @@ def test_mixed_batch_runs_are_identical_to_runs_alone():
     # the stop is where the numpy engine stops too: both stop 1e-3 rad before
     # |delta_f| = pi/2, the compiled engine no later (to a few ulp)
     ref = fws.simulate(
-        VEH, ARC, stops, speed=5.0, initial_state=x0[2], duration=15.0, engine="numpy"
+        fws.LateralPlant(VEH, speed=5.0),
+        ARC,
+        stops,
+        initial_state=x0[2],
+        duration=15.0,
+        engine="numpy",
     )
     assert ref.status == "singular_steering"
     assert batch.t_stop[2] == pytest.approx(ref.t_stop, abs=1e-4)
@@ -166,31 +176,33 @@ def test_unsupported_cases_raise(vehicle, gains, kwargs, reason):
         gains = fws.double_root_gains(
             vehicle, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0
         )
+    kwargs = dict(kwargs)
+    plant = fws.LateralPlant(vehicle, speed=5.0, model=kwargs.pop("model", "kinematic"))
     kw = dict(CURVE, duration=1.0, **kwargs)
     # the default engine ("auto") runs it on the numpy engine
-    assert fws.simulate(vehicle, ARC, gains, **kw).engine == "numpy"
+    assert fws.simulate(plant, ARC, gains, **kw).engine == "numpy"
     for run in (fws.simulate, fws.simulate_batch):
         with pytest.raises(ValueError, match="engine='compiled'") as info:
-            run(vehicle, ARC, gains, **kw, engine="compiled")
+            run(plant, ARC, gains, **kw, engine="compiled")
         assert reason in str(info.value)
 
 
 def test_unknown_engine_and_missing_numba_raise(monkeypatch):
     g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
     with pytest.raises(ValueError, match=r"engine must be one of .*'fast'"):
-        fws.simulate(VEH, ARC, g, **CURVE, engine="fast")
+        fws.simulate(PLANT, ARC, g, **CURVE, engine="fast")
     from fws_control.simulation import compiled
 
     monkeypatch.setattr(compiled, "numba", None)
     with pytest.raises(ValueError, match="engine='compiled'.*numba is not installed"):
-        fws.simulate(VEH, ARC, g, **CURVE, engine="compiled")
+        fws.simulate(PLANT, ARC, g, **CURVE, engine="compiled")
 
 
 def test_indexing_keeps_the_engine():
     g = fws.double_root_gains(
         VEH, speed=5.0, curvature=0.1, ratio=np.array([-1.0, 0.0]), pole=-1.0
     )
-    res = fws.simulate_batch(VEH, ARC, g, **CURVE, engine="compiled")
+    res = fws.simulate_batch(PLANT, ARC, g, **CURVE, engine="compiled")
     assert res[1].engine == "compiled" and res[1].peaks.exact is True
     with pytest.raises(ValueError, match="engine must be 'numpy' or 'compiled'"):
         import dataclasses

@@ -40,7 +40,7 @@ def _reference(vehicle, path, gains, speed, x0, t, feedforward=True, **kw):
     return dict(zip(sys.output_labels, resp.outputs, strict=True))
 
 
-@pytest.mark.parametrize("model", ["exact", "paper"])
+@pytest.mark.parametrize("model", ["kinematic", "paper"])
 @pytest.mark.parametrize("name", list(SCENARIOS))
 def test_fast_engine_agrees_with_interconnected_reference(name, model):
     V, kappa, y0, ff = SCENARIOS[name]
@@ -51,10 +51,9 @@ def test_fast_engine_agrees_with_interconnected_reference(name, model):
             VEH, speed=V, curvature=kappa, ratio=a, pole=-1.0, model=model
         )
         res = fws.simulate(
-            VEH,
+            fws.LateralPlant(VEH, speed=V),
             path,
             g,
-            speed=V,
             initial_state=(0.0, y0, 0.0),
             duration=10.0,
             feedforward=ff,
@@ -72,10 +71,9 @@ def test_fast_engine_agrees_with_interconnected_reference(name, model):
             t_ref = np.linspace(0.0, 0.999 * res.t_stop, 21)
             ref = _reference(VEH, path, g, V, [0.0, y0, 0.0], t_ref, ff)
             near = fws.simulate(
-                VEH,
+                fws.LateralPlant(VEH, speed=V),
                 path,
                 g,
-                speed=V,
                 initial_state=(0.0, y0, 0.0),
                 duration=t_ref[-1],
                 feedforward=ff,
@@ -148,7 +146,13 @@ def _fd_lateral_accel(res, d):
 def test_lateral_acceleration_and_rates_match_finite_differences(path, V, x0, ff):
     g = fws.SteeringGains(k1=0.15, k2=0.8, ratio=-0.5)
     res = fws.simulate(
-        VEH, path, g, speed=V, initial_state=x0, duration=8.0, feedforward=ff, dt=2e-3
+        fws.LateralPlant(VEH, speed=V),
+        path,
+        g,
+        initial_state=x0,
+        duration=8.0,
+        feedforward=ff,
+        dt=2e-3,
     )
     assert res.ok
     fd = _fd_lateral_accel(res, VEH.rear_to_cg)
@@ -167,10 +171,9 @@ def test_singular_steering_at_start_is_reported_not_raised():
     g = fws.double_root_gains(VEH, speed=5.0, curvature=0.0, ratio=0.5, pole=-2.0)
     assert g.k1 * 2.0 > math.pi / 2
     res = fws.simulate(
-        VEH,
+        fws.LateralPlant(VEH, speed=5.0),
         Straight(),
         g,
-        speed=5.0,
         initial_state=(0.0, 2.0, 0.0),
         duration=10.0,
         feedforward=False,
@@ -186,10 +189,9 @@ def test_singular_steering_during_run_stops_there():
     # k2 < 0 feeds the heading back positively: delta_f runs to pi/2
     g = fws.SteeringGains(k1=0.1, k2=-0.5, ratio=0.0)
     res = fws.simulate(
-        VEH,
+        fws.LateralPlant(VEH, speed=5.0),
         Straight(),
         g,
-        speed=5.0,
         initial_state=(0.0, 1.0, 0.0),
         duration=10.0,
         feedforward=False,
@@ -217,10 +219,9 @@ def test_singular_curvature_when_driving_into_the_centre():
         print("numba is not installed: the compiled engine's stop not tested")
     for engine, stop in engines:
         res = fws.simulate(
-            VEH,
+            fws.LateralPlant(VEH, speed=5.0),
             Arc(0.1),
             g,
-            speed=5.0,
             initial_state=(0.0, 5.0, math.pi / 2),
             duration=3.0,
             feedforward=False,
@@ -234,10 +235,9 @@ def test_singular_curvature_when_driving_into_the_centre():
 def test_end_of_open_path():
     g = fws.SteeringGains(0.0, 0.0, 0.0)
     res = fws.simulate(
-        VEH,
+        fws.LateralPlant(VEH, speed=5.0),
         Straight(length=20.0),
         g,
-        speed=5.0,
         initial_state=(0.0, 1.0, 0.0),
         duration=10.0,
         feedforward=False,
@@ -251,10 +251,9 @@ def test_angle_saturation_agrees_with_reference():
     lim = fws.Vehicle(2.7, 1.35, max_steer_front=0.15, max_steer_rear=0.05)
     g = fws.double_root_gains(lim, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
     res = fws.simulate(
-        lim,
+        fws.LateralPlant(lim, speed=5.0),
         Arc(0.1),
         g,
-        speed=5.0,
         initial_state=(0.0, -5.0, 0.0),
         duration=10.0,
         dt=0.05,
@@ -271,15 +270,13 @@ def test_rate_limited_actuator_agrees_with_reference_and_limits_rates():
     g = fws.double_root_gains(lim, speed=5.0, curvature=0.0, ratio=-0.5, pole=-1.0)
     x0 = (0.0, 2.0, 0.0)
     res = fws.simulate(
-        lim,
+        fws.LateralPlant(lim, speed=5.0, steering_lag=0.1),
         Straight(),
         g,
-        speed=5.0,
         initial_state=x0,
         duration=10.0,
         feedforward=False,
         dt=1e-3,
-        actuator_time_constant=0.1,
     )
     assert res.ok
     assert np.max(np.abs(res.delta_f_rate)) == pytest.approx(0.2)
@@ -305,7 +302,11 @@ def test_psi_keeps_the_given_branch_and_is_continuous():
     g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
     psi0 = 2 * math.pi + 0.1
     res = fws.simulate(
-        VEH, Arc(0.1), g, speed=5.0, initial_state=(0.0, -5.0, psi0), duration=20.0
+        fws.LateralPlant(VEH, speed=5.0),
+        Arc(0.1),
+        g,
+        initial_state=(0.0, -5.0, psi0),
+        duration=20.0,
     )
     assert res.psi[0] == pytest.approx(psi0)
     assert np.max(np.abs(np.diff(res.psi))) < 0.05
@@ -316,18 +317,17 @@ def test_psi_keeps_the_given_branch_and_is_continuous():
 
 def _curve_run(**kw):
     g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
-    args = {"speed": 5.0, "initial_state": (0.0, -5.0, 0.0), "duration": 5.0}
+    args = {"initial_state": (0.0, -5.0, 0.0), "duration": 5.0}
     args.update(kw)
-    return g, fws.simulate(VEH, Arc(0.1), g, **args)
+    return g, fws.simulate(fws.LateralPlant(VEH, speed=5.0), Arc(0.1), g, **args)
 
 
 def test_simulate_is_a_squeezed_batch_of_one():
     g, res = _curve_run(dt=0.1)
     batch = fws.simulate_batch(
-        VEH,
+        fws.LateralPlant(VEH, speed=5.0),
         Arc(0.1),
         g,
-        speed=5.0,
         initial_state=(0.0, -5.0, 0.0),
         duration=5.0,
         dt=0.1,
@@ -360,9 +360,10 @@ def test_simulate_is_a_squeezed_batch_of_one():
 
 def test_squeezed_stopped_run_ends_at_its_stop_and_the_batch_keeps_the_grid():
     g = fws.SteeringGains(k1=0.1, k2=-0.5, ratio=0.0)  # delta_f runs to pi/2
-    kw = {"speed": 5.0, "initial_state": (0.0, 1.0, 0.0), "duration": 10.0}
-    res = fws.simulate(VEH, Straight(), g, feedforward=False, **kw)
-    batch = fws.simulate_batch(VEH, Straight(), g, feedforward=False, **kw)
+    kw = {"initial_state": (0.0, 1.0, 0.0), "duration": 10.0}
+    plant = fws.LateralPlant(VEH, speed=5.0)
+    res = fws.simulate(plant, Straight(), g, feedforward=False, **kw)
+    batch = fws.simulate_batch(plant, Straight(), g, feedforward=False, **kw)
     assert res.status == "singular_steering"
     grid = np.linspace(0.0, 10.0, 1001)
     np.testing.assert_array_equal(batch.t, grid)
@@ -469,37 +470,38 @@ def test_to_time_response_matches_the_python_control_reference():
 
 def test_invalid_arguments():
     g = fws.SteeringGains(0.1, 0.5, 0.0)
-    kw = {"speed": 5.0, "initial_state": (0, 1, 0), "duration": 5.0}
+    kw = {"initial_state": (0, 1, 0), "duration": 5.0}
+    plant = fws.LateralPlant(VEH, speed=5.0)
     # everything after the gains is keyword-only: a positional call fails
     with pytest.raises(TypeError):
-        fws.simulate(VEH, Straight(), g, 5.0, (0, 1, 0), 5.0)
+        fws.simulate(plant, Straight(), g, (0, 1, 0), 5.0)
     with pytest.raises(TypeError):
         fws.closed_loop_system(VEH, Straight(), g, 5.0)
     with pytest.raises(TypeError, match="path"):
-        fws.simulate(VEH, "straight", g, **kw)
-    with pytest.raises(TypeError, match="vehicle"):
+        fws.simulate(plant, "straight", g, **kw)
+    with pytest.raises(TypeError, match="plant"):
         fws.simulate((2.7, 1.35), Straight(), g, **kw)
     with pytest.raises(ValueError, match="speed"):
-        fws.simulate(VEH, Straight(), g, **{**kw, "speed": 0.0})
+        fws.simulate(fws.LateralPlant(VEH, speed=0.0), Straight(), g, **kw)
     with pytest.raises(ValueError, match="duration"):
-        fws.simulate(VEH, Straight(), g, **{**kw, "duration": -1.0})
+        fws.simulate(plant, Straight(), g, **{**kw, "duration": -1.0})
     with pytest.raises(ValueError, match="initial_state"):
-        fws.simulate(VEH, Straight(), g, **{**kw, "initial_state": (0, 1)})
+        fws.simulate(plant, Straight(), g, **{**kw, "initial_state": (0, 1)})
     with pytest.raises(ValueError, match="simulate_batch"):
-        fws.simulate(VEH, Straight(), fws.SteeringGains([0.1, 0.2], 0.5, 0.0), **kw)
+        fws.simulate(plant, Straight(), fws.SteeringGains([0.1, 0.2], 0.5, 0.0), **kw)
     with pytest.raises(ValueError, match="simulate_batch"):
-        fws.simulate(VEH, Straight(), g, **{**kw, "speed": [5.0, 6.0]})
+        fws.simulate(fws.LateralPlant(VEH, speed=[5.0, 6.0]), Straight(), g, **kw)
     with pytest.raises(ValueError, match="simulate_batch"):
-        fws.simulate(VEH, Straight(), g, **{**kw, "initial_state": [(0, 1, 0)] * 2})
+        fws.simulate(plant, Straight(), g, **{**kw, "initial_state": [(0, 1, 0)] * 2})
     with pytest.raises(ValueError, match="t_eval"):
-        fws.simulate(VEH, Straight(), g, **kw, t_eval=[0.0, 6.0])
+        fws.simulate(plant, Straight(), g, **kw, t_eval=[0.0, 6.0])
     with pytest.raises(ValueError, match="method must be one of"):
-        fws.simulate(VEH, Straight(), g, **kw, method="Euler")
+        fws.simulate(plant, Straight(), g, **kw, method="Euler")
     with pytest.raises(ValueError, match="rtol"):
-        fws.simulate(VEH, Straight(), g, **kw, rtol=0.0)
+        fws.simulate(plant, Straight(), g, **kw, rtol=0.0)
     with pytest.raises(AmbiguousProjectionError):
         fws.simulate(
-            VEH, Arc(0.1), g, **{**kw, "initial_state": (0.0, 10.0, 0.0)}
+            plant, Arc(0.1), g, **{**kw, "initial_state": (0.0, 10.0, 0.0)}
         )  # the centre of the circle
 
 
@@ -509,7 +511,12 @@ def test_reversing_agrees_with_interconnected_reference(kappa):
     V, path = -3.0, _path(kappa)
     g = fws.double_root_gains(VEH, speed=V, curvature=kappa, ratio=-0.5, pole=-0.8)
     res = fws.simulate(
-        VEH, path, g, speed=V, initial_state=(0.0, -1.0, 0.1), duration=8.0, dt=0.05
+        fws.LateralPlant(VEH, speed=V),
+        path,
+        g,
+        initial_state=(0.0, -1.0, 0.1),
+        duration=8.0,
+        dt=0.05,
     )
     assert res.ok and res.s[-1] < -10.0  # it really drove backwards
     ref = _reference(VEH, path, g, V, [0.0, -1.0, 0.1], res.t)
@@ -527,12 +534,8 @@ _G13 = fws.SteeringGains(0.1, 0.5, ratio=0.0)
     [
         (fws.simulate, dict(duration=[1.0, 2.0]), ValueError, "duration"),
         (fws.simulate, dict(dt=np.eye(2)), ValueError, "dt"),
-        (
-            fws.simulate,
-            dict(actuator_time_constant=[0.1, 0.2]),
-            ValueError,
-            "actuator_time_constant",
-        ),  # fmt: skip
+        # a (front, rear) pair of different lags: one time constant is simulated
+        (fws.simulate, dict(steering_lag=[0.1, 0.2]), ValueError, "steering_lag"),
         (fws.simulate, dict(delay=1e-300), ValueError, "delay"),
         (fws.simulate_batch, dict(chunk_size=math.inf), ValueError, "chunk_size"),
         (fws.simulate_batch, dict(chunk_size=math.nan), ValueError, "chunk_size"),
@@ -556,18 +559,24 @@ def test_issue13_bad_run_options_name_the_argument(func, kw, exc, arg):
     # before: float() of an array, OverflowError for chunk_size=inf, a
     # progress flag read by its truth value, a hang (simulate) or a
     # ZeroDivisionError in control.pade (closed_loop_system) for 1e-300 s
-    base = dict(speed=5.0)
-    if func is not fws.closed_loop_system:
-        base.update(initial_state=(0.0, 1.0, 0.0), duration=2.0, dt=0.1)
+    if func is fws.closed_loop_system:
+        with pytest.raises(exc, match=rf"\b{arg}\b"):
+            func(VEH, Straight(), _G13, speed=5.0, **kw)
+        return
+    kw = dict(kw)
+    plant = fws.LateralPlant(VEH, speed=5.0, steering_lag=kw.pop("steering_lag", None))
+    base = dict(initial_state=(0.0, 1.0, 0.0), duration=2.0, dt=0.1)
     with pytest.raises(exc, match=rf"\b{arg}\b"):
-        func(VEH, Straight(), _G13, **{**base, **kw})
+        func(plant, Straight(), _G13, **{**base, **kw})
 
 
 def test_delay_floor_is_duration_over_1e4():
     # the floor is duration / 1e4 (each forced step costs about 1.7 ms of
     # Python right-hand sides: 1e4 steps about 17 s): 2 s / 1e4 = 2e-4 s
-    kw = dict(speed=5.0, initial_state=(0.0, 1.0, 0.0), duration=2.0, dt=0.1)
+    kw = dict(initial_state=(0.0, 1.0, 0.0), duration=2.0, dt=0.1)
     with pytest.raises(
         ValueError, match=r"delay must be 0 or >= duration/10000 = 0.0002 s"
     ):
-        fws.simulate(VEH, Straight(), _G13, delay=1.9e-4, **kw)
+        fws.simulate(
+            fws.LateralPlant(VEH, speed=5.0), Straight(), _G13, delay=1.9e-4, **kw
+        )

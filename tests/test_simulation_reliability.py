@@ -40,7 +40,8 @@ def _paper_gains():
     return fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
 
 
-PAPER = {"speed": 5.0, "initial_state": (0.0, -5.0, 0.0), "duration": 15.0}
+PLANT = fws.LateralPlant(VEH, speed=5.0)
+PAPER = {"initial_state": (0.0, -5.0, 0.0), "duration": 15.0}
 
 
 # --------------------------------------------------------------------------
@@ -69,9 +70,11 @@ def test_bad_tolerances_are_refused_promptly_naming_argument_value_range(
     value = {"rtol": rtol, "atol": atol}[bad]
     span = "[1e-20, 0.1]" if bad == "atol" else f"[{100 * EPS:.3g}, 0.1]"
     calls = (
-        lambda: fws.simulate(VEH, Arc(0.1), g, **PAPER, rtol=rtol, atol=atol),
-        lambda: fws.simulate_batch(VEH, Arc(0.1), g, **PAPER, rtol=rtol, atol=atol),
-        lambda: simulate_reference(VEH, Arc(0.1), g, **PAPER, rtol=rtol, atol=atol),
+        lambda: fws.simulate(PLANT, Arc(0.1), g, **PAPER, rtol=rtol, atol=atol),
+        lambda: fws.simulate_batch(PLANT, Arc(0.1), g, **PAPER, rtol=rtol, atol=atol),
+        lambda: simulate_reference(
+            VEH, Arc(0.1), g, speed=5.0, **PAPER, rtol=rtol, atol=atol
+        ),
     )
     with time_limit(20):
         for call in calls:
@@ -85,11 +88,11 @@ def test_bad_tolerances_are_refused_promptly_naming_argument_value_range(
 def test_tolerances_at_the_ends_of_their_ranges_are_accepted():
     g = _paper_gains()
     kw = {**PAPER, "duration": 5.0}
-    ref = simulate_reference(VEH, Arc(0.1), g, **kw, rtol=1e-12, atol=1e-14)
+    ref = simulate_reference(VEH, Arc(0.1), g, speed=5.0, **kw, rtol=1e-12, atol=1e-14)
     e_ref = ref.outputs[ref.output_labels.index("e")]
     with time_limit(20):
-        tight = fws.simulate(VEH, Arc(0.1), g, **kw, rtol=100 * EPS, atol=1e-20)
-        loose = fws.simulate(VEH, Arc(0.1), g, **kw, rtol=0.1, atol=0.1)
+        tight = fws.simulate(PLANT, Arc(0.1), g, **kw, rtol=100 * EPS, atol=1e-20)
+        loose = fws.simulate(PLANT, Arc(0.1), g, **kw, rtol=0.1, atol=0.1)
     assert tight.ok and loose.ok
     np.testing.assert_allclose(tight.e, e_ref, rtol=0, atol=1e-9)
     # a 10 % tolerance still follows the solution to within its tolerance
@@ -122,10 +125,10 @@ def test_loose_tolerances_still_stop_at_the_singular_steering_angle(rtol, atol, 
     # Both engines stop at the margin |delta_f| = pi/2 - 1e-3.
     stop = math.pi / 2 - 1e-3
     g = fws.SteeringGains(k1=0.1, k2=-0.5, ratio=0.0)
-    kw = {"speed": 5.0, "initial_state": (0.0, 1.0, 0.0), "duration": 10.0}
+    kw = {"initial_state": (0.0, 1.0, 0.0), "duration": 10.0}
     kw.update(feedforward=False, dt=0.01, engine=engine)
-    tight = fws.simulate(VEH, Straight(), g, **kw)
-    res = fws.simulate(VEH, Straight(), g, **kw, rtol=rtol, atol=atol)
+    tight = fws.simulate(PLANT, Straight(), g, **kw)
+    res = fws.simulate(PLANT, Straight(), g, **kw, rtol=rtol, atol=atol)
     assert tight.status == res.status == "singular_steering"
     # every sample before the stop is regular: the controller's own formula
     # delta_f = -k1 e - k2 theta, evaluated here, stays below the stop angle
@@ -142,10 +145,9 @@ def test_loose_tolerances_still_stop_at_the_singular_steering_angle(rtol, atol, 
 def test_identical_runs_stop_together_and_none_runs_on_past_the_singularity():
     g = fws.SteeringGains(k1=[0.1, 0.1, 0.1], k2=[-0.5, -0.5, 0.5], ratio=0.0)
     res = fws.simulate_batch(
-        VEH,
+        fws.LateralPlant(VEH, speed=5.0),
         Straight(),
         g,
-        speed=5.0,
         initial_state=(0.0, 1.0, 0.0),
         duration=10.0,
         feedforward=False,
@@ -163,10 +165,20 @@ BATCH = {"initial_state": (0.0, 1.0, 0.0), "duration": 3.0, "dt": 0.1}
 GAIN = fws.SteeringGains(0.1, 0.5, 0.0)
 
 
+def _beyond_plant_range(speeds, *args, **kw):
+    """simulate_batch at speeds a LateralPlant refuses (1e300 m/s, where the
+    solver fails at once): only the deprecated Vehicle form reaches the
+    solver with them, so it provokes the failure these tests isolate."""
+    with pytest.warns(FutureWarning, match="LateralPlant"):
+        return fws.simulate_batch(VEH, *args, speed=speeds, **kw)
+
+
 def _good_runs_alone():
     """The reference: the four good runs, without the failing one."""
     good = np.array([0, 2, 3, 4])
-    return good, fws.simulate_batch(VEH, Straight(), GAIN, speed=SPEEDS[good], **BATCH)
+    return good, fws.simulate_batch(
+        fws.LateralPlant(VEH, speed=SPEEDS[good]), Straight(), GAIN, **BATCH
+    )
 
 
 def _check_isolated(res, good, ref):
@@ -181,8 +193,8 @@ def _check_isolated(res, good, ref):
 def test_a_failing_run_takes_only_itself_out(chunk_size):
     good, ref = _good_runs_alone()
     with time_limit(30), np.errstate(all="ignore"):
-        res = fws.simulate_batch(
-            VEH, Straight(), GAIN, speed=SPEEDS, chunk_size=chunk_size, **BATCH
+        res = _beyond_plant_range(
+            SPEEDS, Straight(), GAIN, chunk_size=chunk_size, **BATCH
         )
     _check_isolated(res, good, ref)
 
@@ -190,19 +202,20 @@ def test_a_failing_run_takes_only_itself_out(chunk_size):
 def test_a_failing_run_takes_only_itself_out_on_dask(dask_client):
     good, ref = _good_runs_alone()
     with time_limit(60), np.errstate(all="ignore"):
-        res = fws.simulate_batch(
-            VEH, Straight(), GAIN, speed=SPEEDS, chunk_size=2, client=dask_client,
-            **BATCH,
+        res = _beyond_plant_range(
+            SPEEDS, Straight(), GAIN, chunk_size=2, client=dask_client, **BATCH,
         )  # fmt: skip
     _check_isolated(res, good, ref)
 
 
 def test_lost_dask_tasks_are_marked_and_finished_chunks_kept(dask_client):
     speeds = np.array([5.0, 6.0, 7.0, 8.0, 9.0])
-    local = fws.simulate_batch(VEH, Straight(), GAIN, speed=speeds, **BATCH)
+    local = fws.simulate_batch(
+        fws.LateralPlant(VEH, speed=speeds), Straight(), GAIN, **BATCH
+    )
     with time_limit(60), pytest.warns(RuntimeWarning, match="3 runs of 2 lost"):
         res = fws.simulate_batch(
-            VEH, Straight(), GAIN, speed=speeds, chunk_size=2,
+            fws.LateralPlant(VEH, speed=speeds), Straight(), GAIN, chunk_size=2,
             client=LosingClient(dask_client), **BATCH,
         )  # fmt: skip
     assert res.status.tolist() == ["ok", "ok", "failed", "failed", "failed"]
@@ -220,7 +233,9 @@ def test_a_closed_dask_client_raises_before_any_work():
         client = distributed.Client(cluster)
         client.close()
     with time_limit(30), pytest.raises(RuntimeError, match="closed"):
-        fws.simulate_batch(VEH, Straight(), GAIN, speed=5.0, client=client, **BATCH)
+        fws.simulate_batch(
+            fws.LateralPlant(VEH, speed=5.0), Straight(), GAIN, client=client, **BATCH
+        )
 
 
 # --------------------------------------------------------------------------
@@ -241,7 +256,8 @@ def test_oversized_output_is_refused_at_once_with_the_way_out(kw, runs, samples)
     g = fws.SteeringGains(np.full(runs, 0.1), 0.5, 0.0)
     with time_limit(10), pytest.raises(ValueError) as info:
         fws.simulate_batch(
-            VEH, Straight(), g, speed=5.0, initial_state=(0, 1, 0), duration=15.0,
+            fws.LateralPlant(VEH, speed=5.0),
+            Straight(), g, initial_state=(0, 1, 0), duration=15.0,
             **kw,
         )  # fmt: skip
     msg = str(info.value)
@@ -254,7 +270,8 @@ def test_oversized_output_is_refused_at_once_with_the_way_out(kw, runs, samples)
     if runs == 1:  # simulate and the reference refuse it the same way
         with time_limit(10), pytest.raises(ValueError, match="budget of 2 GiB"):
             fws.simulate(
-                VEH, Straight(), GAIN, speed=5.0, initial_state=(0, 1, 0),
+                fws.LateralPlant(VEH, speed=5.0),
+                Straight(), GAIN, initial_state=(0, 1, 0),
                 duration=15.0, **kw,
             )  # fmt: skip
         with time_limit(10), pytest.raises(ValueError, match="budget of 2 GiB"):
@@ -293,10 +310,10 @@ def test_peak_memory_scales_with_the_output_not_more():
 
     g = _paper_gains()
     kw = {**PAPER, "dt": 1e-4}  # 150,001 samples: 13.2 MB of signals
-    fws.simulate(VEH, Arc(0.1), g, **{**kw, "duration": 0.1})  # warm caches
+    fws.simulate(PLANT, Arc(0.1), g, **{**kw, "duration": 0.1})  # warm caches
     tracemalloc.start()
     try:
-        res = fws.simulate(VEH, Arc(0.1), g, **kw)
+        res = fws.simulate(PLANT, Arc(0.1), g, **kw)
         _, peak = tracemalloc.get_traced_memory()
     finally:
         tracemalloc.stop()
@@ -315,10 +332,10 @@ def test_signals_computed_in_blocks_equal_one_pass(monkeypatch):
         VEH, speed=5.0, curvature=0.1, ratio=np.array([-1.0, 0.5]), pole=-1.0
     )
     # a full turn and more: psi must stay continuous across the blocks
-    kw = {"speed": 5.0, "initial_state": (0.0, -5.0, 6.0), "duration": 20.0}
-    one = fws.simulate_batch(VEH, Arc(0.1), g, **kw)
+    kw = {"initial_state": (0.0, -5.0, 6.0), "duration": 20.0}
+    one = fws.simulate_batch(PLANT, Arc(0.1), g, **kw)
     monkeypatch.setattr(runners, "_OUTPUT_BLOCK", 2 * 37)  # blocks of 37 samples
-    blocks = fws.simulate_batch(VEH, Arc(0.1), g, **kw)
+    blocks = fws.simulate_batch(PLANT, Arc(0.1), g, **kw)
     # equal up to rounding (numpy's SIMD loops round by array length)
     np.testing.assert_allclose(blocks.signals, one.signals, rtol=1e-14, atol=1e-14)
     assert np.all(np.abs(np.diff(one.psi, axis=1)) < 0.5)  # no 2 pi jump
@@ -333,7 +350,8 @@ def test_max_steps_marks_a_run_failed_instead_of_running_on(monkeypatch):
     # (MAX_STEPS is the numpy engine's budget: the compiled engine steps each
     # run alone and has none)
     res = fws.simulate_batch(
-        VEH, Straight(), GAIN, speed=np.array([5.0, 1e6]), chunk_size=2, **BATCH,
+        fws.LateralPlant(VEH, speed=np.array([5.0, 1e6])),
+        Straight(), GAIN, chunk_size=2, **BATCH,
         engine="numpy",
     )  # fmt: skip
     assert res.status.tolist() == ["ok", "failed"]
@@ -351,14 +369,14 @@ def test_stiff_actuator_chooses_radau_runs_fast_and_agrees_to_order_tau():
 
     g = _paper_gains()
     kw = {**PAPER, "duration": 5.0}
-    plain = fws.simulate(VEH, Arc(0.1), g, **kw)  # no actuator: the reference
+    plain = fws.simulate(PLANT, Arc(0.1), g, **kw)  # no actuator: the reference
     assert plain.method == "DOP853"
     runs = {}
     for tau in (1e-4, 2e-4):
         start = time.process_time()
         with time_limit(60):
-            runs[tau] = fws.simulate(VEH, Arc(0.1), g, **kw, actuator_time_constant=tau,
-                                     engine="numpy")  # fmt: skip
+            lagged = fws.LateralPlant(VEH, speed=5.0, steering_lag=tau)
+            runs[tau] = fws.simulate(lagged, Arc(0.1), g, **kw, engine="numpy")
         cpu = time.process_time() - start
         assert runs[tau].method == "Radau" and runs[tau].ok
         # 0.4 s measured; explicit DOP853 needs ~7,800 steps (~6 s) at 1e-4
@@ -368,7 +386,7 @@ def test_stiff_actuator_chooses_radau_runs_fast_and_agrees_to_order_tau():
         # is installed (DOP853 held to 3.2 T would take 15,625 steps here,
         # over runners._RADAU_FROM_STEPS), numpy's otherwise; the same run to
         # far below the O(T) effects checked below
-        default = fws.simulate(VEH, Arc(0.1), g, **kw, actuator_time_constant=tau)
+        default = fws.simulate(lagged, Arc(0.1), g, **kw)
         assert default.method == "Radau"
         assert np.max(np.abs(default.e - runs[tau].e)) < 1e-7
     rate = np.max(np.abs(plain.delta_f_rate))
@@ -392,7 +410,9 @@ def test_auto_keeps_dop853_for_a_slow_actuator_and_warns_for_explicit_stiff(
 
     g = _paper_gains()
     kw = {**PAPER, "duration": 2.0}
-    slow = fws.simulate(VEH, Arc(0.1), g, **kw, actuator_time_constant=0.05)
+    slow = fws.simulate(
+        fws.LateralPlant(VEH, speed=5.0, steering_lag=0.05), Arc(0.1), g, **kw
+    )
     assert slow.method == "DOP853"  # the default actuator is not stiff
     # the documented rule: T < 0.004 s * (rtol / 1e-10) ** (1/6)
     for tau, rtol in ((0.0039, 1e-10), (0.0041, 1e-10), (0.0085, 1e-8)):
@@ -404,8 +424,8 @@ def test_auto_keeps_dop853_for_a_slow_actuator_and_warns_for_explicit_stiff(
     monkeypatch.setattr(engine, "MAX_STEPS", 50)
     with pytest.warns(RuntimeWarning, match="stiff.*'Radau'"):
         res = fws.simulate(
-            VEH, Arc(0.1), g, **{**kw, "duration": 0.5},
-            actuator_time_constant=1e-5, method="DOP853", engine="numpy",
+            fws.LateralPlant(VEH, speed=5.0, steering_lag=1e-5), Arc(0.1), g,
+            **{**kw, "duration": 0.5}, method="DOP853", engine="numpy",
         )  # fmt: skip
     assert res.method == "DOP853" and res.status == "failed"
     assert "MAX_STEPS" in res.message and "Radau" in res.message
@@ -428,7 +448,8 @@ def test_to_pandas_without_pandas_names_the_extra_that_installs_it(monkeypatch):
         return real_import(name, *args, **kwargs)
 
     res = fws.simulate(
-        VEH, Straight(), GAIN, speed=5.0, initial_state=(0.0, 1.0, 0.0),
+        fws.LateralPlant(VEH, speed=5.0),
+        Straight(), GAIN, initial_state=(0.0, 1.0, 0.0),
         duration=1.0,
     )  # fmt: skip
     monkeypatch.setattr(builtins, "__import__", no_pandas)
@@ -450,9 +471,7 @@ def test_to_pandas_csv_round_trip_keeps_every_run_and_its_status(tmp_path):
     speeds = np.array([5.0, 1e300, 5.0])
     kw = {"initial_state": (0.0, 1.0, 0.0), "duration": 6.0, "dt": 0.5}
     with np.errstate(all="ignore"):
-        sub = fws.simulate_batch(
-            VEH, Straight(), g, speed=speeds, feedforward=False, **kw
-        )
+        sub = _beyond_plant_range(speeds, Straight(), g, feedforward=False, **kw)
     res = expand_runs(
         sub, positions=[0, 1, 3], k1=[0.1, 0.1, np.nan, 0.1],
         k2=[0.5, 0.5, np.nan, -0.5], ratio=[0.0] * 4,
@@ -501,7 +520,8 @@ def test_an_error_of_the_simulation_itself_still_raises_on_dask(dask_client):
     # the centre of the arc has no unique projection: raised as it is locally
     with time_limit(60), pytest.raises(fws.AmbiguousProjectionError):
         fws.simulate_batch(
-            VEH, Arc(0.1), GAIN, speed=5.0, chunk_size=1, client=dask_client,
+            fws.LateralPlant(VEH, speed=5.0),
+            Arc(0.1), GAIN, chunk_size=1, client=dask_client,
             initial_state=[(0.0, 1.0, 0.0), (0.0, 10.0, 0.0)], duration=1.0,
         )  # fmt: skip
 

@@ -32,7 +32,7 @@ def _closed_loop_eigenvalues(veh, speed, curvature, k1, k2, ratio, model):
     return np.linalg.eigvals(A + B @ K)
 
 
-@pytest.mark.parametrize("model", ["exact", "paper"])
+@pytest.mark.parametrize("model", ["kinematic", "paper"])
 def test_is_stable_agrees_with_eigenvalues_on_random_points(model):
     rng = np.random.default_rng(7)
     n = 120_000
@@ -55,7 +55,7 @@ def test_is_stable_agrees_with_eigenvalues_on_random_points(model):
 
 
 @given(
-    model=st.sampled_from(["exact", "paper"]),
+    model=st.sampled_from(["kinematic", "paper"]),
     speed=st.one_of(st.floats(1, 40), st.floats(-40, -1)),
     curvature=st.floats(-0.3, 0.3),
     ratio=st.floats(-2, 2),
@@ -78,7 +78,7 @@ def test_boundaries_reproduce_eigenvalues(model, speed, curvature, ratio, k1, k2
 
 
 @given(
-    model=st.sampled_from(["exact", "paper"]),
+    model=st.sampled_from(["kinematic", "paper"]),
     curvature=st.floats(-0.3, 0.3),
     ratio=st.floats(-2, 2),
     t=st.floats(-2, 2),
@@ -107,7 +107,7 @@ def test_points_on_boundary_have_a_zero_coefficient(model, curvature, ratio, t):
 
 
 def test_lines_do_not_depend_on_speed_but_reversing_flips_eq35_side():
-    for model in ("exact", "paper"):
+    for model in ("kinematic", "paper"):
         fwd, fast, rev = (
             fws.stability_boundaries(
                 VEH, speed=V, curvature=0.1, ratio=-0.5, model=model
@@ -129,7 +129,7 @@ def test_lines_do_not_depend_on_speed_but_reversing_flips_eq35_side():
 
 def test_ratio_one_straight_path():
     """Eq. (38): k1 = 0 is the boundary of (35); (36) is degenerate, p0 = 0."""
-    for model in ("exact", "paper"):
+    for model in ("kinematic", "paper"):
         plant = fws.LateralPlant(VEH, speed=5.0, curvature=0.0, model=model)
         b1, b0 = fws.stability_boundaries(plant, ratio=1.0)
         assert b1.vertical and b1.k1_at(0.7) == pytest.approx(0.0, abs=1e-15)
@@ -166,7 +166,7 @@ def test_broadcast_grid_shape():
 # --------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("model", ["exact", "paper"])
+@pytest.mark.parametrize("model", ["kinematic", "paper"])
 def test_array_plant_equals_loop_of_scalar_calls(model):
     rng = np.random.default_rng(11)
     speeds = np.array([-20.0, -1.5, 2.0, 5.0, 30.0])[:, None, None]  # (5, 1, 1)
@@ -192,7 +192,7 @@ def test_array_plant_equals_loop_of_scalar_calls(model):
 # --------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("model", ["exact", "paper"])
+@pytest.mark.parametrize("model", ["kinematic", "paper"])
 def test_two_state_fast_path_equals_routh_hurwitz(model):
     """is_stable's closed form p1 > 0, p0 > 0 = routh_hurwitz of the polynomial."""
     rng = np.random.default_rng(2024)

@@ -102,7 +102,7 @@ def test_gains_without_python_control_gives_its_poles():
     veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     exact = fws.LateralPlant(veh, speed=20.0, curvature=0.01)
     g = fws.double_root_gains(exact, ratio=0.5, pole=-1.0)
-    for lin in ("exact", "paper"):
+    for lin in ("kinematic", "paper"):
         plant = fws.LateralPlant(veh, speed=20.0, curvature=0.01, model=lin)
         ref = np.sort_complex(fws.closed_loop(plant, g).poles())
         line = next(

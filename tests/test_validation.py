@@ -60,10 +60,9 @@ G = fws.SteeringGains(0.1, 0.5, 0.0)
         ),
         (
             lambda: fws.simulate(
-                VEH,
+                fws.LateralPlant(VEH, speed=5.0),
                 fws.Straight(),
                 (0.1, 0.5, 0.0),
-                speed=5.0,
                 initial_state=(0, 1, 0),
                 duration=5.0,
             ),
@@ -72,24 +71,31 @@ G = fws.SteeringGains(0.1, 0.5, 0.0)
         ),
         (
             lambda: fws.simulate(
-                VEH, None, G, speed=5.0, initial_state=(0, 1, 0), duration=5.0
+                fws.LateralPlant(VEH, speed=5.0),
+                None,
+                G,
+                initial_state=(0, 1, 0),
+                duration=5.0,
             ),
             TypeError,
             "path",
         ),
         (
             lambda: fws.simulate(
-                VEH, fws.Straight(), G, speed=5.0, initial_state="abc", duration=5.0
+                fws.LateralPlant(VEH, speed=5.0),
+                fws.Straight(),
+                G,
+                initial_state="abc",
+                duration=5.0,
             ),
             ValueError,
             "initial_state",
         ),
         (
             lambda: fws.simulate_batch(
-                VEH,
+                fws.LateralPlant(VEH, speed=5.0),
                 fws.Straight(),
                 [1, 2],
-                speed=5.0,
                 initial_state=(0, 1, 0),
                 duration=5.0,
             ),

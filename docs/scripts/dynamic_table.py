@@ -78,9 +78,10 @@ def rows(speeds=SPEEDS, schedules=SCHEDULES) -> list[dict]:
         g = fws.double_root_gains(
             veh, speed=speed, curvature=CURVATURE, ratio=ratios, pole=-1.0
         )
-        kw = dict(speed=speed, initial_state=INITIAL_STATE, duration=DURATION, dt=0.5)
-        dyn = fws.simulate_batch(veh, path, g, model="dynamic", **kw)
-        kin = fws.simulate_batch(veh, path, g, **kw)
+        kw = dict(initial_state=INITIAL_STATE, duration=DURATION, dt=0.5)
+        dynamic = fws.LateralPlant(veh, speed=speed, model="dynamic")
+        dyn = fws.simulate_batch(dynamic, path, g, **kw)
+        kin = fws.simulate_batch(fws.LateralPlant(veh, speed=speed), path, g, **kw)
         for j, schedule in enumerate(schedules):
             gj = fws.SteeringGains(float(g.k1[j]), float(g.k2[j]), float(ratios[j]))
             poles = closed_loop_eigenvalues(veh, gj, speed)

@@ -111,7 +111,7 @@ def delay_margin_table(
 
 def plot_actuator(
     *,
-    model: str = "exact",
+    model: str = "kinematic",
     quick: bool = False,
     delay: float = REALISTIC_DELAY,
     steering_lag: float = REALISTIC_STEERING_LAG,
@@ -128,7 +128,7 @@ def plot_actuator(
 
     Parameters
     ----------
-    model : {"exact", "paper"}, optional
+    model : {"kinematic", "paper"}, optional
         Linearisation of the designs.
     quick : bool, optional
         Shorter simulations and fewer poles (for tests).
@@ -205,11 +205,13 @@ def plot_actuator(
     # delayed runs, the dearest of reproduce after Fig. 5.
     runs = {
         act: simulate_batch(
-            PAPER_VEHICLE, sc.path, gains, speed=sc.speed,
+            LateralPlant(PAPER_VEHICLE, speed=sc.speed,
+                         steering_lag=steering_lag if act else None),
+            sc.path, gains,
             initial_state=sc.initial_state, duration=duration,
+            delay=delay if act else 0.0,
             feedforward=sc.feedforward, dt=0.02, progress=False,
             rtol=_PLOT_RTOL, atol=_PLOT_ATOL,
-            **({"delay": delay, "actuator_time_constant": steering_lag} if act else {}),
         )
         for act in (False, True)
     }  # fmt: skip

@@ -117,7 +117,7 @@ def _build_panel(
 def paper_figure_panels(
     n: int,
     *,
-    model: str = "exact",
+    model: str = "kinematic",
     vehicle: Vehicle | None = None,
     pole: float = -1.0,
     curvatures=None,
@@ -140,7 +140,7 @@ def paper_figure_panels(
     ----------
     n : {2, 3, 4}
         Figure number.
-    model : {"exact", "paper"}, optional
+    model : {"kinematic", "paper"}, optional
         Linearisation. On a straight path (Fig. 2) both agree.
     vehicle : Vehicle, optional
         Default :data:`PAPER_VEHICLE`.
@@ -163,7 +163,7 @@ def paper_figure_panels(
     [('a = -1.5', 'a = -1', 'a = -0.5', 'a = 0'), ('a = -1.5', 'a = -1', 'a = -0.5'),
      ('a = 0', 'a = 0.5', 'a = 1', 'a = 1.5')]
     """
-    check_model(model)
+    model = check_model(model)
     vehicle = PAPER_VEHICLE if vehicle is None else vehicle
     if n == 2:
         groups = [
@@ -294,7 +294,7 @@ def _draw_panel(ax, panel: ChartPanel, legend: bool = True) -> list:
 def plot_paper_figure(
     n: int,
     *,
-    model: str = "exact",
+    model: str = "kinematic",
     vehicle: Vehicle | None = None,
     pole: float = -1.0,
     curvatures=None,

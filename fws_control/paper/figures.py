@@ -80,7 +80,7 @@ class FigureSpec:
 
 
 def _chart_figure(n):
-    def make(model: str = "exact", quick: bool = False):
+    def make(model: str = "kinematic", quick: bool = False):
         return plot_paper_figure(n, model=model, npoints=201 if quick else 401).figure
 
     return make
@@ -89,7 +89,7 @@ def _chart_figure(n):
 def plot_root_loci(
     *,
     vehicle: Vehicle | None = None,
-    model: str = "exact",
+    model: str = "kinematic",
     quick: bool = False,
     ax=None,
 ) -> ct.ControlPlot:
@@ -111,7 +111,7 @@ def plot_root_loci(
     ----------
     vehicle : Vehicle, optional
         Default the paper's vehicle.
-    model : {"exact", "paper"}, optional
+    model : {"kinematic", "paper"}, optional
         Linearisation of the designs in (a) and (c).
     quick : bool, optional
         Fewer points per locus.
@@ -185,7 +185,7 @@ def plot_root_loci(
     ax = axes[1]
     kap = np.linspace(0.0, 0.4, n)
     for i, a in enumerate((-1.0, 0.0, 0.5)):
-        plant = LateralPlant(vehicle, speed=5.0, model="exact")
+        plant = LateralPlant(vehicle, speed=5.0, model="kinematic")
         g0 = double_root_gains(
             LateralPlant(vehicle, speed=5.0, model="paper"), ratio=a, pole=-1.0
         )
@@ -258,7 +258,7 @@ def plot_root_loci(
     return ct.ControlPlot(lines, np.array([list(axes)], dtype=object), fig)
 
 
-def _comparison_figure(model: str = "exact", quick: bool = False):
+def _comparison_figure(model: str = "kinematic", quick: bool = False):
     from ..comparison import compare_linear_nonlinear
 
     plant = LateralPlant(PAPER_VEHICLE, speed=5.0, curvature=0.1, model=model)
@@ -273,7 +273,7 @@ def _comparison_figure(model: str = "exact", quick: bool = False):
     return cmp.plot().figure
 
 
-def _turning_figure(model: str = "exact", quick: bool = False):
+def _turning_figure(model: str = "kinematic", quick: bool = False):
     return plot_turning_radius(PAPER_VEHICLE).figure
 
 
@@ -311,7 +311,7 @@ def _fig6_to_9_data(model: str, quick: bool):
 _G = 9.81  # m/s^2
 
 
-def plot_fig5(model: str = "exact", quick: bool = False):
+def plot_fig5(model: str = "kinematic", quick: bool = False):
     r"""Fig. 5: peak absolute lateral acceleration of G versus the ratio ``a``.
 
     One panel per scenario, one curve per double root :math:`\lambda_0`
@@ -618,7 +618,7 @@ def _clip_initial_spike(ax, t, values, ratios, frac: float = 0.03) -> None:
 
 
 def _response_maker(n):
-    def make(model: str = "exact", quick: bool = False):
+    def make(model: str = "kinematic", quick: bool = False):
         return _responses_figure(n, model, quick)
 
     return make
@@ -711,7 +711,7 @@ FIGURES: dict[str, FigureSpec] = {
     "extra_root_loci": FigureSpec(
         "extra_root_loci",
         "Root loci: gain scaling, paper gains versus curvature, ratio",
-        lambda model="exact", quick=False: (
+        lambda model="kinematic", quick=False: (
             plot_root_loci(model=model, quick=quick).figure
         ),
         paper=False,
@@ -721,7 +721,7 @@ FIGURES: dict[str, FigureSpec] = {
         "The paper's designs with a 0.24 s input delay and a 0.27 s steering lag "
         "(Autoware's defaults): delay margin versus lambda0, responses in Fig. 9's "
         "scenario for lambda0 = -1 and -2",
-        lambda model="exact", quick=False: (
+        lambda model="kinematic", quick=False: (
             plot_actuator(model=model, quick=quick).figure
         ),
         paper=False,
@@ -735,14 +735,14 @@ FIGURES: dict[str, FigureSpec] = {
 }
 
 
-def make_figure(name: str, *, model: str = "exact", quick: bool = False):
+def make_figure(name: str, *, model: str = "kinematic", quick: bool = False):
     """Draw one figure of :data:`FIGURES` by name.
 
     Parameters
     ----------
     name : str
         Key of :data:`FIGURES`, e.g. ``"fig3"``.
-    model : {"exact", "paper"}, optional
+    model : {"kinematic", "paper"}, optional
         Linearisation used for the designs and charts.
     quick : bool, optional
         Coarser grids and shorter sweeps (for tests).
@@ -761,7 +761,7 @@ def make_figure(name: str, *, model: str = "exact", quick: bool = False):
     3
     >>> plt.close(fig)
     """
-    check_model(model)
+    model = check_model(model)
     if name not in FIGURES:
         raise ValueError(f"name must be one of {sorted(FIGURES)}, got {name!r}")
     return _make(name, model, quick)
@@ -989,7 +989,7 @@ def _collector_per_figure():
 def reproduce(
     out: str | os.PathLike,
     *,
-    model: str = "exact",
+    model: str = "kinematic",
     quick: bool = False,
     progress: bool = True,
     dpi: int = 110,
@@ -1001,7 +1001,7 @@ def reproduce(
     ----------
     out : path-like
         Output directory; created if needed.
-    model : {"exact", "paper"}, optional
+    model : {"kinematic", "paper"}, optional
         Linearisation used for the charts and designs.
     quick : bool, optional
         Coarser grids and fewer sweep points (for tests).
@@ -1052,7 +1052,7 @@ def reproduce(
     """
     import matplotlib.pyplot as plt
 
-    check_model(model)
+    model = check_model(model)
     names = list(FIGURES) if names is None else list(names)
     for name in names:
         if name not in FIGURES:

@@ -4,7 +4,7 @@ Every function here returns plain data (frozen dataclasses holding numpy
 arrays and :class:`~fws_control.SimulationResult` batches); figures are drawn from them
 elsewhere. The closed loop is always the **nonlinear** kinematic model; the
 ``model`` argument only selects the linearisation used to design the
-double-root gains (``"exact"`` Jacobian or the ``"paper"``'s eq. 33).
+double-root gains (``"kinematic"``: the exact Jacobian or the ``"paper"``'s eq. 33).
 
 Scenarios (paper section 4.3; ``f = 2.7 m``, ``d = 1.35 m``, zero initial
 heading error):
@@ -30,10 +30,12 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from scipy.optimize import brentq
 
+from ..deprecation import legacy_keyword, reject_unknown
 from ..design import UncontrollableError, double_root_gains
 from ..gains import SteeringGains
 from ..paths import Arc, Straight
@@ -134,7 +136,7 @@ def scenario_gains(
     scenario: Scenario | str,
     ratios,
     pole,
-    model: str = "exact",
+    model: str = "kinematic",
     vehicle: Vehicle = PAPER_VEHICLE,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Double-root gains for each ratio, with uncontrollable designs marked.
@@ -146,7 +148,7 @@ def scenario_gains(
         Rear-to-front ratios ``a``.
     pole : float or array_like
         Double root :math:`\\lambda_0` [1/s]; broadcasts with `ratios`.
-    model : {"exact", "paper"}
+    model : {"kinematic", "paper"}
         Linearisation used for the design.
     vehicle : Vehicle, optional
 
@@ -166,7 +168,7 @@ def scenario_gains(
     ([0.108, nan], [True, False])
     """
     sc = paper_scenario(scenario)
-    check_model(model)
+    model = check_model(model)
     a, lam = np.broadcast_arrays(
         np.asarray(check_finite("ratios", ratios), dtype=float),
         np.asarray(check_finite("pole", pole), dtype=float),
@@ -211,7 +213,8 @@ def _simulate_designs(
     dt: float,
     client,
     progress,
-    actuator: dict | None = None,
+    delay: float = 0.0,
+    steering_lag: float | None = None,
 ) -> SimulationResult:
     """Simulate the controllable designs; keep the others as marked runs."""
     n = ratios.size
@@ -219,17 +222,16 @@ def _simulate_designs(
     sub = None
     if positions.size:
         sub = simulate_batch(
-            vehicle,
+            LateralPlant(vehicle, speed=sc.speed, steering_lag=steering_lag),
             sc.path,
             SteeringGains(k1[positions], k2[positions], ratios[positions]),
-            speed=sc.speed,
             initial_state=sc.initial_state,
             duration=duration,
+            delay=delay,
             feedforward=feedforward,
             dt=dt,
             client=client,
             progress=progress,
-            **(actuator or {}),
         )
     return expand_runs(
         sub,
@@ -288,16 +290,17 @@ def scenario_responses(
     scenario: Scenario | str,
     ratios: Sequence[float] = FIG6_TO_9_RATIOS,
     pole: float = -1.0,
-    model: str = "exact",
+    model: str = "kinematic",
     *,
     feedforward: bool | None = None,
     duration: float | None = None,
     dt: float = 0.01,
     vehicle: Vehicle = PAPER_VEHICLE,
     delay: float = 0.0,
-    actuator_time_constant: float | None = None,
+    steering_lag: float | None = None,
     client=None,
     progress: bool | None = None,
+    **kwargs: Any,
 ) -> ScenarioResponses:
     """Simulate a scenario for several ratios with double-root gains.
 
@@ -309,7 +312,7 @@ def scenario_responses(
         Default ``(-1, -0.5, 0, 0.5, 1)`` as in Figs. 6-9.
     pole : float, optional
         Double root :math:`\\lambda_0` [1/s] (default -1, as in Figs. 6-9).
-    model : {"exact", "paper"}, optional
+    model : {"kinematic", "paper"}, optional
         Linearisation used to compute the gains.
     feedforward : bool, optional
         Override the scenario's controller (e.g. ``False`` on a curve).
@@ -319,12 +322,16 @@ def scenario_responses(
         Output spacing [s].
     vehicle : Vehicle, optional
         Default :data:`PAPER_VEHICLE`.
-    delay, actuator_time_constant : float, optional
-        Input delay [s] and steering-actuator time constant [s] of the
-        simulation (:func:`~fws_control.simulate`); the gains are designed
+    delay, steering_lag : float, optional
+        Input delay [s] of the loop and steering lag [s] of the simulated
+        plant (:func:`~fws_control.simulate`); the gains are designed
         without them, as in the paper.
     client, progress
         Passed to :func:`simulate_batch`.
+    **kwargs
+        ``actuator_time_constant=``, the former name of `steering_lag`,
+        accepted with a :class:`FutureWarning` until fws_control 0.4; any
+        other keyword raises :class:`TypeError`.
 
     Returns
     -------
@@ -343,16 +350,20 @@ def scenario_responses(
     ratios = np.atleast_1d(np.asarray(check_finite("ratios", ratios), dtype=float))
     ff = sc.feedforward if feedforward is None else bool(feedforward)
     dur = sc.duration if duration is None else duration
-    k1, k2, ok = scenario_gains(sc, ratios, pole, model, vehicle)
-    act = {"delay": delay, "actuator_time_constant": actuator_time_constant}
-    res = _simulate_designs(
-        sc, vehicle, ratios, k1, k2, ok, ff, dur, dt, client, progress, act
+    steering_lag = legacy_keyword(
+        kwargs, "actuator_time_constant", "steering_lag", steering_lag
     )
+    reject_unknown("scenario_responses", kwargs)
+    k1, k2, ok = scenario_gains(sc, ratios, pole, model, vehicle)
+    res = _simulate_designs(
+        sc, vehicle, ratios, k1, k2, ok, ff, dur, dt, client, progress,
+        delay, steering_lag,
+    )  # fmt: skip
     return ScenarioResponses(sc, ratios, float(pole), model, ff, res)
 
 
 def fig6_to_9_responses(
-    model: str = "exact",
+    model: str = "kinematic",
     ratios: Sequence[float] = FIG6_TO_9_RATIOS,
     pole: float = -1.0,
     *,
@@ -360,10 +371,19 @@ def fig6_to_9_responses(
     dt: float = 0.01,
     vehicle: Vehicle = PAPER_VEHICLE,
     delay: float = 0.0,
-    actuator_time_constant: float | None = None,
+    steering_lag: float | None = None,
     progress: bool | None = None,
+    **kwargs: Any,
 ) -> dict[int, ScenarioResponses]:
     """The time responses of Figs. 6-9 (e, theta, trajectory, steering, a_lat).
+
+    Parameters
+    ----------
+    model, ratios, pole, duration, dt, vehicle, delay, steering_lag, progress
+        As in :func:`scenario_responses`.
+    **kwargs
+        ``actuator_time_constant=``, the former name of `steering_lag`,
+        accepted with a :class:`FutureWarning` until fws_control 0.4.
 
     Returns
     -------
@@ -379,6 +399,10 @@ def fig6_to_9_responses(
     >>> sorted(figs), figs[7].scenario.name, figs[6].result.status.tolist()[-1]
     ([6, 7, 8, 9], 'curve_5', 'uncontrollable')
     """
+    steering_lag = legacy_keyword(
+        kwargs, "actuator_time_constant", "steering_lag", steering_lag
+    )
+    reject_unknown("fig6_to_9_responses", kwargs)
     out = {}
     for sc in PAPER_SCENARIOS.values():
         out[sc.figure] = scenario_responses(
@@ -390,7 +414,7 @@ def fig6_to_9_responses(
             dt=dt,
             vehicle=vehicle,
             delay=delay,
-            actuator_time_constant=actuator_time_constant,
+            steering_lag=steering_lag,
             progress=progress,
         )
     return dict(sorted(out.items()))
@@ -443,7 +467,7 @@ class PeakSweep:
 
 
 def fig5_peak_lateral_accel(
-    model: str = "exact",
+    model: str = "kinematic",
     ratios=FIG5_RATIOS,
     poles: dict[float, Sequence[float]] | None = None,
     *,
@@ -451,9 +475,10 @@ def fig5_peak_lateral_accel(
     dt: float = 0.01,
     vehicle: Vehicle = PAPER_VEHICLE,
     delay: float = 0.0,
-    actuator_time_constant: float | None = None,
+    steering_lag: float | None = None,
     client=None,
     progress: bool | None = None,
+    **kwargs: Any,
 ) -> dict[str, PeakSweep]:
     """Fig. 5: peak absolute lateral acceleration versus the ratio ``a``.
 
@@ -462,15 +487,18 @@ def fig5_peak_lateral_accel(
 
     Parameters
     ----------
-    model : {"exact", "paper"}, optional
+    model : {"kinematic", "paper"}, optional
         Linearisation used for the design.
     ratios : array_like, optional
         Default :data:`FIG5_RATIOS` (-1.5 to 1.5 step 0.05).
     poles : dict, optional
         Double roots per speed; default ``{5: (-1, -2), 20: (-1, -2, -3)}``
         as in the paper.
-    duration, dt, vehicle, delay, actuator_time_constant, client, progress
+    duration, dt, vehicle, delay, steering_lag, client, progress
         As in :func:`scenario_responses`.
+    **kwargs
+        ``actuator_time_constant=``, the former name of `steering_lag`,
+        accepted with a :class:`FutureWarning` until fws_control 0.4.
 
     Returns
     -------
@@ -488,7 +516,11 @@ def fig5_peak_lateral_accel(
     >>> fig5["a"].peak_lateral_accel.round(3).tolist()
     [[1.984, nan], [7.041, nan]]
     """
-    check_model(model)
+    model = check_model(model)
+    steering_lag = legacy_keyword(
+        kwargs, "actuator_time_constant", "steering_lag", steering_lag
+    )
+    reject_unknown("fig5_peak_lateral_accel", kwargs)
     ratios = np.atleast_1d(np.asarray(check_finite("ratios", ratios), dtype=float))
     poles = FIG5_POLES if poles is None else poles
     out = {}
@@ -512,7 +544,8 @@ def fig5_peak_lateral_accel(
             dt,
             client,
             progress,
-            {"delay": delay, "actuator_time_constant": actuator_time_constant},
+            delay,
+            steering_lag,
         )
         good = res.status == "ok"
         exact = res.peaks  # maxima of the continuous solution
@@ -682,7 +715,7 @@ def feedback_only_curve(
     scenario: Scenario | str = "curve_5",
     ratios: Sequence[float] = FIG6_TO_9_RATIOS,
     pole: float = -1.0,
-    model: str = "exact",
+    model: str = "kinematic",
     *,
     duration: float | None = None,
     dt: float = 0.01,

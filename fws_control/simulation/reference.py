@@ -221,7 +221,7 @@ def closed_loop_system(
     if tau is None:
         applied = src
     else:
-        syslist.append(steering_actuator(vehicle, time_constant=tau, name="actuator"))
+        syslist.append(steering_actuator(vehicle, steering_lag=tau, name="actuator"))
         connections += [
             ["actuator.delta_f_cmd", src["f"]],
             ["actuator.delta_r_cmd", src["r"]],
@@ -439,7 +439,7 @@ def simulate_reference(
     >>> ref = simulate_reference(veh, fws.Straight(), g, speed=5.0,
     ...                          initial_state=(0.0, 2.0, 0.0), duration=5.0,
     ...                          delay=0.2)
-    >>> fast = fws.simulate(veh, fws.Straight(), g, speed=5.0,
+    >>> fast = fws.simulate(fws.LateralPlant(veh, speed=5.0), fws.Straight(), g,
     ...                     initial_state=(0.0, 2.0, 0.0), duration=5.0, delay=0.2)
     >>> bool(abs(ref.outputs[4] - fast.e).max() < 1e-3)
     True

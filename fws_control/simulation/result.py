@@ -132,7 +132,7 @@ class Peaks:
     >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     >>> g = fws.SteeringGains(k1=0.1, k2=0.5, ratio=0.0)
-    >>> res = fws.simulate(veh, fws.Straight(), g, speed=5.0,
+    >>> res = fws.simulate(fws.LateralPlant(veh, speed=5.0), fws.Straight(), g,
     ...                    initial_state=(0.0, 1.0, 0.0), duration=10.0, dt=1.0)
     >>> p = res.peaks
     >>> p.exact, round(p.e.value, 6), p.e.time     # |e| is largest at the start
@@ -293,7 +293,7 @@ class SimulationResult:
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     >>> g = fws.double_root_gains(veh, speed=20.0, ratio=np.array([-1.0, 0.0]),
     ...                           pole=-1.0)
-    >>> batch = fws.simulate_batch(veh, fws.Straight(), g, speed=20.0,
+    >>> batch = fws.simulate_batch(fws.LateralPlant(veh, speed=20.0), fws.Straight(), g,
     ...                            initial_state=(0.0, 2.0, 0.0), duration=5.0,
     ...                            feedforward=False)
     >>> len(batch), batch.e.shape, batch.status.tolist()
@@ -547,8 +547,8 @@ class SimulationResult:
         --------
         >>> import fws_control as fws
         >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-        >>> res = fws.simulate_batch(veh, fws.Straight(),
-        ...                          fws.SteeringGains(0.1, 0.5, 0.0), speed=5.0,
+        >>> res = fws.simulate_batch(fws.LateralPlant(veh, speed=5.0), fws.Straight(),
+        ...                          fws.SteeringGains(0.1, 0.5, 0.0),
         ...                          initial_state=(0.0, 1.0, 0.0), duration=1.0,
         ...                          signals=("e", "delta_f"))
         >>> res.signal_names, res.signal("e").shape
@@ -790,7 +790,7 @@ class SimulationResult:
         >>> import fws_control as fws
         >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
         >>> g = fws.SteeringGains(k1=0.1, k2=0.5, ratio=0.0)
-        >>> res = fws.simulate(veh, fws.Straight(), g, speed=5.0,
+        >>> res = fws.simulate(fws.LateralPlant(veh, speed=5.0), fws.Straight(), g,
         ...                    initial_state=(0.0, 1.0, 0.0), duration=2.0)
         >>> resp = res.to_time_response()
         >>> resp.output_labels[4], resp.outputs.shape, resp.ntraces
@@ -867,7 +867,8 @@ class SimulationResult:
         >>> import fws_control as fws
         >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
         >>> g = fws.SteeringGains(k1=[0.1, 0.2], k2=0.5, ratio=0.0)
-        >>> res = fws.simulate_batch(veh, fws.Straight(), g, speed=5.0,
+        >>> plant = fws.LateralPlant(veh, speed=5.0)
+        >>> res = fws.simulate_batch(plant, fws.Straight(), g,
         ...                          initial_state=(0.0, 1.0, 0.0), duration=1.0,
         ...                          dt=0.5)
         >>> res.to_pandas()[["run", "t", "e", "k1", "status"]]
@@ -995,7 +996,7 @@ class SimulationResult:
         >>> import matplotlib.pyplot as plt, fws_control as fws
         >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
         >>> g = fws.SteeringGains(k1=0.1, k2=0.5, ratio=0.0)
-        >>> res = fws.simulate(veh, fws.Straight(), g, speed=5.0,
+        >>> res = fws.simulate(fws.LateralPlant(veh, speed=5.0), fws.Straight(), g,
         ...                    initial_state=(0.0, 1.0, 0.0), duration=2.0)
         >>> cplt = res.plot(labels="a = 0")
         >>> cplt.axes.shape
@@ -1224,7 +1225,7 @@ def expand_runs(
     >>> from fws_control.simulation.result import expand_runs
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     >>> g = fws.SteeringGains(0.1, 0.5, 0.0)
-    >>> res = fws.simulate_batch(veh, fws.Straight(), g, speed=5.0,
+    >>> res = fws.simulate_batch(fws.LateralPlant(veh, speed=5.0), fws.Straight(), g,
     ...                          initial_state=(0.0, 1.0, 0.0), duration=1.0)
     >>> full = expand_runs(res, positions=[1], k1=[np.nan, 0.1],
     ...                    k2=[np.nan, 0.5], ratio=[1.0, 0.0], speed=[5.0, 5.0],

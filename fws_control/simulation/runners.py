@@ -39,12 +39,15 @@ from scipy.integrate import DOP853, RK23, RK45
 
 from ..baselines import LateralController
 from ..controllers import check_feedforward
+from ..deprecation import legacy_keyword, reject_unknown, warn_deprecated
 from ..dynamics import require_dynamics
 from ..exceptions import ClusterLostError
 from ..gains import SteeringGains
 from ..metrics import HORIZON_METRICS, tracking_metrics
 from ..paths import Path
+from ..plant import LateralPlant
 from ..validation import (
+    MAX_SPEED,
     check_bool,
     check_delay,
     check_nonzero,
@@ -708,7 +711,7 @@ def _prepare(
                 f"{name} must be a scalar [s], got an array of shape {np.shape(value)}"
             )
     if tau is not None:
-        tau = check_scalar("actuator_time_constant", tau)
+        tau = check_scalar("steering_lag", tau)
     speed_arr = np.atleast_1d(np.asarray(check_nonzero("speed", speed), dtype=float))
     if speed_arr.ndim != 1:
         raise ValueError(f"speed must be a scalar or 1-D, got shape {speed_arr.shape}")
@@ -775,7 +778,7 @@ def _warn_if_stiff(solver, tau, duration) -> None:
     steps = duration / (6.4 * tau)
     if steps > _STIFF_STEPS:
         warnings.warn(
-            f"method={solver.__name__!r} with actuator_time_constant={tau!r} over "
+            f"method={solver.__name__!r} with steering_lag={tau!r} over "
             f"duration={duration!r}: the actuator makes the loop stiff, so this "
             f"explicit method needs about {steps:.2g} steps (its step is bounded "
             "near 6.4 times the time constant); method='auto' or 'Radau' steps "
@@ -785,7 +788,7 @@ def _warn_if_stiff(solver, tau, duration) -> None:
         )
 
 
-def simulate(
+def _simulate_run(
     vehicle: Vehicle,
     path: Path,
     gains: SteeringGains,
@@ -805,158 +808,8 @@ def simulate(
     tyre: str = "linear",
     engine: str = "auto",
 ) -> SimulationResult:
-    r"""Simulate the closed loop (one run) with the fast path-frame engine.
-
-    Integrates the corrected path-frame model (eqs. 17-19 with the curvature
-    :math:`\kappa(s)` of the path at the projection point) closed with the
-    controller of eqs. (24)-(29) in one right-hand side. The initial pose is
-    projected onto the path once; the global pose is reconstructed from
-    ``(s, e, theta)``.
-
-    Parameters
-    ----------
-    vehicle : Vehicle
-        Geometry and optional steering limits. Angle limits clip the
-        commands; rate limits insert the actuator of
-        :func:`~fws_control.steering_actuator`.
-    path : Path
-        Reference path (e.g. :class:`~fws_control.Straight`,
-        :class:`~fws_control.Arc`).
-    gains : SteeringGains or LateralController
-        Scalar ``k1, k2, ratio`` of the paper's law, or any controller of
-        :mod:`fws_control.baselines` (e.g. :class:`~fws_control.PurePursuit`),
-        which carries its own feedforward (`feedforward` applies to gains
-        only).
-    speed : float
-        Speed :math:`V` [m/s], nonzero (negative: reversing).
-    initial_state : array_like
-        ``(x_R, y_R, psi)`` of the rear-axle centre [m, m, rad].
-    duration : float
-        Final time [s], > 0.
-    feedforward : bool or {"kinematic", "dynamic"}, optional
-        Include the curvature feedforward (default ``True``, the same as
-        ``"kinematic"``: eq. 26); ``False`` is the feedback-only controller;
-        ``"dynamic"`` the front and rear angles of
-        :func:`~fws_control.dynamics.dynamic_feedforward` (for the tyre model
-        `tyre`), which hold the dynamic model on a curve without offset.
-    dt : float, optional
-        Nominal spacing of the output times [s] (the solver chooses its own
-        steps). The grid is ``linspace(0, duration, round(duration/dt) + 1)``,
-        so the actual spacing is ``duration/round(duration/dt)`` (at least
-        one interval): pass `t_eval` for exact times. It sets the output
-        only, not the accuracy (`rtol`, `atol`); the signals of one call may
-        not exceed
-        :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES` (2 GiB).
-    t_eval : array_like, optional
-        Output times instead of `dt`; increasing, from 0 to at most
-        `duration`.
-    actuator_time_constant : float, optional
-        Time constant :math:`T` [s] of a first-order steering actuator,
-        :math:`T\dot\delta = \delta_{cmd} - \delta` on each axle, whose rate
-        the vehicle's rate limits clip. Given: the actuator is in the loop
-        (its states start at the initial command). None (default): an
-        actuator only if the vehicle has a rate limit, with
-        :data:`~fws_control.controllers.DEFAULT_ACTUATOR_TIME_CONSTANT`.
-    delay : float, optional
-        Input delay :math:`\tau_d \ge 0` [s] on the steering command: the
-        controller acts on the measurements of ``t - delay`` (perception and
-        computation latency). Initial history: the state is held at its
-        initial value before ``t = 0``, so the command is the one of the
-        initial state until ``t = delay``. Integrated by the method of steps
-        (see :func:`~fws_control.simulation.engine.integrate`). Default 0.
-    method : str or scipy.integrate.OdeSolver, optional
-        Integration method: ``"auto"`` (default), a name in ``"DOP853",
-        "RK45", "RK23", "Radau", "BDF", "LSODA"`` or an OdeSolver class. The
-        engine steps that solver itself, as :func:`scipy.integrate.solve_ivp`
-        would, so that it can stop a run at a singular state. ``"auto"`` is
-        DOP853, or Radau when a fast actuator makes the loop stiff, or LSODA
-        for a run long enough that the actuator's stability bound would cost
-        DOP853 more than 10 steps (rule and measurements in
-        :func:`~fws_control.simulation.engine.choose_method`); the result's
-        ``method`` says which. An explicit method chosen for a stiff loop
-        gives a :class:`RuntimeWarning`.
-    rtol, atol : float, optional
-        Relative and absolute tolerances of the solver: rtol in
-        ``[100 eps, 0.1]`` (scipy's own floor to a 10 % error per step),
-        atol in ``[1e-20, 0.1]`` [m, rad]; see
-        :func:`~fws_control.simulation.engine.check_tolerances`.
-    model : {"kinematic", "dynamic"}, optional
-        Vehicle model. ``"kinematic"`` (default): the paper's model, no tyre
-        slip. ``"dynamic"``: the single-track model of
-        :mod:`fws_control.dynamics` (tyre slip; lateral velocity and yaw rate
-        as states; needs the vehicle's mass, yaw inertia and cornering
-        stiffnesses), with `speed` its constant longitudinal speed
-        :math:`u > 0`. The path errors are those of the rear-axle centre R
-        in both models, so every controller applies unchanged; delay and
-        actuator combine with either model. `initial_state` may then carry
-        ``(x_R, y_R, psi, v_y, r)``; with three values the vehicle starts
-        rolling without tyre slip at the initial steering angles.
-    tyre : {"linear", "magic"}, optional
-        Tyre model of ``model="dynamic"``: linear (default) or the
-        saturating simplified magic formula (needs ``vehicle.friction``).
-    engine : {"auto", "numpy", "compiled"}, optional
-        ``"compiled"``: the numba ports of DOP853 and Radau of
-        :mod:`fws_control.simulation.compiled` (extra ``fast``), each run
-        with its own steps and stop, at compiled speed. It runs the paper's
-        law (:class:`~fws_control.SteeringGains`) on the kinematic model
-        without delay, with ``method="DOP853"``, ``"Radau"`` or ``"auto"``
-        (which then means DOP853; with an actuator of time constant T, its
-        steps held to 3.2 T, half its stability bound, where its error
-        estimate bounds the error again, up to 2,500 such steps, and Radau
-        beyond: 9-13 ms per run of the paper's curve scenario whatever T
-        and the duration) and `feedforward` True or
-        False, on any path whose curvature it can tabulate; any other case
-        raises :class:`ValueError` (no fallback). Its results agree with the
-        numpy engine's to the solver tolerance (the same method; angle and
-        rate limits are switched as events, and a run stops ``1e-3`` before
-        a singularity: see that module), and its
-        :attr:`~fws_control.SimulationResult.peaks` are the exact peaks of
-        each run's own dense output
-        (:func:`~fws_control.simulation.compiled.compiled_peaks`).
-        ``"numpy"``: the engine described above, for every case.
-        ``"auto"`` (default): the compiled engine where numba is installed
-        and it runs the case (with ``method="auto"`` and an actuator: DOP853
-        held to 3.2 T or Radau, as above; the numpy engine's own choice is
-        :func:`~fws_control.simulation.engine.choose_method`); the numpy
-        engine otherwise. The result's
-        ``engine`` says which ran, and is bitwise the result of asking for
-        that engine explicitly.
-
-    Returns
-    -------
-    SimulationResult
-        One run, squeezed: ``res.e`` etc. have shape ``(time,)``,
-        ``res.status`` is a str. If the run meets a singular state it stops
-        there; ``status`` and ``message`` say why and the data end at the
-        last output time before ``t_stop``.
-
-    Raises
-    ------
-    ValueError
-        For non-scalar gains, speed or initial state (use
-        :func:`simulate_batch`), a zero speed, a non-positive duration, an
-        unknown method, tolerances out of range, or an output larger than
-        :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES`.
-        unknown method, model, tyre or feedforward, or (``model="dynamic"``
-        or ``feedforward="dynamic"``) a vehicle without the dynamic data or a
-        negative speed; for an unknown `engine`, or ``engine="compiled"``
-        for a case it does not run (the message says why).
-    AmbiguousProjectionError
-        If the initial position has no unique closest point on the path.
-
-    Examples
-    --------
-    >>> import fws_control as fws
-    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> g = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=-1.0,
-    ...                           pole=-1.0)
-    >>> res = fws.simulate(veh, fws.Arc(curvature=0.1), g, speed=5.0,
-    ...                    initial_state=(0.0, -5.0, 0.0), duration=15.0)
-    >>> res.status, round(float(res.e[0]), 6), round(float(res.e[-1]), 5)
-    ('ok', -5.0, -3e-05)
-    >>> len(res), res.e.shape
-    (1, (1501,))
-    """
+    """:func:`simulate` on the resolved plant (its vehicle, speed, model,
+    tyre and lag as separate arguments)."""
     n_gains = (
         (gains.runs() or 1)
         if isinstance(gains, LateralController)
@@ -964,7 +817,7 @@ def simulate(
     )
     if n_gains != 1:
         raise ValueError(
-            f"gains must be scalar for simulate (got {n_gains} designs); use "
+            f"controller must be scalar for simulate (got {n_gains} designs); use "
             "simulate_batch for several runs"
         )
     if np.size(speed) != 1:
@@ -977,7 +830,7 @@ def simulate(
             "initial_state must be (x_R, y_R, psi) for simulate, got shape "
             f"{np.shape(initial_state)}; use simulate_batch for several runs"
         )
-    batch = simulate_batch(
+    batch = _simulate_batch(
         vehicle,
         path,
         gains,
@@ -1006,7 +859,7 @@ def simulate(
     )
 
 
-def simulate_batch(
+def _simulate_batch(
     vehicle: Vehicle,
     path: Path,
     gains: SteeringGains | Any,
@@ -1031,192 +884,8 @@ def simulate_batch(
     signals: Any = None,
     out: np.ndarray | None = None,
 ) -> SimulationResult:
-    r"""Simulate many closed loops at once on stacked numpy state.
-
-    Parameters
-    ----------
-    vehicle : Vehicle
-        Geometry and optional limits (shared by all runs).
-    path : Path
-        Reference path (shared by all runs).
-    gains : SteeringGains, sequence of SteeringGains or LateralController
-        Per-run gains: one :class:`~fws_control.SteeringGains` whose fields
-        are arrays (e.g. from :func:`~fws_control.double_root_gains` over an
-        array of ratios; flattened), or a sequence of them; or a controller
-        of :mod:`fws_control.baselines` (its array parameters, if any, hold
-        one value per run). A controller's runs record NaN gains.
-    speed : float or array_like
-        Speed [m/s], scalar or one per run; nonzero.
-    initial_state : array_like
-        ``(x_R, y_R, psi)`` for all runs, or shape ``(runs, 3)``; with
-        ``model="dynamic"`` also ``(x_R, y_R, psi, v_y, r)`` or ``(runs,
-        5)``, as in :func:`simulate`.
-    duration : float
-        Final time [s], > 0.
-    feedforward : bool or {"kinematic", "dynamic"}, optional
-        Curvature feedforward (default ``True``), as in :func:`simulate`.
-    dt : float, optional
-        Nominal output spacing [s], as in :func:`simulate`.
-    t_eval : array_like, optional
-        Output times instead of `dt`, as in :func:`simulate`.
-    actuator_time_constant : float, optional
-        Steering actuator time constant [s], as in :func:`simulate`.
-    delay : float, optional
-        Input delay [s] on the steering command, as in :func:`simulate`.
-    method : str or scipy.integrate.OdeSolver, optional
-        Integration method, as in :func:`simulate`.
-    rtol, atol : float, optional
-        Solver tolerances, as in :func:`simulate`.
-    model, tyre : str, optional
-        Vehicle and tyre model, as in :func:`simulate`.
-    engine : {"auto", "numpy", "compiled"}, optional
-        Integration engine, as in :func:`simulate` (default ``"auto"``: the
-        compiled engine where numba is installed and it runs the case --
-        the paper's law, kinematic model, no delay, DOP853, Radau or
-        ``"auto"`` -- else the numpy engine). With
-        ``"compiled"`` each run has its own steps, error norm and stop, so a
-        run's result does not depend on the other runs (nor on
-        `chunk_size`).
-    chunk_size : int, optional
-        Runs per chunk (one solver; one Dask task); default
-        :data:`DEFAULT_CHUNK_SIZE`, or
-        :data:`~fws_control.simulation.engine.LSODA_MAX_RUNS` (16) when the
-        numpy engine integrates with LSODA (``method="LSODA"``, or what
-        ``method="auto"`` picks for a stiff actuator over a long run).
-        Smaller chunks decouple the step sizes of runs with very different
-        dynamics.
-    client : dask.distributed.Client, optional
-        Submit the chunks to this Dask cluster (needs the extra
-        ``distributed``). The vehicle, path and arguments are pickled to the
-        workers. Chunks that the cluster loses (a task cancelled, the
-        scheduler gone) are marked ``"failed"`` with NaN data and a
-        :class:`RuntimeWarning`; the finished chunks are kept. A cluster
-        left with no worker for 60 s raises
-        :class:`~fws_control.ClusterLostError`, whose ``result`` holds the
-        finished chunks (the pending runs marked ``"failed"``).
-    progress : bool, optional
-        Show a tqdm progress bar over the chunks. ``None`` (default): only if
-        standard error is a terminal.
-    signals : None, sequence of str or "metrics", optional
-        The time series to keep, for sweeps too large to hold them all.
-        ``None`` (default): all of
-        :data:`~fws_control.simulation.SIGNALS`. A sequence of their names:
-        only those (held in the order of ``SIGNALS``; the result's
-        ``signal_names`` says which). ``"metrics"``: none. Each chunk
-        computes its signals, writes the kept ones into the preallocated
-        result and is freed, so the peak memory is the returned data and one
-        chunk's working set, and the budget
-        :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES` counts the
-        kept signals only (and one chunk's full signals). Whatever is kept,
-        the result holds per run the status, ``t_stop``, the peaks
-        (:attr:`~fws_control.SimulationResult.peaks`, computed before the
-        signals are dropped: exact on either engine) and, when ``e`` or
-        ``theta`` is dropped, the horizon metrics of
-        :func:`~fws_control.tracking_metrics` (settling time, overshoot, RMS
-        and steady-state errors, with its default settings), so
-        ``tracking_metrics(result)`` works on every result.
-        Reading a signal not kept (``result.theta``,
-        :meth:`~fws_control.SimulationResult.signal`, ``plot``) raises
-        :class:`~fws_control.SignalNotKeptError`.
-    out : ndarray, optional
-        Where to write the kept signals: a writeable, C-contiguous float64
-        array (or :class:`numpy.memmap`) of shape ``(runs, len(kept),
-        time)``, with ``time`` the number of output times; the result's
-        ``signals`` is a view of it (the same memory). Each chunk is written
-        into it as it finishes. One array reused across sweeps of the same
-        size spares the kernel's providing fresh memory for every result
-        at its first touch (measured on the paper's scenario: from next to
-        nothing to about 150 us of CPU per run in best-of-5 timings, and up
-        to 450 us of system time in single batches, next to the compiled
-        engine's own 300 us; ``benchmarks/bench_engine.py``); a
-        memory map of a ``.npy`` file
-        (:func:`numpy.lib.format.open_memmap`) streams a sweep larger than
-        memory to disk. The output budget
-        :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES` then counts
-        one chunk's working set only. If the call raises, `out` may hold
-        some runs' signals. Not with ``signals="metrics"``. A result whose
-        `out` is written again (by another sweep) shows the new signals
-        next to its own per-run values: copy the signals of a result you
-        keep (``result.signals.copy()``).
-
-    Returns
-    -------
-    SimulationResult
-        Not squeezed, whatever the number of runs: signals of shape ``(runs,
-        time)`` on the common output grid, NaN after a run's stop; per-run
-        ``status``, ``t_stop``, ``speed``, ``k1``, ``k2``, ``ratio``. The
-        number of runs is the broadcast of the numbers of gains, speeds and
-        initial states.
-
-    Raises
-    ------
-    ValueError
-        If the per-run arguments do not broadcast, for an invalid
-        `chunk_size`, for `signals` naming an unknown or repeated signal,
-        empty or another str than ``"metrics"``, for an `out` of another
-        shape or dtype, not C-contiguous or read-only (or given with
-        ``signals="metrics"``), or as in :func:`simulate`.
-    TypeError
-        If `gains` is not a SteeringGains or a sequence of them,
-        `signals` is not None, a str or a sequence of str, or `out` is not a
-        numpy array.
-    ClusterLostError
-        If the Dask cluster of `client` has had no worker for 60 s (its
-        ``result`` keeps the finished chunks).
-
-    Examples
-    --------
-    Peak lateral acceleration over a sweep of the ratio ``a``:
-
-    >>> import numpy as np, fws_control as fws
-    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> ratios = np.array([-1.0, -0.5, 0.0, 0.5])
-    >>> g = fws.double_root_gains(veh, speed=20.0, ratio=ratios, pole=-1.0)
-    >>> res = fws.simulate_batch(veh, fws.Straight(), g, speed=20.0,
-    ...                          initial_state=(0.0, 2.0, 0.0), duration=10.0,
-    ...                          feedforward=False)
-    >>> res.e.shape, res.status.tolist()
-    ((4, 1001), ['ok', 'ok', 'ok', 'ok'])
-    >>> bool(np.all(np.abs(res.e[:, -1]) < 1e-2))
-    True
-    >>> fws.tracking_metrics(res).peak_lateral_accel.round(2).tolist()
-    [2.0, 1.91, 1.73, 1.19]
-
-    A large sweep keeps only what it needs: here the lateral error, or only
-    the metrics (the same values, computed before the signals are dropped):
-
-    >>> few = fws.simulate_batch(veh, fws.Straight(), g, speed=20.0,
-    ...                          initial_state=(0.0, 2.0, 0.0), duration=10.0,
-    ...                          feedforward=False, signals=("e",))
-    >>> few.signal_names, few.signals.shape, bool(np.all(few.e == res.e))
-    (('e',), (4, 1, 1001), True)
-    >>> none = fws.simulate_batch(veh, fws.Straight(), g, speed=20.0,
-    ...                           initial_state=(0.0, 2.0, 0.0), duration=10.0,
-    ...                           feedforward=False, signals="metrics")
-    >>> m = fws.tracking_metrics(none)
-    >>> m.peak_lateral_accel.round(2).tolist(), m.settling_time.round(2).tolist()
-    ([2.0, 1.91, 1.73, 1.19], [5.9, 5.88, 5.83, 5.69])
-    >>> bool(np.all(m.settling_time == fws.tracking_metrics(res).settling_time))
-    True
-
-    A sweep streamed to a ``.npy`` file as its chunks finish (a memory map
-    as `out`; written under a temporary name and renamed when complete, so
-    that an interrupted sweep leaves no file that looks finished):
-
-    >>> import os, tempfile
-    >>> with tempfile.TemporaryDirectory() as folder:
-    ...     part = os.path.join(folder, "sweep.npy.part")
-    ...     disk = np.lib.format.open_memmap(part, mode="w+", shape=(4, 1, 1001))
-    ...     _ = fws.simulate_batch(veh, fws.Straight(), g, speed=20.0,
-    ...                            initial_state=(0.0, 2.0, 0.0), duration=10.0,
-    ...                            feedforward=False, signals=("e",), out=disk)
-    ...     disk.flush()
-    ...     del disk
-    ...     os.replace(part, os.path.join(folder, "sweep.npy"))
-    ...     saved = np.load(os.path.join(folder, "sweep.npy"))
-    >>> saved.shape, bool(np.all(saved[:, 0] == res.e))
-    ((4, 1, 1001), True)
-    """
+    """:func:`simulate_batch` on the resolved plant (its vehicle, speed,
+    model, tyre and lag as separate arguments)."""
     if not isinstance(engine, str) or engine not in _ENGINES:
         raise ValueError(f"engine must be one of {_ENGINES}, got {engine!r}")
     auto_method = isinstance(method, str) and method == "auto"
@@ -1451,3 +1120,536 @@ def simulate_batch(
     if cluster_lost is not None:
         raise ClusterLostError(cluster_lost, result=result)
     return result
+
+
+#: The keywords of the deprecated Vehicle form of simulate/simulate_batch
+#: that the plant now holds.
+_PLANT_KEYWORDS = ("speed", "model", "tyre", "steering_lag", "actuator_time_constant")
+
+
+def _resolve_plant(function: str, plant: Any, controller: Any, kwargs: dict):
+    """``(vehicle, controller, speed, model, tyre, lag)`` of a call.
+
+    `plant` is a :class:`LateralPlant`, or (deprecated, with a
+    FutureWarning) a :class:`Vehicle` with the keywords of
+    :data:`_PLANT_KEYWORDS` in `kwargs`. The deprecated ``gains=`` names
+    the controller. `kwargs` is emptied; an unknown keyword raises.
+    """
+    controller = legacy_keyword(kwargs, "gains", _CONTROLLER[function], controller)
+    if controller is None:
+        raise TypeError(
+            f"{function}() missing the argument {_CONTROLLER[function]!r} (a "
+            "SteeringGains or a lateral controller)"
+        )
+    if isinstance(plant, LateralPlant):
+        given = [k for k in _PLANT_KEYWORDS if k in kwargs]
+        if given:
+            raise TypeError(
+                f"{function}(): {', '.join(k + '=' for k in given)} applies only "
+                "to the deprecated Vehicle form; the LateralPlant already holds "
+                "its speed, model, tyre and steering lag (e.g. "
+                "dataclasses.replace(plant, steering_lag=0.1))"
+            )
+        reject_unknown(function, kwargs)
+        lag = plant.steering_lag
+        if lag is not None:
+            front, rear = lag
+            if front != rear:
+                raise ValueError(
+                    f"plant.steering_lag must hold one time constant for both "
+                    f"axles in the simulation (front == rear > 0 s), got "
+                    f"{lag!r}: the simulated actuator has one time constant"
+                )
+            lag = front
+        # "kinematic" and "paper" are two linearisations of one nonlinear
+        # kinematic model, which is what is simulated
+        model = "dynamic" if plant.model == "dynamic" else "kinematic"
+        return plant.vehicle, controller, plant.speed, model, plant.tyre, lag
+    if isinstance(plant, Vehicle):
+        if "speed" not in kwargs:
+            raise TypeError(
+                f"{function}(): plant must be a fws.LateralPlant (vehicle, speed, "
+                f"model, tyre, steering lag), got a Vehicle without speed=; pass "
+                f"fws.LateralPlant(vehicle, speed=...)"
+            )
+        warn_deprecated(
+            f"{function}(vehicle, path, gains, speed=...)",
+            f"{function}(plant, path, {_CONTROLLER[function]}) and pass a "
+            "fws.LateralPlant(vehicle, speed=..., model=..., tyre=..., "
+            "steering_lag=...) as the plant",
+        )
+        speed = kwargs.pop("speed")
+        model = kwargs.pop("model", "kinematic")
+        tyre = kwargs.pop("tyre", "linear")
+        lag = legacy_keyword(
+            kwargs, "actuator_time_constant", "steering_lag",
+            kwargs.pop("steering_lag", None),
+        )  # fmt: skip
+        reject_unknown(function, kwargs)
+        return plant, controller, speed, model, tyre, lag
+    raise TypeError(
+        f"{function}(): plant must be a fws.LateralPlant (the simulated system: "
+        f"vehicle, speed, model, tyre, steering lag), got {type(plant).__name__}"
+    )
+
+
+_CONTROLLER = {"simulate": "controller", "simulate_batch": "controllers"}
+
+
+def simulate(
+    plant: LateralPlant,
+    path: Path,
+    controller: SteeringGains | LateralController | None = None,
+    *,
+    initial_state: Any,
+    duration: float,
+    delay: float = 0.0,
+    feedforward: bool | str = True,
+    dt: float = 0.01,
+    t_eval: Any = None,
+    method: str = "auto",
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
+    engine: str = "auto",
+    **kwargs: Any,
+) -> SimulationResult:
+    r"""Simulate the closed loop (one run) with the fast path-frame engine.
+
+    Integrates the corrected path-frame model (eqs. 17-19 with the curvature
+    :math:`\kappa(s)` of the path at the projection point) closed with the
+    controller of eqs. (24)-(29) in one right-hand side. The initial pose is
+    projected onto the path once; the global pose is reconstructed from
+    ``(s, e, theta)``.
+
+    Parameters
+    ----------
+    plant : LateralPlant
+        The simulated system, the same object the analysis takes: its
+        vehicle (geometry and optional steering limits: angle limits clip
+        the commands, rate limits insert the actuator of
+        :func:`~fws_control.steering_actuator`), its `speed` :math:`V`
+        [m/s] (one nonzero number; negative: reversing), its `model` and
+        `tyre` and its `steering_lag`. ``model="kinematic"`` and
+        ``model="paper"`` are two linearisations of one nonlinear kinematic
+        model: both simulate that nonlinear model (eqs. 17-19). With
+        ``model="dynamic"`` the single-track model of
+        :mod:`fws_control.dynamics` is integrated (tyre slip; lateral velocity
+        and yaw rate as states; `speed` is its constant longitudinal speed
+        :math:`u > 0`), with the plant's `tyre` (linear, or the saturating
+        simplified magic formula). The path errors are those of the
+        rear-axle centre R in both models, so every controller applies
+        unchanged; delay and lag combine with either model. The plant's
+        `steering_lag` :math:`T` [s] is a first-order actuator
+        :math:`T\dot\delta = \delta_{cmd} - \delta` on each axle, whose rate
+        the vehicle's rate limits clip (its states start at the initial
+        command); the simulation runs one time constant for both axles, so
+        a (front, rear) pair must hold equal values. ``None``: an actuator
+        only if the vehicle has a rate limit, with
+        :data:`~fws_control.controllers.DEFAULT_ACTUATOR_TIME_CONSTANT`.
+        The plant's `curvature` is its linearisation point and is not used
+        here: the path gives the curvature along the run.
+    path : Path
+        Reference path (e.g. :class:`~fws_control.Straight`,
+        :class:`~fws_control.Arc`).
+    controller : SteeringGains or LateralController
+        Scalar ``k1, k2, ratio`` of the paper's law, or any controller of
+        :mod:`fws_control.baselines` (e.g. :class:`~fws_control.PurePursuit`),
+        which carries its own feedforward (`feedforward` applies to gains
+        only).
+    initial_state : array_like
+        ``(x_R, y_R, psi)`` of the rear-axle centre [m, m, rad].
+    duration : float
+        Final time [s], > 0.
+    feedforward : bool or {"kinematic", "dynamic"}, optional
+        Include the curvature feedforward (default ``True``, the same as
+        ``"kinematic"``: eq. 26); ``False`` is the feedback-only controller;
+        ``"dynamic"`` the front and rear angles of
+        :func:`~fws_control.dynamics.dynamic_feedforward` (for the plant's
+        tyre model), which hold the dynamic model on a curve without offset.
+    dt : float, optional
+        Nominal spacing of the output times [s] (the solver chooses its own
+        steps). The grid is ``linspace(0, duration, round(duration/dt) + 1)``,
+        so the actual spacing is ``duration/round(duration/dt)`` (at least
+        one interval): pass `t_eval` for exact times. It sets the output
+        only, not the accuracy (`rtol`, `atol`); the signals of one call may
+        not exceed
+        :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES` (2 GiB).
+    t_eval : array_like, optional
+        Output times instead of `dt`; increasing, from 0 to at most
+        `duration`.
+    delay : float, optional
+        Input delay :math:`\tau_d \ge 0` [s] on the steering command: the
+        controller acts on the measurements of ``t - delay`` (perception and
+        computation latency). Initial history: the state is held at its
+        initial value before ``t = 0``, so the command is the one of the
+        initial state until ``t = delay``. Integrated by the method of steps
+        (see :func:`~fws_control.simulation.engine.integrate`). Default 0.
+        The delay belongs to the loop, not to the plant, as in the analysis
+        (:func:`~fws_control.critical_delay` of a plant and gains; the
+        delayed charts take ``delay=``).
+    method : str or scipy.integrate.OdeSolver, optional
+        Integration method: ``"auto"`` (default), a name in ``"DOP853",
+        "RK45", "RK23", "Radau", "BDF", "LSODA"`` or an OdeSolver class. The
+        engine steps that solver itself, as :func:`scipy.integrate.solve_ivp`
+        would, so that it can stop a run at a singular state. ``"auto"`` is
+        DOP853, or Radau when a fast actuator makes the loop stiff, or LSODA
+        for a run long enough that the actuator's stability bound would cost
+        DOP853 more than 10 steps (rule and measurements in
+        :func:`~fws_control.simulation.engine.choose_method`); the result's
+        ``method`` says which. An explicit method chosen for a stiff loop
+        gives a :class:`RuntimeWarning`.
+    rtol, atol : float, optional
+        Relative and absolute tolerances of the solver: rtol in
+        ``[100 eps, 0.1]`` (scipy's own floor to a 10 % error per step),
+        atol in ``[1e-20, 0.1]`` [m, rad]; see
+        :func:`~fws_control.simulation.engine.check_tolerances`.
+    engine : {"auto", "numpy", "compiled"}, optional
+        ``"compiled"``: the numba ports of DOP853 and Radau of
+        :mod:`fws_control.simulation.compiled` (extra ``fast``), each run
+        with its own steps and stop, at compiled speed. It runs the paper's
+        law (:class:`~fws_control.SteeringGains`) on the kinematic model
+        without delay, with ``method="DOP853"``, ``"Radau"`` or ``"auto"``
+        (which then means DOP853; with an actuator of time constant T, its
+        steps held to 3.2 T, half its stability bound, where its error
+        estimate bounds the error again, up to 2,500 such steps, and Radau
+        beyond: 9-13 ms per run of the paper's curve scenario whatever T
+        and the duration) and `feedforward` True or
+        False, on any path whose curvature it can tabulate; any other case
+        raises :class:`ValueError` (no fallback). Its results agree with the
+        numpy engine's to the solver tolerance (the same method; angle and
+        rate limits are switched as events, and a run stops ``1e-3`` before
+        a singularity: see that module), and its
+        :attr:`~fws_control.SimulationResult.peaks` are the exact peaks of
+        each run's own dense output
+        (:func:`~fws_control.simulation.compiled.compiled_peaks`).
+        ``"numpy"``: the engine described above, for every case.
+        ``"auto"`` (default): the compiled engine where numba is installed
+        and it runs the case (with ``method="auto"`` and an actuator: DOP853
+        held to 3.2 T or Radau, as above; the numpy engine's own choice is
+        :func:`~fws_control.simulation.engine.choose_method`); the numpy
+        engine otherwise. The result's
+        ``engine`` says which ran, and is bitwise the result of asking for
+        that engine explicitly.
+
+    **kwargs
+        Deprecated calling form, accepted until fws_control 0.4 with a
+        :class:`FutureWarning`: a :class:`~fws_control.Vehicle` as `plant`
+        with ``speed=``, ``model=`` ({"kinematic", "dynamic"}), ``tyre=``
+        and ``steering_lag=`` (formerly ``actuator_time_constant=``), and
+        ``gains=`` for `controller`. Any other keyword raises
+        :class:`TypeError`.
+
+    Returns
+    -------
+    SimulationResult
+        One run, squeezed: ``res.e`` etc. have shape ``(time,)``,
+        ``res.status`` is a str. If the run meets a singular state it stops
+        there; ``status`` and ``message`` say why and the data end at the
+        last output time before ``t_stop``.
+
+    Raises
+    ------
+    TypeError
+        If `plant` is not a :class:`~fws_control.LateralPlant` (a
+        :class:`~fws_control.Vehicle` without ``speed=`` included), or for
+        an unknown keyword.
+    ValueError
+        For non-scalar gains, plant speed or initial state (use
+        :func:`simulate_batch`), a plant whose front and rear lags differ, a
+        non-positive duration, an unknown method or feedforward, tolerances
+        out of range, or an output larger than
+        :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES`; for
+        ``feedforward="dynamic"`` a vehicle without the dynamic data or a
+        negative speed; for an unknown `engine`, or ``engine="compiled"``
+        for a case it does not run (the message says why).
+    AmbiguousProjectionError
+        If the initial position has no unique closest point on the path.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> g = fws.double_root_gains(fws.LateralPlant(veh, speed=5.0, curvature=0.1),
+    ...                           ratio=-1.0, pole=-1.0)
+    >>> plant = fws.LateralPlant(veh, speed=5.0)
+    >>> res = fws.simulate(plant, fws.Arc(curvature=0.1), g,
+    ...                    initial_state=(0.0, -5.0, 0.0), duration=15.0)
+    >>> res.status, round(float(res.e[0]), 6), round(float(res.e[-1]), 5)
+    ('ok', -5.0, -3e-05)
+    >>> len(res), res.e.shape
+    (1, (1501,))
+    """
+    vehicle, controller, speed, model, tyre, lag = _resolve_plant(
+        "simulate", plant, controller, kwargs
+    )
+    if isinstance(plant, LateralPlant) and np.ndim(speed) != 0:
+        raise ValueError(
+            "plant.speed must be one speed (a scalar, nonzero, at most "
+            f"{MAX_SPEED:g} m/s) for simulate, got an array of shape "
+            f"{np.shape(speed)}: {np.array2string(np.asarray(speed), threshold=6)}; "
+            "use simulate_batch for several runs"
+        )
+    return _simulate_run(
+        vehicle,
+        path,
+        controller,
+        speed=speed,
+        initial_state=initial_state,
+        duration=duration,
+        feedforward=feedforward,
+        dt=dt,
+        t_eval=t_eval,
+        actuator_time_constant=lag,
+        delay=delay,
+        method=method,
+        rtol=rtol,
+        atol=atol,
+        model=model,
+        tyre=tyre,
+        engine=engine,
+    )
+
+
+def simulate_batch(
+    plant: LateralPlant,
+    path: Path,
+    controllers: SteeringGains | Any = None,
+    *,
+    initial_state: Any,
+    duration: float,
+    delay: float = 0.0,
+    feedforward: bool | str = True,
+    dt: float = 0.01,
+    t_eval: Any = None,
+    method: str = "auto",
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
+    engine: str = "auto",
+    chunk_size: int | None = None,
+    client: Any = None,
+    progress: bool | None = None,
+    signals: Any = None,
+    out: np.ndarray | None = None,
+    **kwargs: Any,
+) -> SimulationResult:
+    r"""Simulate many closed loops at once on stacked numpy state.
+
+    Parameters
+    ----------
+    plant : LateralPlant
+        The simulated system (shared by all runs), as in :func:`simulate`;
+        its `speed` may be an array, one speed per run (1-D), broadcast
+        against the gains and the initial states. Its `curvature` is not
+        used (the path gives the curvature).
+    path : Path
+        Reference path (shared by all runs).
+    controllers : SteeringGains, sequence of SteeringGains or LateralController
+        Per-run gains: one :class:`~fws_control.SteeringGains` whose fields
+        are arrays (e.g. from :func:`~fws_control.double_root_gains` over an
+        array of ratios; flattened), or a sequence of them; or a controller
+        of :mod:`fws_control.baselines` (its array parameters, if any, hold
+        one value per run). A controller's runs record NaN gains.
+    initial_state : array_like
+        ``(x_R, y_R, psi)`` for all runs, or shape ``(runs, 3)``; with
+        a ``model="dynamic"`` plant also ``(x_R, y_R, psi, v_y, r)`` or ``(runs,
+        5)``, as in :func:`simulate`.
+    duration : float
+        Final time [s], > 0.
+    feedforward : bool or {"kinematic", "dynamic"}, optional
+        Curvature feedforward (default ``True``), as in :func:`simulate`.
+    dt : float, optional
+        Nominal output spacing [s], as in :func:`simulate`.
+    t_eval : array_like, optional
+        Output times instead of `dt`, as in :func:`simulate`.
+    delay : float, optional
+        Input delay [s] on the steering command, as in :func:`simulate` (a
+        property of the loop, not of the plant).
+    method : str or scipy.integrate.OdeSolver, optional
+        Integration method, as in :func:`simulate`.
+    rtol, atol : float, optional
+        Solver tolerances, as in :func:`simulate`.
+    engine : {"auto", "numpy", "compiled"}, optional
+        Integration engine, as in :func:`simulate` (default ``"auto"``: the
+        compiled engine where numba is installed and it runs the case --
+        the paper's law, kinematic model, no delay, DOP853, Radau or
+        ``"auto"`` -- else the numpy engine). With
+        ``"compiled"`` each run has its own steps, error norm and stop, so a
+        run's result does not depend on the other runs (nor on
+        `chunk_size`).
+    chunk_size : int, optional
+        Runs per chunk (one solver; one Dask task); default
+        :data:`DEFAULT_CHUNK_SIZE`, or
+        :data:`~fws_control.simulation.engine.LSODA_MAX_RUNS` (16) when the
+        numpy engine integrates with LSODA (``method="LSODA"``, or what
+        ``method="auto"`` picks for a stiff actuator over a long run).
+        Smaller chunks decouple the step sizes of runs with very different
+        dynamics.
+    client : dask.distributed.Client, optional
+        Submit the chunks to this Dask cluster (needs the extra
+        ``distributed``). The vehicle, path and arguments are pickled to the
+        workers. Chunks that the cluster loses (a task cancelled, the
+        scheduler gone) are marked ``"failed"`` with NaN data and a
+        :class:`RuntimeWarning`; the finished chunks are kept. A cluster
+        left with no worker for 60 s raises
+        :class:`~fws_control.ClusterLostError`, whose ``result`` holds the
+        finished chunks (the pending runs marked ``"failed"``).
+    progress : bool, optional
+        Show a tqdm progress bar over the chunks. ``None`` (default): only if
+        standard error is a terminal.
+    signals : None, sequence of str or "metrics", optional
+        The time series to keep, for sweeps too large to hold them all.
+        ``None`` (default): all of
+        :data:`~fws_control.simulation.SIGNALS`. A sequence of their names:
+        only those (held in the order of ``SIGNALS``; the result's
+        ``signal_names`` says which). ``"metrics"``: none. Each chunk
+        computes its signals, writes the kept ones into the preallocated
+        result and is freed, so the peak memory is the returned data and one
+        chunk's working set, and the budget
+        :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES` counts the
+        kept signals only (and one chunk's full signals). Whatever is kept,
+        the result holds per run the status, ``t_stop``, the peaks
+        (:attr:`~fws_control.SimulationResult.peaks`, computed before the
+        signals are dropped: exact on either engine) and, when ``e`` or
+        ``theta`` is dropped, the horizon metrics of
+        :func:`~fws_control.tracking_metrics` (settling time, overshoot, RMS
+        and steady-state errors, with its default settings), so
+        ``tracking_metrics(result)`` works on every result.
+        Reading a signal not kept (``result.theta``,
+        :meth:`~fws_control.SimulationResult.signal`, ``plot``) raises
+        :class:`~fws_control.SignalNotKeptError`.
+    out : ndarray, optional
+        Where to write the kept signals: a writeable, C-contiguous float64
+        array (or :class:`numpy.memmap`) of shape ``(runs, len(kept),
+        time)``, with ``time`` the number of output times; the result's
+        ``signals`` is a view of it (the same memory). Each chunk is written
+        into it as it finishes. One array reused across sweeps of the same
+        size spares the kernel's providing fresh memory for every result
+        at its first touch (measured on the paper's scenario: from next to
+        nothing to about 150 us of CPU per run in best-of-5 timings, and up
+        to 450 us of system time in single batches, next to the compiled
+        engine's own 300 us: ``docs/performance.md``); a
+        memory map of a ``.npy`` file
+        (:func:`numpy.lib.format.open_memmap`) streams a sweep larger than
+        memory to disk. The output budget
+        :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES` then counts
+        one chunk's working set only. If the call raises, `out` may hold
+        some runs' signals. Not with ``signals="metrics"``. A result whose
+        `out` is written again (by another sweep) shows the new signals
+        next to its own per-run values: copy the signals of a result you
+        keep (``result.signals.copy()``).
+
+    **kwargs
+        Deprecated calling form, accepted until fws_control 0.4 with a
+        :class:`FutureWarning`: a :class:`~fws_control.Vehicle` as `plant`
+        with ``speed=``, ``model=`` ({"kinematic", "dynamic"}), ``tyre=``
+        and ``steering_lag=`` (formerly ``actuator_time_constant=``), and
+        ``gains=`` for `controllers`. Any other keyword raises
+        :class:`TypeError`.
+
+    Returns
+    -------
+    SimulationResult
+        Not squeezed, whatever the number of runs: signals of shape ``(runs,
+        time)`` on the common output grid, NaN after a run's stop; per-run
+        ``status``, ``t_stop``, ``speed``, ``k1``, ``k2``, ``ratio``. The
+        number of runs is the broadcast of the numbers of gains, speeds and
+        initial states.
+
+    Raises
+    ------
+    ValueError
+        If the per-run arguments do not broadcast, for an invalid
+        `chunk_size`, for `signals` naming an unknown or repeated signal,
+        empty or another str than ``"metrics"``, for an `out` of another
+        shape or dtype, not C-contiguous or read-only (or given with
+        ``signals="metrics"``), or as in :func:`simulate`.
+    TypeError
+        If `plant` is not a :class:`~fws_control.LateralPlant`, for an
+        unknown keyword, if `controllers` is not a SteeringGains or a
+        sequence of them, `signals` is not None, a str or a sequence of
+        str, or `out` is not a numpy array.
+    ClusterLostError
+        If the Dask cluster of `client` has had no worker for 60 s (its
+        ``result`` keeps the finished chunks).
+
+    Examples
+    --------
+    Peak lateral acceleration over a sweep of the ratio ``a``:
+
+    >>> import numpy as np, fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> ratios = np.array([-1.0, -0.5, 0.0, 0.5])
+    >>> plant = fws.LateralPlant(veh, speed=20.0)
+    >>> g = fws.double_root_gains(plant, ratio=ratios, pole=-1.0)
+    >>> res = fws.simulate_batch(plant, fws.Straight(), g,
+    ...                          initial_state=(0.0, 2.0, 0.0), duration=10.0,
+    ...                          feedforward=False)
+    >>> res.e.shape, res.status.tolist()
+    ((4, 1001), ['ok', 'ok', 'ok', 'ok'])
+    >>> bool(np.all(np.abs(res.e[:, -1]) < 1e-2))
+    True
+    >>> fws.tracking_metrics(res).peak_lateral_accel.round(2).tolist()
+    [2.0, 1.91, 1.73, 1.19]
+
+    A large sweep keeps only what it needs: here the lateral error, or only
+    the metrics (the same values, computed before the signals are dropped):
+
+    >>> few = fws.simulate_batch(plant, fws.Straight(), g,
+    ...                          initial_state=(0.0, 2.0, 0.0), duration=10.0,
+    ...                          feedforward=False, signals=("e",))
+    >>> few.signal_names, few.signals.shape, bool(np.all(few.e == res.e))
+    (('e',), (4, 1, 1001), True)
+    >>> none = fws.simulate_batch(plant, fws.Straight(), g,
+    ...                           initial_state=(0.0, 2.0, 0.0), duration=10.0,
+    ...                           feedforward=False, signals="metrics")
+    >>> m = fws.tracking_metrics(none)
+    >>> m.peak_lateral_accel.round(2).tolist(), m.settling_time.round(2).tolist()
+    ([2.0, 1.91, 1.73, 1.19], [5.9, 5.88, 5.83, 5.69])
+    >>> bool(np.all(m.settling_time == fws.tracking_metrics(res).settling_time))
+    True
+
+    A sweep streamed to a ``.npy`` file as its chunks finish (a memory map
+    as `out`; written under a temporary name and renamed when complete, so
+    that an interrupted sweep leaves no file that looks finished):
+
+    >>> import os, tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     part = os.path.join(folder, "sweep.npy.part")
+    ...     disk = np.lib.format.open_memmap(part, mode="w+", shape=(4, 1, 1001))
+    ...     _ = fws.simulate_batch(plant, fws.Straight(), g,
+    ...                            initial_state=(0.0, 2.0, 0.0), duration=10.0,
+    ...                            feedforward=False, signals=("e",), out=disk)
+    ...     disk.flush()
+    ...     del disk
+    ...     os.replace(part, os.path.join(folder, "sweep.npy"))
+    ...     saved = np.load(os.path.join(folder, "sweep.npy"))
+    >>> saved.shape, bool(np.all(saved[:, 0] == res.e))
+    ((4, 1, 1001), True)
+    """
+    vehicle, controllers, speed, model, tyre, lag = _resolve_plant(
+        "simulate_batch", plant, controllers, kwargs
+    )
+    return _simulate_batch(
+        vehicle,
+        path,
+        controllers,
+        speed=speed,
+        initial_state=initial_state,
+        duration=duration,
+        feedforward=feedforward,
+        dt=dt,
+        t_eval=t_eval,
+        actuator_time_constant=lag,
+        delay=delay,
+        method=method,
+        rtol=rtol,
+        atol=atol,
+        model=model,
+        tyre=tyre,
+        engine=engine,
+        chunk_size=chunk_size,
+        client=client,
+        progress=progress,
+        signals=signals,
+        out=out,
+    )
