@@ -16,8 +16,8 @@ from typing import Any, cast
 
 import numpy as np
 
-from .hints import RealArrayLike
 from . import equations
+from .hints import RealArrayLike
 from .models import check_inputs, check_result, check_steering, yaw_rate
 from .validation import check_type
 from .vehicle import Vehicle

@@ -204,7 +204,7 @@ class StabilityChart:
         Why the design failed (:class:`UncontrollableError`).
     design_model : str or None
         The model of the plant the design was placed on when it is not the
-        chart's: ``"exact"`` (the kinematic plant at the same operating
+        chart's: ``"kinematic"`` (the kinematic plant at the same operating
         point) for a chart of a ``LateralPlant(model="dynamic")``; None when
         the design is the chart plant's own.
     verdict : ndarray of int8 or None
@@ -570,7 +570,7 @@ class StabilityChart:
                     first = False
         if design and self.design_on_chart:
             k1d, k2d = float(self.design.k1), float(self.design.k2)
-            kin = " (kinematic design)" if self.design_model == "exact" else ""
+            kin = " (kinematic design)" if self.design_model == "kinematic" else ""
             (pt,) = ax.plot(
                 k1d,
                 k2d,
@@ -785,7 +785,7 @@ def stability_chart(
         reason in :attr:`StabilityChart.design_error` instead of failing.
         Two gains place a double root only in a 2-state loop: on a chart of
         ``LateralPlant(model="dynamic")`` the marked gains are the kinematic
-        plant's design at the same operating point (``model="exact"``,
+        plant's design at the same operating point (``model="kinematic"``,
         recorded in :attr:`StabilityChart.design_model`), so the chart shows
         where that design lands on the dynamic plant; another plant of more
         than two states raises a ValueError (mark gains of one's own with
@@ -841,7 +841,7 @@ def stability_chart(
         dp = p
         order = loop_matrices(p).order
         if order > 2 and isinstance(p, LateralPlant) and p.model == "dynamic":
-            dp, design_model = replace(p, model="exact"), "exact"
+            dp, design_model = replace(p, model="kinematic"), "kinematic"
         elif order > 2:
             raise ValueError(
                 f"pole={pole!r} needs a 2-state plant, got one of order {order}: "

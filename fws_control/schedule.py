@@ -263,7 +263,7 @@ def _plant_at(plant, speed: float, steering_lag, curvature, model):
             plant,
             speed=speed,
             curvature=0.0 if curvature is None else curvature,
-            model="exact" if model is None else model,
+            model="kinematic" if model is None else model,
             steering_lag=steering_lag,
         )
     if isinstance(plant, LateralPlant):
@@ -315,7 +315,7 @@ def schedule_gains(
     curvature : float, optional
         Path curvature [1/m] (default 0 for a vehicle).
     model : str, optional
-        ``"exact"`` (default for a vehicle) or ``"paper"``.
+        ``"kinematic"`` (default for a vehicle) or ``"paper"``.
     grid : int, optional
         Start grid of each most-stable search, 4 to 40.
 

@@ -36,8 +36,8 @@ from typing import TYPE_CHECKING
 import control as ct
 import numpy as np
 
-from .hints import RatioLike, RealArrayLike
 from . import equations
+from .hints import RatioLike, RealArrayLike
 from .layout import grid_margins
 from .models import check_steering
 from .reprs import summary_repr

@@ -304,7 +304,7 @@ def test_pole_on_the_dynamic_plant_marks_the_kinematic_design():
     dyn = fws.LateralPlant(veh, speed=10.0, curvature=0.02, model="dynamic")
     axis = np.linspace(-1.0, 1.0, 41)
     ch = fws.stability_chart(dyn, ratio=0.0, pole=-1.0, k1=axis, k2=axis)
-    assert ch.design_model == "exact" and ch.order == 4
+    assert ch.design_model == "kinematic" and ch.order == 4
     cplt = ch.plot()
     dot = next(a for a in cplt.lines[0, 0] if "kinematic design" in str(a.get_label()))
     (k1d, k2d), = dot.get_xydata()  # fmt: skip

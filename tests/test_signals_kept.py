@@ -14,8 +14,8 @@ import pytest
 from conftest import (
     CURVE_BATCH_KW,
     CURVE_GAINS_WITH_STOP,
-    PAPER_VEHICLE,
     CURVE_SPEED,
+    PAPER_VEHICLE,
     LosingClient,
     traced_peak,
 )
