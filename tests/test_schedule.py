@@ -12,6 +12,7 @@ from __future__ import annotations
 import control as ct
 import numpy as np
 import pytest
+from conftest import PAPER_VEHICLE
 
 import fws_control as fws
 
@@ -148,3 +149,27 @@ def test_plot_has_units(schedule):
         np.testing.assert_allclose(ax[1, 1].lines[0].get_ydata(), schedule.abscissa)
     finally:
         plt.close(cplt.figure)
+
+
+def test_simulators_read_a_schedule_at_the_plant_speed():
+    # a schedule is run as its gains at the run's speed: bit for bit the
+    # run of sch.at(V), for one run and per run of a batch
+    sch = fws.GainSchedule(
+        speeds=[5.0, 25.0], k1=[0.05, 0.002], k2=[0.5, 0.1], ratio=[-0.5, 0.2]
+    )
+    veh = PAPER_VEHICLE
+    kw = dict(initial_state=(0.0, 0.5, 0.0), duration=3.0, dt=0.05)
+    path = fws.Straight()
+    one = fws.simulate(fws.LateralPlant(veh, speed=12.0), path, sch, **kw)
+    ref = fws.simulate(fws.LateralPlant(veh, speed=12.0), path, sch.at(12.0), **kw)
+    np.testing.assert_array_equal(one.e, ref.e)
+    # the interpolation itself: k1 V^2 and k2 V linear in V, by hand
+    w = (12.0 - 5.0) / 20.0
+    assert ref.k1 * 144.0 == pytest.approx((1 - w) * 0.05 * 25 + w * 0.002 * 625)
+    speeds = np.array([6.0, 20.0])
+    batch = fws.simulate_batch(fws.LateralPlant(veh, speed=speeds), path, sch, **kw)
+    for i, V in enumerate(speeds):
+        alone = fws.simulate(fws.LateralPlant(veh, speed=V), path, sch.at(V), **kw)
+        np.testing.assert_allclose(batch.e[i], alone.e, rtol=0, atol=1e-9)
+    with pytest.raises(ValueError, match="speed must lie in the schedule's range"):
+        fws.simulate(fws.LateralPlant(veh, speed=30.0), path, sch, **kw)

@@ -1127,6 +1127,28 @@ def _simulate_batch(
 _PLANT_KEYWORDS = ("speed", "model", "tyre", "steering_lag", "actuator_time_constant")
 
 
+def _scheduled(controller: Any, speed: Any) -> Any:
+    """The gains of a gain schedule at the run's speed; others unchanged.
+
+    A gain schedule is an object with a method ``at(speed)`` that returns
+    :class:`~fws_control.SteeringGains` (e.g.
+    :class:`~fws_control.GainSchedule`); the runs hold their speed, so the
+    schedule is read once per run. Its range errors name the speed.
+    """
+    if isinstance(controller, (SteeringGains, LateralController)):
+        return controller
+    at = getattr(controller, "at", None)
+    if not callable(at):
+        return controller
+    gains = at(np.asarray(speed, dtype=float))
+    if not isinstance(gains, SteeringGains):
+        raise TypeError(
+            f"controller.at(speed) must return a SteeringGains (a gain "
+            f"schedule), got {type(gains).__name__} from {controller!r}"
+        )
+    return gains
+
+
 def _resolve_plant(function: str, plant: Any, controller: Any, kwargs: dict):
     """``(vehicle, controller, speed, model, tyre, lag)`` of a call.
 
@@ -1251,11 +1273,13 @@ def simulate(
     path : Path
         Reference path (e.g. :class:`~fws_control.Straight`,
         :class:`~fws_control.Arc`).
-    controller : SteeringGains or LateralController
+    controller : SteeringGains, LateralController or GainSchedule
         Scalar ``k1, k2, ratio`` of the paper's law, or any controller of
         :mod:`fws_control.baselines` (e.g. :class:`~fws_control.PurePursuit`),
         which carries its own feedforward (`feedforward` applies to gains
-        only).
+        only), or a gain schedule (:class:`~fws_control.GainSchedule`, or
+        any object whose ``at(speed)`` returns SteeringGains): its gains at
+        the plant's speed.
     initial_state : array_like
         ``(x_R, y_R, psi)`` of the rear-axle centre [m, m, rad].
     duration : float
@@ -1382,6 +1406,7 @@ def simulate(
     vehicle, controller, speed, model, tyre, lag = _resolve_plant(
         "simulate", plant, controller, kwargs
     )
+    controller = _scheduled(controller, speed)
     if isinstance(plant, LateralPlant) and np.ndim(speed) != 0:
         raise ValueError(
             "plant.speed must be one speed (a scalar, nonzero, at most "
@@ -1448,7 +1473,9 @@ def simulate_batch(
         are arrays (e.g. from :func:`~fws_control.double_root_gains` over an
         array of ratios; flattened), or a sequence of them; or a controller
         of :mod:`fws_control.baselines` (its array parameters, if any, hold
-        one value per run). A controller's runs record NaN gains.
+        one value per run). A controller's runs record NaN gains. A gain
+        schedule (:class:`~fws_control.GainSchedule`) gives each run its
+        gains at that run's speed.
     initial_state : array_like
         ``(x_R, y_R, psi)`` for all runs, or shape ``(runs, 3)``; with
         a ``model="dynamic"`` plant also ``(x_R, y_R, psi, v_y, r)`` or ``(runs,
@@ -1629,6 +1656,7 @@ def simulate_batch(
     vehicle, controllers, speed, model, tyre, lag = _resolve_plant(
         "simulate_batch", plant, controllers, kwargs
     )
+    controllers = _scheduled(controllers, speed)
     return _simulate_batch(
         vehicle,
         path,
