@@ -111,11 +111,12 @@ import fws_control as fws
 t1 = time.process_time()
 veh, path = fws.Vehicle(2.7, 1.35), fws.Arc(0.1)
 g = fws.SteeringGains(0.2, 0.9, -1.0)
-res = fws.simulate(veh, path, g, speed=5.0, initial_state=(0.0, -5.0, 0.0),
+plant = fws.LateralPlant(veh, speed=5.0)
+res = fws.simulate(plant, path, g, initial_state=(0.0, -5.0, 0.0),
                    duration=15.0)
 t2 = time.process_time()
 assert res.engine == "compiled", res.engine
-fws.simulate(veh, path, g, speed=5.0, initial_state=(0.0, -5.0, 0.0),
+fws.simulate(plant, path, g, initial_state=(0.0, -5.0, 0.0),
              duration=15.0)
 t3 = time.process_time()
 print(t1 - t0, t2 - t1, t3 - t2)

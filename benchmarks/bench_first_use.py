@@ -72,8 +72,8 @@ import fws_control as fws
 veh = fws.Vehicle(wheelbase=WHEELBASE, rear_to_cg=REAR_TO_CG)
 g = fws.double_root_gains(veh, speed=SPEED, curvature=CURVATURE, ratio=-1.0, pole=-1.0)
 before = cpu()
-res = fws.simulate(veh, fws.Arc(curvature=CURVATURE), g, speed=SPEED,
-                   initial_state=INITIAL, duration=DURATION, feedforward=True)
+res = fws.simulate(fws.LateralPlant(veh, speed=SPEED), fws.Arc(curvature=CURVATURE),
+                   g, initial_state=INITIAL, duration=DURATION, feedforward=True)
 after = cpu()
 import json
 print(json.dumps({"total": after, "simulate": after - before, "stages": stages,

@@ -57,10 +57,11 @@ veh, sc = PAPER_VEHICLE, paper_scenario("curve_5")
 ratios = np.linspace(-1.5, 0.6, runs)
 g = fws.double_root_gains(veh, speed=sc.speed, curvature=sc.curvature,
                           ratio=ratios, pole=-1.0)
-kw = dict(speed=sc.speed, initial_state=sc.initial_state, duration=sc.duration,
+plant = fws.LateralPlant(veh, speed=sc.speed)
+kw = dict(initial_state=sc.initial_state, duration=sc.duration,
           dt=dt, engine=engine, progress=False, signals=signals)
 g4 = fws.SteeringGains(g.k1[:4], g.k2[:4], g.ratio[:4])
-fws.simulate_batch(veh, sc.path, g4, **{**kw, "duration": 1.0})  # numba cache
+fws.simulate_batch(plant, sc.path, g4, **{**kw, "duration": 1.0})  # numba cache
 
 
 def status(key):
@@ -79,7 +80,7 @@ except OSError:
 base = status("VmRSS")
 load0 = os.getloadavg()[0]
 w0, c0 = time.perf_counter(), time.process_time()
-res = fws.simulate_batch(veh, sc.path, g, **kw)
+res = fws.simulate_batch(plant, sc.path, g, **kw)
 wall, cpu = time.perf_counter() - w0, time.process_time() - c0
 if method.startswith("VmHWM"):
     peak = status("VmHWM")

@@ -258,7 +258,7 @@ def test_figs_6_to_9_peaks_with_the_actuator(text):
         kind: fig6_to_9_responses(pole=-1.0, duration=30.0, **kw)
         for kind, kw in (
             ("ideal", {}),
-            ("real", {"delay": REALISTIC_DELAY, "actuator_time_constant": LAG}),
+            ("real", {"delay": REALISTIC_DELAY, "steering_lag": LAG}),
         )
     }
     for cells in table:

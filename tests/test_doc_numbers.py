@@ -95,7 +95,7 @@ def test_delay_page_convergence_counts():
     runs, converged, tails = 0, 0, {"ideal": [], "real": []}
     actuator = {
         "delay": REALISTIC_DELAY,
-        "actuator_time_constant": REALISTIC_STEERING_LAG,
+        "steering_lag": REALISTIC_STEERING_LAG,
     }
     for name, poles in POLES.items():
         for pole in poles:
@@ -123,7 +123,7 @@ def test_delay_page_convergence_counts():
 def test_critical_delay_beyond_the_closed_form():
     prose = _prose("delay.md")
     pa = fws.LateralPlant(VEH, speed=5.0, curvature=0.1, model="paper")
-    ex = fws.LateralPlant(VEH, speed=5.0, curvature=0.1, model="exact")
+    ex = fws.LateralPlant(VEH, speed=5.0, curvature=0.1, model="kinematic")
 
     # a paper-model design on the exact plant
     m = re.search(r"on the 5 m/s curve the margin is (\S+) s depending on \$a\$", prose)
@@ -161,7 +161,7 @@ def test_critical_delay_beyond_the_closed_form():
     quoted = {5.0: m[1], 20.0: m[2]}
     for speed, text in quoted.items():
         dyn = fws.LateralPlant(BMW_320I, speed=speed, curvature=0.0, model="dynamic")
-        kin = fws.LateralPlant(BMW_320I, speed=speed, curvature=0.0, model="exact")
+        kin = fws.LateralPlant(BMW_320I, speed=speed, curvature=0.0, model="kinematic")
         taus = [
             float(
                 fws.critical_delay(
@@ -279,9 +279,9 @@ def test_commonroad_gap_on_a_tight_circle():
     )
     t = np.linspace(0.0, DURATION, 401)
     x0 = (0.0, -1.0, 0.0)
+    plant = fws.LateralPlant(veh, speed=speed, model="dynamic", steering_lag=SERVO_T)
     res = fws.simulate(
-        veh, path, g, speed=speed, initial_state=x0, duration=DURATION, t_eval=t,
-        model="dynamic", actuator_time_constant=SERVO_T,
+        plant, path, g, initial_state=x0, duration=DURATION, t_eval=t,
     )  # fmt: skip
     assert res.status == "ok"
 

@@ -442,7 +442,7 @@ def test_engine_matches_the_python_control_reference(tyre, tau, delay, ratio):
     # (a Pade block of order 6 for the delay, stiff: looser solver tolerances)
     opts = {"pade_order": 6, "rtol": 1e-8, "atol": 1e-10} if delay else {}
     ref = fws.simulation.simulate_reference(
-        VEH, path, g, speed=15.0, actuator_time_constant=tau, model="dynamic",
+        VEH, path, g, speed=15.0, steering_lag=tau, model="dynamic",
         tyre=tyre, **kw, **opts,
     )  # fmt: skip
     plant = fws.LateralPlant(
@@ -469,7 +469,7 @@ def test_reference_initial_state_of_the_dynamic_model():
     g = fws.SteeringGains(0.1, 0.5, 0.0)
     x0 = fws.simulation.reference_initial_state(
         VEH, Straight(), g, initial_state=(0.0, 1.0, 0.0), speed=10.0,
-        model="dynamic", actuator_time_constant=0.1,
+        model="dynamic", steering_lag=0.1,
     )  # fmt: skip
     # pose, no-slip (v_y, r) at delta_f = -k1 e = -0.1, then the actuator
     r0 = 10.0 * math.tan(-0.1) / 2.7

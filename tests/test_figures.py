@@ -485,13 +485,13 @@ def test_actuator_responses_match_simulate_at_default_tolerance(panel, pole):
     veh = PAPER_VEHICLE
     g = fws.double_root_gains(veh, speed=20.0, curvature=0.01, ratio=0.5, pole=pole)
     styles = {ln.get_linestyle(): ln for ln in ax.lines}
-    for style, act in (
-        ("--", {}),
-        ("-", {"delay": 0.24, "actuator_time_constant": 0.27}),
+    for style, lag, act in (
+        ("--", None, {}),
+        ("-", 0.27, {"delay": 0.24}),
     ):
         line = styles[style]
         ref = fws.simulate(
-            fws.LateralPlant(veh, speed=20.0),
+            fws.LateralPlant(veh, speed=20.0, steering_lag=lag),
             Arc(curvature=0.01),
             g,
             initial_state=(0.0, -10.0, 0.0),

@@ -194,7 +194,7 @@ compiled.integrate_compiled(
     path_state=np.array([[0.0, -5.0, 0.0]]), t_eval=np.linspace(0.0, 1.0, 3),
     time_constant=None)
 alone = list(compiled_names)
-res = fws.simulate(veh, fws.Arc(curvature=0.1), g, speed=5.0,
+res = fws.simulate(fws.LateralPlant(veh, speed=5.0), fws.Arc(curvature=0.1), g,
                    initial_state=(0.0, -5.0, 0.0), duration=15.0)
 print(json.dumps({"file": fws.__file__, "status": str(res.status),
                   "alone": alone, "all": compiled_names,

@@ -650,7 +650,7 @@ CASES: dict[str, Case] = {
     "closed_loop_system": Case(
         fws.closed_loop_system,
         dict(vehicle=VEH, path=ARC, gains=GAINS),
-        dict(speed=5.0, feedforward=True, actuator_time_constant=None, delay=0.0),
+        dict(speed=5.0, feedforward=True, steering_lag=None, delay=0.0),
         examples=FEW,
     ),
     "projection_system": Case(fws.projection_system, dict(path=ARC)),

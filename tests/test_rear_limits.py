@@ -57,8 +57,8 @@ def _double_root_run(vehicle, e0=0.5):
     plant = fws.LateralPlant(VEH, speed=5.0)
     g = fws.double_root_gains(plant, ratio=-1.0, pole=-1.0)
     res = fws.simulate(
-        vehicle, fws.Straight(), g, speed=5.0, initial_state=(0.0, e0, 0.0),
-        duration=8.0, dt=0.005,
+        fws.LateralPlant(vehicle, speed=5.0), fws.Straight(), g,
+        initial_state=(0.0, e0, 0.0), duration=8.0, dt=0.005,
     )  # fmt: skip
     return g, res
 

@@ -286,7 +286,7 @@ def test_rate_limited_actuator_agrees_with_reference_and_limits_rates():
     # reference: actuator block states appended after the vehicle's
     x0_ref = [*x0, -g.k1 * 2.0, -g.ratio * g.k1 * 2.0]
     ref = _reference(
-        lim, Straight(), g, 5.0, x0_ref, res.t[::50], False, actuator_time_constant=0.1
+        lim, Straight(), g, 5.0, x0_ref, res.t[::50], False, steering_lag=0.1
     )
     np.testing.assert_allclose(res.e[::50], ref["e"], atol=1e-6)
     fd = _fd_lateral_accel(res, lim.rear_to_cg)
@@ -549,9 +549,9 @@ _G13 = fws.SteeringGains(0.1, 0.5, ratio=0.0)
         (fws.closed_loop_system, dict(delay=1e-300), ValueError, "delay"),
         (
             fws.closed_loop_system,
-            dict(actuator_time_constant=[0.1]),
+            dict(steering_lag=[0.1]),
             ValueError,
-            "actuator_time_constant",
+            "steering_lag",
         ),  # fmt: skip
     ],
 )

@@ -592,7 +592,7 @@ def resolve_time_constant(vehicle: Vehicle, value: float | None) -> float | None
     (0.05, 0.1)
     """
     if value is not None:
-        return float(check_positive("actuator_time_constant", value))
+        return float(check_positive("steering_lag", value))
     has_rate = (
         vehicle.max_steer_rate_front is not None
         or vehicle.max_steer_rate_rear is not None

@@ -14,12 +14,15 @@ for loops the engine does not cover.
 
 from __future__ import annotations
 
+from typing import Any
+
 import control as ct
 import numpy as np
 
 from .. import equations
 from ..baselines import LateralController, saturate
 from ..controllers import path_tracking_controller, steering_actuator
+from ..deprecation import legacy_keyword, reject_unknown
 from ..dynamics import dynamic_global_model
 from ..gains import SteeringGains
 from ..models import global_frame_model
@@ -91,11 +94,12 @@ def closed_loop_system(
     *,
     speed: float,
     feedforward: bool = True,
-    actuator_time_constant: float | None = None,
+    steering_lag: float | None = None,
     delay: float = 0.0,
     pade_order: int = DEFAULT_PADE_ORDER,
     model: str = "kinematic",
     tyre: str = "linear",
+    **kwargs: Any,
 ) -> ct.InterconnectedSystem:
     r"""The closed loop as a python-control interconnection (the reference).
 
@@ -120,9 +124,11 @@ def closed_loop_system(
     feedforward : bool or {"kinematic", "dynamic"}, optional
         Curvature feedforward (default ``True``), as in
         :func:`~fws_control.simulation.simulate`.
-    actuator_time_constant : float, optional
-        Steering actuator time constant [s], as in
-        :func:`~fws_control.simulation.simulate`.
+    steering_lag : float, optional
+        Time constant [s] of the first-order steering actuator (the
+        plant's ``steering_lag`` in :func:`~fws_control.simulation.simulate`;
+        ``actuator_time_constant=`` is its former name, accepted until 0.4
+        with a FutureWarning).
     delay : float, optional
         Input delay [s] on the steering commands, as in
         :func:`~fws_control.simulation.simulate`, approximated here by a
@@ -166,13 +172,15 @@ def closed_loop_system(
     >>> round(float(resp.outputs[4, -1]), 5)   # e [m] at t = 15 s
     -3e-05
     """
+    steering_lag = legacy_keyword(
+        kwargs, "actuator_time_constant", "steering_lag", steering_lag
+    )
+    reject_unknown("closed_loop_system", kwargs)
     check_type("vehicle", vehicle, Vehicle)
     speed = check_scalar("speed", check_nonzero("speed", speed))
-    if actuator_time_constant is not None:
-        actuator_time_constant = check_scalar(
-            "actuator_time_constant", actuator_time_constant
-        )
-    tau = resolve_time_constant(vehicle, actuator_time_constant)
+    if steering_lag is not None:
+        steering_lag = check_scalar("steering_lag", steering_lag)
+    tau = resolve_time_constant(vehicle, steering_lag)
     model, tyre = check_model(vehicle, model, tyre)
     if model == "dynamic":
         veh_sys = dynamic_global_model(vehicle, speed=speed, tyre=tyre, name="vehicle")
@@ -271,11 +279,12 @@ def reference_initial_state(
     initial_state,
     speed: float | None = None,
     feedforward: bool = True,
-    actuator_time_constant: float | None = None,
+    steering_lag: float | None = None,
     delay: float = 0.0,
     pade_order: int = DEFAULT_PADE_ORDER,
     model: str = "kinematic",
     tyre: str = "linear",
+    **kwargs: Any,
 ) -> np.ndarray:
     """Initial state of :func:`closed_loop_system` matching the fast engine's.
 
@@ -296,7 +305,7 @@ def reference_initial_state(
     speed : float, optional
         Speed [m/s]; needed when `gains` is a controller (its law may
         depend on the speed) and for the dynamic model.
-    feedforward, actuator_time_constant, delay, pade_order, model, tyre : optional
+    feedforward, steering_lag, delay, pade_order, model, tyre : optional
         As in :func:`closed_loop_system`.
 
     Returns
@@ -316,6 +325,10 @@ def reference_initial_state(
     >>> x0.shape
     (7,)
     """
+    steering_lag = legacy_keyword(
+        kwargs, "actuator_time_constant", "steering_lag", steering_lag
+    )
+    reject_unknown("reference_initial_state", kwargs)
     from ..controllers import steering_command
 
     if model not in ("kinematic", "dynamic"):
@@ -375,7 +388,7 @@ def reference_initial_state(
         for u in u0:
             blk = _pade_block(delay, pade_order, "d")
             parts.append(-np.linalg.solve(blk.A, blk.B[:, 0] * u))
-    if resolve_time_constant(vehicle, actuator_time_constant) is not None:
+    if resolve_time_constant(vehicle, steering_lag) is not None:
         parts.append(u0)
     return np.concatenate(parts)
 
@@ -390,13 +403,14 @@ def simulate_reference(
     duration: float,
     feedforward: bool = True,
     dt: float = 0.01,
-    actuator_time_constant: float | None = None,
+    steering_lag: float | None = None,
     delay: float = 0.0,
     pade_order: int = DEFAULT_PADE_ORDER,
     rtol: float = 1e-10,
     atol: float = 1e-12,
     model: str = "kinematic",
     tyre: str = "linear",
+    **kwargs: Any,
 ) -> ct.TimeResponseData:
     """Simulate :func:`closed_loop_system` with :func:`control.input_output_response`.
 
@@ -407,7 +421,7 @@ def simulate_reference(
 
     Parameters
     ----------
-    vehicle, path, gains, speed, feedforward, actuator_time_constant, delay
+    vehicle, path, gains, speed, feedforward, steering_lag, delay
         As in :func:`closed_loop_system`.
     initial_state : array_like
         ``(x_R, y_R, psi)`` [m, m, rad]; for the dynamic model also
@@ -444,6 +458,10 @@ def simulate_reference(
     >>> bool(abs(ref.outputs[4] - fast.e).max() < 1e-3)
     True
     """
+    steering_lag = legacy_keyword(
+        kwargs, "actuator_time_constant", "steering_lag", steering_lag
+    )
+    reject_unknown("simulate_reference", kwargs)
     from .engine import check_tolerances, time_grid
 
     rtol, atol = check_tolerances(rtol, atol)
@@ -454,7 +472,7 @@ def simulate_reference(
         gains,
         speed=speed,
         feedforward=feedforward,
-        actuator_time_constant=actuator_time_constant,
+        steering_lag=steering_lag,
         delay=delay,
         pade_order=pade_order,
         model=model,
@@ -467,7 +485,7 @@ def simulate_reference(
         initial_state=initial_state,
         speed=speed,
         feedforward=feedforward,
-        actuator_time_constant=actuator_time_constant,
+        steering_lag=steering_lag,
         delay=delay,
         pade_order=pade_order,
         model=model,
