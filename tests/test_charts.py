@@ -308,7 +308,7 @@ def test_pole_on_the_dynamic_plant_marks_the_kinematic_design():
     cplt = ch.plot()
     dot = next(a for a in cplt.lines[0, 0] if "kinematic design" in str(a.get_label()))
     (k1d, k2d), = dot.get_xydata()  # fmt: skip
-    kin = fws.LateralPlant(veh, speed=10.0, curvature=0.02, model="exact")
+    kin = fws.LateralPlant(veh, speed=10.0, curvature=0.02, model="kinematic")
     A = fws.closed_loop(kin, fws.SteeringGains(k1d, k2d, 0.0)).A
     np.testing.assert_allclose(np.linalg.eigvals(A), [-1.0, -1.0], atol=1e-5)
     plt.close(cplt.figure)

@@ -83,11 +83,11 @@ def test_negative_numbers_in_any_spelling(pole, capsys):
     args = ["gains", "--speed", "5", "--curvature", "0.1", "--ratio", "-1e0"]
     code, out, err = _run_main([*args, "--pole", pole], capsys)
     assert code == 0 and err == [], err
-    m = re.search(r"exact model:\s+k1 = (\S+) rad/m\s+k2 = (\S+)", out)
+    m = re.search(r"kinematic model:\s+k1 = (\S+) rad/m\s+k2 = (\S+)", out)
     k1, k2 = _double_root_reference(5.0, 0.1, -1.0, -1.5)
     assert float(m[1]) == pytest.approx(k1, abs=2e-6)
     assert float(m[2]) == pytest.approx(k2, abs=2e-6)
-    assert "exact linearisation: -1.500000, -1.500000" in out
+    assert "kinematic linearisation: -1.500000, -1.500000" in out
 
 
 def test_negative_numbers_in_two_value_options():
@@ -568,7 +568,7 @@ def test_ill_conditioned_design_refused(command, tmp_path, capsys):
     code, out, err = _run_main(argv, capsys)
     assert code == 2 and out == "" and len(err) == 1, err
     if g is not None:
-        assert "no reliable exact-model design for --pole -1" in err[0]
+        assert "no reliable kinematic-model design for --pole -1" in err[0]
     else:
         assert err[0].startswith(f"fws-control {command}: error:")
     assert not list(tmp_path.iterdir())
@@ -582,7 +582,7 @@ def test_well_conditioned_near_one_still_designed(capsys):
         ["gains", "--curvature", 0, "--ratio", 0.98, "--pole", -1], capsys
     )
     assert code == 0 and err == []
-    m = re.search(r"exact model:\s+k1 = (\S+) rad/m\s+k2 = (\S+)", out)
+    m = re.search(r"kinematic model:\s+k1 = (\S+) rad/m\s+k2 = (\S+)", out)
     poles = _closed_loop_poles_by_hand(5.0, 0.0, 0.98, float(m[1]), float(m[2]))
     # k1 is printed with 6 decimals: poles from the printed gains are close.
     np.testing.assert_allclose(np.sort(poles.real), [-1.0, -1.0], atol=2e-2)
