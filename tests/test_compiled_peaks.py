@@ -354,7 +354,7 @@ def test_auto_engine_without_numba():
         sys.modules["numba"] = None  # import numba raises ImportError
         import numpy as np
         import fws_control as fws
-        veh = PAPER_VEHICLE
+        veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)  # the paper's
         g = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=-1.0,
                                   pole=-1.0)
         kw = dict(initial_state=(0.0, -5.0, 0.0), duration=2.0)
@@ -394,7 +394,10 @@ def test_exact_peaks_as_numpy_engine_random(ratio, pole, e0, psi0, tau, dt):
     curve: the two engines' exact peaks agree to 1e-9 (relative, and
     absolute for a peak near 0: starting on the path, e stays at the
     solvers' own error, 4.5e-11 m on the numpy engine, 4e-13 m on the
-    compiled one), whatever the output step."""
+    compiled one), whatever the output step; 1e-8 for the lateral
+    acceleration of a violent transient (a = 0, lambda0 = -3, e0 = 0.25 m,
+    psi0 = 0.5 rad, lag 0.05 s: a 916 m/s^2 peak on which the two
+    integrations, each at rtol 1e-10, differ by 2.3e-9 relative)."""
     g = _gains(VEH, ratio=ratio, pole=pole)
     kw = dict(initial_state=(0.0, e0, psi0), duration=8.0, dt=dt)
     plant = fws.LateralPlant(VEH, speed=5.0, steering_lag=tau)
@@ -405,4 +408,5 @@ def test_exact_peaks_as_numpy_engine_random(ratio, pole, e0, psi0, tau, dt):
         return
     for sig in PEAK_SIGNALS:
         p, r = getattr(got.peaks, sig).value, getattr(ref.peaks, sig).value
-        assert p == pytest.approx(r, rel=1e-9, abs=1e-9), sig
+        rel = 1e-8 if abs(r) > 100.0 else 1e-9
+        assert p == pytest.approx(r, rel=rel, abs=1e-9), sig

@@ -295,9 +295,9 @@ def test_method_of_steps_against_the_pade_reference(text):
         fws.LateralPlant(veh, speed=5.0, curvature=0.1), ratio=-1.0, pole=-1.0
     )
     path = fws.Arc(curvature=0.1)
-    kw = dict(speed=5.0, initial_state=(0.0, -5.0, 0.0), duration=1.0, dt=0.05)
-    fast = fws.simulate(veh, path, g, delay=0.2, **kw)
-    ref = simulate_reference(veh, path, g, delay=0.2, **kw)
+    kw = dict(initial_state=(0.0, -5.0, 0.0), duration=1.0, dt=0.05)
+    fast = fws.simulate(fws.LateralPlant(veh, speed=5.0), path, g, delay=0.2, **kw)
+    ref = simulate_reference(veh, path, g, speed=5.0, delay=0.2, **kw)
     gap = np.abs(fast.e - ref.outputs[list(ref.output_labels).index("e")])
     assert f"{gap.max():.1e}" == m[1]
     assert fast.t[np.argmax(gap)] < 0.2

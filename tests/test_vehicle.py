@@ -110,10 +110,9 @@ def test_gains_and_stability_need_no_cg():
         ),
         (
             lambda v: fws.simulate(
-                v,
+                fws.LateralPlant(v, speed=5.0),
                 fws.Straight(),
                 fws.SteeringGains(0.1, 0.5, 0.0),
-                speed=5.0,
                 initial_state=(0.0, 1.0, 0.0),
                 duration=1.0,
             ),
@@ -121,10 +120,9 @@ def test_gains_and_stability_need_no_cg():
         ),
         (
             lambda v: fws.simulate_batch(
-                v,
+                fws.LateralPlant(v, speed=5.0),
                 fws.Straight(),
                 fws.SteeringGains(0.1, 0.5, 0.0),
-                speed=5.0,
                 initial_state=(0.0, 1.0, 0.0),
                 duration=1.0,
                 signals=("e",),
