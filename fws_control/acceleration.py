@@ -166,9 +166,7 @@ def lateral_acceleration(
     # the inputs passed the checks of yaw_rate and yaw_acceleration
     dr, rr, V = (np.asarray(v, dtype=float) for v in (delta_r, delta_r_rate, speed))
     with np.errstate(over="ignore", invalid="ignore"):
-        out = equations.lateral_acceleration(
-            V, d, dr, rr, psi_dot, psi_ddot
-        )
+        out = equations.lateral_acceleration(V, d, dr, rr, psi_dot, psi_ddot)
     check_result(
         "lateral acceleration",
         out,
