@@ -260,6 +260,12 @@ KWARGS_EXCEPTIONS = {
     "steering_actuator": (
         "accepts the deprecated time_constant= until 0.4, with a FutureWarning"
     ),
+    "closed_loop_system": (
+        "accepts the deprecated actuator_time_constant= until 0.4, with a"
+        " FutureWarning; rejects any other name"
+    ),
+    "reference_initial_state": "as closed_loop_system",
+    "simulate_reference": "as closed_loop_system",
 }
 
 # Spec 0.2: exact positional parameters and required keyword-only parameters
@@ -765,7 +771,26 @@ def _kwargs_calls():
         veh, _, _ = _objects()
         fws.steering_actuator(veh, bogus_kw=1)
 
+    def reference(name):
+        veh, _, _ = _objects()
+        g = fws.SteeringGains(0.1, 0.5, ratio=0.0)
+        kw = dict(speed=5.0, bogus_kw=1)
+        if name == "closed_loop_system":
+            fws.closed_loop_system(veh, fws.Straight(), g, **kw)
+        elif name == "reference_initial_state":
+            fws.simulation.reference_initial_state(
+                veh, fws.Straight(), g, initial_state=(0.0, 1.0, 0.0), **kw
+            )
+        else:
+            fws.simulation.simulate_reference(
+                veh, fws.Straight(), g, initial_state=(0.0, 1.0, 0.0),
+                duration=1.0, **kw,
+            )  # fmt: skip
+
     return {
+        "closed_loop_system": lambda: reference("closed_loop_system"),
+        "reference_initial_state": lambda: reference("reference_initial_state"),
+        "simulate_reference": lambda: reference("simulate_reference"),
         "StabilityChart.draw": draw,
         "simulate": simulate,
         "simulate_batch": lambda: simulate(batch=True),

@@ -132,7 +132,7 @@ def test_steering_lag_bit_for_bit_and_against_the_python_control_loop():
     # independent reference: the python-control interconnection with the
     # first-order actuator block
     ref = simulate_reference(PAPER_VEHICLE, sc.path, g, speed=sc.speed,
-                             actuator_time_constant=0.27, **kw)  # fmt: skip
+                             steering_lag=0.27, **kw)  # fmt: skip
     out = dict(zip(ref.output_labels, ref.outputs, strict=True))
     np.testing.assert_allclose(new.e, out["e"], rtol=0, atol=1e-6)
     np.testing.assert_allclose(new.delta_f, out["delta_f"], rtol=0, atol=1e-6)
