@@ -113,25 +113,22 @@ def require_dynamics(vehicle: Vehicle, *, tyre: str = "linear") -> Vehicle:
     check_type("vehicle", vehicle, Vehicle)
     if not isinstance(tyre, str) or tyre not in TYRES:
         raise ValueError(f"tyre must be one of {TYRES}, got {tyre!r}")
-    missing = [
-        name
-        for name in (
-            "rear_to_cg",
-            "mass",
-            "yaw_inertia",
-            "cornering_front",
-            "cornering_rear",
-        )
-        if getattr(vehicle, name) is None
-    ]
-    if tyre == "magic" and vehicle.friction is None:
-        missing.append("friction")
+    # each field with its unit, so the message lists only what is missing
+    units = {
+        "rear_to_cg": "m",
+        "mass": "kg",
+        "yaw_inertia": "kg m^2",
+        "cornering_front": "N/rad per axle",
+        "cornering_rear": "N/rad per axle",
+    }
+    if tyre == "magic":
+        units["friction"] = "for tyre='magic'"
+    missing = [name for name in units if getattr(vehicle, name) is None]
     if missing:
         raise ValueError(
             "the dynamic model needs Vehicle fields "
-            + ", ".join(missing)
-            + " (m, kg, kg m^2, N/rad per axle; friction for tyre='magic'); "
-            "they are None in the vehicle given"
+            + ", ".join(f"{name} [{units[name]}]" for name in missing)
+            + "; they are None in the vehicle given"
         )
     return vehicle
 

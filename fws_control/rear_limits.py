@@ -234,7 +234,7 @@ class RearSaturation:
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     >>> g = fws.double_root_gains(fws.LateralPlant(veh, speed=5.0), ratio=-1.0,
     ...                           pole=-1.0)
-    >>> res = fws.simulate(veh, fws.Straight(), g, speed=5.0,
+    >>> res = fws.simulate(fws.LateralPlant(veh, speed=5.0), fws.Straight(), g,
     ...                    initial_state=(0.0, 0.5, 0.0), duration=8.0)
     >>> sat = fws.rear_saturation(res, rear_limit=0.02)
     >>> sat.saturates, round(sat.peak, 4), round(sat.time_above, 2)
@@ -275,7 +275,7 @@ def rear_saturation(result: Any, *, rear_limit: float | None = None) -> RearSatu
     >>> import numpy as np, fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     >>> g = fws.SteeringGains(0.1, 0.5, ratio=0.5)
-    >>> res = fws.simulate(veh, fws.Straight(), g, speed=5.0,
+    >>> res = fws.simulate(fws.LateralPlant(veh, speed=5.0), fws.Straight(), g,
     ...                    initial_state=(0.0, 0.1, 0.0), duration=5.0)
     >>> sat = fws.rear_saturation(res, rear_limit=0.01)
     >>> round(sat.peak, 6)   # |a k1 e0| at t = 0

@@ -147,5 +147,5 @@ def test_dynamic_model_lists_rear_to_cg():
         lambda: fws.understeer_gradient(bare),
         lambda: fws.LateralPlant(bare, speed=10.0, model="dynamic"),
     ):
-        with pytest.raises(ValueError, match=r"needs Vehicle fields rear_to_cg \("):
+        with pytest.raises(ValueError, match=r"needs Vehicle fields rear_to_cg \[m\]"):
             call()

@@ -446,9 +446,9 @@ def check_model(vehicle: Vehicle, model: Any, tyre: Any) -> tuple[str, str]:
     >>> check_model(fws.Vehicle(2.7, 1.35), "dynamic", "linear")
     Traceback (most recent call last):
     ...
-    ValueError: the dynamic model needs Vehicle fields mass, yaw_inertia, \
-cornering_front, cornering_rear (kg, kg m^2, N/rad per axle; friction for \
-tyre='magic'); they are None in the vehicle given
+    ValueError: the dynamic model needs Vehicle fields mass [kg], \
+yaw_inertia [kg m^2], cornering_front [N/rad per axle], cornering_rear \
+[N/rad per axle]; they are None in the vehicle given
     """
     if model not in MODELS:
         raise ValueError(f"model must be one of {MODELS}, got {model!r}")
