@@ -93,7 +93,12 @@ def test_magic_tyre_slope_and_peak():
 
 
 def test_missing_data_is_named():
-    with pytest.raises(ValueError, match="mass, yaw_inertia, cornering_front"):
+    # each missing field is named with its unit; the paper's vehicle has none
+    message = (
+        r"mass \[kg\], yaw_inertia \[kg m\^2\], "
+        r"cornering_front \[N/rad per axle\], cornering_rear \[N/rad per axle\];"
+    )
+    with pytest.raises(ValueError, match=message):
         dynamics.body_derivatives(PAPER_VEHICLE, 0.0, 0.0, 0.0, 0.0, speed=5)
     with pytest.raises(ValueError, match="friction"):
         dynamics.require_dynamics(
