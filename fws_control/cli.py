@@ -370,12 +370,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_operating_point(p)
     p.add_argument("--pole", type=_finite, default=-1.0, help="lambda0 [1/s] (-1)")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
     _add_vehicle(p)
     p.set_defaults(func=_cmd_gains)
 
     p = sub.add_parser(
         "chart",
-        help="stability chart in the (k1, k2) plane (PNG)",
+        help="stability chart in the (k1, k2) plane (figure)",
         description="Routh-Hurwitz stable region, its boundaries and the "
         "lambda0 design point; or one of the paper's Figs. 2-4.",
     )
@@ -410,14 +411,17 @@ def build_parser() -> argparse.ArgumentParser:
         help="draw the paper's Fig. 2, 3 or 4 instead",
     )
     p.add_argument(
-        "--out", type=Path, default=Path("chart.png"), help="PNG file (chart.png)"
+        "--out",
+        type=Path,
+        default=Path("chart.png"),
+        help="figure file: .png, .svg or .pdf (chart.png)",
     )
     _add_vehicle(p)
     p.set_defaults(func=_cmd_chart)
 
     p = sub.add_parser(
         "rlocus",
-        help="root locus of the gain scaling or of a parameter (PNG)",
+        help="root locus of the gain scaling or of a parameter (figure)",
         description="Root locus of the gain scaling g*(k1, k2) "
         "(control.root_locus_plot of the SISO loop), or with --param the "
         "closed-loop poles while ratio, speed, curvature, k1 or k2 varies.",
@@ -456,14 +460,17 @@ def build_parser() -> argparse.ArgumentParser:
         "--design-model paper shows where the paper's gains put the true poles",
     )
     p.add_argument(
-        "--out", type=Path, default=Path("rlocus.png"), help="PNG file (rlocus.png)"
+        "--out",
+        type=Path,
+        default=Path("rlocus.png"),
+        help="figure file: .png, .svg or .pdf (rlocus.png)",
     )
     _add_vehicle(p)
     p.set_defaults(func=_cmd_rlocus)
 
     p = sub.add_parser(
         "simulate",
-        help="nonlinear closed-loop simulation (PNG, optional CSV)",
+        help="nonlinear closed-loop simulation (figure, optional CSV)",
         description="Simulate the nonlinear closed loop on a straight path or an "
         "arc from the initial pose (x0, y0, psi0) of the rear-axle centre, "
         "next to the linear closed loop from the same initial errors. Exit "
@@ -473,20 +480,25 @@ def build_parser() -> argparse.ArgumentParser:
     _add_gains(p)
     p.add_argument(
         "--path",
-        choices=("straight", "arc"),
+        choices=("straight", "arc", *COURSES),
         default="arc",
         help="reference path; arc of --curvature starting at the origin "
-        "heading +x (arc)",
+        "heading +x; or a course: ISO 3888-1 lane change, ISO 3888-2 obstacle "
+        "avoidance, 18 m slalom (nonlinear run only, gains designed on a "
+        "straight road, run to the end of the course) (arc)",
     )
     p.add_argument("--x0", type=_finite, default=0.0, help="x_R(0) [m] (0)")
-    p.add_argument("--y0", type=_finite, default=-5.0, help="y_R(0) [m] (-5)")
+    p.add_argument(
+        "--y0", type=_finite, default=None, help="y_R(0) [m] (-5; 0 on a course)"
+    )
     p.add_argument("--psi0", type=_angle_deg, default=0.0, help="psi(0) [deg] (0)")
     p.add_argument(
         "--duration",
         type=_budget_float("simulate", "--duration"),
-        default=15.0,
+        default=None,
         help="[s], at most "
-        f"{BUDGETS[('simulate', '--duration')][0]:g} s, sampled every 0.01 s (15)",
+        f"{BUDGETS[('simulate', '--duration')][0]:g} s, sampled every 0.01 s (15; "
+        "on a course: its length over --speed)",
     )
     p.add_argument(
         "--no-feedforward",
@@ -497,7 +509,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--out",
         type=Path,
         default=Path("simulation.png"),
-        help="PNG file (simulation.png)",
+        help="figure file: .png, .svg or .pdf (simulation.png)",
     )
     p.add_argument(
         "--csv",
@@ -505,6 +517,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="also write the time series as CSV: header row with units, angles "
         "in deg and rates in deg/s as printed, a status column (none)",
     )
+    p.add_argument("--json", action="store_true", help="machine-readable output")
     _add_vehicle(p)
     p.set_defaults(func=_cmd_simulate)
 
@@ -536,12 +549,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="also report the rightmost roots at this delay [s]: 0, or "
         f"{DELAY_MARGIN_MIN_DELAY:g} to {BUDGETS[('delay-margin', '--delay')][0]:g}",
     )
+    p.add_argument("--json", action="store_true", help="machine-readable output")
     _add_vehicle(p)
     p.set_defaults(func=_cmd_delay_margin)
 
     p = sub.add_parser(
         "compare",
-        help="controllers side by side on a standard manoeuvre (table + PNG)",
+        help="controllers side by side on a standard manoeuvre (table + figure)",
         description="Run the paper's double-root law (front steering and a rear "
         "ratio), rear-wheel feedback, pure pursuit, Stanley and LQR (paper "
         "structure and independent rear) on the same vehicle, course, speed, "
@@ -595,7 +609,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--vehicle-width", type=_finite, default=1.8, help="b for the gates [m] (1.8)"
     )
     p.add_argument(
-        "--out", type=Path, default=Path("compare.png"), help="PNG file (compare.png)"
+        "--out",
+        type=Path,
+        default=Path("compare.png"),
+        help="figure file: .png, .svg or .pdf (compare.png)",
     )
     _add_vehicle(p)
     p.set_defaults(func=_cmd_compare)
@@ -603,7 +620,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser(
         "reproduce",
         help="write every figure of the paper (Figs. 2-9) and summary.md",
-        description="Regenerate the paper's Figs. 2-9 (plus extras) as PNG files "
+        description="Regenerate the paper's Figs. 2-9 (plus extras) as PNG, SVG "
+        "or PDF files "
         "and summary.md (gains table, Fig. 5 peak accelerations) in --out. Each "
         "file is written under a temporary name and renamed when complete, so an "
         "interrupted run (Ctrl-C: exit status 130) leaves complete files only. "
@@ -638,7 +656,17 @@ def build_parser() -> argparse.ArgumentParser:
         default=110,
         help=f"PNG resolution, 1 to {BUDGETS[('reproduce', '--dpi')][0]} (110)",
     )
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--format",
+        choices=("png", "svg", "pdf"),
+        default="png",
+        help="file format of the figures (png)",
+    )
+    p.add_argument(
+        "--no-progress",
+        action="store_true",
+        help="no progress bar (none either when stderr is not a terminal)",
+    )
     p.set_defaults(func=_cmd_reproduce)
     _add_design_parser(sub)
     return parser
@@ -676,7 +704,9 @@ def _add_design_parser(sub) -> None:
         help="start grid points per gain axis, 4 to 40 (10)",
     )  # fmt: skip
     p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.add_argument("--out", type=Path, help="PNG file of the chart (none)")
+    p.add_argument(
+        "--out", type=Path, help="figure file of the chart: .png, .svg or .pdf (none)"
+    )
     _add_vehicle(p)
     p.set_defaults(func=_cmd_design)
 
@@ -772,10 +802,7 @@ def _save_quiet(fig, out: Path, quiet: bool) -> None:
     if not quiet:
         _save(fig, out)
         return
-    from .files import atomic_write
-
-    with atomic_write(Path(out)) as fh:
-        fig.savefig(fh, format="png", dpi=110)
+    _write_figure(fig, out)
 
 
 def _vehicle(args):
@@ -885,7 +912,23 @@ def _fmt_coeffs(c) -> str:
     )
 
 
-def _cmd_gains(args) -> int:
+def _json_number(x: float) -> float | None:
+    """`x`, or None where JSON has no number (NaN, infinity)."""
+    return float(x) if math.isfinite(x) else None
+
+
+def _roots_json(roots) -> list[list[float | None]]:
+    """Complex roots sorted, as [re, im] pairs (JSON has no complex numbers)."""
+    import numpy as np
+
+    return [
+        [_json_number(r.real), _json_number(r.imag)]
+        for r in np.sort_complex(np.asarray(roots, dtype=complex))
+    ]
+
+
+def _gains_numbers(args) -> dict:
+    """The gains command's designs as plain numbers (one entry per model)."""
     from .design import UncontrollableError, double_root_gains
 
     veh = _vehicle(args)
@@ -897,10 +940,15 @@ def _cmd_gains(args) -> int:
         args.pole,
         args.model,
     )
-    print(
-        f"V = {args.speed:g} m/s, kappa = {args.curvature:g} 1/m, a = {args.ratio:g}, "
-        f"lambda0 = {args.pole:g} 1/s, f = {veh.wheelbase:g} m"
-    )
+    out: dict = {
+        "speed": args.speed,
+        "curvature": args.curvature,
+        "ratio": args.ratio,
+        "pole": args.pole,
+        "wheelbase": veh.wheelbase,
+        "model": args.model,
+        "designs": {},
+    }
     order = [args.model] + [m for m in ("kinematic", "paper") if m != args.model]
     for model in order:
         try:
@@ -910,22 +958,53 @@ def _cmd_gains(args) -> int:
         except UncontrollableError as exc:
             if model == args.model:
                 raise
-            print(f"{model} model: no design ({exc})")
+            out["designs"][model] = {"error": f"no design ({exc})"}
             continue
         err = _design_error(_plant(args, veh, model), g, args.pole)
         if model != args.model and not err <= DESIGN_TOLERANCE:
-            print(
-                f"{model} model: no reliable design (its poles miss lambda0 by "
+            out["designs"][model] = {
+                "error": "no reliable design (its poles miss lambda0 by "
                 f"{err:.2g} relative)"
-            )
+            }
+            continue
+        out["designs"][model] = {
+            "k1": float(g.k1),
+            "k2": float(g.k2),
+            "k3": float(g.k3),
+            "k4": float(g.k4),
+            "poles": {
+                lin: _roots_json(
+                    _closed_loop_poles(_plant(args, veh, lin), g, args.ratio)
+                )
+                for lin in ("kinematic", "paper")
+            },
+        }
+    return out
+
+
+def _cmd_gains(args) -> int:
+    import json
+
+    out = _gains_numbers(args)
+    if args.json:
+        print(json.dumps(out))
+        return 0
+    print(
+        f"V = {args.speed:g} m/s, kappa = {args.curvature:g} 1/m, a = {args.ratio:g}, "
+        f"lambda0 = {args.pole:g} 1/s, f = {out['wheelbase']:g} m"
+    )
+    for model, d in out["designs"].items():
+        if "error" in d:
+            print(f"{model} model: {d['error']}")
             continue
         tag = "" if model == args.model else " (for comparison)"
         print(f"{model} model{tag}:")
-        print(f"  k1 = {float(g.k1):.6f} rad/m   k2 = {float(g.k2):.6f}")
-        print(f"  k3 = {float(g.k3):.6f} rad/m   k4 = {float(g.k4):.6f}")
-        for lin in ("kinematic", "paper"):
-            poles = _closed_loop_poles(_plant(args, veh, lin), g, args.ratio)
-            print(f"  closed-loop poles, {lin} linearisation: {_fmt_poles(poles)}")
+        print(f"  k1 = {d['k1']:.6f} rad/m   k2 = {d['k2']:.6f}")
+        print(f"  k3 = {d['k3']:.6f} rad/m   k4 = {d['k4']:.6f}")
+        for lin, poles in d["poles"].items():
+            nan = float("nan")
+            roots = [complex(nan if x is None else x, y or 0.0) for x, y in poles]
+            print(f"  closed-loop poles, {lin} linearisation: {_fmt_poles(roots)}")
     return 0
 
 
@@ -1071,29 +1150,80 @@ def _cmd_rlocus(args) -> int:
     return 0
 
 
+#: The courses of ``simulate --path`` besides straight and arc: the
+#: manoeuvres of :mod:`fws_control.manoeuvres` with their default geometry.
+COURSES = ("lane-change", "obstacle", "slalom")
+
+
+def _course(name: str):
+    from .manoeuvres import double_lane_change, obstacle_avoidance, slalom
+
+    return {
+        "lane-change": double_lane_change,
+        "obstacle": obstacle_avoidance,
+        "slalom": slalom,
+    }[name]()
+
+
+def _simulate_course(args, veh, g):
+    """The nonlinear run on a manoeuvre's course (no linear prediction there)."""
+    from .plant import LateralPlant
+    from .simulation import simulate
+
+    course = _course(args.path)
+    duration = (
+        args.duration if args.duration is not None else course.path.length / args.speed
+    )
+    res = simulate(
+        LateralPlant(veh, speed=args.speed, model=args.model),
+        course.path,
+        g,
+        initial_state=(args.x0, args.y0, math.radians(args.psi0)),
+        duration=duration,
+        feedforward=not args.no_feedforward,
+    )
+    cplt = res.plot(title=f"{course.name}, V = {args.speed:g} m/s")
+    course.draw_gates(cplt.axes.flat[2])
+    hit = course.cones_hit(res.x, res.y, res.psi, wheelbase=veh.wheelbase)
+    return res, cplt.figure, hit
+
+
 def _cmd_simulate(args) -> int:
+    import json
+
     import matplotlib.pyplot as plt
+    import numpy as np
 
     from .comparison import compare_linear_nonlinear
 
     veh = _vehicle(args)
-    if args.path == "straight" and args.curvature != 0.0 and args.k1 is None:
-        # The design of a straight path is made at zero curvature.
+    course = args.path in COURSES
+    if args.path != "arc" and args.curvature != 0.0 and args.k1 is None:
+        # The design of a straight path or a course is made at zero curvature.
         args.curvature = 0.0
+    if args.y0 is None:
+        args.y0 = 0.0 if course else -5.0
     g = _gains(args, veh)
-    cmp = compare_linear_nonlinear(
-        veh,
-        g,
-        speed=args.speed,
-        curvature=args.curvature if args.path == "arc" else 0.0,
-        initial_state=(args.x0, args.y0, math.radians(args.psi0)),
-        duration=args.duration,
-        feedforward=not args.no_feedforward,
-        model=args.model,
+    cones = None
+    if course:
+        res, fig, cones = _simulate_course(args, veh, g)
+    else:
+        cmp = compare_linear_nonlinear(
+            veh,
+            g,
+            speed=args.speed,
+            curvature=args.curvature if args.path == "arc" else 0.0,
+            initial_state=(args.x0, args.y0, math.radians(args.psi0)),
+            duration=15.0 if args.duration is None else args.duration,
+            feedforward=not args.no_feedforward,
+            model=args.model,
+        )
+        res = cmp.nonlinear
+        fig = cmp.plot().figure
+    # a course ends where its path ends: the run's normal end there
+    stopped = str(res.status) != "ok" and not (
+        course and str(res.status) == "end_of_path"
     )
-    res = cmp.nonlinear
-    fig = cmp.plot().figure
-    stopped = str(res.status) != "ok"
     if stopped:
         why = str(res.status).replace("_", " ")
         detail = f" ({res.message})" if res.message else ""
@@ -1108,23 +1238,28 @@ def _cmd_simulate(args) -> int:
             fontsize=10,
             bbox={"fc": "white", "ec": "C3"},
         )
-    _save(fig, args.out)
+    _write_figure(fig, args.out)
     plt.close(fig)
-    print(f"k1 = {float(g.k1):.6f}, k2 = {float(g.k2):.6f}, a = {float(g.ratio):g}")
-    print(f"status: {res.status}{(' - ' + res.message) if res.message else ''}")
-    import numpy as np
-
     acc = np.abs(np.asarray(res.lateral_accel, dtype=float))
-    peak = (
-        f"{np.nanmax(acc):.4f} m/s^2"
-        if np.isfinite(acc).any()
-        else "n/a (no valid sample)"
-    )
-    print(f"peak |lateral acceleration| = {peak}")
-    print(
-        f"final e = {res.e[-1]:.4g} m, final theta = "
-        f"{math.degrees(res.theta[-1]):.4g} deg"
-    )
+    peak = float(np.nanmax(acc)) if np.isfinite(acc).any() else None
+    e = np.asarray(res.e, dtype=float)
+    out = {
+        "path": args.path,
+        "speed": args.speed,
+        "k1": float(g.k1),
+        "k2": float(g.k2),
+        "ratio": float(g.ratio),
+        "status": str(res.status),
+        "message": res.message or None,
+        "t_stop": float(res.t_stop),
+        "peak_lateral_accel": peak,
+        "max_abs_e": _json_number(float(np.nanmax(np.abs(e)))),
+        "final_e": _json_number(float(e[-1])),
+        "final_theta_deg": _json_number(math.degrees(float(res.theta[-1]))),
+        "cones_hit": cones,
+        "out": str(args.out),
+        "csv": None if args.csv is None else str(args.csv),
+    }
     if args.csv is not None:
         _write_csv(
             res,
@@ -1133,7 +1268,22 @@ def _cmd_simulate(args) -> int:
             speed=args.speed,
             curvature=args.curvature if args.path == "arc" else 0.0,
         )
-        print(f"wrote {args.csv}")
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(f"wrote {args.out}")
+        print(f"k1 = {out['k1']:.6f}, k2 = {out['k2']:.6f}, a = {out['ratio']:g}")
+        print(f"status: {res.status}{(' - ' + res.message) if res.message else ''}")
+        text = f"{peak:.4f} m/s^2" if peak is not None else "n/a (no valid sample)"
+        print(f"peak |lateral acceleration| = {text}")
+        if course:
+            print(f"max |e| = {out['max_abs_e']:.4g} m, cones hit = {cones}")
+        print(
+            f"final e = {res.e[-1]:.4g} m, final theta = "
+            f"{math.degrees(res.theta[-1]):.4g} deg"
+        )
+        if args.csv is not None:
+            print(f"wrote {args.csv}")
     if stopped:
         _say(
             f"{PROG} simulate: run stopped at t = {float(res.t_stop):.3g} s "
@@ -1269,7 +1419,8 @@ def _cmd_compare(args) -> int:
     return 0
 
 
-def _cmd_delay_margin(args) -> int:
+def _delay_margin_numbers(args) -> dict:
+    """The delay-margin command's results as plain numbers."""
     from .delay import critical_delay, rightmost_roots
     from .plant import LateralPlant
 
@@ -1288,33 +1439,71 @@ def _cmd_delay_margin(args) -> int:
         steering_lag=None if lag is None else (lag[0] if len(lag) == 1 else lag),
     )
     cd = critical_delay(plant, g)
-    design = "given gains" if args.k1 is not None else f"lambda0 = {args.pole:g} design"
-    print(
-        f"V = {args.speed:g} m/s, kappa = {args.curvature:g} 1/m, a = {args.ratio:g}, "
-        f"k1 = {float(g.k1):.6f} rad/m, k2 = {float(g.k2):.6f} ({design}, "
-        f"{args.model} model)"
-    )
-    if plant.steering_lag is None:
-        print("steering lag: none")
-    else:
-        tf_, tr = plant.steering_lag
-        print(f"steering lag: {tf_:g} s front, {tr:g} s rear")
-    if not cd.stable_without_delay:
-        print("critical delay: 0 s (the loop is unstable without delay)")
-    elif math.isinf(cd.delay):
-        print("critical delay: inf (no delay destabilises the loop)")
-    else:
-        print(
-            f"critical delay: {cd.delay:.6g} s (crossing at {cd.frequency:.6g} rad/s "
-            f"= {cd.frequency / (2 * math.pi):.4g} Hz)"
-        )
+    out = {
+        "speed": args.speed,
+        "curvature": args.curvature,
+        "ratio": args.ratio,
+        "k1": float(g.k1),
+        "k2": float(g.k2),
+        "design": "given gains" if args.k1 is not None else f"lambda0 = {args.pole:g}",
+        "model": args.model,
+        "steering_lag": None
+        if plant.steering_lag is None
+        else list(plant.steering_lag),
+        "stable_without_delay": bool(cd.stable_without_delay),
+        # JSON has no infinity: null where no delay destabilises the loop
+        "critical_delay": _json_number(cd.delay),
+        "frequency": _json_number(cd.frequency),
+    }
     if args.delay is not None:
         roots = rightmost_roots(plant, g, delay=args.delay, n=2)
-        verdict = "stable" if roots[0].real < 0 else "unstable"
+        out["delay"] = args.delay
+        out["stable_at_delay"] = bool(roots[0].real < 0)
+        out["rightmost_roots"] = _roots_json(roots)
+    return out
+
+
+def _cmd_delay_margin(args) -> int:
+    import json
+
+    out = _delay_margin_numbers(args)
+    if args.json:
+        print(json.dumps(out))
+        return 0
+    print(
+        f"V = {args.speed:g} m/s, kappa = {args.curvature:g} 1/m, a = {args.ratio:g}, "
+        f"k1 = {out['k1']:.6f} rad/m, k2 = {out['k2']:.6f} ({out['design']}"
+        f"{'' if args.k1 is not None else ' design'}, {args.model} model)"
+    )
+    if out["steering_lag"] is None:
+        print("steering lag: none")
+    else:
+        tf_, tr = out["steering_lag"]
+        print(f"steering lag: {tf_:g} s front, {tr:g} s rear")
+    if not out["stable_without_delay"]:
+        print("critical delay: 0 s (the loop is unstable without delay)")
+    elif out["critical_delay"] is None:
+        print("critical delay: inf (no delay destabilises the loop)")
+    else:
+        w = out["frequency"]
+        print(
+            f"critical delay: {out['critical_delay']:.6g} s (crossing at {w:.6g} "
+            f"rad/s = {w / (2 * math.pi):.4g} Hz)"
+        )
+    if args.delay is not None:
+        verdict = "stable" if out["stable_at_delay"] else "unstable"
+        roots = [complex(x, y) for x, y in out["rightmost_roots"]]
         print(
             f"at delay {args.delay:g} s: {verdict}; rightmost roots {_fmt_poles(roots)}"
         )
     return 0
+
+
+def _stderr_is_terminal() -> bool:
+    try:
+        return sys.stderr is not None and sys.stderr.isatty()
+    except (AttributeError, ValueError):  # replaced or closed stream
+        return False
 
 
 def _cmd_reproduce(args) -> int:
@@ -1324,9 +1513,11 @@ def _cmd_reproduce(args) -> int:
         args.out,
         model=args.model,
         quick=args.quick,
-        progress=not args.no_progress,
+        # a progress bar is for a terminal: in a log file it is noise
+        progress=not args.no_progress and _stderr_is_terminal(),
         dpi=args.dpi,
         names=args.only,
+        format=args.format,
     )
     for p in res.figures:
         print(p)
@@ -1334,18 +1525,31 @@ def _cmd_reproduce(args) -> int:
     return 0
 
 
-def _check_out(out: Path) -> None:
-    if Path(out).suffix.lower() != ".png":
-        raise ValueError(f"--out must be a .png file, got {str(out)!r}")
+#: The figure formats of --out, by file suffix: raster for screens and
+#: slides, vector for papers (matplotlib writes all three without extras).
+FIGURE_FORMATS = ("png", "svg", "pdf")
+
+
+def _check_out(out: Path) -> str:
+    """The figure format of `out` (its suffix), or ValueError."""
+    suffix = Path(out).suffix.lower().lstrip(".")
+    if suffix not in FIGURE_FORMATS:
+        allowed = ", ".join(f".{f}" for f in FIGURE_FORMATS)
+        raise ValueError(f"--out must be a {allowed} file, got {str(out)!r}")
+    return suffix
+
+
+def _write_figure(fig, out: Path) -> None:
+    """Write `fig` atomically in the format of `out`'s suffix."""
+    from .files import atomic_write
+
+    fmt = _check_out(out)
+    with atomic_write(Path(out)) as fh:
+        fig.savefig(fh, format=fmt, dpi=110)
 
 
 def _save(fig, out: Path) -> None:
-    from .files import atomic_write
-
-    out = Path(out)
-    _check_out(out)
-    with atomic_write(out) as fh:
-        fig.savefig(fh, format="png", dpi=110)
+    _write_figure(fig, out)
     print(f"wrote {out}")
 
 

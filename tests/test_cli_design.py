@@ -91,7 +91,7 @@ def test_robust_matches_robust_gains(capsys):
         (["--speed", 10, 20], "--speed takes one speed"),
         (["--method", "robust", "--speed", 20], "--speed takes LOW HIGH"),
         (["--grid", 2], "--grid"),
-        (["--out", "x.pdf"], "--out must be a .png"),
+        (["--out", "x.tiff"], "--out must be a .png, .svg, .pdf file"),
     ],
 )
 def test_bad_input_is_one_line_and_status_2(capsys, args, words):

@@ -938,6 +938,9 @@ def _progress(iterable, enabled, total=None, desc=None):
     )
 
 
+#: The file formats :func:`reproduce` writes.
+FORMATS = ("png", "svg", "pdf")
+
 # zlib level 3 instead of PIL's 6: the same pixels, encoded in about 30 %
 # less time (0.42 s instead of 0.61 s for the twelve figures), files 8 %
 # larger (2.4 instead of 2.2 MB); measured on this machine with PIL.
@@ -994,8 +997,9 @@ def reproduce(
     progress: bool = True,
     dpi: int = 110,
     names=None,
+    format: str = "png",
 ) -> ReproduceResult:
-    """Write every figure of :data:`FIGURES` as PNG and ``summary.md``.
+    """Write every figure of :data:`FIGURES` (PNG, SVG or PDF) and ``summary.md``.
 
     Parameters
     ----------
@@ -1009,9 +1013,12 @@ def reproduce(
         Show a tqdm progress bar on stderr.
     dpi : int, optional
         Resolution of the PNG files, 1 to 600 (a higher one would need
-        gigabytes of memory for the widest figure).
+        gigabytes of memory for the widest figure); of the raster parts
+        only, in SVG and PDF.
     names : sequence of str, optional
         Subset of :data:`FIGURES` to write; default all.
+    format : {"png", "svg", "pdf"}, optional
+        File format of the figures: raster for screens, vector for papers.
 
     Returns
     -------
@@ -1061,6 +1068,10 @@ def reproduce(
         raise TypeError(f"dpi must be an int, got {type(dpi).__name__} {dpi!r}")
     if not 1 <= dpi <= _MAX_DPI:
         raise ValueError(f"dpi must be in 1..{_MAX_DPI}, got {dpi}")
+    if not isinstance(format, str) or format not in FORMATS:
+        raise ValueError(f"format must be one of {FORMATS}, got {format!r}")
+    # the PNG encoder's options mean nothing to the vector backends
+    options = {"pil_kwargs": _PNG_OPTIONS} if format == "png" else {}
     out = Path(out)
     with lock_folder(out):
         # Holding the lock, no live writer owns a temporary file here: any
@@ -1070,12 +1081,10 @@ def reproduce(
         with _collector_per_figure():
             for name in _progress(names, progress, total=len(names), desc="figures"):
                 fig = _make(name, model, quick)
-                path = out / f"{name}.png"
+                path = out / f"{name}.{format}"
                 try:
                     with atomic_write(path) as fh, plt.rc_context(_DRAW_RC):
-                        fig.savefig(
-                            fh, format="png", dpi=int(dpi), pil_kwargs=_PNG_OPTIONS
-                        )
+                        fig.savefig(fh, format=format, dpi=int(dpi), **options)
                 finally:
                     plt.close(fig)
                 # the closed figure's reference cycles, freed now (see
