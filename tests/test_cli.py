@@ -225,7 +225,7 @@ def test_one_default_curvature_and_out_defaults_in_help(capsys):
         ("reproduce", "figures"),
     ):
         text = " ".join(sub[name].format_help().split())
-        assert f"--out OUT PNG file ({default})" in text or (
+        assert f"--out OUT figure file: .png, .svg or .pdf ({default})" in text or (
             f"--out OUT directory ({default})" in text
         ), name
 

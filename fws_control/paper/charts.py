@@ -216,28 +216,40 @@ def _note_box(ax, notes) -> None:
             0.02,
             "\n".join(notes),
             transform=ax.transAxes,
-            fontsize=7,
+            fontsize=8,
             va="bottom",
             bbox={"fc": "white", "ec": "0.7", "alpha": 0.9},
             zorder=10,
         )
 
 
-def _draw_panel(ax, panel: ChartPanel, legend: bool = True) -> list:
+#: One hatch per overlaid chart: where the stable regions of several
+#: curvatures overlap, their hatches cross instead of their light fills
+#: blending into one colour.
+_HATCHES = ("//", "\\\\", "||", "--", "++", "..")
+
+
+def _draw_panel(ax, panel: ChartPanel, legend: bool = True, notes_here: bool = True):
+    """Draw one panel; return its legend handles and its notes.
+
+    With `notes_here` the notes go into a box in the panel; otherwise the
+    caller places them (Figs. 3-4 gather them beside the legend, where
+    they hide no region).
+    """
     from matplotlib.lines import Line2D
 
     handles = []
     notes = []
     for i, (ch, lab) in enumerate(zip(panel.charts, panel.labels, strict=True)):
         color = f"C{i}"
-        # Light fills with an outline band: overlapping regions darken
-        # instead of merging into one hatched patch, and each edge keeps its
-        # colour.
+        # Light fills, a hatch each and an outline band: overlapping regions
+        # show every hatch that covers them, and each edge keeps its colour.
         handles += ch.draw(
             ax,
             color=color,
             label=lab,
-            alpha=0.12,
+            alpha=0.08,
+            hatch=_HATCHES[i % len(_HATCHES)],
             outline=True,
             boundaries=True,
             design=True,
@@ -273,10 +285,11 @@ def _draw_panel(ax, panel: ChartPanel, legend: bool = True) -> list:
                 color="0.3",
                 mfc="white",
                 mew=2.0,
-                label="gains off chart (arrow on the frame; values in the note)",
+                label="gains off chart (arrow on the frame; values in the notes)",
             )
         )
-    _note_box(ax, notes)
+    if notes_here:
+        _note_box(ax, notes)
     ax.set_title(panel.title, fontsize=10)
     if legend:
         # Below the axes: inside, it would hide regions and design points.
@@ -288,7 +301,7 @@ def _draw_panel(ax, panel: ChartPanel, legend: bool = True) -> list:
             ncol=3,
             frameon=False,
         )
-    return handles
+    return handles, notes
 
 
 def plot_paper_figure(
@@ -368,8 +381,12 @@ def plot_paper_figure(
     axes = list(axs.flat)
     lines = np.empty(shape, dtype=object)
     handles = []
+    all_notes = []
     for i, (a, panel) in enumerate(zip(axes, panels, strict=False)):
-        for h in _draw_panel(a, panel, legend=n == 2):
+        drawn, notes = _draw_panel(a, panel, legend=n == 2, notes_here=n == 2)
+        # "(f) a = 1, V = 5 m/s" -> "(f)": the notes name their panel
+        all_notes += [f"{panel.title.split(' ', 1)[0]} {note}" for note in notes]
+        for h in drawn:
             base = h.get_label().removesuffix(" (empty)")
             if base not in [k.get_label().removesuffix(" (empty)") for k in handles]:
                 handles.append(h)
@@ -385,9 +402,16 @@ def plot_paper_figure(
 
         to_edge = blended_transform_factory(fig.transFigure, spare.transAxes)
         spare.legend(
-            handles=handles, loc="center right", bbox_to_anchor=(0.995, 0.5),
+            handles=handles, loc="upper right", bbox_to_anchor=(0.995, 1.0),
             bbox_transform=to_edge, fontsize=10, title="legend",
         )  # fmt: skip
+        if all_notes:
+            # the panels' notes, under the legend: in the panels they hid data
+            spare.text(
+                0.0, 0.0, "notes:\n" + "\n".join(all_notes),
+                transform=spare.transAxes, ha="left", va="bottom", fontsize=9,
+                wrap=True,
+            )  # fmt: skip
         lines.flat[-1] = []
     V = {2: "5 and 20", 3: "5", 4: "20"}[n]
     fig.suptitle(

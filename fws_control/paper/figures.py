@@ -510,9 +510,7 @@ def _responses_figure(n: int, model: str, quick: bool):
     for ax, name, scale, title in panels:
         ax.set_title(title, fontsize=10)
         ax.grid(alpha=0.3)
-        if name == "lateral_accel" and ok.any():
-            _clip_initial_spike(ax, res.t, getattr(res, name)[ok], sr.ratios[ok])
-        elif name is not None and ok.any() and not ok.all():
+        if name is not None and ok.any() and not ok.all():
             # Scale to the runs that finished: a run that diverges towards a
             # singular steering angle would otherwise flatten every curve.
             vals = scale * getattr(res, name)[ok]
@@ -531,6 +529,9 @@ def _responses_figure(n: int, model: str, quick: bool):
                     fontsize=7,
                     color="0.4",
                 )
+        if name == "lateral_accel" and ok.any():
+            # then the finished runs' own spike at t = 0, if it dwarfs the rest
+            _clip_initial_spike(ax, res.t, getattr(res, name)[ok], sr.ratios[ok])
         if name is None:
             s = res.s[np.isfinite(res.s)]
             ss = np.linspace(0.0, float(s.max()) if s.size else 1.0, 400)

@@ -1,0 +1,62 @@
+"""Readability of the reproduced figures: axis ranges, hatches, notes.
+
+References: the data the figure itself draws (the finished runs' curves
+against the stopped run's), and the notes each chart writes
+(``StabilityChart.notes``), which must all appear, once, outside the
+panels.
+"""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from fws_control.paper import make_figure, paper_figure_panels  # noqa: E402
+
+
+def test_fig9_acceleration_axis_follows_the_finished_runs():
+    # (the full run: the quick one samples too coarsely to catch the spike)
+    fig = make_figure("fig9")
+    try:
+        ax = fig.axes[5]
+        assert "lateral acceleration" in ax.get_title()
+        curves = [ln for ln in ax.get_lines() if ln.get_xdata().size > 1]
+        peaks = [float(np.nanmax(np.abs(ln.get_ydata()))) for ln in curves]
+        # the a = 1 run stops at singular steering with a spike that dwarfs
+        # the finished runs (hundreds of m/s^2 against about ten)
+        stopped, finished = max(peaks), sorted(peaks)[-2]
+        assert stopped > 10 * finished
+        low, high = ax.get_ylim()
+        assert finished <= high < 2 * finished
+        texts = [t.get_text() for t in ax.texts]
+        assert "stopped runs clipped" in texts
+    finally:
+        plt.close(fig)
+
+
+def test_fig3_hatches_apart_and_notes_beside_the_legend():
+    fig = make_figure("fig3", quick=True)
+    try:
+        panels = fig.axes[:7]
+        for ax in panels:
+            hatches = [c.get_hatch() for c in ax.collections if c.get_hatch()]
+            hatches = [h for h in hatches if h != "xx"]  # the undecided points'
+            # one hatch per overlaid region with stable gains, none twice
+            assert hatches and len(hatches) == len(set(hatches)), hatches
+            assert not [t for t in ax.texts if "gains off chart" in t.get_text()]
+        notes = []
+        for panel in paper_figure_panels(3, npoints=201):
+            letter = panel.title.split(" ", 1)[0]
+            for ch, lab in zip(panel.charts, panel.labels, strict=True):
+                notes += [f"{letter} {n}" for n in ch.notes(label=lab)]
+        spare = fig.axes[7].texts
+        assert len(spare) == 1
+        lines = spare[0].get_text().split("\n")
+        assert lines[0] == "notes:" and lines[1:] == notes
+        assert spare[0].get_fontsize() >= 9
+    finally:
+        plt.close(fig)
