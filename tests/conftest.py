@@ -212,3 +212,26 @@ CURVE_BATCH_KW = {
     "chunk_size": 4,  # two chunks
     "progress": False,
 }
+
+
+# CPU seconds per test (this process and the subprocesses it waited for),
+# appended as "nodeid<TAB>seconds" lines to the file FWS_TEST_CPU_LOG names:
+# unlike wall-clock durations, CPU time does not grow with the machine's
+# load, so the suite's cost can be profiled on a busy machine
+# (docs/developer.md, "Keeping the suite fast").
+_CPU_LOG = os.environ.get("FWS_TEST_CPU_LOG")
+
+if _CPU_LOG:
+    import resource
+    import time
+
+    @pytest.hookimpl(hookwrapper=True)
+    def pytest_runtest_protocol(item, nextitem):
+        def cpu():
+            children = resource.getrusage(resource.RUSAGE_CHILDREN)
+            return time.process_time() + children.ru_utime + children.ru_stime
+
+        start = cpu()
+        yield
+        with open(_CPU_LOG, "a", encoding="utf-8") as fh:
+            fh.write(f"{item.nodeid}\t{cpu() - start:.3f}\n")
