@@ -250,7 +250,10 @@ class StepResponseMetrics:
     peak_response_time : float
         Time [s] from :math:`t = 0` to the largest value of the response,
         if that value exceeds :math:`Y_{ss}` within the record; ``inf``
-        otherwise (no peak).
+        otherwise (no peak). The peak is the vertex of the parabola through
+        the largest sample and its neighbours, the crossings are
+        interpolated linearly between samples: all times to a small fraction
+        of the output step.
     peak : float
         The largest value of the response (in the direction of
         :math:`Y_{ss}`); :math:`Y_{ss}` if there is no peak.
@@ -679,10 +682,11 @@ def step_steer(
     )
     delta_r = a * delta_f
 
+    sys = steering_response_system(vehicle, speed=u, ratio=a)
+    _check_stable(sys, u)
     if model == "linear":
         import control as ct
 
-        sys = steering_response_system(vehicle, speed=u, ratio=a)
         out = ct.forced_response(sys, t - t[0], delta_f, return_states=True)
         v_y, r = out.states
         yaw, a_y = out.outputs
@@ -723,7 +727,7 @@ def step_steer(
             x0 = sol.y[:, -1]
         vy_dot, _ = rates(v_y, r, delta_f, delta_r)
         yaw, a_y = r, vy_dot + u * r
-        lin = np.ravel(steering_response_system(vehicle, speed=u, ratio=a).dcgain())
+        lin = np.ravel(sys.dcgain())
         # the linear steady state: v_y from the v_y row, a_y = u r there
         guess = (0.0, float(lin[0]) * amp)
         vy_ss, r_ss = _steady_body(vehicle, amp, a * amp, u, tyre, guess)
@@ -911,9 +915,10 @@ def steering_frequency_response(
     fixed step of at most 1/60 of the shortest period and 0.1 of the
     fastest time constant). After `settle` seconds the first harmonic of each
     response is fitted by least squares over the last `periods` whole
-    periods; gain and phase are those of the harmonic relative to the input.
-    At a small amplitude this is the linear response (the tests hold it to
-    it); at a large amplitude with ``tyre="magic"`` the gain drops as the
+    periods (with the harmonics 2 to 11, which a saturating tyre excites);
+    gain and phase are those of the first harmonic relative to the input.
+    At a small amplitude this is the linear response (the tests hold the
+    two equal to 1e-6); at a large amplitude with ``tyre="magic"`` the gain drops as the
     tyres saturate.
 
     Parameters
@@ -1051,8 +1056,13 @@ def steering_frequency_response(
         # span them exactly only up to a step, so fit on the samples inside
         window = t >= t[-1] - periods * period[k]
         tk = t[window]
+        # the window holds whole periods only to within a step: harmonics 2
+        # to 11 of a saturating response are fitted too, so that they do not
+        # leak into the first one
+        wt = w[k] * tk
         basis = np.column_stack(
-            [np.sin(w[k] * tk), np.cos(w[k] * tk), np.ones_like(tk)]
+            [np.sin(wt), np.cos(wt), np.ones_like(tk)]
+            + [f(j * wt) for j in range(2, 12) for f in (np.sin, np.cos)]
         )
         coef, *_ = np.linalg.lstsq(
             basis, np.column_stack([r[window, k], a_y[window, k]]), rcond=None
