@@ -79,11 +79,17 @@ OUTPUTS = ("r", "a_y")
 # argument checks
 
 
+#: Lowest speed of the open-loop tests [m/s]: the model's matrices scale
+#: with 1/u, and a walking pace is no driving test.
+MIN_SPEED = 0.1
+
+
 def _check_speed(speed: Any) -> float:
     v = check_magnitude("speed", speed, MAX_SPEED, "m/s")
-    if np.ndim(v) != 0 or not float(v) > 0.0:
+    if np.ndim(v) != 0 or not float(v) >= MIN_SPEED:
         raise ValueError(
-            f"speed must be a scalar in (0, {MAX_SPEED:g}] m/s, got {speed!r}"
+            f"speed must be a scalar in [{MIN_SPEED:g}, {MAX_SPEED:g}] m/s, "
+            f"got {speed!r}"
         )
     return float(v)
 
@@ -168,7 +174,7 @@ def steering_response_system(
         Geometry and dynamic data (mass, yaw inertia, cornering stiffnesses
         :math:`C_f, C_r` per axle).
     speed : float
-        Longitudinal speed :math:`u` [m/s], in (0, 1e6].
+        Longitudinal speed :math:`u` [m/s], in [0.1, 1e6].
     ratio : float or callable, optional
         Rear-to-front ratio :math:`a`, in [-10, 10], or a schedule
         ``ratio(vehicle, speed=...)`` such as
@@ -272,8 +278,8 @@ class StepResponseMetrics:
     here: the response passes 10 % before the steering reaches 50 %.
     """
 
+    _: KW_ONLY  # a result record: every field named at construction
     steady_state: float
-    _: KW_ONLY
     response_time: float
     rise_time: float
     peak_response_time: float
@@ -324,7 +330,7 @@ def _metrics(
         # monotone within the record (or still rising at its end)
         t_peak, peak, over = math.inf, ss, 0.0
     return StepResponseMetrics(
-        steady,
+        steady_state=steady,
         response_time=t90,
         rise_time=t90 - t10,
         peak_response_time=t_peak,
@@ -573,7 +579,7 @@ def step_steer(
     vehicle : Vehicle
         Geometry and dynamic data (friction too for ``tyre="magic"``).
     speed : float
-        Longitudinal speed :math:`u` [m/s], in (0, 1e6].
+        Longitudinal speed :math:`u` [m/s], in [0.1, 1e6].
     amplitude : float
         Final front angle [rad], nonzero, :math:`|\delta_f| \le 0.5`.
     ratio : float or callable, optional
@@ -926,7 +932,7 @@ def steering_frequency_response(
     vehicle : Vehicle
         Geometry and dynamic data (friction too for ``tyre="magic"``).
     speed : float
-        Longitudinal speed :math:`u` [m/s], in (0, 1e6].
+        Longitudinal speed :math:`u` [m/s], in [0.1, 1e6].
     omega : array_like
         Angular frequencies [rad/s], 1-D, strictly increasing, in (0, 1e4].
     ratio : float or callable, optional
