@@ -498,22 +498,24 @@ class StepSteerResponse:
             (axes[1], self.lateral_acceleration, self.lateral_acceleration_metrics,
              "a_y [m/s^2]"),
         ):  # fmt: skip
-            (ln,) = a.plot(self.time, y, color="C0", label=f"{self.model} model")
+            # one colour per response, so that several fit in the same axes
+            name = f"{self.model}, {self.tyre} tyre"
+            (ln,) = a.plot(self.time, y, label=name)
+            color = ln.get_color()
             lines.append(ln)
-            lines.append(
-                a.axhline(m.steady_state, color="k", ls="--", lw=0.8, label="steady")
-            )
+            lines.append(a.axhline(m.steady_state, color=color, ls="--", lw=0.8))
             lines.append(
                 a.axvline(
                     m.response_time,
-                    color="C1",
-                    lw=0.8,
+                    color=color,
+                    ls=":",
+                    lw=1.0,
                     label=f"response time {m.response_time:.3f} s",
                 )  # fmt: skip
             )
             if math.isfinite(m.peak_response_time):
                 (pk,) = a.plot(
-                    m.peak_response_time, m.peak, "v", color="C3",
+                    m.peak_response_time, m.peak, "v", color=color,
                     label=f"peak {m.peak_response_time:.3f} s, "
                     f"overshoot {100 * m.overshoot:.1f} %",
                 )  # fmt: skip
