@@ -588,7 +588,8 @@ def step_steer(
         Rear-to-front ratio :math:`a` in [-10, 10] or a schedule
         ``ratio(vehicle, speed=...)``; default 0.
     steer_rate : float, optional
-        Magnitude of the front steering rate of the ramp [rad/s], > 0;
+        Magnitude of the front steering rate of the ramp [rad/s], at least
+        ``|amplitude| / (2 duration)`` (the ramp ends within the record);
         ``math.inf`` for an ideal step. Default: the ISO 7401 limit,
         ``0.8 * |amplitude| / 0.15``.
     model : {"linear", "nonlinear"}, optional
@@ -674,6 +675,17 @@ def step_steer(
         )
 
     ramp = abs(amp) / rate  # duration of the ramp [s]
+    if 0.5 * ramp > duration:
+        raise ValueError(
+            f"steer_rate={steer_rate!r} rad/s turns amplitude={amp!r} rad in "
+            f"{ramp!r} s: the ramp must end within the record, so steer_rate must "
+            f"be >= |amplitude| / (2 duration) = {abs(amp) / (2.0 * duration)!r} rad/s"
+        )
+    if (0.5 * ramp + duration) / dt > 2e6:
+        raise ValueError(
+            f"duration/dt must be at most 2e6 samples with the ramp, got "
+            f"duration={duration!r} s, dt={dt!r} s, steer_rate={rate!r} rad/s"
+        )
     if ramp > 0.0:
         # an even number of steps over the ramp puts 0 (50 %) and both
         # corners on samples; the linear solution is then exact

@@ -546,6 +546,8 @@ def test_circle_bad_input(name, value):
          "mass"),
         (lambda: fws.step_steer(BMW, speed=20.0, amplitude=0.01, duration=600.0,
                                 dt=1e-6), "duration"),
+        (lambda: fws.step_steer(BMW, speed=20.0, amplitude=0.01,
+                                steer_rate=1e-300), "steer_rate"),
     ],
 )  # fmt: skip
 def test_targeted_bad_input(call, name):
