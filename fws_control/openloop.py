@@ -725,10 +725,13 @@ def step_steer(
             )
             return rates(x[0], x[1], df, a * df)
 
+        # the ramp, then the hold, split at the sample of the ramp's end
+        # (index 2 n_half, not a comparison of rounded times)
+        end = 2 * n_half
         pieces = (
-            [(t <= 0.5 * ramp, True), (t >= 0.5 * ramp, False)]
+            [(slice(0, end + 1), True), (slice(end, None), False)]
             if ramp > 0.0
-            else [(t >= t[0], False)]
+            else [(slice(0, None), False)]
         )
         v_y, r = np.zeros_like(t), np.zeros_like(t)
         x0 = np.zeros(2)
@@ -752,7 +755,6 @@ def step_steer(
         guess = (0.0, float(lin[0]) * amp)
         vy_ss, r_ss = _steady_body(vehicle, amp, a * amp, u, tyre, guess)
         steady_r, steady_ay = r_ss, u * r_ss
-    # the a_y of a neutral vehicle is v_y_dot + u r; at steady state u r
     if not (np.all(np.isfinite(yaw)) and np.all(np.isfinite(a_y))):
         raise ValueError(
             f"the step steer diverged (speed={u!r} m/s, amplitude={amp!r} rad): "

@@ -560,3 +560,23 @@ def test_results_are_frozen():
     res = fws.step_steer(BMW, speed=20.0, amplitude=0.01, duration=1.0)
     with pytest.raises(dataclasses.FrozenInstanceError):
         res.speed = 1.0  # type: ignore[misc]
+
+
+def test_nonlinear_step_equals_the_library_nlsys():
+    """The same ramp through ct.input_output_response of dynamic_global_model."""
+    u, amp = 20.0, 0.04
+    a = zero_sideslip(BMW, u)
+    res = fws.step_steer(
+        BMW, speed=u, amplitude=amp, ratio=a, model="nonlinear", tyre="magic",
+        duration=1.5, dt=2e-3,
+    )  # fmt: skip
+    sys = fws.dynamics.dynamic_global_model(BMW, speed=u, tyre="magic")
+    # the ramp's corners are samples, so linear interpolation of U is exact
+    out = ct.input_output_response(
+        sys, res.time - res.time[0], np.vstack([res.delta_f, a * res.delta_f]),
+        X0=np.zeros(5), solve_ivp_method="Radau",
+        solve_ivp_kwargs=dict(rtol=1e-11, atol=1e-14, max_step=0.005),
+    )  # fmt: skip
+    v_y, r = out.states[3], out.states[4]
+    assert np.max(np.abs(res.yaw_rate - r)) <= 1e-7 * np.max(np.abs(r))
+    assert np.max(np.abs(res.lateral_velocity - v_y)) <= 1e-7 * u * np.max(np.abs(r))
