@@ -28,6 +28,7 @@ Modules: :mod:`~fws_control.vehicle`, :mod:`~fws_control.exceptions`,
 :mod:`~fws_control.turning`, :mod:`~fws_control.paths`,
 :mod:`~fws_control.controllers`, :mod:`~fws_control.simulation`,
 :mod:`~fws_control.metrics`, :mod:`~fws_control.comparison`,
+:mod:`~fws_control.openloop` (ISO 7401 and ISO 4138 open-loop tests),
 :mod:`~fws_control.symbolic` (sympy derivations, the tests' reference) and
 :mod:`~fws_control.paper` (imported only by the CLI).
 
@@ -142,6 +143,16 @@ if TYPE_CHECKING:
         global_frame_model as global_frame_model,
         path_frame_model as path_frame_model,
         yaw_rate as yaw_rate,
+    )
+    from .openloop import (
+        SteadyStateCircle as SteadyStateCircle,
+        SteeringFrequencyResponse as SteeringFrequencyResponse,
+        StepResponseMetrics as StepResponseMetrics,
+        StepSteerResponse as StepSteerResponse,
+        steady_state_circle as steady_state_circle,
+        steering_frequency_response as steering_frequency_response,
+        steering_response_system as steering_response_system,
+        step_steer as step_steer,
     )
     from .paths import (
         Arc as Arc,

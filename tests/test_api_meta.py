@@ -945,7 +945,25 @@ def _plot_factories():
             veh, front_angle=np.linspace(0.02, 0.6, 20), rear_limit=0.05
         ).plot
 
+    def step_steer():
+        return fws.step_steer(
+            fws.vehicles.BMW_320I, speed=20.0, amplitude=0.01, duration=1.0
+        ).plot
+
+    def frequency_response():
+        return fws.steering_frequency_response(
+            fws.vehicles.BMW_320I, speed=20.0, omega=[1.0, 5.0, 20.0]
+        ).plot
+
+    def circle():
+        return fws.steady_state_circle(
+            fws.vehicles.BMW_320I, lateral_acceleration=[1.0, 5.0]
+        ).plot
+
     return {
+        "StepSteerResponse.plot": step_steer,
+        "SteeringFrequencyResponse.plot": frequency_response,
+        "SteadyStateCircle.plot": circle,
         "RearLimitBand.plot": rear_band,
         "ParetoFront.plot": pareto,
         "GainSchedule.plot": schedule,

@@ -87,6 +87,7 @@ def test_every_example_is_covered():
         "plot_design_delay.py",
         "plot_dynamic.py",
         "plot_fws_vs_4ws.py",
+        "plot_openloop.py",
         "plot_quick_start.py",
         "plot_ratio_sweep.py",
         "plot_root_loci.py",
@@ -463,3 +464,37 @@ def test_design_delay(tmp_path):
     ]
     assert [r[0] for r in rows] == pytest.approx([1.230, 2.460, 3.690], abs=1e-3)
     assert [r[1] for r in rows] == pytest.approx([0.9156, 0.2912, 0.1858], abs=1e-4)
+
+
+def test_openloop(tmp_path):
+    """Printed numbers of plot_openloop.py against the textbook linear model."""
+    out = run_example("plot_openloop.py", tmp_path)
+    veh = fws.vehicles.BMW_320I
+    u = 20.0
+    m, iz, f = veh.mass, veh.yaw_inertia, veh.wheelbase
+    lr = veh.rear_to_cg
+    lf = f - lr
+    cf, cr = veh.cornering_front, veh.cornering_rear
+    a_zero = (-lr + m * lf * u**2 / (f * cr)) / (lf + m * lr * u**2 / (f * cf))
+    for label, a in (("front", 0.0), ("4WS a(V)", a_zero)):
+        # steady yaw rate of the textbook model: -C A^-1 B for 0.02 rad
+        A = np.array(
+            [
+                [-(cf + cr) / (m * u), -u - (lf * cf - lr * cr) / (m * u)],
+                [
+                    -(lf * cf - lr * cr) / (iz * u),
+                    -(lf**2 * cf + lr**2 * cr) / (iz * u),
+                ],
+            ]
+        )
+        B = np.array([(cf + a * cr) / m, (lf * cf - a * lr * cr) / iz])
+        r_ss = -np.linalg.solve(A, B)[1] * 0.02
+        printed = floats_after(f"{label}, linear: yaw rate", out)[0]
+        assert printed == pytest.approx(r_ss, abs=6e-5)
+        nl = floats_after(f"{label}, nonlinear: yaw rate", out)[0]
+        assert nl == pytest.approx(r_ss, rel=2e-3)
+    assert floats_after("largest gain difference", out)[0] < 1e-6
+    assert floats_after("gain kept at 0.06 rad:", out)[0] < 0.95
+    # on the 100 m circle at low a_y the front angle is the Ackermann f/R
+    delta = floats_after("front: delta_f", out)[0]
+    assert delta == pytest.approx(math.degrees(f / 100.0), abs=2e-3)

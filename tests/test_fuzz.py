@@ -72,6 +72,8 @@ Deliberately excluded (with the reason)
   ``ControllerComparison``, ``DelayMarginChart``, ``TurningGeometry``,
   ``LinearNonlinearComparison``, ``SimulationResult``, ``TrackingMetrics``,
   ``MostStableDesign``, ``ParetoFront``, ``RearLimitBand``, ``RearSaturation``,
+  ``StepSteerResponse``, ``StepResponseMetrics``, ``SteeringFrequencyResponse``,
+  ``SteadyStateCircle``,
   ``Projection``: their fields are fuzzed through the functions that build
   them.
 * The arguments ``name`` (a label passed to python-control), ``ax`` and
@@ -131,6 +133,10 @@ EXCLUDED = {
     "TrackingMetrics": "result record",
     "Projection": "result record",
     "KinematicDesignLimit": "result record",
+    "StepSteerResponse": "result record",
+    "StepResponseMetrics": "result record",
+    "SteeringFrequencyResponse": "result record",
+    "SteadyStateCircle": "result record",
     "BoundaryPiece": "result record",
     "RobustRegion": "result record",
     "RobustDesign": "result record",
@@ -721,6 +727,50 @@ CASES: dict[str, Case] = {
         flags=("closed",),
     ),
     "understeer_gradient": Case(fws.understeer_gradient, dict(vehicle=BMW)),
+    "steering_response_system": Case(
+        fws.steering_response_system, dict(vehicle=BMW), dict(speed=20.0, ratio=0.0)
+    ),
+    "step_steer": Case(
+        fws.step_steer,
+        dict(vehicle=BMW),
+        dict(
+            speed=20.0,
+            amplitude=0.01,
+            ratio=0.0,
+            steer_rate=None,
+            model="linear",
+            tyre="linear",
+            duration=1.0,
+            dt=0.002,
+        ),
+        post=finite_or_inf,  # no peak: peak_response_time inf (documented)
+        examples=FEW,
+    ),
+    "steering_frequency_response": Case(
+        fws.steering_frequency_response,
+        dict(vehicle=BMW),
+        dict(
+            speed=20.0,
+            omega=np.array([1.0, 10.0]),
+            ratio=0.0,
+            model="linear",
+            tyre="linear",
+            amplitude=1e-3,
+            periods=2,
+            settle=None,
+        ),
+    ),
+    "steady_state_circle": Case(
+        fws.steady_state_circle,
+        dict(vehicle=BMW),
+        dict(
+            lateral_acceleration=np.array([1.0, 5.0]),
+            radius=100.0,
+            ratio=0.0,
+            tyre="magic",
+        ),
+        examples=FEW,
+    ),
     "zero_sideslip_ratio": Case(
         fws.zero_sideslip_ratio, dict(vehicle=BMW), dict(speed=20.0)
     ),
