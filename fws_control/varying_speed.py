@@ -120,7 +120,7 @@ def _require_cvxpy():
 
 
 @summary_repr
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class SpeedCertificate:
     r"""Result of :func:`speed_certificate`.
 
@@ -161,6 +161,18 @@ class SpeedCertificate:
         Names of the states of :math:`x`.
     message : str
         The verdict in words.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> sch = fws.GainSchedule(speeds=[5.0, 10.0], k1=[2.7 / 25, 2.7 / 100],
+    ...                        k2=[5.4 / 5, 5.4 / 10], ratio=[0.0, 0.0])
+    >>> cert = fws.speed_certificate(veh, sch, rate=0.5, cells=2)
+    >>> cert.nodes
+    array([ 5. ,  7.5, 10. ])
+    >>> cert.P.shape, cert.certified_rate
+    ((3, 2, 2), 0.5)
     """
 
     speed_range: tuple[float, float]
@@ -175,7 +187,8 @@ class SpeedCertificate:
     frozen_abscissa: float
     states: tuple[str, ...]
     message: str
-    _cells: Any = dataclasses.field(default=None, repr=False)
+    # the loop's matrices, for plot(); set by speed_certificate
+    _cells: Any = dataclasses.field(default=None, init=False, repr=False)
 
     def P_at(self, speed) -> np.ndarray:
         r""":math:`\mathbf P(V)` at `speed` (piecewise affine between nodes).
@@ -392,9 +405,13 @@ class _Cells:
             res = np.linalg.norm(R, 2, axis=(-2, -1)).sum(axis=1)
             worst = max(worst, float((res - eps).max()))
         if worst >= 0.0:
-            return False, worst, (
-                "the solver's certificate failed the a posteriori check "
-                f"(bound {worst:.3g} >= 0)"
+            return (
+                False,
+                worst,
+                (
+                    "the solver's certificate failed the a posteriori check "
+                    f"(bound {worst:.3g} >= 0)"
+                ),
             )
         # independent check on a dense grid, with the library's matrices
         v = np.linspace(self.nodes[0], self.nodes[-1], 4001)
@@ -402,10 +419,14 @@ class _Cells:
         for sign in (1.0, -1.0):
             grid = self.derivative_bound(P, rate, sign, v)
             if grid.max() >= 0.0:
-                return False, float(grid.max()), (
-                    "the Lyapunov derivative is not negative on the check grid "
-                    f"(largest eigenvalue {grid.max():.3g} at "
-                    f"{v[np.argmax(grid)]:.4g} m/s)"
+                return (
+                    False,
+                    float(grid.max()),
+                    (
+                        "the Lyapunov derivative is not negative on the check grid "
+                        f"(largest eigenvalue {grid.max():.3g} at "
+                        f"{v[np.argmax(grid)]:.4g} m/s)"
+                    ),
                 )
         t = np.linspace(0.0, 1.0, 17)
         vt = self.nodes[:-1, np.newaxis] + t * self.h[:, np.newaxis]
@@ -497,6 +518,16 @@ class _Program:
         P = np.array([Pj.value for Pj in self.P])
         g = np.array([[S.value for S in pair] for pair in self.grams])
         return P, g.reshape(P.shape[0] - 1, 2, 2, *g.shape[-2:])
+
+
+def _scalar(name: str, value: Any) -> float:
+    if isinstance(value, (bool, np.bool_)) or np.ndim(value) != 0:
+        raise ValueError(f"{name} must be a real number, got {value!r}")
+    try:
+        out = float(value)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be a real number, got {value!r}") from exc
+    return float(check_finite(name, out))
 
 
 def _as_schedule(gains, lo: float, hi: float, nodes: np.ndarray) -> GainSchedule:
@@ -663,7 +694,7 @@ def speed_certificate(
             f"[{gains.speeds[0]:g}, {gains.speeds[-1]:g}] m/s"
         )
     if rate is not None:
-        rate = float(check_finite("rate", rate))
+        rate = _scalar("rate", rate)
         if rate < 0.0:
             raise ValueError(f"rate must be >= 0 m/s^2, got {rate!r}")
     if search is None:
@@ -674,10 +705,10 @@ def speed_certificate(
         raise TypeError(f"cells must be an int, got {cells!r}")
     if not 1 <= cells <= 400:
         raise ValueError(f"cells must be in 1..400, got {cells!r}")
-    rtol = float(check_finite("rtol", rtol))
+    rtol = _scalar("rtol", rtol)
     if not 0.0 < rtol < 1.0:
         raise ValueError(f"rtol must be in (0, 1), got {rtol!r}")
-    max_rate = float(check_finite("max_rate", max_rate))
+    max_rate = _scalar("max_rate", max_rate)
     if not max_rate > 0.0:
         raise ValueError(f"max_rate must be > 0 m/s^2, got {max_rate!r}")
 
@@ -707,10 +738,12 @@ def speed_certificate(
         return (P, margin) if ok else None
 
     def finish(**kw) -> SpeedCertificate:
-        return SpeedCertificate(
+        out = SpeedCertificate(
             speed_range=(lo, hi), rate=rate, nodes=nodes, states=states,
-            frozen_abscissa=frozen, _cells=cl, **kw,
+            frozen_abscissa=frozen, **kw,
         )  # fmt: skip
+        object.__setattr__(out, "_cells", cl)
+        return out
 
     base = attempt(0.0)
     if base is None:
