@@ -90,7 +90,9 @@ def main() -> None:
 
         def fmt(c):
             hi = c.rate_bracket[1]
-            return f"{c.max_rate:.4g}" + (" (cap)" if hi == np.inf else "")
+            if hi == np.inf:
+                return f"{c.max_rate:.4g} (cap)"
+            return f"{c.max_rate:.4g} ({hi:.4g} refused)"
 
         print(f"| {pole:g} | {fmt(c0)} | {fmt(cz)} |")
     cx = fws.speed_certificate(PAPER, counterexample(), cells=20)
