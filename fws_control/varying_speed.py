@@ -45,13 +45,19 @@ Clarabel (the optional extra ``certificates``).
 
 *A posteriori proof, in numpy.* The solver's answer is not trusted: for the
 returned :math:`\mathbf P_j`, every :math:`\mathbf P(V_j)` must be positive
-definite (then so is the affine :math:`\mathbf P(V)` between them), and on
-each cell the largest eigenvalue of :math:`\mathbf N_s(t)` at a dense grid
-of :math:`t_k` (spacing :math:`\Delta t`) plus the Lipschitz bound
-:math:`\tfrac{\Delta t}{2}\sum_k k\lVert\mathbf N_{s,k}\rVert_2` of the
-polynomial (coefficients :math:`\mathbf N_{s,k}`) must be negative. The
-polynomial :math:`\mathbf W` is checked against the closed-loop matrix of
-the library (:func:`~fws_control.loop_matrices`) at those points too.
+definite (then so is the affine :math:`\mathbf P(V)` between them); the
+Gram matrices are projected onto the semidefinite cone and the residual
+:math:`\mathbf R(t) = \sum_k \mathbf R_k t^k` of the identity above is
+computed coefficient by coefficient, so that on :math:`[0, 1]`
+:math:`\lambda_{max}(\mathbf N_s(t)) \le -\varepsilon + \sum_k
+\lVert\mathbf R_k\rVert_2`, which must be negative on every cell. As an
+independent check, the largest eigenvalue of :math:`\mathbf A^T\mathbf P +
+\mathbf P\mathbf A \pm \rho\,\mathbf P'` with the library's closed-loop
+matrix (:func:`~fws_control.loop_matrices`) must be negative on a grid of
+4001 speeds. The polynomial :math:`\mathbf W` is checked against that
+matrix between its fitting points before the program is built (to
+:math:`10^{-8}`; a plant whose matrices are not affine in the speed is
+refused).
 
 *Why it proves stability.* Along any absolutely continuous :math:`V(t)`
 in the range with :math:`|\dot V| \le \rho`,
@@ -316,6 +322,20 @@ class _Cells:
         coef = np.linalg.solve(vand, np.moveaxis(vals, 1, 0).reshape(deg + 1, -1))
         self.W = np.moveaxis(coef.reshape(deg + 1, -1, n, n), 0, 1)  # (cells, k, n, n)
         self.n = n
+        # W must be a polynomial of degree 4 on each cell (plant matrices
+        # affine in V): checked between the fitting points
+        t = np.linspace(0.0, 1.0, 17)
+        direct = self.scaled(nodes[:-1, np.newaxis] + t * self.h[:, np.newaxis])
+        poly = np.einsum(
+            "tk,ckij->ctij", t[:, np.newaxis] ** np.arange(deg + 1), self.W
+        )
+        fit = float(np.abs(direct - poly).max())
+        if fit > 1e-8 * max(1.0, float(np.abs(direct).max())):
+            raise ValueError(
+                f"plant: its closed loop is not a degree-{deg} polynomial in the "
+                f"speed on a cell (fit error {fit:.3g}): the plant's matrices must "
+                "be affine in the speed (the kinematic models)"
+            )
         # (V/vref)^2 on a cell, in t: c0 + c1 t + c2 t^2
         v0, h = nodes[:-1] / self.vref, self.h / self.vref
         self.q = np.stack([v0**2, 2 * v0 * h, h**2], axis=1)
@@ -428,20 +448,6 @@ class _Cells:
                         f"{v[np.argmax(grid)]:.4g} m/s)"
                     ),
                 )
-        t = np.linspace(0.0, 1.0, 17)
-        vt = self.nodes[:-1, np.newaxis] + t * self.h[:, np.newaxis]
-        direct = self.scaled(vt)
-        powers = t[:, np.newaxis] ** np.arange(_DEGREE + 1)
-        poly = np.einsum("tk,ckij->ctij", powers, self.W)
-        fit = float(np.abs(direct - poly).max())
-        if fit > 1e-8 * max(1.0, float(np.abs(direct).max())):
-            return (
-                False,
-                math.nan,
-                f"the closed loop is not a degree-{_DEGREE} polynomial on a cell "
-                f"(fit error {fit:.3g}): the plant's matrices are not affine in "
-                "the speed",
-            )
         return True, worst, ""
 
 
@@ -578,8 +584,8 @@ def speed_certificate(
     plant : Vehicle or LateralPlant
         The loop's plant; its speed is replaced by the scheduled one. A
         vehicle gives the kinematic plant on a straight path; a
-        :class:`LateralPlant` keeps its model (``"kinematic"``, ``"exact"``
-        or ``"paper"``: matrices affine in the speed), curvature and
+        :class:`LateralPlant` keeps its model (``"kinematic"`` or
+        ``"paper"``: matrices affine in the speed), curvature and
         `steering_lag` (the lag's states join :math:`x`).
     gains : GainSchedule or callable
         The schedule, or a function ``speed -> SteeringGains`` (arrays in,
@@ -660,7 +666,7 @@ def speed_certificate(
     if plant.model == "dynamic":
         raise ValueError(
             "plant: model='dynamic' has matrices that are not affine in the speed; "
-            "speed_certificate takes model='kinematic', 'exact' or 'paper'"
+            "speed_certificate takes model='kinematic' or 'paper'"
         )
     if np.ndim(plant.curvature) != 0:
         raise ValueError(
