@@ -219,6 +219,10 @@ if TYPE_CHECKING:
         steady_turn as steady_turn,
         turning_radius as turning_radius,
     )
+    from .varying_speed import (
+        SpeedCertificate as SpeedCertificate,
+        speed_certificate as speed_certificate,
+    )
     from .vehicle import Vehicle as Vehicle
 # isort: on
 

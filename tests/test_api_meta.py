@@ -206,6 +206,10 @@ POSITIONAL_EXCEPTIONS = {
         {"ratio"},
         "evaluates the band at given ratios: the ratio is the data",
     ),
+    "SpeedCertificate.P_at": (
+        {"speed"},
+        "evaluates the Lyapunov matrix at given speeds [m/s]: the speed is the data",
+    ),
     "GainSchedule.at": (
         {"speed"},
         "evaluates the schedule at given speeds [m/s]: the speed is the data",
@@ -940,6 +944,12 @@ def _plot_factories():
             speeds=[10.0, 20.0], k1=[0.01, 0.004], k2=[0.3, 0.2], ratio=[0.0, 0.0]
         ).plot
 
+    def speed_certificate():
+        sch = fws.GainSchedule(
+            speeds=[10.0, 20.0], k1=[0.027, 0.00675], k2=[0.54, 0.27], ratio=[0.0, 0.0]
+        )
+        return fws.speed_certificate(veh, sch, rate=0.5, cells=2).plot
+
     def rear_band():
         return fws.rear_limit_band(
             veh, front_angle=np.linspace(0.02, 0.6, 20), rear_limit=0.05
@@ -967,6 +977,7 @@ def _plot_factories():
         "RearLimitBand.plot": rear_band,
         "ParetoFront.plot": pareto,
         "GainSchedule.plot": schedule,
+        "SpeedCertificate.plot": speed_certificate,
         "RobustRegion.plot": robust,
         "MostStableDesign.plot": most_stable,
         "KinematicDesignLimit.plot": design_limit,

@@ -71,9 +71,9 @@ Deliberately excluded (with the reason)
   ``BoundaryCurve``, ``CriticalDelay``, ``StabilityChart``, ``StabilityVerdict``,
   ``ControllerComparison``, ``DelayMarginChart``, ``TurningGeometry``,
   ``LinearNonlinearComparison``, ``SimulationResult``, ``TrackingMetrics``,
-  ``MostStableDesign``, ``ParetoFront``, ``RearLimitBand``, ``RearSaturation``,
-  ``StepSteerResponse``, ``StepResponseMetrics``, ``SteeringFrequencyResponse``,
-  ``SteadyStateCircle``,
+  ``MostStableDesign``, ``ParetoFront``, ``SpeedCertificate``, ``RearLimitBand``,
+  ``RearSaturation``, ``StepSteerResponse``, ``StepResponseMetrics``,
+  ``SteeringFrequencyResponse``, ``SteadyStateCircle``,
   ``Projection``: their fields are fuzzed through the functions that build
   them.
 * The arguments ``name`` (a label passed to python-control), ``ax`` and
@@ -142,6 +142,7 @@ EXCLUDED = {
     "RobustDesign": "result record",
     "MostStableDesign": "result record",
     "ParetoFront": "result record",
+    "SpeedCertificate": "result record",
     "RearLimitBand": "result record",
     "RearSaturation": "result record",
     "vehicles": "a module (example vehicle data sets, no callables)",
@@ -448,6 +449,21 @@ CASES: dict[str, Case] = {
         fws.schedule_gains,
         dict(plant=VEH),
         dict(speeds=[10.0, 20.0], delay=0.3, ratio=0.0, grid=4),
+        examples=3,
+    ),
+    "speed_certificate": Case(
+        fws.speed_certificate,
+        dict(
+            plant=VEH,
+            gains=fws.GainSchedule(
+                speeds=[5.0, 10.0],
+                k1=[0.108, 0.027],
+                k2=[1.08, 0.54],
+                ratio=[0.0, 0.0],
+            ),
+        ),
+        dict(speed_range=(5.0, 10.0), rate=0.5, cells=1),
+        post=finite_or_inf,
         examples=3,
     ),
     "double_root_gains": Case(
