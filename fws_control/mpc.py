@@ -72,6 +72,11 @@ _WHOLE_SAMPLES = 1e-9
 _MAX_ITER = 20_000
 #: Longest horizon [steps]: the QP has about 10 variables and rows per step.
 MAX_HORIZON = 2000
+#: Range of the sample time [s]: lateral controllers run at 1 to 10,000 Hz.
+MIN_SAMPLE_TIME, MAX_SAMPLE_TIME = 1e-4, 1.0
+#: Largest rear-to-front ratio magnitude of the ratio structure (production
+#: 4WS stays within 1).
+MAX_RATIO = 10.0
 
 
 def _import_osqp():
@@ -197,7 +202,7 @@ class MPCController(LateralController):
     Parameters
     ----------
     sample_time : float, optional
-        :math:`T_s` [s], > 0 (default 0.04).
+        :math:`T_s` [s], in ``[1e-4, 1]`` (default 0.04).
     horizon : int, optional
         Prediction horizon :math:`N` [steps], 1 to :data:`MAX_HORIZON`
         (default 50).
@@ -210,7 +215,8 @@ class MPCController(LateralController):
         (default 4, times the identity for independent axles).
     ratio : float, optional
         The paper's structure ``delta_r = ratio (delta_f - delta_ff)`` (one
-        input). ``None`` (default): both axles independent.
+        input), ``|ratio| <= 10``. ``None`` (default): both axles
+        independent.
     delay : float, optional
         Input delay :math:`\tau_d` [s] compensated by prediction, >= 0 and
         a whole number of sample times (default 0).
@@ -253,8 +259,11 @@ class MPCController(LateralController):
     def __post_init__(self) -> None:
         _import_osqp()
         ts = check_scalar("sample_time", self.sample_time)
-        if not ts > 0.0:
-            raise ValueError(f"sample_time must be > 0 s, got {self.sample_time!r}")
+        if not MIN_SAMPLE_TIME <= ts <= MAX_SAMPLE_TIME:
+            raise ValueError(
+                f"sample_time must be in [{MIN_SAMPLE_TIME:g}, {MAX_SAMPLE_TIME:g}] "
+                f"s, got {self.sample_time!r}"
+            )
         object.__setattr__(self, "sample_time", ts)
         h = self.horizon
         if (
@@ -274,7 +283,13 @@ class MPCController(LateralController):
             raise ValueError(f"Q must be positive semidefinite, got {self.Q!r}")
         object.__setattr__(self, "Q", Q)
         if self.ratio is not None:
-            object.__setattr__(self, "ratio", check_scalar("ratio", self.ratio))
+            a = check_scalar("ratio", self.ratio)
+            if abs(a) > MAX_RATIO:
+                raise ValueError(
+                    f"ratio must be in [-{MAX_RATIO:g}, {MAX_RATIO:g}], got "
+                    f"{self.ratio!r}"
+                )
+            object.__setattr__(self, "ratio", a)
             r = 4.0 if self.R is None else check_scalar("R", self.R)
             if not r > 0.0:
                 raise ValueError(f"R must be > 0 with ratio=, got {self.R!r}")
@@ -606,6 +621,10 @@ class MPCRun:
             A = sp.csc_matrix(
                 (Ax, self._A.indices, self._A.indptr), shape=self._A.shape
             )
+            # OSQP 1.0 renamed "polish" and made solve() raise on failure
+            # optional (its default to change): the status is checked here
+            new_api = int(str(osqp.__version__).split(".")[0]) >= 1
+            self._solve_kw = {"raise_error": False} if new_api else {}
             self._qp = osqp.OSQP()
             self._qp.setup(
                 self._P,
@@ -615,9 +634,9 @@ class MPCRun:
                 up,
                 eps_abs=c.tolerance,
                 eps_rel=c.tolerance,
-                polish=True,
                 max_iter=_MAX_ITER,
                 verbose=False,
+                **{"polishing" if new_api else "polish": True},
             )
             self._Ax = Ax
         else:
@@ -628,7 +647,7 @@ class MPCRun:
                 self._qp.update(l=lo, u=up)
             if self._warm is not None:
                 self._qp.warm_start(x=self._warm)
-        res = self._qp.solve()
+        res = self._qp.solve(**self._solve_kw)
         status = str(res.info.status)
         if status not in ("solved", "solved inaccurate") or res.x is None:
             raise RuntimeError(
