@@ -167,6 +167,19 @@ class MPCStep:
         OSQP's status (``"solved"``).
     iterations : int
         OSQP's iterations.
+    solve_time : float
+        OSQP's solve time [s] (its update of the QP's data excluded).
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> mpc = fws.MPCController(sample_time=0.04, horizon=20, delay=0.08)
+    >>> run = mpc.start(veh, fws.Straight(), speed=10.0)
+    >>> cmd = run.step(s=0.0, e=0.5, theta=0.0)
+    >>> step = run.last
+    >>> step.sent.shape, step.delay_states.shape, step.inputs.shape, step.status
+    ((2, 2), (3, 2), (20, 2), 'solved')
     """
 
     s: float
@@ -179,6 +192,7 @@ class MPCStep:
     curvature: np.ndarray
     status: str
     iterations: int
+    solve_time: float
 
 
 def _optional_limit(name: str, value: Any) -> float | None:
@@ -339,6 +353,12 @@ class MPCController(LateralController):
     def steering(self, vehicle, path, *, s, e, theta, curvature, speed):
         """Not a static law: an MPC is sampled (use :meth:`start`).
 
+        Parameters
+        ----------
+        vehicle, path, s, e, theta, curvature, speed
+            As in :meth:`LateralController.steering
+            <fws_control.LateralController.steering>`.
+
         Raises
         ------
         TypeError
@@ -354,6 +374,12 @@ class MPCController(LateralController):
 
     def system(self, vehicle, path, *, speed, name="controller"):
         """Not available: the python-control reference runs static laws only.
+
+        Parameters
+        ----------
+        vehicle, path, speed, name
+            As in :meth:`LateralController.system
+            <fws_control.LateralController.system>`.
 
         Raises
         ------
@@ -396,6 +422,17 @@ class MPCRun:
     sample, in time order. The commands it returns are the ones it assumes
     sent: after its first call the prediction over the delay uses exactly
     them (before it, the feedforward at the first measurement).
+
+    Parameters
+    ----------
+    controller : MPCController
+        Its parameters.
+    vehicle : Vehicle
+        Geometry and (optional) steering limits.
+    path : Path
+        The reference path.
+    speed : float
+        Speed :math:`V` [m/s], nonzero.
 
     Attributes
     ----------
@@ -572,7 +609,7 @@ class MPCRun:
             xs[j + 1] = Ad[j] @ xs[j] + Bd[j] @ (sent[j] - ff[j])
         x0 = xs[Nd]
         h = slice(Nd, Nd + N)
-        v, status, iters = self._solve(x0, Ad[h], BdG[h], ff[h])
+        X, v, status, iters, solve_time = self._solve(x0, Ad[h], BdG[h], ff[h])
         G = self._G
         cmd = ff[Nd:] + v @ G.T  # (N, 2) absolute commands
         # OSQP meets the bounds to its tolerance: the command sent meets them
@@ -583,11 +620,11 @@ class MPCRun:
             self._sent_last + self._step_limit,
         )
         u0 = np.clip(u0, -self._angle, self._angle)
-        states = np.empty((N + 1, 2))
-        states[0] = x0
-        for j in range(N):
-            states[j + 1] = Ad[Nd + j] @ states[j] + BdG[Nd + j] @ v[j]
-        self.last = MPCStep(s, e, theta, sent, xs, states, cmd, kappa, status, iters)
+        # the QP's own state variables (the model holds to OSQP's tolerance)
+        states = np.vstack([x0, X])
+        self.last = MPCStep(
+            s, e, theta, sent, xs, states, cmd, kappa, status, iters, solve_time
+        )
         if Nd:
             self._pending.popleft()
             self._pending.append(u0)
@@ -662,6 +699,6 @@ class MPCRun:
         self._warm = np.concatenate(
             [np.vstack([X[1:], X[-1:]]).ravel(), np.vstack([V[1:], V[-1:]]).ravel()]
         )
-        return V, status, int(res.info.iter)
+        return X, V, status, int(res.info.iter), float(res.info.solve_time)
 
     _warm: np.ndarray | None = None
