@@ -382,3 +382,31 @@ def test_bad_weights_refused(name, sign):
         return
     with pytest.raises(ValueError, match=name):
         fws.MPCController(**{name: bad})
+
+
+def test_a_stopped_run_leaves_the_others_running():
+    """On an open path the run that leaves it stops there (its status says
+    so); the other run of the batch goes on as it does alone."""
+    mpc = fws.MPCController(sample_time=0.05, horizon=20)
+    plant = fws.LateralPlant(VEH, speed=10.0)
+    path = fws.Straight(length=20.0)
+    x0 = np.array([[1.0, 0.5, 0.0], [14.0, -0.5, 0.0]])
+    kw = dict(duration=1.0, dt=0.01)
+    batch = fws.simulate_batch(plant, path, mpc, initial_state=x0, **kw)
+    assert list(batch.status) == ["ok", "end_of_path"]
+    # the second run's rear axle reaches s = 20 after about 0.6 s
+    assert 0.5 < batch.t_stop[1] < 0.7
+    for i in range(2):
+        one = fws.simulate(plant, path, mpc, initial_state=x0[i], **kw)
+        assert one.status == batch.status[i]
+        assert one.t_stop == pytest.approx(batch.t_stop[i], abs=1e-9)
+        n = len(one.e)
+        np.testing.assert_allclose(batch.e[i][:n], one.e, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("name", ["s", "e", "theta"])
+def test_step_refuses_non_finite_measurements(name):
+    run = fws.MPCController(horizon=5).start(VEH, fws.Straight(), speed=5.0)
+    meas = dict(s=0.0, e=0.1, theta=0.0) | {name: math.nan}
+    with pytest.raises(ValueError, match=name):
+        run.step(**meas)

@@ -1378,8 +1378,12 @@ def integrate(
     ----------
     vehicle, path
         Shared by all runs.
-    gains : SteeringGains
-        Per run (fields of shape ``(n,)`` or scalars that broadcast).
+    gains : SteeringGains or LateralController
+        Per run (fields of shape ``(n,)`` or scalars that broadcast). A
+        sampled controller (:func:`is_sampled`) is integrated piece by piece
+        between its samples, its held command two more state rows
+        (:func:`hold_row`): the solver restarts at every measurement and
+        switch of the command, and no delayed rows are returned.
     speed : ndarray
         Per run speed, shape ``(n,)``; its size is the number of runs.
     feedforward : bool
