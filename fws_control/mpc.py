@@ -61,7 +61,13 @@ import numpy as np
 from .baselines import LateralController
 from .paths import Path
 from .plant import LateralPlant
-from .validation import check_delay, check_finite, check_scalar, check_type
+from .validation import (
+    MAX_SPEED,
+    check_delay,
+    check_finite,
+    check_scalar,
+    check_type,
+)
 from .vehicle import Vehicle
 
 __all__ = ["MPCController", "MPCStep", "MPCRun", "zoh_discretize"]
@@ -456,8 +462,11 @@ class MPCRun:
         check_type("vehicle", vehicle, Vehicle)
         check_type("path", path, Path, "a fws_control Path (e.g. fws.Straight())")
         V = check_scalar("speed", speed)
-        if V == 0.0:
-            raise ValueError(f"speed must be finite and nonzero, got {speed!r}")
+        if V == 0.0 or abs(V) > MAX_SPEED:
+            raise ValueError(
+                f"speed must be nonzero with magnitude <= {MAX_SPEED:g} m/s, got "
+                f"{speed!r}"
+            )
         self.controller = controller
         self.vehicle = vehicle
         self.path = path
@@ -487,6 +496,8 @@ class MPCRun:
         self._sent_last: np.ndarray | None = None
         self._kappa: np.ndarray | None = None
         self._model: tuple[np.ndarray, ...] | None = None
+        # the previous solution shifted by one step (the next warm start)
+        self._warm: np.ndarray | None = None
         self._setup_qp(N, nu)
 
     # -- the QP's fixed structure --------------------------------------------
@@ -700,5 +711,3 @@ class MPCRun:
             [np.vstack([X[1:], X[-1:]]).ravel(), np.vstack([V[1:], V[-1:]]).ravel()]
         )
         return X, V, status, int(res.info.iter), float(res.info.solve_time)
-
-    _warm: np.ndarray | None = None

@@ -410,3 +410,15 @@ def test_step_refuses_non_finite_measurements(name):
     meas = dict(s=0.0, e=0.1, theta=0.0) | {name: math.nan}
     with pytest.raises(ValueError, match=name):
         run.step(**meas)
+
+
+@pytest.mark.parametrize("ts", [1e-300, -0.1, math.nan, math.inf])
+def test_bad_sample_time_of_any_sampled_controller_refused(ts):
+    with pytest.raises(ValueError, match="sample_time"):
+        fws.simulate(
+            fws.LateralPlant(VEH, speed=5.0),
+            fws.Straight(),
+            SampledP(sample_time=ts),
+            initial_state=(0.0, 1.0, 0.0),
+            duration=10.0,
+        )

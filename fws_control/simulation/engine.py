@@ -26,6 +26,7 @@ subpackage, not part of the top-level API.
 from __future__ import annotations
 
 import bisect
+import heapq
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -1585,8 +1586,34 @@ def hold_row(controller: Any, time_constant: float | None) -> int | None:
 _WHOLE_SAMPLES = 1e-9
 
 
+#: Most samples of a sampled controller in one run: each restarts the solver
+#: and calls the controller (an MPC step costs about a millisecond).
+MAX_SAMPLES = 1_000_000
+
+
+def check_sampling(controller: Any, duration: float) -> None:
+    """Refuse a sampled controller's `sample_time` that is not a number > 0,
+    or more than :data:`MAX_SAMPLES` samples over `duration` [s]."""
+    ts = controller.sample_time
+    if isinstance(ts, (bool, np.bool_)) or not isinstance(
+        ts, (int, float, np.integer, np.floating)
+    ):
+        raise TypeError(
+            f"controller.sample_time must be a number of seconds, got {ts!r}"
+        )
+    if not (math.isfinite(ts) and ts > 0.0):
+        raise ValueError(f"controller.sample_time must be finite and > 0 s, got {ts!r}")
+    if duration / ts > MAX_SAMPLES:
+        raise ValueError(
+            f"controller.sample_time={ts!r} s over duration={duration!r} s gives "
+            f"{duration / ts:.3g} samples, more than MAX_SAMPLES = {MAX_SAMPLES:g} "
+            "(each restarts the solver and calls the controller); a longer "
+            "sample_time or a shorter duration"
+        )
+
+
 def _sample_events(t0: float, t_end: float, sample_time: float, delay: float):
-    """``(time, kind, k)`` of a sampled run, in the order they happen.
+    """``(time, kind, k)`` of a sampled run, in the order they happen (lazily).
 
     Sample ``k`` measures the state at ``t0 + k Ts`` (the initial state for
     ``k <= 0``: the state is held before ``t0``) and its command is applied
@@ -1600,14 +1627,12 @@ def _sample_events(t0: float, t_end: float, sample_time: float, delay: float):
         d = round(d)
     k_first = math.floor(-d)
     k_last = math.floor((t_end - t0) / ts - d)  # the last switch before t_end
-    events = []
-    for k in range(k_first, k_last + 1):
-        events.append((t0 + max(k, 0) * ts, 0, k))
-        switch = t0 + (k + d) * ts
-        if switch < t_end:
-            events.append((max(switch, t0), 1, k))
-    events.sort()
-    return events
+    samples = range(k_first, k_last + 1)
+    measures = ((t0 + max(k, 0) * ts, 0, k) for k in samples)
+    switches = (
+        (max(t0 + (k + d) * ts, t0), 1, k) for k in samples if t0 + (k + d) * ts < t_end
+    )
+    return heapq.merge(measures, switches)
 
 
 def _integrate_sampled(
@@ -1644,16 +1669,16 @@ def _integrate_sampled(
     Y = np.zeros((m, n))
     Y[:3] = np.asarray(path_state, dtype=float).T
     events = _sample_events(t0, t_end, float(ctrl.sample_time), delay)
+    nxt = next(events, None)
     pending: dict[int, np.ndarray] = {}
     active = np.arange(n)
     history = None
-    pos = 0
     t_cur = t0
     solver_cls = check_method(method)
     while True:
-        while pos < len(events) and events[pos][0] <= t_cur:
-            _, kind, k = events[pos]
-            pos += 1
+        while nxt is not None and nxt[0] <= t_cur:
+            _, kind, k = nxt
+            nxt = next(events, None)
             if kind == 0:
                 cmd = np.array(
                     [
@@ -1690,7 +1715,7 @@ def _integrate_sampled(
             pending = {k: v[:, ~bad] for k, v in pending.items()}
         if active.size == 0 or t_cur >= t_end:
             break
-        seg_end = events[pos][0] if pos < len(events) else t_end
+        seg_end = t_end if nxt is None else nxt[0]
         eng = engine_for(active)
         first = int(np.searchsorted(t_eval, t_cur, side="right"))
 

@@ -64,12 +64,14 @@ from .engine import (
     check_method,
     check_model,
     check_output_budget,
+    check_sampling,
     check_tolerances,
     choose_method,
     compute_outputs,
     exact_peaks,
     initial_path_state,
     integrate,
+    is_sampled,
     output_samples,
     resolve_time_constant,
     run_gains,
@@ -745,6 +747,8 @@ def _prepare(
     )
     t = time_grid(duration, dt=dt, t_eval=t_eval)
     span = float(t[-1] - t[0])
+    if ctrl is not None and is_sampled(ctrl):
+        check_sampling(ctrl, span)
     if 0.0 < opts["delay"] < span / _MAX_DELAY_STEPS:
         # the method of steps takes steps no longer than the delay: a delay of
         # 1e-300 s would never finish
