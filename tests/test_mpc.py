@@ -422,3 +422,28 @@ def test_bad_sample_time_of_any_sampled_controller_refused(ts):
             initial_state=(0.0, 1.0, 0.0),
             duration=10.0,
         )
+
+
+def test_compensation_keeps_the_delayed_lane_change_on_course():
+    """docs/mpc.md: the compensating MPC completes the course with the
+    largest |e| printed there; without compensation it does not complete."""
+    import re
+    from pathlib import Path
+
+    text = " ".join(
+        (Path(__file__).resolve().parents[1] / "docs" / "mpc.md").read_text().split()
+    )
+    printed = re.search(r"largest lateral error of ([\d.]+) m", text)[1]
+    Q = np.diag([1.0, 4.0])
+    ctrls = {
+        tau: fws.MPCController(
+            sample_time=0.04, horizon=50, Q=Q, R=4.0 * np.eye(2), delay=tau
+        )
+        for tau in (0.24, 0.0)
+    }
+    plant = fws.LateralPlant(VEH, speed=10.0)
+    cmp = fws.compare(plant, fws.double_lane_change(), ctrls, delay=0.24)
+    done = [bool(c) for c in cmp.table["completed"]]
+    assert done == [True, False]
+    worst = float(cmp.table["max e [m]"][0])
+    assert round(worst, len(printed.split(".")[1])) == float(printed), worst
