@@ -144,6 +144,11 @@ if TYPE_CHECKING:
         path_frame_model as path_frame_model,
         yaw_rate as yaw_rate,
     )
+    from .mpc import (
+        MPCController as MPCController,
+        MPCRun as MPCRun,
+        MPCStep as MPCStep,
+    )
     from .openloop import (
         SteadyStateCircle as SteadyStateCircle,
         SteeringFrequencyResponse as SteeringFrequencyResponse,

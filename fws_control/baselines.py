@@ -117,12 +117,13 @@ def saturate(vehicle: Vehicle, delta_f, delta_r) -> tuple[np.ndarray, np.ndarray
 
 
 class LateralController:
-    """Interface of a static lateral controller (subclasses are frozen dataclasses).
+    """Interface of a lateral controller (subclasses are frozen dataclasses).
 
-    A subclass implements :meth:`steering`; it may override
+    A static law implements :meth:`steering`; it may override
     :meth:`steering_rate` with an analytic rate (the default is a central
     difference along the motion). Array-valued parameters hold one value per
-    run and are indexed by :meth:`subset`.
+    run and are indexed by :meth:`subset`. A sampled controller declares a
+    :attr:`sample_time` instead.
 
     Examples
     --------
@@ -145,6 +146,17 @@ class LateralController:
 
     #: Short name used in tables and legends.
     label = "controller"
+
+    #: Sample time [s] of a sampled controller; ``None`` (here): a static law,
+    #: evaluated at every solver stage. A sampled controller (e.g.
+    #: :class:`~fws_control.MPCController`) sets it and implements
+    #: ``start(vehicle, path, *, speed)``, which returns the state of one run
+    #: with a method ``step(*, s, e, theta) -> (delta_f, delta_r)``.
+    #: :func:`~fws_control.simulate` calls ``step`` with the state at the
+    #: sample times ``k * sample_time`` (the initial state for the samples at
+    #: or before the start) and holds each command for one sample time from
+    #: ``k * sample_time + delay`` (zero-order hold), on the numpy engine.
+    sample_time: float | None = None
 
     def steering(self, vehicle, path, *, s, e, theta, curvature, speed):
         """Steering angles ``(delta_f, delta_r)`` [rad], before saturation.

@@ -126,6 +126,24 @@ def default_controllers(
         "Stanley": Stanley(gain=1.0),
         f"LQR (a = {ratio:g})": LQRController(plant, Q=Q, R=4.0, ratio=ratio),
         "LQR (independent rear)": LQRController(plant, Q=Q, R=4.0 * np.eye(2)),
+        **_mpc_controllers(Q),
+    }
+
+
+def _mpc_controllers(Q: np.ndarray) -> dict[str, Any]:
+    """The LTV MPC with the LQR designs' weights, where its extra is installed."""
+    import importlib.util
+
+    if importlib.util.find_spec("osqp") is None:
+        return {}
+    from .mpc import MPCController
+
+    # the weights of the LQR designs; 25 Hz, a 2 s horizon; no delay to
+    # compensate (pass MPCController(delay=...) for a delayed comparison)
+    return {
+        "linear MPC (independent rear)": MPCController(
+            sample_time=0.04, horizon=50, Q=Q, R=4.0 * np.eye(2)
+        )
     }
 
 

@@ -81,6 +81,10 @@ FIRST_PARAMETER_EXCEPTIONS = {
     "paper_figure_panels": ("n", "the paper's figure number: panels of Fig. n"),
     "plot_paper_figure": ("n", "the paper's figure number: plot_paper_figure(3)"),
     "reproduce": ("out", "the output directory is what it fills: reproduce(out)"),
+    "MPCRun": (
+        "controller",
+        "the state of one run of a controller: MPCRun(controller, vehicle, path)",
+    ),
 }
 
 # Check 2: names that are *data* and may be positional (positional-or-keyword)
@@ -156,6 +160,7 @@ RECORD_CLASSES = {
     "Gate": "geometry record (x_start, x_end, y_right, y_left, name)",
     "Manoeuvre": "course record (name, path, gates, vehicle_width, start_x)",
     "ControllerComparison": "result record of compare",
+    "MPCStep": "result record of MPCRun.step (measurement, prediction, plan)",
 }
 
 # Check 2: further parameters that are data for one particular callable.

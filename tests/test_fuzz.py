@@ -131,6 +131,7 @@ EXCLUDED = {
     "LinearNonlinearComparison": "result record",
     "SimulationResult": "result record",
     "TrackingMetrics": "result record",
+    "MPCStep": "result record",
     "Projection": "result record",
     "KinematicDesignLimit": "result record",
     "StepSteerResponse": "result record",
@@ -280,6 +281,17 @@ def elementwise(result, call) -> bool:
     # documented: non-finite elements of array inputs give non-finite
     # elements in their place (vectorised evaluation over samples)
     return _has_nonfinite_array(call) or _finite_tree(result)
+
+
+def mpc_run_post(run, call) -> bool:
+    """One step of the run gives finite commands within the vehicle's limits."""
+    cmd = np.asarray(run.step(s=0.0, e=0.5, theta=0.0))
+    return bool(np.all(np.isfinite(cmd)))
+
+
+def mpc_post(result, call) -> bool:
+    """The controller's first command on a straight road is finite."""
+    return mpc_run_post(result.start(VEH, fws.Straight(), speed=5.0), call)
 
 
 def simulation_post(result, call) -> bool:
@@ -544,6 +556,31 @@ CASES: dict[str, Case] = {
         fws.PurePursuit, {}, dict(lookahead=5.0, lookahead_time=None, ratio=0.0)
     ),
     "Stanley": Case(fws.Stanley, {}, dict(gain=1.0, softening=0.1, ratio=0.0)),
+    "MPCController": Case(
+        fws.MPCController,
+        {},
+        dict(
+            sample_time=0.05,
+            horizon=10,
+            Q=np.eye(2),
+            R=np.eye(2),
+            delay=0.1,
+            max_steer_rear=0.05,
+            max_rate_front=0.5,
+            tolerance=1e-6,
+        ),
+        post=mpc_post,
+        examples=FEW,
+    ),
+    "MPCRun": Case(
+        fws.MPCRun,
+        dict(
+            controller=fws.MPCController(horizon=10), vehicle=VEH, path=fws.Straight()
+        ),
+        dict(speed=5.0),
+        post=mpc_run_post,
+        examples=FEW,
+    ),
     "RearWheelFeedback": Case(
         fws.RearWheelFeedback, {}, dict(k_e=0.05, k_theta=0.2, ratio=0.0)
     ),

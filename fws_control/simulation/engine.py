@@ -26,6 +26,7 @@ subpackage, not part of the top-level API.
 from __future__ import annotations
 
 import bisect
+import heapq
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -1000,8 +1001,11 @@ class _Engine:
 
     def __init__(
         self, vehicle, path, gains, speed, feedforward, tau, delay=0.0, history=None,
-        runs=None, model="kinematic", tyre="linear",
+        runs=None, model="kinematic", tyre="linear", hold=None,
     ):  # fmt: skip
+        # hold: first of the two rows of a sampled controller's held command
+        # (None: a static law, evaluated at every stage)
+        self.hold = hold
         self.delay = delay
         self.history = history
         self.runs = runs
@@ -1014,7 +1018,11 @@ class _Engine:
         self.tau = tau
         self.dynamic = model == "dynamic"
         self.tyre = tyre
-        self.m = (3 if tau is None else 5) + (2 if self.dynamic else 0)
+        self.m = (
+            (3 if tau is None else 5)
+            + (0 if hold is None else 2)
+            + (2 if self.dynamic else 0)
+        )
         self._kappa = _curvature_function(path)
         length = float(getattr(path, "length", math.inf))
         self.open_length = (
@@ -1036,6 +1044,10 @@ class _Engine:
 
     def command(self, Y, kappa, t):
         """Controller output at time `t`, from the measurements at ``t - delay``."""
+        if self.hold is not None:
+            # a sampled controller: the command held since its last sample
+            # (already delayed and saturated when it was set)
+            return Y[self.hold], Y[self.hold + 1]
         if self.delayed is not None:  # delayed states given (output stage)
             Y, kappa = self.delayed, self.curvature(self.delayed[0])
         elif self.delay > 0.0 and self.history is not None:
@@ -1068,6 +1080,11 @@ class _Engine:
 
     def command_rate(self, Y, Ydot, kappa):
         """Time derivative of the command for (delayed) states and their rates."""
+        if self.hold is not None:
+            # piecewise constant: no rate between the samples (its jumps are
+            # not rates)
+            zero = np.zeros(np.shape(Y[0]))
+            return zero, zero.copy()
         kappa_rate = (
             np.asarray(self.path.curvature_rate(self.clip(Y[0])), dtype=float) * Ydot[0]
         )
@@ -1125,12 +1142,13 @@ class _Engine:
                 s_dot, e_dot, th_dot = equations.path_frame_derivatives(
                     self.speed, self.vehicle.wheelbase, kappa, e, th, df, dr
                 )
+        held = () if self.hold is None else (np.zeros_like(s_dot),) * 2
         if self.tau is None:
-            Ydot = np.stack([s_dot, e_dot, th_dot, *body])
+            Ydot = np.stack([s_dot, e_dot, th_dot, *held, *body])
         else:
             cmd = self.command(Y, kappa, t)
             rf, rr = actuator_rate(self.vehicle, cmd, (df, dr), time_constant=self.tau)
-            Ydot = np.stack([s_dot, e_dot, th_dot, rf, rr, *body])
+            Ydot = np.stack([s_dot, e_dot, th_dot, rf, rr, *held, *body])
         return Ydot, kappa, df, dr
 
     def rhs(self, t, y):
@@ -1361,8 +1379,12 @@ def integrate(
     ----------
     vehicle, path
         Shared by all runs.
-    gains : SteeringGains
-        Per run (fields of shape ``(n,)`` or scalars that broadcast).
+    gains : SteeringGains or LateralController
+        Per run (fields of shape ``(n,)`` or scalars that broadcast). A
+        sampled controller (:func:`is_sampled`) is integrated piece by piece
+        between its samples, its held command two more state rows
+        (:func:`hold_row`): the solver restarts at every measurement and
+        switch of the command, and no delayed rows are returned.
     speed : ndarray
         Per run speed, shape ``(n,)``; its size is the number of runs.
     feedforward : bool
@@ -1429,6 +1451,13 @@ def integrate(
     >>> states.shape, status.tolist(), t_stop.tolist()
     ((3, 2, 11), ['ok', 'ok'], [1.0, 1.0])
     """
+    if is_sampled(gains):
+        return _integrate_sampled(
+            vehicle, path, gains, speed=speed, feedforward=feedforward,
+            path_state=path_state, t_eval=t_eval, time_constant=time_constant,
+            method=method, rtol=rtol, atol=atol, delay=delay, solution=solution,
+            model=model, tyre=tyre, body_state=body_state,
+        )  # fmt: skip
     tau = time_constant
     z0 = np.asarray(path_state, dtype=float)
     n = speed.size
@@ -1522,39 +1551,10 @@ def integrate(
                 break
             Y, t0 = seg.y_last.reshape(m, active.size), seg_end
             continue
-        Y_last = seg.y_last.reshape(m, active.size)
-        marg = eng.margins(Y_last, seg.t_last)
-        j = int(np.argmin(np.min(marg, axis=0)))
-        kind = _STOP_KINDS[int(np.argmin(marg[:, j]))]
-        if seg.outcome == "event":
-            note = _STOP_MESSAGES[kind]
-        elif np.min(marg[:, j]) < _COLLAPSE_MARGIN:
-            # Near |delta_f| = pi/2 the solution has a square-root singularity
-            # (d delta_f/dt ~ 1/cos delta_f): the step size collapses before
-            # any accepted step crosses it, so the event cannot fire.
-            note = (
-                f"{_STOP_MESSAGES[kind]} (the solver's step size collapsed "
-                f"{float(np.min(marg[:, j])):.2g} away from it)"
-            )
-        else:
-            for i in active:
-                status[i], t_stop[i] = STATUS_FAILED, seg.t_last
-                message[i] = (
-                    f"at t={seg.t_last:.6g} s the ODE solver failed: {seg.message}"
-                )
+        keep = _stop_runs(eng, seg, active, status, message, t_stop)
+        if keep is None:
             break
-        # The run that set the stop, and any other at its margin there too
-        # (e.g. identical runs): one left in would start the next segment
-        # past its stop, where no sign change can be seen.
-        stops = np.union1d([j], np.flatnonzero(~(np.min(marg, axis=0) > 0.0)))
-        for jj in stops:
-            kind_jj = _STOP_KINDS[int(np.argmin(marg[:, jj]))]
-            i = active[jj]
-            status[i], t_stop[i] = kind_jj, seg.t_last
-            message[i] = f"at t={seg.t_last:.6g} s: " + (
-                note if jj == j else _STOP_MESSAGES[kind_jj]
-            )
-        keep = ~np.isin(np.arange(active.size), stops)
+        Y_last = seg.y_last.reshape(m, active.size)
         active, Y, t0 = active[keep], Y_last[:, keep], seg.t_last
     if delay > 0.0:
         out = np.concatenate(
@@ -1563,6 +1563,225 @@ def integrate(
     if solution is not None:
         solution.append(DenseSolution(history, engine_for, delay))
     return out, status, message, t_stop
+
+
+def is_sampled(controller: Any) -> bool:
+    """True for a sampled controller (one that declares a ``sample_time``)."""
+    return getattr(controller, "sample_time", None) is not None
+
+
+def hold_row(controller: Any, time_constant: float | None) -> int | None:
+    """First state row of a sampled controller's held command (else None).
+
+    The rows follow ``s, e, theta`` and the actuator's ``delta_f, delta_r``
+    (with a lag) and precede the dynamic model's ``v_y, r``.
+    """
+    if not is_sampled(controller):
+        return None
+    return 3 if time_constant is None else 5
+
+
+#: Relative slack with which a delay counts as a whole number of samples
+#: (then the commands switch exactly at the sample times).
+_WHOLE_SAMPLES = 1e-9
+
+
+#: Most samples of a sampled controller in one run: each restarts the solver
+#: and calls the controller (an MPC step costs about a millisecond).
+MAX_SAMPLES = 1_000_000
+
+
+def check_sampling(controller: Any, duration: float) -> None:
+    """Refuse a sampled controller's `sample_time` that is not a number > 0,
+    or more than :data:`MAX_SAMPLES` samples over `duration` [s]."""
+    ts = controller.sample_time
+    if isinstance(ts, (bool, np.bool_)) or not isinstance(
+        ts, (int, float, np.integer, np.floating)
+    ):
+        raise TypeError(
+            f"controller.sample_time must be a number of seconds, got {ts!r}"
+        )
+    if not (math.isfinite(ts) and ts > 0.0):
+        raise ValueError(f"controller.sample_time must be finite and > 0 s, got {ts!r}")
+    if duration / ts > MAX_SAMPLES:
+        raise ValueError(
+            f"controller.sample_time={ts!r} s over duration={duration!r} s gives "
+            f"{duration / ts:.3g} samples, more than MAX_SAMPLES = {MAX_SAMPLES:g} "
+            "(each restarts the solver and calls the controller); a longer "
+            "sample_time or a shorter duration"
+        )
+
+
+def _sample_events(t0: float, t_end: float, sample_time: float, delay: float):
+    """``(time, kind, k)`` of a sampled run, in the order they happen (lazily).
+
+    Sample ``k`` measures the state at ``t0 + k Ts`` (the initial state for
+    ``k <= 0``: the state is held before ``t0``) and its command is applied
+    from ``t0 + k Ts + delay`` until the next one's; kind 0 is the
+    measurement, kind 1 the switch. The first sample is the one whose command
+    is applied at ``t0``.
+    """
+    ts = sample_time
+    d = delay / ts
+    if abs(d - round(d)) <= _WHOLE_SAMPLES * max(1.0, d):
+        d = round(d)
+    k_first = math.floor(-d)
+    k_last = math.floor((t_end - t0) / ts - d)  # the last switch before t_end
+    samples = range(k_first, k_last + 1)
+    measures = ((t0 + max(k, 0) * ts, 0, k) for k in samples)
+    switches = (
+        (max(t0 + (k + d) * ts, t0), 1, k) for k in samples if t0 + (k + d) * ts < t_end
+    )
+    return heapq.merge(measures, switches)
+
+
+def _integrate_sampled(
+    vehicle, path, ctrl, *, speed, feedforward, path_state, t_eval, time_constant,
+    method, rtol, atol, delay, solution, model, tyre, body_state,
+):  # fmt: skip
+    """:func:`integrate` with a sampled controller (zero-order hold).
+
+    The controller's command is a pair of state rows (:func:`hold_row`),
+    constant between its switches: the solver restarts at every measurement
+    and switch time (:func:`_sample_events`), where the rows are set to the
+    command of that sample, computed by the run's own ``ctrl.start(...)``
+    from the state at the measurement time. The delay is in the switch
+    times, so no delayed rows are returned.
+    """
+    tau = time_constant
+    n, T = speed.size, t_eval.size
+    dyn = model == "dynamic"
+    hold = hold_row(ctrl, tau)
+    m = hold + 2 + (2 if dyn else 0)
+    out = np.full((m, n, T), np.nan)
+    status = np.full(n, STATUS_OK, dtype=object)
+    message = np.full(n, "", dtype=object)
+    t_stop = np.full(n, t_eval[-1])
+    runs = [ctrl.start(vehicle, path, speed=float(v)) for v in speed]
+
+    def engine_for(idx):
+        return _Engine(
+            vehicle, path, ctrl, speed[idx], feedforward, tau, runs=idx,
+            model=model, tyre=tyre, hold=hold,
+        )  # fmt: skip
+
+    t0, t_end = float(t_eval[0]), float(t_eval[-1])
+    Y = np.zeros((m, n))
+    Y[:3] = np.asarray(path_state, dtype=float).T
+    events = _sample_events(t0, t_end, float(ctrl.sample_time), delay)
+    nxt = next(events, None)
+    pending: dict[int, np.ndarray] = {}
+    active = np.arange(n)
+    history = None
+    t_cur = t0
+    solver_cls = check_method(method)
+    while True:
+        while nxt is not None and nxt[0] <= t_cur:
+            _, kind, k = nxt
+            nxt = next(events, None)
+            if kind == 0:
+                cmd = np.array(
+                    [
+                        runs[i].step(s=Y[0, j], e=Y[1, j], theta=Y[2, j])
+                        for j, i in enumerate(active)
+                    ]
+                ).reshape(active.size, 2)
+                pending[k] = np.stack(saturate(vehicle, cmd[:, 0], cmd[:, 1]))
+                continue
+            Y[hold : hold + 2] = pending.pop(k)
+            if history is not None:
+                # a switch at an output time: that sample shows the new
+                # command (the hold is right-continuous)
+                at = np.flatnonzero(np.abs(t_eval - t_cur) <= 1e-9 * ctrl.sample_time)
+                if at.size:
+                    rows = Y[hold : hold + 2, :, None]
+                    out[hold : hold + 2, active[:, None], at[None, :]] = rows
+        if history is None:
+            # the start: the actuator at the first command, the body rolling
+            # without slip, the margins checked
+            if tau is not None:
+                Y[3:5] = Y[hold : hold + 2]
+            if dyn:
+                _initial_body_state(vehicle, Y, Y[hold : hold + 2], speed, body_state)
+            out[:, :, 0] = Y
+            history = _History(t0, Y.copy())
+            marg = engine_for(active).margins(Y, t0)
+            bad = np.min(marg, axis=0) <= 0.0
+            for i in np.flatnonzero(bad):
+                kind = _STOP_KINDS[int(np.argmin(marg[:, i]))]
+                status[i], t_stop[i] = kind, t0
+                message[i] = f"initial state: {_STOP_MESSAGES[kind]}"
+            active, Y = active[~bad], Y[:, ~bad]
+            pending = {k: v[:, ~bad] for k, v in pending.items()}
+        if active.size == 0 or t_cur >= t_end:
+            break
+        seg_end = t_end if nxt is None else nxt[0]
+        eng = engine_for(active)
+        first = int(np.searchsorted(t_eval, t_cur, side="right"))
+
+        def store(k, y, first=first, active=active):
+            out[:, active, first + k : first + k + y.shape[1]] = y.reshape(
+                m, active.size, -1
+            )
+
+        seg = _solve_segment(
+            eng, solver_cls, t_cur, Y.ravel(), seg_end, t_eval[first:], rtol, atol,
+            store, record=history, runs=active,
+        )  # fmt: skip
+        if seg.outcome == "done":
+            Y, t_cur = seg.y_last.reshape(m, active.size).copy(), seg_end
+            continue
+        keep = _stop_runs(eng, seg, active, status, message, t_stop)
+        if keep is None:
+            break
+        # the stopped runs take no more samples; the others go on from the stop
+        Y = seg.y_last.reshape(m, active.size)[:, keep].copy()
+        active, t_cur = active[keep], seg.t_last
+        pending = {k: v[:, keep] for k, v in pending.items()}
+    if solution is not None:
+        if history is None:
+            history = _History(t0, Y.copy())
+        solution.append(DenseSolution(history, engine_for, 0.0))
+    return out, status, message, t_stop
+
+
+def _stop_runs(eng, seg, active, status, message, t_stop):
+    """Mark the runs a segment's stop ended; return the mask of those left.
+
+    A solver failure away from any singular state fails every active run
+    (returns None).
+    """
+    Y_last = seg.y_last.reshape(eng.m, active.size)
+    marg = eng.margins(Y_last, seg.t_last)
+    j = int(np.argmin(np.min(marg, axis=0)))
+    kind = _STOP_KINDS[int(np.argmin(marg[:, j]))]
+    if seg.outcome == "event":
+        note = _STOP_MESSAGES[kind]
+    elif np.min(marg[:, j]) < _COLLAPSE_MARGIN:
+        # Near |delta_f| = pi/2 the solution has a square-root singularity
+        # (d delta_f/dt ~ 1/cos delta_f): the step size collapses before
+        # any accepted step crosses it, so the event cannot fire.
+        note = (
+            f"{_STOP_MESSAGES[kind]} (the solver's step size collapsed "
+            f"{float(np.min(marg[:, j])):.2g} away from it)"
+        )
+    else:
+        for i in active:
+            status[i], t_stop[i] = STATUS_FAILED, seg.t_last
+            message[i] = f"at t={seg.t_last:.6g} s the ODE solver failed: {seg.message}"
+        return None
+    # The run that set the stop, and any other at its margin there too
+    # (e.g. identical runs): one left in would start the next segment
+    # past its stop, where no sign change can be seen.
+    stops = np.union1d([j], np.flatnonzero(~(np.min(marg, axis=0) > 0.0)))
+    for jj in stops:
+        kind_jj = _STOP_KINDS[int(np.argmin(marg[:, jj]))]
+        i = active[jj]
+        status[i], t_stop[i] = kind_jj, seg.t_last
+        message[i] = f"at t={seg.t_last:.6g} s: " + (
+            note if jj == j else _STOP_MESSAGES[kind_jj]
+        )
+    return ~np.isin(np.arange(active.size), stops)
 
 
 def _initial_body_state(vehicle, Y, cmd, speed, body_state) -> None:
@@ -1666,7 +1885,8 @@ def compute_outputs(
         time and put on the branch of this value.
     delay : float, optional
         The input delay given to :func:`integrate` [s]; its six extra rows
-        of `states` then give the applied (delayed) steering command.
+        of `states` then give the applied (delayed) steering command (for a
+        sampled controller the held rows give it: no extra rows).
     model, tyre : str, optional
         As given to :func:`integrate`.
 
@@ -1700,7 +1920,8 @@ def compute_outputs(
     tau = time_constant
     psi0 = np.asarray(initial_heading, dtype=float)
     delayed = None
-    if delay > 0.0:
+    # (a sampled controller's held rows already hold the delayed command)
+    if delay > 0.0 and not is_sampled(gains):
         delayed, states = states[-6:], states[:-6]
     m, n, T = states.shape
     valid = np.isfinite(states[0])
@@ -1718,7 +1939,10 @@ def compute_outputs(
     else:
         g = gains.subset(run_idx) if gains.runs() else gains
     V = speed[run_idx]
-    eng = _Engine(vehicle, path, g, V, feedforward, tau, model=model, tyre=tyre)
+    eng = _Engine(
+        vehicle, path, g, V, feedforward, tau, model=model, tyre=tyre,
+        hold=hold_row(gains, tau),
+    )  # fmt: skip
     if delayed is not None:
         Yd, Ydd = delayed[:3, valid], delayed[3:, valid]
         eng.delayed = Yd

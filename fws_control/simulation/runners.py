@@ -64,12 +64,14 @@ from .engine import (
     check_method,
     check_model,
     check_output_budget,
+    check_sampling,
     check_tolerances,
     choose_method,
     compute_outputs,
     exact_peaks,
     initial_path_state,
     integrate,
+    is_sampled,
     output_samples,
     resolve_time_constant,
     run_gains,
@@ -745,6 +747,8 @@ def _prepare(
     )
     t = time_grid(duration, dt=dt, t_eval=t_eval)
     span = float(t[-1] - t[0])
+    if ctrl is not None and is_sampled(ctrl):
+        check_sampling(ctrl, span)
     if 0.0 < opts["delay"] < span / _MAX_DELAY_STEPS:
         # the method of steps takes steps no longer than the delay: a delay of
         # 1e-300 s would never finish
@@ -1279,7 +1283,13 @@ def simulate(
         which carries its own feedforward (`feedforward` applies to gains
         only), or a gain schedule (:class:`~fws_control.GainSchedule`, or
         any object whose ``at(speed)`` returns SteeringGains): its gains at
-        the plant's speed.
+        the plant's speed. A sampled controller (one with a
+        :attr:`~fws_control.LateralController.sample_time`, e.g.
+        :class:`~fws_control.MPCController`) measures the state at the
+        sample times ``k * sample_time`` and its command is held from
+        ``k * sample_time + delay`` until the next one (zero-order hold; the
+        output at a switch time shows the new command, whose rate is zero
+        between switches), on the numpy engine.
     initial_state : array_like
         ``(x_R, y_R, psi)`` of the rear-axle centre [m, m, rad].
     duration : float
@@ -1475,7 +1485,9 @@ def simulate_batch(
         of :mod:`fws_control.baselines` (its array parameters, if any, hold
         one value per run). A controller's runs record NaN gains. A gain
         schedule (:class:`~fws_control.GainSchedule`) gives each run its
-        gains at that run's speed.
+        gains at that run's speed. A sampled controller (e.g.
+        :class:`~fws_control.MPCController`) is held between its samples as
+        in :func:`simulate`, each run with its own controller state.
     initial_state : array_like
         ``(x_R, y_R, psi)`` for all runs, or shape ``(runs, 3)``; with
         a ``model="dynamic"`` plant also ``(x_R, y_R, psi, v_y, r)`` or ``(runs,
