@@ -440,3 +440,104 @@ def test_pchip_stays_within_the_table():
     # C1: the derivative is continuous at the points (one-sided limits)
     for p in pts[1:-1]:
         assert abs(prof.derivative(p - 1e-9) - prof.derivative(p + 1e-9)) < 1e-3
+
+
+# --------------------------------------------------------------------------
+# Gains that follow the speed during the run
+
+
+def _table_gains(speeds, k1, k2, a):
+    """GainSchedule.at written out: k1 V^2, k2 V and a linear in V."""
+    sp = np.asarray(speeds)
+
+    def gains_of(V):
+        return (
+            np.interp(V, sp, np.asarray(k1) * sp**2) / V**2,
+            np.interp(V, sp, np.asarray(k2) * sp) / V,
+            np.interp(V, sp, np.asarray(a)),
+        )
+
+    return gains_of
+
+
+def test_gain_schedule_during_the_run_matches_reference():
+    """A braking run with gains and a(V) of the zero-sideslip double root."""
+    sch = fws.GainSchedule.double_root(
+        DYN, speeds=np.linspace(6.0, 24.0, 10), pole=-1.2,
+        ratio=fws.zero_sideslip_ratio,
+    )  # fmt: skip
+    # a(V) changes sign inside the run: the 4WS phase switches
+    assert sch.ratio[0] < 0.0 < sch.ratio[-1]
+    prof = fws.SpeedProfile.braking(22.0, 4.0, start=0.5, final=8.0)
+    t = np.linspace(0.0, 5.0, 501)
+    gains_of = _table_gains(sch.speeds, sch.k1, sch.k2, sch.ratio)
+    kappa = 0.02
+    ref = _kinematic_reference(
+        lambda tt, s: float(prof(tt)), lambda V: tuple(map(float, gains_of(V))),
+        kappa, [0.0, -1.0, 0.0], t,
+    )  # fmt: skip
+    res = fws.simulate(
+        fws.LateralPlant(DYN, speed=22.0), _path(kappa), sch,
+        initial_state=(0.0, -1.0, 0.0), duration=5.0, t_eval=t, speed=prof,
+        rtol=1e-12, atol=1e-12, method="DOP853",
+    )  # fmt: skip
+    assert res.status == "ok"
+    assert np.max(np.hypot(res.x - ref.y[0], res.y - ref.y[1])) < 1e-8
+    # the applied ratio follows a(V(t)) (away from e = theta = 0, where
+    # delta_r / (delta_f - feedforward) is 0/0)
+    u = res.delta_f - math.atan(kappa * 2.7)
+    big = np.abs(u) > 1e-3
+    np.testing.assert_allclose(
+        (res.delta_r / u)[big], gains_of(res.longitudinal_speed)[2][big], rtol=1e-9
+    )
+    # the recorded gains are the schedule's at the initial speed
+    assert res.ratio == pytest.approx(float(gains_of(22.0)[2]), rel=1e-14)
+    # the rate includes d(gains)/dt: a central difference of the samples
+    rate_fd = np.gradient(res.delta_r, t, edge_order=2)
+    inner = slice(5, -5)
+    # dV/dt jumps where the braking starts and ends
+    kinks = (np.abs(t - 0.5) < 0.03) | (np.abs(t - 4.0) < 0.03)
+    ok = ~kinks[inner]
+    np.testing.assert_allclose(
+        res.delta_r_rate[inner][ok], rate_fd[inner][ok], atol=2e-5
+    )
+
+
+def test_user_function_schedule_with_rear_limit():
+    """A user's gain function, clipped by the rear angle limit after it."""
+    veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35, max_steer_rear=0.01)
+
+    def rule(V):
+        V = np.asarray(V, dtype=float)
+        return fws.SteeringGains(1.5 / V**2, 3.0 / V, 0.9 - 0.05 * V)
+
+    prof = fws.SpeedProfile.from_time([0.0, 6.0], [6.0, 24.0])
+    t = np.linspace(0.0, 6.0, 121)
+
+    def law(e, th, V):
+        g = rule(V)
+        u = -g.k1 * e - g.k2 * th
+        return float(u), float(np.clip(g.ratio * u, -0.01, 0.01))
+
+    pchip = PchipInterpolator([0.0, 6.0], [6.0, 24.0])
+
+    def rhs(tt, z):
+        x, y, psi = z
+        V = float(pchip(tt))
+        df, dr = law(y, psi, V)
+        return [
+            V * math.cos(psi + dr),
+            V * math.sin(psi + dr),
+            V * math.sin(df - dr) / (2.7 * math.cos(df)),
+        ]
+
+    ref = solve_ivp(rhs, (0.0, 6.0), [0.0, 1.5, 0.0], t_eval=t, **TOL)
+    res = fws.simulate(
+        fws.LateralPlant(veh, speed=6.0), fws.Straight(), rule,
+        initial_state=(0.0, 1.5, 0.0), duration=6.0, t_eval=t, speed=prof,
+        rtol=1e-12, atol=1e-12, method="DOP853",
+    )  # fmt: skip
+    assert np.max(np.abs(res.y - ref.y[1])) < 1e-8
+    assert np.max(np.abs(res.delta_r)) == pytest.approx(0.01, abs=1e-15)
+    # the ratio a(V) = 0.9 - 0.05 V changes sign at 18 m/s
+    assert np.any(res.delta_r > 0.0) and np.any(res.delta_r < 0.0)
