@@ -136,6 +136,7 @@ RECORD_CLASSES = {
     "RobustDesign": "result record of robust_gains",
     "ParetoFront": "result record of pareto_front",
     "GainSchedule": "schedule record: speeds and the gains at each (the data)",
+    "SpeedProfile": "speed record: a table (points, speeds) or a function of t or s",
     "RearLimitBand": "result record of rear_limit_band",
     "RearSaturation": "result record of rear_saturation",
     "ChartPanel": "result record (title, charts, labels)",

@@ -314,7 +314,7 @@ def test_engine_choice_with_varying_speed():
         fws.simulate(plant, fws.Straight(), g, feedforward="dynamic", **kw)
     with pytest.raises(ValueError, match="PurePursuit"):
         fws.simulate(plant, fws.Straight(), fws.PurePursuit(lookahead=5.0), **kw)
-    with pytest.raises(TypeError, match="speed must be None .* or a fws.SpeedProfile"):
+    with pytest.raises(TypeError, match="speed= must be None or a fws.SpeedProfile"):
         fws.simulate(plant, fws.Straight(), g, **{**kw, "speed": 12.0})
 
 
@@ -541,3 +541,44 @@ def test_user_function_schedule_with_rear_limit():
     assert np.max(np.abs(res.delta_r)) == pytest.approx(0.01, abs=1e-15)
     # the ratio a(V) = 0.9 - 0.05 V changes sign at 18 m/s
     assert np.any(res.delta_r > 0.0) and np.any(res.delta_r < 0.0)
+
+
+@settings(max_examples=25, deadline=None, derandomize=True)
+@given(
+    st.lists(st.floats(0.5, 40.0), min_size=2, max_size=5),
+    st.floats(-40.0, 0.0),
+    st.data(),
+)
+def test_dynamic_model_refuses_non_positive_speeds(speeds, low, data):
+    """u > 0 everywhere: a 0 or a negative table is refused, naming its index."""
+    i = data.draw(st.integers(0, len(speeds) - 1))
+    vals = [low] * len(speeds) if low < 0.0 else list(speeds)
+    vals[i] = low
+    prof = fws.SpeedProfile.from_time(np.arange(len(vals), dtype=float), vals)
+    first = int(np.flatnonzero(np.asarray(vals) <= 0.0)[0])
+    with pytest.raises(ValueError, match=rf"\(0, inf\).* at index {first}"):
+        fws.simulate(
+            fws.LateralPlant(DYN, speed=10.0, model="dynamic"), fws.Straight(),
+            fws.SteeringGains(0.01, 0.2, 0.0), initial_state=(0.0, 1.0, 0.0),
+            duration=1.0, speed=prof,
+        )  # fmt: skip
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf])
+def test_function_profile_returning_non_finite_is_refused(bad):
+    prof = fws.SpeedProfile.from_function(lambda t: np.where(t < 0.5, 5.0, bad))
+    with pytest.raises(ValueError, match=rf"returned {bad!r} at time \[s\]"):
+        fws.simulate(
+            fws.LateralPlant(VEH, speed=5.0), fws.Straight(),
+            fws.SteeringGains(0.01, 0.2, 0.0), initial_state=(0.0, 1.0, 0.0),
+            duration=1.0, speed=prof,
+        )  # fmt: skip
+
+
+def test_batch_refuses_an_array_plant_speed_with_a_profile():
+    with pytest.raises(ValueError, match="plant.speed must be one number"):
+        fws.simulate_batch(
+            fws.LateralPlant(VEH, speed=np.array([5.0, 6.0])), fws.Straight(),
+            fws.SteeringGains(0.01, 0.2, 0.0), initial_state=(0.0, 1.0, 0.0),
+            duration=1.0, speed=fws.SpeedProfile.from_time([0, 1], [5.0, 6.0]),
+        )  # fmt: skip

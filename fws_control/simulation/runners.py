@@ -1225,10 +1225,11 @@ def _speed_option(plant: Any, speed: Any, kwargs: dict) -> SpeedProfile | None:
     if isinstance(speed, SpeedProfile):
         return speed
     raise TypeError(
-        "speed must be None (the plant's constant speed) or a fws.SpeedProfile "
-        f"(e.g. fws.SpeedProfile.from_time(t, v)), got {type(speed).__name__} "
-        f"{speed!r}; a constant speed belongs to the plant: "
-        "dataclasses.replace(plant, speed=...)"
+        f"speed={speed!r} ({type(speed).__name__}) with a LateralPlant: a number "
+        "as speed= applies only to the deprecated Vehicle form (the plant holds "
+        "its constant speed: dataclasses.replace(plant, speed=...)); speed= "
+        "must be None or a fws.SpeedProfile (e.g. fws.SpeedProfile.from_time(t, "
+        "v)) for a speed that varies"
     )
 
 
@@ -1467,6 +1468,23 @@ def simulate(
         engine otherwise. The result's
         ``engine`` says which ran, and is bitwise the result of asking for
         that engine explicitly.
+    speed : SpeedProfile, optional
+        A speed that varies along the run (:class:`~fws_control.SpeedProfile`:
+        a table of the time or of the arc length, a braking manoeuvre, a
+        function), instead of the plant's constant speed, which is then its
+        linearisation point only. The run goes on the numpy engine
+        (``engine="auto"`` records ``"numpy"``; ``"compiled"`` raises), the
+        dynamic model's longitudinal speed :math:`u` follows the profile,
+        and a gain schedule passed as `controller` (a
+        :class:`~fws_control.GainSchedule` or a function ``speed ->
+        SteeringGains``) is read at the current speed at every step. The
+        result's :attr:`~fws_control.SimulationResult.longitudinal_speed`,
+        ``longitudinal_accel``, ``longitudinal_force`` and
+        ``friction_usage`` report the longitudinal motion. Not with a
+        delay, ``feedforward="dynamic"`` or a controller of
+        :mod:`fws_control.baselines` (ValueError). A constant profile
+        (:meth:`~fws_control.SpeedProfile.constant`) is the constant-speed
+        run on the plant with that speed. See ``docs/varying_speed.md``.
 
     **kwargs
         Deprecated calling form, accepted until fws_control 0.4 with a
@@ -1560,6 +1578,12 @@ def _with_profile(profile, speed, controller):
     the run, and `speed` becomes the direction of travel; otherwise a
     schedule is read once at the plant's speed (:func:`_scheduled`).
     """
+    if profile is not None and np.ndim(speed) != 0:
+        raise ValueError(
+            "plant.speed must be one number with speed= a SpeedProfile (the "
+            "profile gives every run's speed; the plant's is its linearisation "
+            f"point), got an array of shape {np.shape(speed)}"
+        )
     if profile is not None and profile.is_constant:
         speed, profile = float(profile.speeds[0]), None
     if profile is None:
@@ -1642,6 +1666,11 @@ def simulate_batch(
         ``"compiled"`` each run has its own steps, error norm and stop, so a
         run's result does not depend on the other runs (nor on
         `chunk_size`).
+    speed : SpeedProfile, optional
+        A speed that varies along the run, shared by all runs, as in
+        :func:`simulate` (the plant's `speed` then must be one number: its
+        linearisation point). Each run's recorded ``speed`` is the
+        profile's at its start.
     chunk_size : int, optional
         Runs per chunk (one solver; one Dask task); default
         :data:`DEFAULT_CHUNK_SIZE`, or
