@@ -211,6 +211,19 @@ class SpeedProfile:
     def from_time(cls, t: Any, v: Any, *, interpolation: str = "pchip") -> SpeedProfile:
         """A table of speeds `v` [m/s] at times `t` [s], interpolated.
 
+        Parameters
+        ----------
+        t : array_like
+            Times [s], strictly increasing, finite, at least 2.
+        v : array_like
+            Speeds [m/s] at `t`: finite, of one sign, ``|v| <= 1e6``.
+        interpolation : {"pchip", "linear"}, optional
+            PCHIP (default: C1 and shape-preserving) or linear.
+
+        Returns
+        -------
+        SpeedProfile
+
         Examples
         --------
         >>> import fws_control as fws
@@ -226,6 +239,20 @@ class SpeedProfile:
     ) -> SpeedProfile:
         """A table of speeds `v` [m/s] at arc lengths `s` [m] of the path.
 
+        Parameters
+        ----------
+        s : array_like
+            Arc lengths of the path [m] (the projection of the rear-axle
+            centre), strictly increasing, finite, at least 2.
+        v : array_like
+            Speeds [m/s] at `s`: finite, of one sign, ``|v| <= 1e6``.
+        interpolation : {"pchip", "linear"}, optional
+            PCHIP (default: C1 and shape-preserving) or linear.
+
+        Returns
+        -------
+        SpeedProfile
+
         Examples
         --------
         >>> import fws_control as fws
@@ -238,6 +265,15 @@ class SpeedProfile:
     @classmethod
     def constant(cls, v: float) -> SpeedProfile:
         """A constant speed `v` [m/s] (nonzero): the same run as ``plant.speed = v``.
+
+        Parameters
+        ----------
+        v : float
+            The speed [m/s], finite, nonzero, ``|v| <= 1e6``.
+
+        Returns
+        -------
+        SpeedProfile
 
         Examples
         --------
@@ -321,6 +357,20 @@ class SpeedProfile:
         negative speed (for the dynamic model also 0) raises
         :class:`ValueError`.
 
+        Parameters
+        ----------
+        function : callable
+            ``function(x) -> speed`` [m/s] for an array of times or arc
+            lengths.
+        of : {"time", "distance"}, optional
+            What `x` is: the time [s] (default) or the arc length [m].
+        rate : callable, optional
+            ``rate(x) -> dV/dx``; None: a central difference.
+
+        Returns
+        -------
+        SpeedProfile
+
         Examples
         --------
         >>> import numpy as np, fws_control as fws
@@ -346,7 +396,18 @@ class SpeedProfile:
         return float(np.sign(self.speeds[np.flatnonzero(self.speeds)[0]]))
 
     def __call__(self, x: Any) -> np.ndarray:
-        """The speed [m/s] at `x` (times or arc lengths), broadcast."""
+        """The speed [m/s] at `x` (times or arc lengths), broadcast.
+
+        Parameters
+        ----------
+        x : float or array_like
+            Times [s] or arc lengths [m]; outside the table the end speed
+            is held.
+
+        Returns
+        -------
+        ndarray
+        """
         x = np.asarray(x, dtype=float)
         if self.is_constant:
             return np.full(x.shape, self.speeds[0])
@@ -360,7 +421,24 @@ class SpeedProfile:
         return np.interp(xc, self.points, self.speeds)
 
     def derivative(self, x: Any) -> np.ndarray:
-        """``dV/dt`` [m/s²] (time) or ``dV/ds`` [1/s] (distance) at `x`."""
+        """``dV/dt`` [m/s²] (time) or ``dV/ds`` [1/s] (distance) at `x`.
+
+        Parameters
+        ----------
+        x : float or array_like
+            Times [s] or arc lengths [m]; outside the table the derivative
+            is 0 (the speed is held).
+
+        Returns
+        -------
+        ndarray
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> float(fws.SpeedProfile.braking(20.0, 4.0).derivative(1.0))
+        -4.0
+        """
         x = np.asarray(x, dtype=float)
         if self.is_constant:
             return np.zeros(x.shape)

@@ -252,6 +252,10 @@ class SimulationResult:
     peaks_exact : bool, optional
         Whether `run_peak` holds the peaks of the continuous solution
         (default, every result of the runners) or of the output samples.
+    speed_profile : SpeedProfile, optional
+        The speed that varied along the runs (None: the constant
+        ``run_speed``); :attr:`longitudinal_speed` and
+        :attr:`longitudinal_accel` read it.
 
     Attributes
     ----------
