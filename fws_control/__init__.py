@@ -198,6 +198,7 @@ if TYPE_CHECKING:
         GainSchedule as GainSchedule,
         schedule_gains as schedule_gains,
     )
+    from .speed_profile import SpeedProfile as SpeedProfile
     from .simulation import (
         SimulationResult as SimulationResult,
         closed_loop_system as closed_loop_system,

@@ -24,6 +24,15 @@ falls about as :math:`1/V^2`. :meth:`GainSchedule.at` therefore interpolates
 :math:`k_1 V^2`, :math:`k_2 V` and :math:`a` piecewise linearly in
 :math:`V` and divides back; at the grid speeds it returns the designed gains
 exactly. It does not extrapolate: a speed outside the grid is refused.
+
+During a simulation with a varying speed (``speed=`` a
+:class:`~fws_control.SpeedProfile`), a schedule passed as the controller
+is read at the current speed at every step (the angle limits of the
+vehicle clip its command, and its rate limits act through the actuator,
+after the schedule). :meth:`GainSchedule.double_root` tabulates the
+double-root rule, with a fixed ratio or a ratio schedule such as
+:func:`~fws_control.zero_sideslip_ratio`; any function ``speed ->
+SteeringGains`` is a schedule too (evaluated exactly, at every step).
 """
 
 from __future__ import annotations
@@ -37,6 +46,7 @@ import control as ct
 import numpy as np
 
 from .delay_design import most_stable_gains
+from .design import double_root_gains
 from .gains import SteeringGains
 from .plant import LateralPlant
 from .reprs import summary_repr
@@ -138,6 +148,77 @@ class GainSchedule:
         if self.delay is not None:
             object.__setattr__(self, "delay", check_delay(self.delay))
         object.__setattr__(self, "designs", tuple(self.designs))
+
+    @classmethod
+    def double_root(
+        cls,
+        plant: Vehicle | LateralPlant,
+        *,
+        speeds: Any,
+        pole: float,
+        ratio: Any = 0.0,
+    ) -> GainSchedule:
+        r"""The double-root gains (:func:`~fws_control.double_root_gains`) on a grid.
+
+        At each speed of `speeds` the gains that put both poles of the
+        plant at `pole`, with the ratio `ratio` (a number, or a schedule
+        ``ratio(vehicle, speed=...)`` such as
+        :func:`~fws_control.zero_sideslip_ratio`, read at each speed).
+        Between the grid speeds :meth:`at` interpolates (exact for the
+        kinematic straight-road plant with a fixed ratio, whose
+        :math:`k_1 V^2` and :math:`k_2 V` do not depend on the speed).
+
+        Parameters
+        ----------
+        plant : Vehicle or LateralPlant
+            A vehicle (the kinematic straight-road plant at each speed) or
+            a plant whose speed is replaced.
+        speeds : array_like
+            The grid [m/s], strictly increasing, of one sign, at least 2.
+        pole : float
+            Double root :math:`\lambda_0` [1/s], < 0.
+        ratio : float or callable, optional
+            The ratio :math:`a` (default 0), or a ratio schedule.
+
+        Returns
+        -------
+        GainSchedule
+
+        Raises
+        ------
+        ValueError
+            As :func:`~fws_control.double_root_gains` (the message names
+            the speed) or for a bad grid.
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+        >>> sch = fws.GainSchedule.double_root(veh, speeds=[5.0, 20.0], pole=-1.0)
+        >>> g = sch.at(10.0)        # between the grid speeds: still the double root
+        >>> import numpy as np
+        >>> A = fws.closed_loop(fws.LateralPlant(veh, speed=10.0), g).A
+        >>> np.poly(A).round(9).tolist()     # s^2 + 2 s + 1
+        [1.0, 2.0, 1.0]
+        """
+        v = np.atleast_1d(np.asarray(check_finite("speeds", speeds), dtype=float))
+        if v.ndim != 1 or v.size < 2:
+            raise ValueError(
+                f"speeds must be a 1-d grid of at least 2 speeds, got {speeds!r}"
+            )
+        designs = []
+        for speed in v.tolist():
+            p = _plant_at(plant, speed, None, None, None)
+            try:
+                designs.append(double_root_gains(p, ratio=ratio, pole=pole))
+            except ValueError as exc:
+                raise ValueError(f"at speed {speed:g} m/s: {exc}") from exc
+        return cls(
+            speeds=v,
+            k1=[float(g.k1) for g in designs],
+            k2=[float(g.k2) for g in designs],
+            ratio=[float(g.ratio) for g in designs],
+        )
 
     def at(self, speed) -> SteeringGains:
         r"""The gains at `speed` (scalar or array), interpolated.

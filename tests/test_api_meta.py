@@ -140,6 +140,7 @@ RECORD_CLASSES = {
     "RobustDesign": "result record of robust_gains",
     "ParetoFront": "result record of pareto_front",
     "GainSchedule": "schedule record: speeds and the gains at each (the data)",
+    "SpeedProfile": "speed record: a table (points, speeds) or a function of t or s",
     "RearLimitBand": "result record of rear_limit_band",
     "RearSaturation": "result record of rear_saturation",
     "ChartPanel": "result record (title, charts, labels)",
@@ -166,6 +167,21 @@ RECORD_CLASSES = {
 # Check 2: further parameters that are data for one particular callable.
 # Key: public label; value: (names, reason).
 POSITIONAL_EXCEPTIONS = {
+    "SpeedProfile.from_time": (
+        {"t", "v"},
+        "alternate constructor from the data (t, v) (SpeedProfile.from_time(t, v))",
+    ),
+    "SpeedProfile.from_distance": (
+        {"s", "v"},
+        "alternate constructor from the data (s, v)",
+    ),
+    "SpeedProfile.constant": ({"v"}, "alternate constructor from the speed v"),
+    "SpeedProfile.braking": (
+        {"v0", "decel"},
+        "alternate constructor from its data: initial speed and deceleration",
+    ),
+    "SpeedProfile.from_function": ({"function"}, "constructor from the function"),
+    "SpeedProfile.derivative": ({"x"}, "evaluates the profile at x (the data)"),
     "SteeringGains.from_K": (
         {"K"},
         "alternate constructor from the data K (spec: SteeringGains.from_K(K))",

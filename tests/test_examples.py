@@ -93,6 +93,7 @@ def test_every_example_is_covered():
         "plot_root_loci.py",
         "plot_spline_course.py",
         "plot_stability_chart.py",
+        "plot_varying_speed.py",  # (run by tests/test_varying_speed_doc.py)
     }
     assert {p.name for p in EXAMPLES} == tested
     for path in EXAMPLES:

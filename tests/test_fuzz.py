@@ -457,6 +457,11 @@ CASES: dict[str, Case] = {
         {},
         dict(speeds=[10.0, 20.0], k1=[0.01, 0.004], k2=[0.3, 0.2], ratio=[0.0, 0.0]),
     ),
+    "SpeedProfile": Case(
+        fws.SpeedProfile,
+        {},
+        dict(of="time", points=[0.0, 2.0, 5.0], speeds=[10.0, 12.0, 8.0]),
+    ),
     "schedule_gains": Case(
         fws.schedule_gains,
         dict(plant=VEH),

@@ -93,6 +93,7 @@ __all__ = [
     "PEAK_SIGNALS",
     "DenseSolution",
     "exact_peaks",
+    "scheduled_gains",
 ]
 
 #: The run reached the final time.
@@ -991,6 +992,59 @@ def _dense_at(dense, times, pos, m, width) -> np.ndarray:
     return y[:, pos, inv]
 
 
+#: Relative step in the speed of the central difference that gives the
+#: rate of a scheduled command, ``(d command/dV) dV/dt`` (error ~ h^2 of the
+#: schedule's third derivative; at a knot of a piecewise linear
+#: :class:`~fws_control.GainSchedule` the mean of the two slopes).
+_SCHEDULE_STEP = 1e-6
+
+
+def scheduled_gains(schedule: Any, speed: Any) -> SteeringGains:
+    """The gains of a schedule at `speed` (``schedule.at`` or the function).
+
+    A schedule is an object with a method ``at(speed)`` (e.g.
+    :class:`~fws_control.GainSchedule`) or a function ``speed ->
+    SteeringGains``, vectorised over an array of speeds.
+
+    Raises
+    ------
+    TypeError
+        If it returns something else than a SteeringGains.
+    """
+    at = getattr(schedule, "at", None)
+    gains = at(speed) if callable(at) else schedule(speed)
+    if not isinstance(gains, SteeringGains):
+        raise TypeError(
+            "a gain schedule must return a SteeringGains at a speed, got "
+            f"{type(gains).__name__} from {schedule!r}"
+        )
+    return gains
+
+
+def _check_profile_values(profile, V, x, dynamic: bool) -> None:
+    """Refuse what a user's speed function returns mid-run: NaN or reversing."""
+    V = np.asarray(V)
+    bad = ~np.isfinite(V)
+    what = "time [s]" if profile.of == "time" else "arc length [m]"
+    xs = np.broadcast_to(np.asarray(x, dtype=float), V.shape)
+    if np.any(bad):
+        i = int(np.flatnonzero(bad.ravel())[0])
+        raise ValueError(
+            f"speed: the SpeedProfile function returned {float(V.ravel()[i])!r} at "
+            f"{what} {float(xs.ravel()[i])!r}; it must return finite speeds [m/s]"
+        )
+    # (a function drives forward: its sign cannot be checked ahead of the run)
+    low = V <= 0.0 if dynamic else V < 0.0
+    if np.any(low):
+        i = int(np.flatnonzero(low.ravel())[0])
+        rng = "(0, inf) for model='dynamic'" if dynamic else "[0, inf)"
+        raise ValueError(
+            f"speed: the SpeedProfile function returned {float(V.ravel()[i])!r} m/s at "
+            f"{what} {float(xs.ravel()[i])!r}: reversing through zero speed is not "
+            f"simulated; speeds must lie in {rng}"
+        )
+
+
 class _Engine:
     """Vectorised closed-loop right-hand side for ``n`` runs.
 
@@ -1001,12 +1055,17 @@ class _Engine:
 
     def __init__(
         self, vehicle, path, gains, speed, feedforward, tau, delay=0.0, history=None,
-        runs=None, model="kinematic", tyre="linear", hold=None,
+        runs=None, model="kinematic", tyre="linear", hold=None, profile=None,
+        schedule=None,
     ):  # fmt: skip
         # hold: first of the two rows of a sampled controller's held command
         # (None: a static law, evaluated at every stage)
         self.hold = hold
         self.delay = delay
+        # a SpeedProfile (None: the constant per-run `speed`) and a gain
+        # schedule read at the current speed (None: the fixed `gains`)
+        self.profile = profile
+        self.schedule = schedule
         self.history = history
         self.runs = runs
         self.delayed = None
@@ -1042,12 +1101,38 @@ class _Engine:
             np.asarray(self._kappa(self.clip(s)), dtype=float), s.shape
         )
 
-    def command(self, Y, kappa, t):
+    def speed_at(self, t, s):
+        """Speed of each column: the constant ``speed`` or the profile's."""
+        if self.profile is None:
+            return self.speed
+        x = t if self.profile.of == "time" else s
+        V = self.profile(np.broadcast_to(np.asarray(x, dtype=float), np.shape(s)))
+        if self.profile.function is not None:
+            _check_profile_values(self.profile, V, x, self.dynamic)
+        return V
+
+    def speed_rate(self, t, s, s_dot):
+        """``dV/dt`` of each column (0 at a constant speed)."""
+        if self.profile is None:
+            return np.zeros(np.shape(s))
+        if self.profile.of == "time":
+            return self.profile.derivative(np.broadcast_to(t, np.shape(s)))
+        return self.profile.derivative(s) * s_dot
+
+    def gains_at(self, V):
+        """The gains of the paper's law at the speeds `V` (scheduled or fixed)."""
+        if self.schedule is None:
+            return self.gains
+        return scheduled_gains(self.schedule, V)
+
+    def command(self, Y, kappa, t, V=None):
         """Controller output at time `t`, from the measurements at ``t - delay``."""
         if self.hold is not None:
             # a sampled controller: the command held since its last sample
             # (already delayed and saturated when it was set)
             return Y[self.hold], Y[self.hold + 1]
+        if V is None:
+            V = self.speed_at(t, Y[0])
         if self.delayed is not None:  # delayed states given (output stage)
             Y, kappa = self.delayed, self.curvature(self.delayed[0])
         elif self.delay > 0.0 and self.history is not None:
@@ -1063,22 +1148,22 @@ class _Engine:
                 e=Y[1],
                 theta=Y[2],
                 curvature=kappa,
-                speed=self.speed,
+                speed=V,
             )
             return saturate(self.vehicle, df, dr)
         return steering_command(
             self.vehicle,
-            self.gains,
+            self.gains_at(V),
             Y[1],
             Y[2],
             curvature=kappa,
             feedforward=self.ff,
             # (used by feedforward="dynamic" only)
-            speed=self.speed,
+            speed=V,
             tyre=self.tyre,
         )
 
-    def command_rate(self, Y, Ydot, kappa):
+    def command_rate(self, Y, Ydot, kappa, t=0.0):
         """Time derivative of the command for (delayed) states and their rates."""
         if self.hold is not None:
             # piecewise constant: no rate between the samples (its jumps are
@@ -1089,9 +1174,10 @@ class _Engine:
             np.asarray(self.path.curvature_rate(self.clip(Y[0])), dtype=float) * Ydot[0]
         )
         if isinstance(self.gains, SteeringGains):
-            return steering_command_rate(
+            V = self.speed_at(t, Y[0])
+            rf, rr = steering_command_rate(
                 self.vehicle,
-                self.gains,
+                self.gains_at(V),
                 Y[1],
                 Y[2],
                 Ydot[1],
@@ -1099,8 +1185,21 @@ class _Engine:
                 curvature=kappa,
                 curvature_rate=kappa_rate,
                 feedforward=self.ff,
-                speed=self.speed,
+                speed=V,
                 tyre=self.tyre,
+            )
+            if self.schedule is None:
+                return rf, rr
+            # gains that follow the speed add (d command/dV) dV/dt: a central
+            # difference in V of the command (clipped where it is), at the
+            # state of the sample
+            V_dot = self.speed_rate(t, Y[0], Ydot[0])
+            h = _SCHEDULE_STEP * np.maximum(1.0, np.abs(V))
+            up = self.command(Y, kappa, t, V + h)
+            down = self.command(Y, kappa, t, V - h)
+            return (
+                rf + (up[0] - down[0]) / (2.0 * h) * V_dot,
+                rr + (up[1] - down[1]) / (2.0 * h) * V_dot,
             )
         ctrl = self.gains
         kw = dict(
@@ -1129,24 +1228,25 @@ class _Engine:
         """Return ``(Ydot, kappa, delta_f, delta_r)`` for states ``Y (m, n)``."""
         s, e, th = Y[0], Y[1], Y[2]
         kappa = self.curvature(s)
-        df, dr = self.steering(Y, kappa, t)
+        V = self.speed_at(t, s)
+        df, dr = self.command(Y, kappa, t, V) if self.tau is None else (Y[3], Y[4])
         body = ()
         with np.errstate(divide="ignore", invalid="ignore"):
             if self.dynamic:
                 # v_y, r are the last two rows (after the actuator's)
                 s_dot, e_dot, th_dot, *body = dynamic_path_derivatives(
                     self.vehicle, kappa, e, th, Y[-2], Y[-1], df, dr,
-                    speed=self.speed, tyre=self.tyre,
+                    speed=V, tyre=self.tyre,
                 )  # fmt: skip
             else:
                 s_dot, e_dot, th_dot = equations.path_frame_derivatives(
-                    self.speed, self.vehicle.wheelbase, kappa, e, th, df, dr
+                    V, self.vehicle.wheelbase, kappa, e, th, df, dr
                 )
         held = () if self.hold is None else (np.zeros_like(s_dot),) * 2
         if self.tau is None:
             Ydot = np.stack([s_dot, e_dot, th_dot, *held, *body])
         else:
-            cmd = self.command(Y, kappa, t)
+            cmd = self.command(Y, kappa, t, V)
             rf, rr = actuator_rate(self.vehicle, cmd, (df, dr), time_constant=self.tau)
             Ydot = np.stack([s_dot, e_dot, th_dot, rf, rr, *held, *body])
         return Ydot, kappa, df, dr
@@ -1372,6 +1472,8 @@ def integrate(
     model: str = "kinematic",
     tyre: str = "linear",
     body_state: np.ndarray | None = None,
+    profile: Any = None,
+    schedule: Any = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate ``n`` runs together; a stopped run leaves the stacked state.
 
@@ -1423,6 +1525,14 @@ def integrate(
         for all runs): the vehicle starts rolling without tyre slip at the
         initial steering angles, ``r = u (tan delta_f - tan delta_r) / f``
         and ``v_y - l_r r = u tan delta_r`` (the kinematic model's motion).
+    profile : SpeedProfile, optional
+        A speed that varies along the run
+        (:class:`~fws_control.SpeedProfile`, of the time or of the state
+        ``s``) instead of the constant `speed`, which then only counts
+        the runs. Not with a delay (the runners refuse it).
+    schedule : optional
+        Gains of the paper's law read at the current speed
+        (:func:`scheduled_gains`) instead of the fixed `gains`.
 
     Returns
     -------
@@ -1492,6 +1602,8 @@ def integrate(
             idx,
             model,
             tyre,
+            profile,
+            schedule,
         )
 
     active = np.arange(n)
@@ -1504,7 +1616,8 @@ def integrate(
         # The actuator starts at the command: no initial transient of its own.
         Y[3:5] = cmd
     if dyn:
-        _initial_body_state(vehicle, Y, cmd, speed, body_state)
+        V0 = speed if profile is None else eng.speed_at(float(t_eval[0]), Y[0])
+        _initial_body_state(vehicle, Y, cmd, V0, body_state)
     out[:, :, 0] = Y
     if delay > 0.0 or solution is not None:
         history = _History(float(t_eval[0]), Y.copy())
@@ -1871,6 +1984,9 @@ def compute_outputs(
     delay: float = 0.0,
     model: str = "kinematic",
     tyre: str = "linear",
+    profile: Any = None,
+    schedule: Any = None,
+    times: np.ndarray | None = None,
 ) -> np.ndarray:
     """All signals of :data:`SIGNALS` from the path-frame states.
 
@@ -1887,8 +2003,11 @@ def compute_outputs(
         The input delay given to :func:`integrate` [s]; its six extra rows
         of `states` then give the applied (delayed) steering command (for a
         sampled controller the held rows give it: no extra rows).
-    model, tyre : str, optional
+    model, tyre, profile, schedule : optional
         As given to :func:`integrate`.
+    times : ndarray, optional
+        The times of the states, ``(T,)`` or ``(n, T)`` [s]; needed with a
+        `profile` (the speed at each sample).
 
     Returns
     -------
@@ -1941,17 +2060,23 @@ def compute_outputs(
     V = speed[run_idx]
     eng = _Engine(
         vehicle, path, g, V, feedforward, tau, model=model, tyre=tyre,
-        hold=hold_row(gains, tau),
+        hold=hold_row(gains, tau), profile=profile, schedule=schedule,
     )  # fmt: skip
+    t_s = 0.0
+    if profile is not None:
+        if times is None:
+            raise ValueError("times are needed to evaluate a speed profile")
+        t_s = np.broadcast_to(np.asarray(times, dtype=float), (n, T))[valid]
+        V = eng.speed_at(t_s, Y[0])
     if delayed is not None:
         Yd, Ydd = delayed[:3, valid], delayed[3:, valid]
         eng.delayed = Yd
-    Ydot, kappa, df, dr = eng.derivatives(Y)
+    Ydot, kappa, df, dr = eng.derivatives(Y, t_s)
     if tau is None and delayed is not None:
         # The applied steering is the command of the delayed measurements.
         rf, rr = eng.command_rate(Yd, Ydd, eng.curvature(Yd[0]))
     elif tau is None:
-        rf, rr = eng.command_rate(Y, Ydot, kappa)
+        rf, rr = eng.command_rate(Y, Ydot, kappa, t_s)
     else:
         rf, rr = Ydot[3], Ydot[4]
     ok = np.abs(df) < math.pi / 2
@@ -1975,6 +2100,17 @@ def compute_outputs(
             np.asarray(rr)[ok],
             speed=V[ok],
         )
+        if profile is not None:
+            # eq. (13) holds V constant; d(v_y)/dt adds dV/dt v_y / V, and
+            # v_y / V = sin(dr) + l_r sin(df - dr) / (f cos df) (no 0/0 at
+            # a stop)
+            V_dot = eng.speed_rate(t_s, Y[0], Ydot[0])[ok]
+            acc[ok] += V_dot * (
+                np.sin(dr[ok])
+                + vehicle.rear_to_cg
+                * np.sin(df[ok] - dr[ok])
+                / (vehicle.wheelbase * np.cos(df[ok]))
+            )
     rf = np.where(ok, rf, np.nan)
     rr = np.where(ok, rr, np.nan)
     s_path = eng.clip(Y[0])
@@ -2092,6 +2228,8 @@ def exact_peaks(
     t_stop: np.ndarray,
     model: str = "kinematic",
     tyre: str = "linear",
+    profile: Any = None,
+    schedule: Any = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     r"""Peaks ``max |signal|`` of the continuous solution, per run and signal.
 
@@ -2120,7 +2258,7 @@ def exact_peaks(
         :func:`compute_outputs` at the output times, ``(n, len(SIGNALS), T)``.
     t_stop : ndarray
         Per run end time, from :func:`integrate`.
-    model, tyre : str, optional
+    model, tyre, profile, schedule : optional
         As given to :func:`integrate`.
 
     Returns
@@ -2178,6 +2316,9 @@ def exact_peaks(
                 delay=solution.delay,
                 model=model,
                 tyre=tyre,
+                profile=profile,
+                schedule=schedule,
+                times=times,
             )
         vals = np.abs(out[:, _PEAK_ROWS, :])
         vals = np.where(np.isfinite(vals), vals, np.inf)

@@ -41,6 +41,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..dynamics import GRAVITY
 from ..exceptions import SignalNotKeptError
 from ..gains import SteeringGains
 from ..metrics import HORIZON_METRICS
@@ -251,6 +252,10 @@ class SimulationResult:
     peaks_exact : bool, optional
         Whether `run_peak` holds the peaks of the continuous solution
         (default, every result of the runners) or of the output samples.
+    speed_profile : SpeedProfile, optional
+        The speed that varied along the runs (None: the constant
+        ``run_speed``); :attr:`longitudinal_speed` and
+        :attr:`longitudinal_accel` read it.
 
     Attributes
     ----------
@@ -327,6 +332,7 @@ class SimulationResult:
     run_samples: np.ndarray | None = None
     run_metrics: np.ndarray | None = None
     peaks_exact: bool = True
+    speed_profile: Any = None
 
     x = _Signal("Global x of the rear-axle centre R [m].")
     y = _Signal("Global y of the rear-axle centre R [m].")
@@ -519,6 +525,7 @@ class SimulationResult:
             run_samples=np.minimum(self.run_samples[idx], count),
             run_metrics=None if self.run_metrics is None else self.run_metrics[idx],
             peaks_exact=self.peaks_exact,
+            speed_profile=self.speed_profile,
         )
 
     def signal(self, name: str) -> np.ndarray:
@@ -662,8 +669,178 @@ class SimulationResult:
 
     @property
     def speed(self) -> float | np.ndarray:
-        """Speed :math:`V` [m/s]."""
+        """Speed :math:`V` [m/s] (with a varying speed: at the start; see
+        :attr:`longitudinal_speed`)."""
         return self._per_run(self.run_speed, float)
+
+    # ------------------------------------------------------------------
+    # Longitudinal motion (a constant speed or a SpeedProfile)
+
+    def _squeezed(self, values: np.ndarray) -> np.ndarray:
+        return values[0] if self.squeeze else values
+
+    def _path_speed(self, what: str) -> np.ndarray:
+        """``ds/dt`` of the runs ``(runs, time)`` from the kept signals."""
+        need = ["s", "e", "theta"]
+        need += ["v_y", "yaw_rate"] if self.model == "dynamic" else ["delta_r"]
+        self._require(need, what)
+        if self.path is None or self.vehicle is None:
+            raise ValueError(f"{what} needs the result's path and vehicle, got None")
+        sig = {k: self.signals[:, self.signal_names.index(k), :] for k in need}
+        V = self._speed_values(sig["s"])
+        with np.errstate(invalid="ignore"):
+            s = np.where(np.isfinite(sig["s"]), sig["s"], 0.0)
+            length = getattr(self.path, "length", math.inf)
+            if math.isfinite(length) and not self.path.closed:
+                s = np.clip(s, 0.0, length)
+            kappa = np.asarray(self.path.curvature(s), dtype=float)
+            kappa = np.broadcast_to(kappa, s.shape)
+            th = sig["theta"]
+            if self.model == "dynamic":
+                v_r = sig["v_y"] - self.vehicle.rear_to_cg * sig["yaw_rate"]
+                along = V * np.cos(th) - v_r * np.sin(th)
+            else:
+                along = V * np.cos(th + sig["delta_r"])
+            return along / (1.0 - kappa * sig["e"])
+
+    def _speed_values(self, s: np.ndarray) -> np.ndarray:
+        """The speed ``(runs, time)`` at the samples (NaN after a stop)."""
+        prof = self.speed_profile
+        if prof is None:
+            V = np.broadcast_to(self.run_speed[:, None], s.shape).astype(float)
+        elif prof.of == "time":
+            V = np.broadcast_to(prof(self.t), s.shape).astype(float)
+        else:
+            V = prof(np.where(np.isfinite(s), s, 0.0))
+        return np.where(np.isfinite(s), V, np.nan)
+
+    @property
+    def longitudinal_speed(self) -> np.ndarray:
+        r"""Speed :math:`V(t)` of the run at the output times [m/s].
+
+        The constant speed, or the :class:`~fws_control.SpeedProfile`'s at
+        each sample (of the time, or of the arc length ``s``); NaN after a
+        run's stop. Squeezed like ``result.e``.
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+        >>> res = fws.simulate(fws.LateralPlant(veh, speed=20.0), fws.Straight(),
+        ...                    fws.SteeringGains(0.01, 0.2, 0.0),
+        ...                    initial_state=(0.0, 0.5, 0.0), duration=4.0,
+        ...                    speed=fws.SpeedProfile.braking(20.0, 4.0))
+        >>> float(res.longitudinal_speed[0]), float(res.longitudinal_speed[-1])
+        (20.0, 4.0)
+        """
+        self._require(["s"], "longitudinal_speed")
+        return self._squeezed(self._speed_values(self._s()))
+
+    def _s(self) -> np.ndarray:
+        return self.signals[:, self.signal_names.index("s"), :]
+
+    @property
+    def longitudinal_accel(self) -> np.ndarray:
+        r"""Longitudinal acceleration :math:`\dot V` the speed profile implies [m/s²].
+
+        :math:`dV/dt` of a profile of the time; :math:`V'(s)\,\dot s` of a
+        profile of the arc length (with :math:`\dot s` of the model at each
+        sample); 0 at a constant speed. NaN after a run's stop. Squeezed
+        like ``result.e``.
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+        >>> res = fws.simulate(fws.LateralPlant(veh, speed=20.0), fws.Straight(),
+        ...                    fws.SteeringGains(0.01, 0.2, 0.0),
+        ...                    initial_state=(0.0, 0.5, 0.0), duration=2.0,
+        ...                    speed=fws.SpeedProfile.braking(20.0, 4.0))
+        >>> float(res.longitudinal_accel[0])
+        -4.0
+        """
+        self._require(["s"], "longitudinal_accel")
+        s = self._s()
+        prof = self.speed_profile
+        if prof is None:
+            out = np.where(np.isfinite(s), 0.0, np.nan)
+        elif prof.of == "time":
+            out = np.where(np.isfinite(s), prof.derivative(self.t)[None, :], np.nan)
+        else:
+            s_dot = self._path_speed("longitudinal_accel")
+            out = prof.derivative(np.where(np.isfinite(s), s, 0.0)) * s_dot
+            out = np.where(np.isfinite(s), out, np.nan)
+        return self._squeezed(out)
+
+    @property
+    def longitudinal_force(self) -> np.ndarray:
+        r"""Longitudinal force :math:`m\dot V` the speed profile needs [N].
+
+        The vehicle's mass times :attr:`longitudinal_accel` (the drive or
+        brake force along the direction of travel; the body-frame term
+        :math:`-m v_y r` of a turn is not included).
+
+        Raises
+        ------
+        ValueError
+            If the vehicle has no mass.
+        """
+        mass = None if self.vehicle is None else self.vehicle.mass
+        if mass is None:
+            raise ValueError(
+                "longitudinal_force needs the vehicle's mass [kg], got mass=None"
+            )
+        return mass * self.longitudinal_accel
+
+    @property
+    def friction_usage(self) -> np.ndarray:
+        r"""Share of the friction circle the run uses at each sample [-].
+
+        .. math:: rac{\sqrt{(m\dot V)^2 + (m a_y)^2}}{\mu m g}
+            = rac{\sqrt{\dot V^2 + a_y^2}}{\mu g}
+
+        with :math:`a_y` = ``lateral_accel``, :math:`\mu` the vehicle's
+        ``friction`` and :math:`g = 9.81` m/s² (a point-mass friction
+        circle). Above 1 the tyres cannot supply the combined force.
+
+        Raises
+        ------
+        ValueError
+            If the vehicle has no friction coefficient.
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35, friction=0.8)
+        >>> res = fws.simulate(fws.LateralPlant(veh, speed=20.0), fws.Straight(),
+        ...                    fws.SteeringGains(0.01, 0.2, 0.0),
+        ...                    initial_state=(0.0, 0.0, 0.0), duration=2.0,
+        ...                    speed=fws.SpeedProfile.braking(20.0, 9.0))
+        >>> round(float(res.friction_usage[0]), 6)       # 9 / (0.8 * 9.81)
+        1.146789
+        >>> res.friction_exceeded
+        True
+        """
+        mu = None if self.vehicle is None else self.vehicle.friction
+        if mu is None:
+            raise ValueError(
+                "friction_usage needs the vehicle's friction coefficient mu, got "
+                "friction=None"
+            )
+        self._require(["lateral_accel"], "friction_usage")
+        a_y = self.signals[:, self.signal_names.index("lateral_accel"), :]
+        a_x = self.longitudinal_accel
+        a_x = a_x[None, :] if self.squeeze else a_x
+        return self._squeezed(np.hypot(a_x, a_y) / (mu * GRAVITY))
+
+    @property
+    def friction_exceeded(self) -> bool | np.ndarray:
+        """True for a run whose :attr:`friction_usage` exceeds 1 at a sample."""
+        usage = self.friction_usage
+        usage = usage[None, :] if self.squeeze else usage
+        with np.errstate(invalid="ignore"):
+            over = np.any(usage > 1.0, axis=1)
+        return self._per_run(over, bool)
 
     @property
     def k1(self) -> float | np.ndarray:

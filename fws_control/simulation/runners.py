@@ -46,6 +46,7 @@ from ..gains import SteeringGains
 from ..metrics import HORIZON_METRICS, tracking_metrics
 from ..paths import Path
 from ..plant import LateralPlant
+from ..speed_profile import SpeedProfile
 from ..validation import (
     MAX_SPEED,
     check_bool,
@@ -75,6 +76,7 @@ from .engine import (
     output_samples,
     resolve_time_constant,
     run_gains,
+    scheduled_gains,
     split_initial_state,
     time_grid,
 )
@@ -116,11 +118,13 @@ def _outputs_in_blocks(vehicle, path, g, *, states, initial_heading, **kw):
         )
     out = np.empty((n, len(SIGNALS), T))
     heading = np.asarray(initial_heading, dtype=float)
+    times = kw.pop("times", None)
     for k0 in range(0, T, step):
         part = out[:, :, k0 : k0 + step]
         part[...] = compute_outputs(
             vehicle, path, g, states=states[:, :, k0 : k0 + step],
-            initial_heading=heading, **kw,
+            initial_heading=heading,
+            times=None if times is None else times[k0 : k0 + step], **kw,
         )  # fmt: skip
         heading = part[:, _PSI, -1]
     return out
@@ -162,6 +166,9 @@ def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, c
         delay=opts["delay"],
         model=opts["model"],
         tyre=opts["tyre"],
+        profile=opts.get("profile"),
+        schedule=opts.get("schedule"),
+        times=t,
     )
     del states  # (the outputs hold everything the peaks need)
     peaks, peak_times = exact_peaks(
@@ -177,6 +184,8 @@ def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, c
         t_stop=t_stop,
         model=opts["model"],
         tyre=opts["tyre"],
+        profile=opts.get("profile"),
+        schedule=opts.get("schedule"),
     )
     return signals, status, message, t_stop, peaks, peak_times
 
@@ -811,6 +820,8 @@ def _simulate_run(
     model: str = "kinematic",
     tyre: str = "linear",
     engine: str = "auto",
+    profile: SpeedProfile | None = None,
+    schedule: Any = None,
 ) -> SimulationResult:
     """:func:`simulate` on the resolved plant (its vehicle, speed, model,
     tyre and lag as separate arguments)."""
@@ -854,6 +865,8 @@ def _simulate_run(
         engine=engine,
         chunk_size=1,
         progress=False,
+        profile=profile,
+        schedule=schedule,
     )
     # batch[0] without copying the signals: the squeezed run's grid ends at
     # its last sample (a view of the batch's arrays).
@@ -887,11 +900,21 @@ def _simulate_batch(
     progress: bool | None = None,
     signals: Any = None,
     out: np.ndarray | None = None,
+    profile: SpeedProfile | None = None,
+    schedule: Any = None,
 ) -> SimulationResult:
     """:func:`simulate_batch` on the resolved plant (its vehicle, speed,
-    model, tyre and lag as separate arguments)."""
+    model, tyre and lag as separate arguments). With a varying speed
+    `profile`, `speed` is only its direction (+1 or -1) and the recorded
+    speed of each run is the profile's at its start; with a `schedule` the
+    recorded gains are the schedule's at that speed."""
     if not isinstance(engine, str) or engine not in _ENGINES:
         raise ValueError(f"engine must be one of {_ENGINES}, got {engine!r}")
+    if profile is not None:
+        _check_profile_run(
+            profile, model=model, delay=delay, feedforward=feedforward,
+            gains=gains, engine=engine,
+        )  # fmt: skip
     auto_method = isinstance(method, str) and method == "auto"
     opts = {
         "method": method,
@@ -918,6 +941,22 @@ def _simulate_batch(
         kept=0 if out is not None else len(kept),
     )
     n = k1.size
+    if profile is not None:
+        # the speed of each run at its start: the record of the run
+        x_start = np.full(n, float(t[0]))
+        if profile.of == "distance":
+            x_start = initial_path_state(path, x0[:, :3])[:, 0]
+        V = np.asarray(profile(x_start), dtype=float)
+        if schedule is not None:
+            g0 = scheduled_gains(schedule, V)
+            k1, k2, a = (
+                np.broadcast_to(np.asarray(v, dtype=float), (n,)).copy()
+                for v in (g0.k1, g0.k2, g0.ratio)
+            )
+        opts["profile"], opts["schedule"] = profile, schedule
+        # a varying speed runs on the numpy engine (the compiled engine holds
+        # the speed constant): "auto" chooses it, "compiled" was refused above
+        engine = "numpy"
     if out is not None:
         _check_out(out, (n, len(kept), t.size))
     # False, True (eq. 26) or "dynamic" (dynamics.dynamic_feedforward)
@@ -1120,6 +1159,7 @@ def _simulate_batch(
         run_samples=samples,
         run_metrics=metrics,
         peaks_exact=exact,
+        speed_profile=profile,
     )
     if cluster_lost is not None:
         raise ClusterLostError(cluster_lost, result=result)
@@ -1129,6 +1169,79 @@ def _simulate_batch(
 #: The keywords of the deprecated Vehicle form of simulate/simulate_batch
 #: that the plant now holds.
 _PLANT_KEYWORDS = ("speed", "model", "tyre", "steering_lag", "actuator_time_constant")
+
+
+def _profile_start(profile: SpeedProfile) -> float:
+    """Where a profile is read for the direction and the nominal gains."""
+    if profile.of == "time" or profile.points is None:
+        return 0.0
+    return float(profile.points[0])
+
+
+def _check_profile_run(profile, *, model, delay, feedforward, gains, engine) -> None:
+    """Refuse the cases a varying speed is not simulated in (ValueError)."""
+    if engine == "compiled":
+        raise ValueError(
+            "engine='compiled' cannot run this simulation: the speed varies "
+            f"along the run (speed={profile!r}) and the compiled engine holds it "
+            "constant; use engine='numpy' (or 'auto', which chooses it)"
+        )
+    if np.ndim(delay) == 0 and float(delay) > 0.0:
+        raise ValueError(
+            f"delay must be 0 with a varying speed (speed={profile!r}), got "
+            f"{delay!r}: the delayed measurements would need the speed of their "
+            "own time"
+        )
+    if isinstance(feedforward, str) and feedforward == "dynamic":
+        raise ValueError(
+            "feedforward='dynamic' is not simulated with a varying speed "
+            f"(speed={profile!r}); use feedforward=True (eq. 26, independent "
+            "of the speed) or False"
+        )
+    if isinstance(gains, LateralController):
+        raise ValueError(
+            f"controller: {type(gains).__name__} is not simulated with a varying "
+            f"speed (speed={profile!r}); use SteeringGains or a gain schedule"
+        )
+    if model == "dynamic" and profile.speeds is not None:
+        low = np.flatnonzero(profile.speeds <= 0.0)
+        if low.size:
+            i = int(low[0])
+            raise ValueError(
+                f"speed: the SpeedProfile's speeds must lie in (0, inf) m/s for "
+                f"model='dynamic' (forward longitudinal speed u), got "
+                f"{float(profile.speeds[i])!r} at index {i}"
+            )
+
+
+def _speed_option(plant: Any, speed: Any, kwargs: dict) -> SpeedProfile | None:
+    """The varying speed of a plant-first call, or None.
+
+    For the deprecated Vehicle form, `speed` is its constant speed and goes
+    back to `kwargs`. A constant profile gives None (the plant's speed is
+    replaced by the caller).
+    """
+    if speed is None:
+        return None
+    if not isinstance(plant, LateralPlant):
+        kwargs["speed"] = speed
+        return None
+    if isinstance(speed, SpeedProfile):
+        return speed
+    raise TypeError(
+        f"speed={speed!r} ({type(speed).__name__}) with a LateralPlant: a number "
+        "as speed= applies only to the deprecated Vehicle form (the plant holds "
+        "its constant speed: dataclasses.replace(plant, speed=...)); speed= "
+        "must be None or a fws.SpeedProfile (e.g. fws.SpeedProfile.from_time(t, "
+        "v)) for a speed that varies"
+    )
+
+
+def _is_schedule(controller: Any) -> bool:
+    """A gain schedule: ``at(speed)`` or a plain function of the speed."""
+    if isinstance(controller, (SteeringGains, LateralController)):
+        return False
+    return callable(getattr(controller, "at", None)) or callable(controller)
 
 
 def _scheduled(controller: Any, speed: Any) -> Any:
@@ -1237,6 +1350,7 @@ def simulate(
     rtol: float = 1e-10,
     atol: float = 1e-12,
     engine: str = "auto",
+    speed: SpeedProfile | None = None,
     **kwargs: Any,
 ) -> SimulationResult:
     r"""Simulate the closed loop (one run) with the fast path-frame engine.
@@ -1364,6 +1478,23 @@ def simulate(
         engine otherwise. The result's
         ``engine`` says which ran, and is bitwise the result of asking for
         that engine explicitly.
+    speed : SpeedProfile, optional
+        A speed that varies along the run (:class:`~fws_control.SpeedProfile`:
+        a table of the time or of the arc length, a braking manoeuvre, a
+        function), instead of the plant's constant speed, which is then its
+        linearisation point only. The run goes on the numpy engine
+        (``engine="auto"`` records ``"numpy"``; ``"compiled"`` raises), the
+        dynamic model's longitudinal speed :math:`u` follows the profile,
+        and a gain schedule passed as `controller` (a
+        :class:`~fws_control.GainSchedule` or a function ``speed ->
+        SteeringGains``) is read at the current speed at every step. The
+        result's :attr:`~fws_control.SimulationResult.longitudinal_speed`,
+        ``longitudinal_accel``, ``longitudinal_force`` and
+        ``friction_usage`` report the longitudinal motion. Not with a
+        delay, ``feedforward="dynamic"`` or a controller of
+        :mod:`fws_control.baselines` (ValueError). A constant profile
+        (:meth:`~fws_control.SpeedProfile.constant`) is the constant-speed
+        run on the plant with that speed. See ``docs/varying_speed.md``.
 
     **kwargs
         Deprecated calling form, accepted until fws_control 0.4 with a
@@ -1413,10 +1544,11 @@ def simulate(
     >>> len(res), res.e.shape
     (1, (1501,))
     """
+    profile = _speed_option(plant, speed, kwargs)
     vehicle, controller, speed, model, tyre, lag = _resolve_plant(
         "simulate", plant, controller, kwargs
     )
-    controller = _scheduled(controller, speed)
+    profile, speed, controller, schedule = _with_profile(profile, speed, controller)
     if isinstance(plant, LateralPlant) and np.ndim(speed) != 0:
         raise ValueError(
             "plant.speed must be one speed (a scalar, nonzero, at most "
@@ -1442,7 +1574,37 @@ def simulate(
         model=model,
         tyre=tyre,
         engine=engine,
+        profile=profile,
+        schedule=schedule,
     )
+
+
+def _with_profile(profile, speed, controller):
+    """``(profile, speed, controller, schedule)`` of a call.
+
+    A constant profile replaces the plant's speed (the run is then the
+    constant-speed run, on either engine). With a varying profile a gain
+    schedule is kept as the `schedule`, read at the current speed during
+    the run, and `speed` becomes the direction of travel; otherwise a
+    schedule is read once at the plant's speed (:func:`_scheduled`).
+    """
+    if profile is not None and np.ndim(speed) != 0:
+        raise ValueError(
+            "plant.speed must be one number with speed= a SpeedProfile (the "
+            "profile gives every run's speed; the plant's is its linearisation "
+            f"point), got an array of shape {np.shape(speed)}"
+        )
+    if profile is not None and profile.is_constant:
+        speed, profile = float(profile.speeds[0]), None
+    if profile is None:
+        return None, speed, _scheduled(controller, speed), None
+    schedule = None
+    if _is_schedule(controller):
+        # the gains at the profile's start count the runs (the record is
+        # the schedule's at each run's own start)
+        schedule = controller
+        controller = scheduled_gains(schedule, profile(_profile_start(profile)))
+    return profile, profile.initial_sign or 1.0, controller, schedule
 
 
 def simulate_batch(
@@ -1460,6 +1622,7 @@ def simulate_batch(
     rtol: float = 1e-10,
     atol: float = 1e-12,
     engine: str = "auto",
+    speed: SpeedProfile | None = None,
     chunk_size: int | None = None,
     client: Any = None,
     progress: bool | None = None,
@@ -1515,6 +1678,11 @@ def simulate_batch(
         ``"compiled"`` each run has its own steps, error norm and stop, so a
         run's result does not depend on the other runs (nor on
         `chunk_size`).
+    speed : SpeedProfile, optional
+        A speed that varies along the run, shared by all runs, as in
+        :func:`simulate` (the plant's `speed` then must be one number: its
+        linearisation point). Each run's recorded ``speed`` is the
+        profile's at its start.
     chunk_size : int, optional
         Runs per chunk (one solver; one Dask task); default
         :data:`DEFAULT_CHUNK_SIZE`, or
@@ -1665,10 +1833,11 @@ def simulate_batch(
     >>> saved.shape, bool(np.all(saved[:, 0] == res.e))
     ((4, 1, 1001), True)
     """
+    profile = _speed_option(plant, speed, kwargs)
     vehicle, controllers, speed, model, tyre, lag = _resolve_plant(
         "simulate_batch", plant, controllers, kwargs
     )
-    controllers = _scheduled(controllers, speed)
+    profile, speed, controllers, schedule = _with_profile(profile, speed, controllers)
     return _simulate_batch(
         vehicle,
         path,
@@ -1692,4 +1861,6 @@ def simulate_batch(
         progress=progress,
         signals=signals,
         out=out,
+        profile=profile,
+        schedule=schedule,
     )
