@@ -1602,8 +1602,8 @@ def integrate(
             idx,
             model,
             tyre,
-            profile,
-            schedule,
+            profile=profile,
+            schedule=schedule,
         )
 
     active = np.arange(n)
