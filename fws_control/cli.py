@@ -1307,9 +1307,11 @@ def _cmd_compare(args) -> int:
     _save(cplt.figure, args.out)
     plt.close(cplt.figure)
     lag = "none" if args.steering_lag is None else f"{args.steering_lag:g} s"
-    model = args.model + (f" ({args.tyre} tyre)" if args.model == "dynamic" else "")
+    model = f"{args.model} model"
+    if args.model == "dynamic":
+        model += f" ({args.tyre} tyre)"
     print(
-        f"{course.name}, V = {args.speed:g} m/s, {model} model, delay "
+        f"{course.name}, V = {args.speed:g} m/s, {model}, delay "
         f"{args.delay:g} s, steering lag {lag}, initial offset {args.offset:g} m"
     )
     print(cmp.to_markdown())
