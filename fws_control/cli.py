@@ -105,6 +105,10 @@ BUDGETS = {
     ),
 }
 
+#: ``compare --vehicle`` choices -> CommonRoad vehicle id
+#: (:func:`fws_control.vehicles.from_commonroad` numbering).
+COMPARE_VEHICLES = {"ford-escort": 1, "bmw-320i": 2, "vw-vanagon": 3}
+
 #: Slowest speed [m/s] of ``compare``: the manoeuvre's duration and cost grow
 #: as 1/speed (0.5 m/s already takes half a minute).
 COMPARE_MIN_SPEED = 1.0
@@ -607,6 +611,26 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--vehicle-width", type=_finite, default=1.8, help="b for the gates [m] (1.8)"
+    )
+    p.add_argument(
+        "--model",
+        choices=("kinematic", "dynamic"),
+        default="kinematic",
+        help="simulated model: kinematic, or the dynamic single-track model with "
+        "tyres (needs --vehicle) (kinematic)",
+    )
+    p.add_argument(
+        "--tyre",
+        choices=("linear", "magic"),
+        default="linear",
+        help="tyre of --model dynamic: linear, or magic (saturates at the "
+        "friction limit) (linear)",
+    )
+    p.add_argument(
+        "--vehicle",
+        choices=tuple(COMPARE_VEHICLES),
+        help="a CommonRoad car (geometry, mass, tyres, friction; replaces "
+        "--wheelbase and --rear-to-cg); the table then adds the friction use",
     )
     p.add_argument(
         "--out",
@@ -1403,17 +1427,42 @@ def _cmd_compare(args) -> int:
         "slalom": lambda: slalom(vehicle_width=args.vehicle_width),
         "circle": lambda: constant_radius(),
     }[args.manoeuvre]()
-    veh = _vehicle(args)
+    if args.vehicle is None:
+        if args.model == "dynamic":
+            raise ValueError(
+                "--model dynamic needs a vehicle with mass, yaw inertia and "
+                "tyres: add --vehicle (one of "
+                f"{', '.join(COMPARE_VEHICLES)})"
+            )
+        veh = _vehicle(args)
+    else:
+        from .vehicles import COMMONROAD_VEHICLES
+
+        veh = COMMONROAD_VEHICLES[COMPARE_VEHICLES[args.vehicle]]
+    if args.tyre != "linear" and args.model != "dynamic":
+        raise ValueError(
+            f"--tyre {args.tyre} applies only to --model dynamic (the kinematic "
+            "model has no tyres)"
+        )
     ctrls = default_controllers(veh, speed=args.speed, ratio=args.ratio, pole=args.pole)
-    plant = LateralPlant(veh, speed=args.speed, steering_lag=args.steering_lag)
+    plant = LateralPlant(
+        veh,
+        speed=args.speed,
+        steering_lag=args.steering_lag,
+        model=args.model,
+        tyre=args.tyre,
+    )
     cmp = compare(plant, course, ctrls, offset=args.offset, delay=args.delay)
     cplt = cmp.plot()
     _save(cplt.figure, args.out)
     plt.close(cplt.figure)
     lag = "none" if args.steering_lag is None else f"{args.steering_lag:g} s"
+    model = f"{args.model} model"
+    if args.model == "dynamic":
+        model += f" ({args.tyre} tyre)"
     print(
-        f"{course.name}, V = {args.speed:g} m/s, delay {args.delay:g} s, steering "
-        f"lag {lag}, initial offset {args.offset:g} m"
+        f"{course.name}, V = {args.speed:g} m/s, {model}, delay "
+        f"{args.delay:g} s, steering lag {lag}, initial offset {args.offset:g} m"
     )
     print(cmp.to_markdown())
     return 0

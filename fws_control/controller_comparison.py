@@ -16,6 +16,23 @@ the output grid — the RMS of ``e`` [m] (trapezoidal on the output grid),
 cones hit (:meth:`Manoeuvre.cones_hit`) and completion: the run did not
 stop and passed the last gate, or, on a course without gates, covered its
 :attr:`Manoeuvre.distance` along the path (every lap of a closed one).
+For a vehicle with a friction coefficient :math:`\mu`
+(:attr:`Vehicle.friction`) the table adds the friction use, peak
+:math:`|a_y| / (\mu g)` with ``g =`` :data:`~fws_control.dynamics.GRAVITY`,
+and whether the run left the friction circle (friction use > 1: a
+kinematic or linear-tyre run that no tyre can drive; the saturating tyre,
+``tyre="magic"``, caps the axle forces at :math:`\mu F_z`, so its runs
+reach 1 at most). Whether the run left the lane
+(:meth:`Manoeuvre.left_lane`: the wheel track crossed a cone line inside a
+gate) is a column for every vehicle.
+
+The plant is the simulated system of :func:`~fws_control.simulate`: the
+kinematic model, or with ``LateralPlant(..., model="dynamic",
+tyre="magic")`` the dynamic single-track model with saturating tyres.
+Every row is the run of ``simulate(plant, manoeuvre.path, controller,
+...)`` with the run's initial state and duration
+(:attr:`ControllerComparison.initial_state`,
+:attr:`ControllerComparison.duration`).
 There is no jerk column: on a course of straight lines and clothoids the
 curvature rate jumps at every joint, the feedforward steering rate with it,
 and the kinematic model's lateral acceleration (eq. 13, which contains the
@@ -32,6 +49,7 @@ independent rear axle.
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass
 from typing import Any
 
@@ -48,11 +66,12 @@ from .baselines import (
 )
 from .deprecation import legacy_keyword, reject_unknown, warn_deprecated
 from .design import double_root_gains
+from .dynamics import GRAVITY
 from .gains import SteeringGains
 from .manoeuvres import Manoeuvre
 from .plant import LateralPlant
 from .simulation import STATUS_END_OF_PATH, SimulationResult, simulate
-from .validation import check_delay, check_scalar, check_type
+from .validation import check_bool, check_delay, check_scalar, check_type
 from .vehicle import Vehicle
 
 __all__ = [
@@ -60,6 +79,7 @@ __all__ = [
     "compare",
     "default_controllers",
     "COMPARISON_METRICS",
+    "FRICTION_METRICS",
     "COMPARE_MAX_STEPS",
 ]
 
@@ -75,7 +95,16 @@ COMPARISON_METRICS = (
     "max delta_r rate [deg/s]",
     "cones hit",
     "completed",
+    "left lane",
+    "peak a_lat / (mu g) [-]",
+    "beyond friction",
 )
+
+#: Columns that need the vehicle's friction coefficient (absent without it).
+FRICTION_METRICS = ("peak a_lat / (mu g) [-]", "beyond friction")
+
+#: Columns of yes/no values.
+_FLAGS = ("completed", "left lane", "beyond friction")
 
 
 def default_controllers(
@@ -149,7 +178,7 @@ def _mpc_controllers(Q: np.ndarray) -> dict[str, Any]:
 
 @dataclass(frozen=True, eq=False)
 class ControllerComparison:
-    """Runs and metrics of several controllers on one course.
+    """Runs and metrics of several controllers on one plant and course.
 
     Attributes
     ----------
@@ -164,8 +193,16 @@ class ControllerComparison:
     results : tuple of SimulationResult
         One run per controller.
     table : dict
-        Metric name (:data:`COMPARISON_METRICS`) -> ndarray, one value per
-        controller.
+        Metric name -> ndarray, one value per controller: the names of
+        :data:`COMPARISON_METRICS` (those of :data:`FRICTION_METRICS` only
+        for a vehicle with a friction coefficient), in :attr:`columns`
+        order.
+    plant : LateralPlant or None
+        The simulated system (vehicle, speed, model, tyre, steering lag).
+    duration : float
+        Final time of every run [s].
+    initial_state : tuple of float
+        ``(x_R, y_R, psi)`` of every run [m, m, rad].
 
     Examples
     --------
@@ -176,6 +213,8 @@ class ControllerComparison:
     >>> cmp = fws.compare(plant, m, {"Stanley": fws.Stanley(gain=1.0)}, offset=0.3)
     >>> cmp.labels, bool(cmp.table["completed"][0])
     (('Stanley',), True)
+    >>> bool(cmp.table["left lane"][0])      # 0.3 + 0.9 m > 1.115 m at the start
+    True
     """
 
     manoeuvre: Manoeuvre
@@ -184,12 +223,71 @@ class ControllerComparison:
     labels: tuple[str, ...]
     results: tuple[SimulationResult, ...]
     table: dict
+    plant: LateralPlant | None = None
+    duration: float = math.nan
+    initial_state: tuple[float, float, float] | None = None
 
     def __repr__(self) -> str:
+        model = ""
+        if self.plant is not None:
+            model = f"model={self.plant.model!r}, "
+            if self.plant.model == "dynamic":
+                model += f"tyre={self.plant.tyre!r}, "
         return (
             f"ControllerComparison({self.manoeuvre.name!r}, speed={self.speed:g} m/s, "
-            f"delay={self.delay:g} s, controllers={list(self.labels)})"
+            f"{model}delay={self.delay:g} s, controllers={list(self.labels)})"
         )
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        """Names of the table's columns, in order (units in the names)."""
+        return tuple(n for n in COMPARISON_METRICS if n in self.table)
+
+    def to_pandas(self):
+        """The table as a :class:`pandas.DataFrame`, one row per controller.
+
+        The index holds the labels (named ``controller``); the columns are
+        :attr:`columns`, numbers as floats, ``cones hit`` as integers and
+        the yes/no columns as booleans.
+
+        Returns
+        -------
+        pandas.DataFrame
+
+        Raises
+        ------
+        ImportError
+            If pandas is not installed (``pip install fws-control[pandas]``).
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35, friction=1.0)
+        >>> cmp = fws.compare(fws.LateralPlant(veh, speed=10.0),
+        ...                   fws.double_lane_change(),
+        ...                   {"pure pursuit": fws.PurePursuit(lookahead=5.0)})
+        >>> df = cmp.to_pandas()
+        >>> df.index.name, df["cones hit"].dtype.kind, df["beyond friction"].dtype
+        ('controller', 'i', dtype('bool'))
+        """
+        try:
+            import pandas as pd
+        except ImportError as exc:  # the optional extra "pandas"
+            raise ImportError(
+                "ControllerComparison.to_pandas needs pandas: pip install "
+                "'fws-control[pandas]'"
+            ) from exc
+        data = {}
+        for name in self.columns:
+            v = np.asarray(self.table[name])
+            if name in _FLAGS:
+                v = v.astype(bool)
+            elif name == "cones hit":
+                v = v.astype(np.int64)
+            else:
+                v = v.astype(float)
+            data[name] = v
+        return pd.DataFrame(data, index=pd.Index(list(self.labels), name="controller"))
 
     def to_markdown(self, *, digits: int = 3) -> str:
         """The table as Markdown, one row per controller.
@@ -203,13 +301,14 @@ class ControllerComparison:
         -------
         str
         """
-        head = "| controller | " + " | ".join(COMPARISON_METRICS) + " |"
-        rows = [head, "|---" * (len(COMPARISON_METRICS) + 1) + "|"]
+        cols = self.columns
+        head = "| controller | " + " | ".join(cols) + " |"
+        rows = [head, "|---" * (len(cols) + 1) + "|"]
         for i, lab in enumerate(self.labels):
             cells = []
-            for name in COMPARISON_METRICS:
+            for name in cols:
                 v = self.table[name][i]
-                if name == "completed":
+                if name in _FLAGS:
                     cells.append("yes" if v else "no")
                 elif name == "cones hit":
                     cells.append(str(int(v)))
@@ -221,6 +320,9 @@ class ControllerComparison:
     def plot(self, ax=None) -> ct.ControlPlot:
         """Trajectories with the gates, lateral error, front steering, a_lat.
 
+        The lateral-acceleration panel marks the friction limit
+        :math:`\\pm\\mu g` for a vehicle with a friction coefficient.
+
         Parameters
         ----------
         ax : sequence of 4 matplotlib.axes.Axes, optional
@@ -230,6 +332,19 @@ class ControllerComparison:
         -------
         control.ControlPlot
             Axes of shape ``(1, 4)``.
+
+        Examples
+        --------
+        >>> import matplotlib
+        >>> matplotlib.use("Agg")
+        >>> import fws_control as fws
+        >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+        >>> cmp = fws.compare(fws.LateralPlant(veh, speed=10.0),
+        ...                   fws.double_lane_change(),
+        ...                   {"Stanley": fws.Stanley(gain=1.0)})
+        >>> cplt = cmp.plot()
+        >>> cplt.axes[0, 1].get_ylabel()
+        'lateral error e [m]'
         """
         import matplotlib.pyplot as plt
 
@@ -256,14 +371,30 @@ class ControllerComparison:
             a_e.plot(r.t, r.e, color=color, lw=1.0)
             a_df.plot(r.t, deg * r.delta_f, color=color, lw=1.0)
             a_acc.plot(r.t, r.lateral_accel, color=color, lw=1.0)
+        mu = None if self.plant is None else self.plant.vehicle.friction
+        if mu is not None:
+            for sign in (1.0, -1.0):
+                a_acc.axhline(
+                    sign * mu * GRAVITY,
+                    color="k",
+                    ls=":",
+                    lw=0.8,
+                    label="±μg" if sign > 0 else None,
+                )
+            a_acc.legend(fontsize=8, loc="lower right")
         s = np.linspace(0.0, self.manoeuvre.path.length, 800)
         px, py = self.manoeuvre.path.position(s)
         a_xy.plot(px, py, "k--", lw=0.8, label="centre line")
         a_xy.set_xlabel("x [m]")
         a_xy.set_ylabel("y [m]")
         a_xy.legend(fontsize=8, ncol=4, loc="upper left")
+        model = ""
+        if self.plant is not None:
+            model = f", {self.plant.model} model"
+            if self.plant.model == "dynamic":
+                model += f", {self.plant.tyre} tyre"
         a_xy.set_title(
-            f"{self.manoeuvre.name} at {self.speed:g} m/s"
+            f"{self.manoeuvre.name} at {self.speed:g} m/s{model}"
             + (f", input delay {self.delay:g} s" if self.delay else ""),
             fontsize=11,
         )
@@ -282,7 +413,9 @@ class ControllerComparison:
         return ct.ControlPlot(lines, np.array([axes], dtype=object), fig)
 
 
-def _metrics(result: SimulationResult, manoeuvre: Manoeuvre, wheelbase: float):
+def _metrics(
+    result: SimulationResult, manoeuvre: Manoeuvre, wheelbase: float, friction
+):
     pk = result.peaks
     deg = 180.0 / math.pi
     e = np.asarray(result.e, dtype=float)
@@ -315,7 +448,17 @@ def _metrics(result: SimulationResult, manoeuvre: Manoeuvre, wheelbase: float):
         deg * float(pk.delta_r_rate.value),
         manoeuvre.cones_hit(result.x, result.y, result.psi, wheelbase=wheelbase),
         finished,
-    )
+        manoeuvre.left_lane(result.x, result.y, result.psi, wheelbase=wheelbase),
+    ) + _friction_metrics(float(pk.lateral_accel.value), friction)
+
+
+def _friction_metrics(peak_accel: float, friction) -> tuple:
+    """``(peak |a_y| / (mu g), beyond the limit)``; ``()`` without a friction."""
+    if friction is None:
+        return ()
+    use = peak_accel / (float(friction) * GRAVITY)
+    # a stopped run's peak may be infinite: that is beyond the limit too
+    return (use, bool(not use <= 1.0))
 
 
 #: Speed range of :func:`compare` [m/s], the largest start offset [m] and the
@@ -427,9 +570,10 @@ def compare(
     delay: float = 0.0,
     dt: float = 0.01,
     max_steps: float = COMPARE_MAX_STEPS,
+    progress: bool | None = None,
     **kwargs: Any,
 ) -> ControllerComparison:
-    """Run every controller on the same plant and course; tabulate metrics.
+    r"""Run every controller on the same plant and course; tabulate metrics.
 
     Parameters
     ----------
@@ -463,6 +607,10 @@ def compare(
         100 times it. A larger request raises ValueError before any run,
         saying the estimate; pass a larger `max_steps` to run it anyway
         (minutes to hours).
+    progress : bool or None, optional
+        Show a tqdm progress bar over the controllers on standard error.
+        ``None`` (default): only if standard error is a terminal (no bar
+        in logs or captured output).
     **kwargs
         Deprecated calling form, accepted until fws_control 0.4 with a
         :class:`FutureWarning`: a :class:`~fws_control.Vehicle` as `plant`
@@ -473,6 +621,9 @@ def compare(
     Returns
     -------
     ControllerComparison
+        With :attr:`~ControllerComparison.table`,
+        :meth:`~ControllerComparison.to_pandas` and
+        :meth:`~ControllerComparison.plot`.
 
     Examples
     --------
@@ -483,6 +634,17 @@ def compare(
     ...                   {"pure pursuit": fws.PurePursuit(lookahead=5.0)})
     >>> int(cmp.table["cones hit"][0])
     0
+
+    On the dynamic model with saturating tyres (BMW 320i of CommonRoad,
+    :math:`\mu` = 1.0489) the lateral acceleration stays within
+    :math:`\mu g`:
+
+    >>> bmw = fws.vehicles.BMW_320I
+    >>> plant = fws.LateralPlant(bmw, speed=10.0, model="dynamic", tyre="magic")
+    >>> cmp = fws.compare(plant, fws.double_lane_change(),
+    ...                   {"pure pursuit": fws.PurePursuit(lookahead=5.0)})
+    >>> bool(cmp.table["peak a_lat / (mu g) [-]"][0] <= 1.0)
+    True
     """
     vehicle, speed, lag, plant = _resolve_plant(plant, kwargs)
     check_type("manoeuvre", manoeuvre, Manoeuvre)
@@ -547,8 +709,21 @@ def compare(
             f"and {_SAMPLES_PER_STEP * budget:.3g} samples; pass a larger "
             "max_steps to run it anyway (minutes or more)"
         )
+    if progress is None:
+        try:
+            progress = sys.stderr.isatty()
+        except (AttributeError, ValueError):  # closed or replaced stderr
+            progress = False
+    progress = check_bool("progress", progress)
     labels, results = [], []
-    for label, c in controllers.items():
+    if progress:
+        from tqdm.auto import tqdm
+
+        items = tqdm(controllers.items(), total=len(controllers), desc="compare",
+                     unit="controller")  # fmt: skip
+    else:
+        items = controllers.items()
+    for label, c in items:
         if not isinstance(c, (SteeringGains, LateralController)):
             raise TypeError(
                 f"controllers[{label!r}] must be a SteeringGains or a lateral "
@@ -576,11 +751,23 @@ def compare(
         )
         labels.append(str(label))
         results.append(res)
-    rows = [_metrics(r, manoeuvre, vehicle.wheelbase) for r in results]
-    table = {
-        name: np.array([row[j] for row in rows])
-        for j, name in enumerate(COMPARISON_METRICS)
-    }
+    rows = [
+        _metrics(r, manoeuvre, vehicle.wheelbase, vehicle.friction) for r in results
+    ]
+    names = [
+        n
+        for n in COMPARISON_METRICS
+        if vehicle.friction is not None or n not in FRICTION_METRICS
+    ]
+    table = {name: np.array([row[j] for row in rows]) for j, name in enumerate(names)}
     return ControllerComparison(
-        manoeuvre, V, float(delay), tuple(labels), tuple(results), table
+        manoeuvre,
+        V,
+        float(delay),
+        tuple(labels),
+        tuple(results),
+        table,
+        plant=plant,
+        duration=duration,
+        initial_state=initial_state,
     )

@@ -338,6 +338,85 @@ class Manoeuvre:
         )
         return int(np.count_nonzero(np.any(inside, axis=0)))
 
+    def left_lane(
+        self,
+        x: RealArrayLike,
+        y: RealArrayLike,
+        psi: RealArrayLike,
+        *,
+        wheelbase: float,
+    ) -> bool:
+        """Whether the vehicle's wheel track crosses a cone line inside a gate.
+
+        The footprint is the rectangle of :meth:`cones_hit` (rear axle centre
+        R to front axle, ``±b/2`` sideways). The vehicle leaves the lane if,
+        at any sample, part of the footprint that lies within a gate's
+        length (``x_start <= x <= x_end``) is right of the gate's right cone
+        line or left of its left one. The transitions between gates have no
+        lane; a course without gates has none to leave (False). Stopped runs
+        count what they swept.
+
+        Parameters
+        ----------
+        x, y, psi : array_like
+            Pose of R over time [m, m, rad] (NaN samples are skipped).
+        wheelbase : float
+            Distance from R to the front axle [m], >= 0.
+
+        Returns
+        -------
+        bool
+
+        Examples
+        --------
+        >>> import numpy as np, fws_control as fws
+        >>> m = fws.double_lane_change()       # entry gate: |y| <= 1.115 m
+        >>> x = np.array([m.start_x + 5.0])
+        >>> m.left_lane(x, [0.2], [0.0], wheelbase=2.7)   # left edge at 1.1 m
+        False
+        >>> m.left_lane(x, [0.3], [0.0], wheelbase=2.7)   # left edge at 1.2 m
+        True
+        """
+        wheelbase = check_scalar("wheelbase", wheelbase)
+        if wheelbase < 0.0:
+            raise ValueError(f"wheelbase must be finite and >= 0 m, got {wheelbase!r}")
+        if not self.gates:
+            return False
+        xs, ys, ps = (np.asarray(v, dtype=float).ravel() for v in (x, y, psi))
+        if not xs.shape == ys.shape == ps.shape:
+            raise ValueError(
+                f"x, y and psi must have the same length, got {xs.size}, "
+                f"{ys.size} and {ps.size}"
+            )
+        ok = np.isfinite(xs) & np.isfinite(ys) & np.isfinite(ps)
+        xs, ys, ps = xs[ok], ys[ok], ps[ok]
+        c, s = np.cos(ps)[:, None], np.sin(ps)[:, None]
+        half = self.vehicle_width / 2.0
+        # corners in order around the rectangle: (lon, lat)
+        lon = np.array([0.0, wheelbase, wheelbase, 0.0])
+        lat = np.array([-half, -half, half, half])
+        cx = xs[:, None] + c * lon - s * lat  # (samples, 4)
+        cy = ys[:, None] + s * lon + c * lat
+        # edges P -> Q of the rectangle
+        px, py = cx, cy
+        qx, qy = np.roll(cx, -1, axis=1), np.roll(cy, -1, axis=1)
+        for g in self.gates:
+            # the footprint within the gate's length is convex: its lateral
+            # extreme lies at a corner inside that length or where an edge
+            # crosses the gate's entry or exit line
+            inside = (cx >= g.x_start) & (cx <= g.x_end)
+            ys_in = [np.where(inside, cy, np.nan)]
+            for x0 in (g.x_start, g.x_end):
+                dx = qx - px
+                crosses = ((px - x0) * (qx - x0) <= 0.0) & (dx != 0.0)
+                w = np.divide(x0 - px, dx, out=np.zeros_like(dx), where=dx != 0.0)
+                ys_in.append(np.where(crosses, py + w * (qy - py), np.nan))
+            yy = np.concatenate(ys_in, axis=1)
+            with np.errstate(invalid="ignore"):
+                if np.any((yy < g.y_right) | (yy > g.y_left)):
+                    return True
+        return False
+
     def draw_gates(self, ax: Axes) -> list[Any]:
         """Draw the cone lines and cones on `ax`; return the artists.
 
