@@ -627,6 +627,13 @@ def build_parser() -> argparse.ArgumentParser:
         "friction limit) (linear)",
     )
     p.add_argument(
+        "--controllers",
+        nargs="+",
+        metavar="NAME",
+        help="run only these controllers, by their labels in the table (quote "
+        "each, e.g. 'pure pursuit' 'paper, a = 0') (all)",
+    )
+    p.add_argument(
         "--vehicle",
         choices=tuple(COMPARE_VEHICLES),
         help="a CommonRoad car (geometry, mass, tyres, friction; replaces "
@@ -1444,7 +1451,16 @@ def _cmd_compare(args) -> int:
             f"--tyre {args.tyre} applies only to --model dynamic (the kinematic "
             "model has no tyres)"
         )
-    ctrls = default_controllers(veh, speed=args.speed, ratio=args.ratio, pole=args.pole)
+    ctrls = default_controllers(
+        veh, speed=args.speed, ratio=args.ratio, pole=args.pole, delay=args.delay
+    )
+    if args.controllers:
+        unknown = [c for c in args.controllers if c not in ctrls]
+        if unknown:
+            raise ValueError(
+                f"--controllers must name controllers of {sorted(ctrls)}, got {unknown}"
+            )
+        ctrls = {name: ctrls[name] for name in args.controllers}
     plant = LateralPlant(
         veh,
         speed=args.speed,

@@ -108,7 +108,12 @@ _FLAGS = ("completed", "left lane", "beyond friction")
 
 
 def default_controllers(
-    vehicle: Vehicle, *, speed: float, ratio: float = -0.3, pole: float = -1.0
+    vehicle: Vehicle,
+    *,
+    speed: float,
+    ratio: float = -0.3,
+    pole: float = -1.0,
+    delay: float = 0.0,
 ) -> dict[str, Any]:
     """A fair set of controllers designed for `speed` on a straight road.
 
@@ -122,6 +127,10 @@ def default_controllers(
         Rear ratio of the four-wheel-steering designs (default -0.3).
     pole : float, optional
         Double root [1/s] of the paper's designs (default -1).
+    delay : float, optional
+        The input delay [s] the comparison will run with: the MPC (when its
+        extra is installed) predicts over it, as deployed MPCs do; the other
+        controllers have no delay model.
 
     Returns
     -------
@@ -140,6 +149,7 @@ def default_controllers(
         raise ValueError(f"speed must be finite and > 0 m/s, got {speed!r}")
     ratio = check_scalar("ratio", ratio)
     pole = check_scalar("pole", pole)
+    delay = check_delay(delay)
     plant = LateralPlant(vehicle, speed=V)
     g0 = double_root_gains(plant, ratio=0.0, pole=pole)
     ga = double_root_gains(plant, ratio=ratio, pole=pole)
@@ -155,11 +165,11 @@ def default_controllers(
         "Stanley": Stanley(gain=1.0),
         f"LQR (a = {ratio:g})": LQRController(plant, Q=Q, R=4.0, ratio=ratio),
         "LQR (independent rear)": LQRController(plant, Q=Q, R=4.0 * np.eye(2)),
-        **_mpc_controllers(Q),
+        **_mpc_controllers(Q, delay),
     }
 
 
-def _mpc_controllers(Q: np.ndarray) -> dict[str, Any]:
+def _mpc_controllers(Q: np.ndarray, delay: float) -> dict[str, Any]:
     """The LTV MPC with the LQR designs' weights, where its extra is installed."""
     import importlib.util
 
@@ -167,12 +177,18 @@ def _mpc_controllers(Q: np.ndarray) -> dict[str, Any]:
         return {}
     from .mpc import MPCController
 
-    # the weights of the LQR designs; 25 Hz, a 2 s horizon; no delay to
-    # compensate (pass MPCController(delay=...) for a delayed comparison)
+    # the weights of the LQR designs; about 25 Hz and a 2 s horizon; the
+    # loop's delay predicted over, as a whole number of samples (the sample
+    # time nearest 0.04 s that divides it)
+    ts = 0.04 if delay == 0.0 else delay / max(1, round(delay / 0.04))
     return {
         "linear MPC (independent rear)": MPCController(
-            sample_time=0.04, horizon=50, Q=Q, R=4.0 * np.eye(2)
-        )
+            sample_time=ts,
+            horizon=round(2.0 / ts),
+            Q=Q,
+            R=4.0 * np.eye(2),
+            delay=delay,
+        )  # fmt: skip
     }
 
 

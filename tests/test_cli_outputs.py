@@ -158,3 +158,44 @@ def test_reproduce_writes_the_format_asked(tmp_path):
     assert res.figures[0].read_bytes().startswith(MAGIC["svg"])
     with pytest.raises(ValueError, match=r"format must be one of .*'png'.*got 'jpg'"):
         reproduce(tmp_path, quick=True, progress=False, names=["fig2"], format="jpg")
+
+
+def test_compare_runs_the_controllers_named(tmp_path, capsys):
+    code, text, _ = _run(
+        ["compare", "--speed", 15, "--controllers", "paper, a = 0",
+         "--out", tmp_path / "c.pdf"],
+        capsys,
+    )  # fmt: skip
+    assert code == 0
+    assert (tmp_path / "c.pdf").read_bytes().startswith(MAGIC["pdf"])
+    rows = [r for r in text.splitlines() if r.startswith("| paper")]
+    assert len(rows) == 1 and len([r for r in text.splitlines() if r[:2] == "| "]) == 2
+    # the same row from the library
+    veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    plant = fws.LateralPlant(veh, speed=15.0)
+    g = fws.double_root_gains(plant, ratio=0.0, pole=-1.0)
+    cmp = fws.compare(plant, fws.double_lane_change(), {"paper, a = 0": g})
+    assert rows[0] == cmp.to_markdown().splitlines()[-1]
+
+
+def test_compare_refuses_an_unknown_controller(tmp_path, capsys):
+    code, _, err = _run(
+        ["compare", "--controllers", "Stanley", "nope", "--out", tmp_path / "c.png"],
+        capsys,
+    )
+    assert code == 2 and "--controllers must name" in err and "'nope'" in err
+    assert not list(tmp_path.iterdir())
+
+
+def test_default_mpc_predicts_over_the_comparison_delay():
+    pytest.importorskip("osqp", reason="the extra 'mpc' (OSQP)")
+    veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    for delay, ts in ((0.0, 0.04), (0.24, 0.04), (0.1, 0.05), (0.03, 0.03)):
+        mpc = fws.default_controllers(veh, speed=20.0, delay=delay)[
+            "linear MPC (independent rear)"
+        ]
+        assert mpc.delay == delay
+        assert mpc.sample_time == pytest.approx(ts, rel=1e-12)
+        # a whole number of samples over the delay, a 2 s horizon
+        assert round(delay / mpc.sample_time) * mpc.sample_time == pytest.approx(delay)
+        assert mpc.horizon * mpc.sample_time == pytest.approx(2.0, abs=ts / 2)
