@@ -55,7 +55,16 @@ def _outline_excursion(m, x, y, psi, wheelbase, n=400):
 def test_dynamic_rows_stay_within_the_friction_limit(dynamic20):
     cmp, _ = dynamic20
     peak = cmp.table["peak a_lat [m/s^2]"]
-    assert np.all(peak <= MU_G * 1.01), peak
+    # a run stopped at singular steering (the front wheel at 90 deg) has no
+    # finite exact peak (the table's "-"): it did not complete, and its
+    # samples up to the stop are within the limit too
+    stopped = ~np.isfinite(peak)
+    assert not np.any(cmp.table["completed"][stopped])
+    for i in np.flatnonzero(stopped):
+        r = cmp.results[i]
+        assert str(r.status) == "singular_steering", (cmp.labels[i], r.status)
+        assert np.nanmax(np.abs(r.lateral_accel)) <= MU_G * 1.01
+    assert np.all(peak[~stopped] <= MU_G * 1.01), peak
     np.testing.assert_allclose(cmp.table["peak a_lat / (mu g) [-]"], peak / MU_G,
                                rtol=1e-12)  # fmt: skip
     assert not cmp.table["beyond friction"].any()

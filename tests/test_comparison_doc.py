@@ -139,7 +139,8 @@ def _check_row(cmp, cells, head):
 
 def _run(model, speed, cond, label):
     dyn = {"model": "dynamic", "tyre": "magic"} if model == "dynamic" else {}
-    ctrl = fws.default_controllers(BMW, speed=speed)[label]
+    delay = 0.24 if cond == "B" else 0.0
+    ctrl = fws.default_controllers(BMW, speed=speed, delay=delay)[label]
     lag = 0.27 if cond == "B" else None
     plant = fws.LateralPlant(BMW, speed=speed, steering_lag=lag, **dyn)
     kw = {"offset": 0.2} if cond == "A" else {"delay": 0.24}

@@ -73,7 +73,9 @@ def mu_g(veh: fws.Vehicle) -> float:
 def run(speed: float, condition: str, model: str, labels=None):
     """:func:`fws_control.compare` of one table (all controllers, or `labels`)."""
     veh = vehicle()
-    ctrls = fws.default_controllers(veh, speed=speed)
+    # the MPC predicts over the delay of condition (B), as deployed MPCs do
+    delay = DELAY if condition == "B" else 0.0
+    ctrls = fws.default_controllers(veh, speed=speed, delay=delay)
     if labels is not None:
         ctrls = {k: ctrls[k] for k in labels}
     dyn = {"model": "dynamic", "tyre": "magic"} if model == "dynamic" else {}
