@@ -19,7 +19,8 @@ interactive terminals.
 That is the numpy engine. By default (``engine="auto"``) the runners use
 the compiled per-run engine of :mod:`~fws_control.simulation.compiled`
 instead wherever numba is installed and it covers the case (the paper's
-law on the kinematic model, no delay, DOP853): each run then has its own
+law on the kinematic model, DOP853 or Radau, with a delay DOP853): each
+run then has its own
 steps, error norm and stop, and its exact peaks come from its own dense
 output.
 """
@@ -337,6 +338,7 @@ def _run_compiled_stages(
         max_step=opts.get("max_step", math.inf),
         method=compiled_method(opts["method"]),
         solution=(solution := []),
+        delay=opts["delay"],
     )
     signals = compiled_outputs(
         vehicle,
@@ -349,6 +351,8 @@ def _run_compiled_stages(
         initial_heading=x0[:, 2],
         table=table,
         out=out,
+        solution=solution[0],
+        t_eval=t,
     )
     peaks, peak_times = compiled_peaks(
         vehicle,
@@ -943,7 +947,13 @@ def _simulate_batch(
         )
     if engine == "compiled" and auto_method:
         duration_run = float(t[-1] - t[0])
-        if stiff_auto and duration_run > _RADAU_FROM_STEPS * _CAPPED_STEP * tau:
+        # (with a delay the compiled engine has DOP853 only, its steps at
+        # most the delay too)
+        if (
+            stiff_auto
+            and duration_run > _RADAU_FROM_STEPS * _CAPPED_STEP * tau
+            and not opts["delay"] > 0.0
+        ):
             opts["method"] = "Radau"
         else:
             opts["method"] = "DOP853"
@@ -1332,12 +1342,14 @@ def simulate(
         :mod:`fws_control.simulation.compiled` (extra ``fast``), each run
         with its own steps and stop, at compiled speed. It runs the paper's
         law (:class:`~fws_control.SteeringGains`) on the kinematic model
-        without delay, with ``method="DOP853"``, ``"Radau"`` or ``"auto"``
+        with ``method="DOP853"``, ``"Radau"`` or ``"auto"``
         (which then means DOP853; with an actuator of time constant T, its
         steps held to 3.2 T, half its stability bound, where its error
         estimate bounds the error again, up to 2,500 such steps, and Radau
         beyond: 9-13 ms per run of the paper's curve scenario whatever T
-        and the duration) and `feedforward` True or
+        and the duration; with a delay DOP853 only, its steps at most the
+        delay: the method of steps, its clips min/max as the numpy
+        engine's) and `feedforward` True or
         False, on any path whose curvature it can tabulate; any other case
         raises :class:`ValueError` (no fallback). Its results agree with the
         numpy engine's to the solver tolerance (the same method; angle and
@@ -1498,8 +1510,8 @@ def simulate_batch(
     engine : {"auto", "numpy", "compiled"}, optional
         Integration engine, as in :func:`simulate` (default ``"auto"``: the
         compiled engine where numba is installed and it runs the case --
-        the paper's law, kinematic model, no delay, DOP853, Radau or
-        ``"auto"`` -- else the numpy engine). With
+        the paper's law, kinematic model, DOP853, Radau or ``"auto"``
+        (with a delay DOP853 or ``"auto"``) -- else the numpy engine). With
         ``"compiled"`` each run has its own steps, error norm and stop, so a
         run's result does not depend on the other runs (nor on
         `chunk_size`).
