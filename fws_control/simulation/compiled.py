@@ -506,7 +506,8 @@ def _with_history(p, y0, rows):
     m = y0.size
     out = np.empty(_P_HIST + m + rows * (2 + (_NPOW + 1) * m))
     for i in range(_NP):
-        out[i] = p[i]
+        # (solve_run may be given the 4 run parameters alone: modes 0)
+        out[i] = p[i] if i < p.size else 0.0
     out[_P_NOW] = 0.0
     out[_P_N_HIST] = 0.0
     for i in range(m):
