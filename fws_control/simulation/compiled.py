@@ -110,6 +110,7 @@ from scipy.integrate._ivp import dop853_coefficients as _dop
 
 from .. import equations
 from ..controllers import steering_command
+from ..dynamics import axle_loads, require_dynamics
 from ..gains import SteeringGains
 from ..paths import Arc, Clothoid, Path, PathChain, Straight
 from ..validation import check_positive
@@ -329,7 +330,12 @@ _Q_KAPPA0, _Q_FF_ANGLE0 = 15, 16
 _Q_METHOD = 17  # 0: DOP853, 1: Radau (see METHODS)
 _RADAU = 1  # q[_Q_METHOD] of Radau, and the constant of its drivers
 _Q_DELAY = 18  # input delay [s] (0: none)
-_NQ = 19
+# the dynamic single-track model (q[_Q_DYNAMIC] = 1; its rows v_y, r last):
+# mass, yaw inertia, l_f, l_r, the axles' cornering stiffnesses and peak
+# forces (0: the linear tyre)
+_Q_DYNAMIC, _Q_MASS, _Q_INERTIA, _Q_L_F, _Q_L_R = 19, 20, 21, 22, 23
+_Q_C_F, _Q_C_R, _Q_PEAK_F, _Q_PEAK_R = 24, 25, 26, 27
+_NQ = 28
 # Layout of the per run parameter vector.
 _P_SPEED, _P_K1, _P_K2, _P_RATIO = 0, 1, 2, 3
 # modes of the four clips (front/rear angle, front/rear rate): -1, 0 or +1
@@ -397,6 +403,11 @@ _lateral_acceleration = _EQUATIONS["lateral_acceleration"]
 _feedforward = _EQUATIONS["feedforward_angle"]
 _feedforward_rate = _EQUATIONS["feedforward_angle_rate"]
 _feedback_command = _EQUATIONS["feedback_command"]
+_slip_angles = _EQUATIONS["slip_angles"]
+_linear_tyre_force = _EQUATIONS["linear_tyre_force"]
+_magic_tyre_force = _EQUATIONS["magic_tyre_force"]
+_body_derivatives = _EQUATIONS["body_derivatives"]
+_dynamic_path_kinematics = _EQUATIONS["dynamic_path_kinematics"]
 
 
 # --------------------------------------------------------------------------
@@ -539,6 +550,25 @@ def _add_to_history(p, t_old, h, y_old, F):
 
 
 @_jit_inline
+def _dynamic_derivatives(V, kappa, e, th, vy, r, df, dr, q):
+    """``(s_dot, e_dot, theta_dot, v_y_dot, r_dot)`` of the dynamic model, as
+    dynamics.dynamic_path_derivatives (the same equations)."""
+    l_f, l_r = q[_Q_L_F], q[_Q_L_R]
+    alpha_f, alpha_r = _slip_angles(V, l_f, l_r, vy, r, df, dr)
+    if q[_Q_PEAK_F] > 0.0:
+        force_f = _magic_tyre_force(alpha_f, q[_Q_C_F], q[_Q_PEAK_F])
+        force_r = _magic_tyre_force(alpha_r, q[_Q_C_R], q[_Q_PEAK_R])
+    else:
+        force_f = _linear_tyre_force(alpha_f, q[_Q_C_F])
+        force_r = _linear_tyre_force(alpha_r, q[_Q_C_R])
+    vy_dot, r_dot = _body_derivatives(
+        V, q[_Q_MASS], q[_Q_INERTIA], l_f, l_r, r, force_f, force_r, df, dr
+    )
+    s_dot, e_dot, th_dot = _dynamic_path_kinematics(V, l_r, kappa, e, th, vy, r)
+    return s_dot, e_dot, th_dot, vy_dot, r_dot
+
+
+@_jit_inline
 def _raw_command(e, theta, kappa, p, q):
     cf, cr = _feedback_command(e, theta, p[_P_K1], p[_P_K2], p[_P_RATIO])
     if q[_Q_FF] != 0.0:
@@ -622,9 +652,15 @@ def closed_loop_rhs(t, y, p, q, breaks, coefs, out):
         df, dr = y[3], y[4]
     else:
         df, dr = cf, cr
-    out[0], out[1], out[2] = _path_frame_derivatives(
-        p[_P_SPEED], q[_Q_WHEELBASE], kappa, e, th, df, dr
-    )
+    if q[_Q_DYNAMIC] != 0.0:
+        m = y.size  # the body's rows v_y, r last
+        out[0], out[1], out[2], out[m - 2], out[m - 1] = _dynamic_derivatives(
+            p[_P_SPEED], kappa, e, th, y[m - 2], y[m - 1], df, dr, q
+        )
+    else:
+        out[0], out[1], out[2] = _path_frame_derivatives(
+            p[_P_SPEED], q[_Q_WHEELBASE], kappa, e, th, df, dr
+        )
     if tau > 0.0:
         rf = (cf - df) / tau
         rr = (cr - dr) / tau
@@ -1665,6 +1701,49 @@ def _point_signals(s, e, th, df_s, dr_s, V, k1, k2, a, q, breaks, coefs, d_cg):
 
 
 @_jit_inline
+def _dynamic_point_signals(s, e, th, df_s, dr_s, vy, r, V, k1, k2, a, q, breaks,
+                           coefs):  # fmt: skip
+    """The signals of one state of the dynamic model, as compute_outputs.
+
+    Returns ``(delta_f, delta_r, their rates, lateral_accel, slip_front,
+    slip_rear, ok)``: the acceleration of G along the body's lateral axis
+    ``dv_y/dt + u r`` (NaN where ``|delta_f| >= pi/2``, as the rates).
+    """
+    f = q[_Q_WHEELBASE]
+    mf, mr = q[_Q_MAX_F], q[_Q_MAX_R]
+    tau = q[_Q_TAU]
+    ff = q[_Q_FF] != 0.0
+    if ff and not tau > 0.0:
+        kappa, dkappa = _curvature_and_rate(s, q, breaks, coefs)
+    else:
+        kappa, dkappa = _curvature(s, q, breaks, coefs), 0.0
+    raw_f, raw_r = _feedback_command(e, th, k1, k2, a)
+    if ff:
+        raw_f = raw_f + _feedforward_angle(kappa, q)
+    cf = min(max(raw_f, -mf), mf)
+    cr = min(max(raw_r, -mr), mr)
+    df, dr = (df_s, dr_s) if tau > 0.0 else (cf, cr)
+    s_dot, e_dot, th_dot, vy_dot, _ = _dynamic_derivatives(
+        V, kappa, e, th, vy, r, df, dr, q
+    )
+    if tau > 0.0:
+        rf = min(max((cf - df) / tau, -q[_Q_RATE_F]), q[_Q_RATE_F])
+        rr = min(max((cr - dr) / tau, -q[_Q_RATE_R]), q[_Q_RATE_R])
+    else:
+        rf, rr = _feedback_command(e_dot, th_dot, k1, k2, a)
+        if ff:
+            rf = rf + _feedforward_rate(f, kappa, dkappa * s_dot)
+        if abs(raw_f) > mf:
+            rf = 0.0
+        if abs(raw_r) > mr:
+            rr = 0.0
+    alpha_f, alpha_r = _slip_angles(V, q[_Q_L_F], q[_Q_L_R], vy, r, df, dr)
+    if not abs(df) < 0.5 * math.pi:
+        return df, dr, np.nan, np.nan, np.nan, alpha_f, alpha_r, False
+    return df, dr, rf, rr, vy_dot + V * r, alpha_f, alpha_r, True
+
+
+@_jit_inline
 def _path_state_at(tt, rec, n_pc, y0, m):
     """``(s, e, theta)`` of a run at `tt` from its dense output (`rec`: its
     pieces), the initial state up to the start (engine._History.states_at)."""
@@ -1770,7 +1849,7 @@ def _delayed_signals_batch(states, P, q, breaks, coefs, d_cg, rec, offsets, Y0,
             if not np.isfinite(states[i, 0, k]):
                 continue
             df_s, dr_s = 0.0, 0.0
-            if m == 5:
+            if q[_Q_TAU] > 0.0:
                 df_s, dr_s = states[i, 3, k], states[i, 4, k]
             df, dr, rf, rr, lat, vy, psi_dot, ok = _delayed_point_signals(
                 t_eval[k], df_s, dr_s, pc, n_pc, Y0[i], m, V,
@@ -1822,15 +1901,31 @@ def _signals_batch(states, P, q, breaks, coefs, d_cg, pose, sig):
                 df_s, dr_s = states[i, 3, k], states[i, 4, k]
             else:
                 df_s, dr_s = 0.0, 0.0
-            df, dr, rf, rr, lat, vy, psi_dot, ok = _point_signals(
-                s, e, th, df_s, dr_s, V, k1, k2, a, q, breaks, coefs, d_cg
-            )
+            if q[_Q_DYNAMIC] != 0.0:
+                # v_y and the yaw rate are states, the slip angles signals
+                vy, psi_dot = states[i, m - 2, k], states[i, m - 1, k]
+                df, dr, rf, rr, lat, slip_f, slip_r, ok = _dynamic_point_signals(
+                    s, e, th, df_s, dr_s, vy, psi_dot, V, k1, k2, a, q, breaks, coefs
+                )
+                sig[i, 8, k] = rf
+                sig[i, 9, k] = rr
+                sig[i, 10, k] = lat
+                sig[i, 11, k] = vy
+                sig[i, 12, k] = psi_dot
+                sig[i, 13, k] = slip_f
+                sig[i, 14, k] = slip_r
+            else:
+                df, dr, rf, rr, lat, vy, psi_dot, ok = _point_signals(
+                    s, e, th, df_s, dr_s, V, k1, k2, a, q, breaks, coefs, d_cg
+                )
             sig[i, 3, k] = s
             sig[i, 4, k] = e
             sig[i, 5, k] = th
             sig[i, 6, k] = df
             sig[i, 7, k] = dr
-            if ok:
+            if q[_Q_DYNAMIC] != 0.0:
+                pass  # rows 8-14 above (rates, acceleration NaN as returned)
+            elif ok:
                 sig[i, 8, k] = rf
                 sig[i, 9, k] = rr
                 sig[i, 10, k] = lat
@@ -1930,12 +2025,17 @@ def _peak_values(tt, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, out)
     """|signal| of the six peak signals at `tt` on the run's dense output."""
     _state_at(tt, rec, n_pc, y0, m, ytmp)
     df_s, dr_s = 0.0, 0.0
-    if m == 5:
+    if q[_Q_TAU] > 0.0:
         df_s, dr_s = ytmp[3], ytmp[4]
     if q[_Q_DELAY] > 0.0:
         df, dr, rf, rr, lat, _, _, ok = _delayed_point_signals(
             tt, df_s, dr_s, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg
         )
+    elif q[_Q_DYNAMIC] != 0.0:
+        df, dr, rf, rr, lat, _, _, ok = _dynamic_point_signals(
+            ytmp[0], ytmp[1], ytmp[2], df_s, dr_s, ytmp[m - 2], ytmp[m - 1], V, k1,
+            k2, a, q, br, co,
+        )  # fmt: skip
     else:
         df, dr, rf, rr, lat, _, _, ok = _point_signals(
             ytmp[0], ytmp[1], ytmp[2], df_s, dr_s, V, k1, k2, a, q, br, co, d_cg
@@ -1960,14 +2060,14 @@ def _peak_values(tt, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, out)
 @_jit
 def _peak_value(tt, j, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals):
     """|signal j| at `tt`: :func:`_peak_values` computing only what j needs."""
-    if j > 2 or (j > 0 and m == 3 and q[_Q_DELAY] > 0.0):
+    if j > 2 or (j > 0 and not q[_Q_TAU] > 0.0 and q[_Q_DELAY] > 0.0):
         # (_peak_values finds the state itself)
         _peak_values(tt, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals)
         return vals[j]
     _state_at(tt, rec, n_pc, y0, m, ytmp)
     if j == 0:
         v = abs(ytmp[1])
-    elif m == 5:
+    elif q[_Q_TAU] > 0.0:
         v = abs(ytmp[2 + j])  # the actuator's angles are states
     else:
         # the clipped commands, with the operations of _point_signals
@@ -2831,6 +2931,8 @@ def shared_parameters(
     max_step: float = math.inf,
     method: str = "DOP853",
     delay: float = 0.0,
+    model: str = "kinematic",
+    tyre: str = "linear",
 ) -> np.ndarray:
     """The parameter vector shared by all runs of a call (for the kernels).
 
@@ -2859,11 +2961,18 @@ def shared_parameters(
         Input delay [s], >= 0 (default 0): the law acts on the measurements
         of ``t - delay`` (the method of steps: the steps are at most the
         delay). DOP853 without `switching` only.
+    model : {"kinematic", "dynamic"}, optional
+        Vehicle model; the dynamic single-track model
+        (:func:`~fws_control.dynamics.dynamic_path_derivatives`) takes the
+        vehicle's mass, yaw inertia and cornering stiffnesses. DOP853 only.
+    tyre : {"linear", "magic"}, optional
+        Tyre model of the dynamic model (``"magic"``: saturating at the
+        friction times the axle's static load).
 
     Returns
     -------
     ndarray
-        Shape ``(19,)``.
+        Shape ``(28,)``.
 
     Examples
     --------
@@ -2891,6 +3000,18 @@ def shared_parameters(
         )
     if not (isinstance(delay, (int, float)) and math.isfinite(delay) and delay >= 0.0):
         raise ValueError(f"delay must be a finite number >= 0 [s], got {delay!r}")
+    if model not in ("kinematic", "dynamic"):
+        raise ValueError(f"model must be 'kinematic' or 'dynamic', got {model!r}")
+    if tyre not in ("linear", "magic"):
+        raise ValueError(f"tyre must be 'linear' or 'magic', got {tyre!r}")
+    if model == "dynamic" and method != "DOP853":
+        raise ValueError(
+            f"model='dynamic' is compiled with method='DOP853' only, got {method!r}"
+        )
+    if model == "dynamic" and delay > 0.0:
+        raise ValueError(
+            f"model='dynamic' is compiled without a delay only, got delay={delay!r}"
+        )
     if delay > 0.0 and (method != "DOP853" or switching):
         raise ValueError(
             f"delay={delay!r} is compiled with method='DOP853' and switching=False "
@@ -2919,6 +3040,20 @@ def shared_parameters(
     # known (accepted) only if h <= delay
     q[_Q_MAX_STEP] = float(min(max_step, delay)) if delay > 0.0 else float(max_step)
     q[_Q_DELAY] = float(delay)
+    q[_Q_DYNAMIC:] = 0.0
+    if model == "dynamic":
+        require_dynamics(vehicle, tyre=tyre)
+        q[_Q_DYNAMIC] = 1.0
+        q[_Q_MASS] = vehicle.mass
+        q[_Q_INERTIA] = vehicle.yaw_inertia
+        q[_Q_L_F] = vehicle.wheelbase - vehicle.rear_to_cg
+        q[_Q_L_R] = vehicle.rear_to_cg
+        q[_Q_C_F] = vehicle.cornering_front
+        q[_Q_C_R] = vehicle.cornering_rear
+        if tyre == "magic":
+            load_f, load_r = axle_loads(vehicle)
+            q[_Q_PEAK_F] = vehicle.friction * load_f
+            q[_Q_PEAK_R] = vehicle.friction * load_r
     q[_Q_METHOD] = float(METHODS.index(method))
     # a curvature equal to the first piece's constant term (every s of an
     # arc or a straight) takes its feedforward angle from here, computed by
@@ -2961,7 +3096,12 @@ def compiled_method(method: Any) -> str | None:
 
 
 def compiled_support(
-    path: Path, gains: Any, *, delay: float = 0.0, method: Any = "DOP853"
+    path: Path,
+    gains: Any,
+    *,
+    delay: float = 0.0,
+    method: Any = "DOP853",
+    model: str = "kinematic",
 ) -> str | None:
     """Why :func:`integrate_compiled` cannot run this case, or None if it can.
 
@@ -2977,6 +3117,9 @@ def compiled_support(
     method : str or scipy.integrate.OdeSolver, optional
         Only :data:`METHODS` (``"DOP853"``, ``"Radau"`` or their classes)
         are compiled; with a delay only DOP853.
+    model : {"kinematic", "dynamic"}, optional
+        Vehicle model: the dynamic one is compiled with DOP853 and without
+        a delay.
 
     Returns
     -------
@@ -3001,6 +3144,12 @@ def compiled_support(
         return f"only method={METHODS} is compiled, got {method!r}"
     if delay != 0.0 and compiled_method(method) != "DOP853":
         return f"an input delay is compiled with method='DOP853' only, got {method!r}"
+    if model == "dynamic" and compiled_method(method) != "DOP853":
+        return f"model='dynamic' is compiled with method='DOP853' only, got {method!r}"
+    if model == "dynamic" and delay != 0.0:
+        return "model='dynamic' with an input delay is not compiled"
+    if model not in ("kinematic", "dynamic"):
+        return f"model={model!r} is not compiled"
     if _exact_pieces(path) is None and not math.isfinite(float(path.length)):
         return "an unbounded path other than Straight has no curvature table"
     return None
@@ -3026,6 +3175,9 @@ def integrate_compiled(
     out: np.ndarray | None = None,
     solution: list | None = None,
     delay: float = 0.0,
+    model: str = "kinematic",
+    tyre: str = "linear",
+    body_state: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate ``n`` runs, each with its own steps and events.
 
@@ -3096,6 +3248,13 @@ def integrate_compiled(
         before the start; the method of steps (steps of at most the delay,
         each run's past from its own dense output, DOP853 restarted at
         ``delay``, ``2 delay`` and ``3 delay``). DOP853 only.
+    model, tyre : str, optional
+        Vehicle model and tyre (see :func:`shared_parameters`); the dynamic
+        model adds the rows ``v_y, r`` last. DOP853 without a delay only.
+    body_state : ndarray, optional
+        Initial ``(v_y, r)`` per run of the dynamic model, shape ``(n, 2)``;
+        where NaN (or None): the no-slip motion at the initial steering, as
+        :func:`~fws_control.simulation.engine.integrate`.
 
     Returns
     -------
@@ -3150,6 +3309,8 @@ def integrate_compiled(
         max_step=max_step,
         method=method,
         delay=delay,
+        model=model,
+        tyre=tyre,
     )
     speed = np.ascontiguousarray(speed, dtype=float).ravel()
     n = speed.size
@@ -3159,23 +3320,38 @@ def integrate_compiled(
         raise ValueError(f"path_state must have shape ({n}, 3), got {z0.shape}")
     t_eval = np.ascontiguousarray(t_eval, dtype=float)
     T = t_eval.size
-    m = 3 if time_constant is None else 5
+    dyn = model == "dynamic"
+    m = (3 if time_constant is None else 5) + (2 if dyn else 0)
     Y0 = np.empty((n, m))
     Y0[:, :3] = z0
+    if time_constant is not None or dyn:
+        kappa = table(z0[:, 0])
+        cmd = steering_command(
+            vehicle,
+            SteeringGains(P[:, _P_K1], P[:, _P_K2], P[:, _P_RATIO]),
+            z0[:, 1],
+            z0[:, 2],
+            curvature=kappa,
+            feedforward=feedforward,
+        )
     if time_constant is not None:
         # The actuator starts at the command: no initial transient of its own.
-        kappa = table(z0[:, 0])
-        Y0[:, 3:] = np.stack(
-            steering_command(
-                vehicle,
-                SteeringGains(P[:, _P_K1], P[:, _P_K2], P[:, _P_RATIO]),
-                z0[:, 1],
-                z0[:, 2],
-                curvature=kappa,
-                feedforward=feedforward,
-            ),
-            axis=1,
-        )
+        Y0[:, 3:5] = np.stack(cmd, axis=1)
+    if dyn:
+        # the no-slip motion at the initial steering, where not given
+        with np.errstate(invalid="ignore"):
+            vy0, r0 = equations.no_slip_body_state(
+                speed, vehicle.wheelbase, vehicle.rear_to_cg, cmd[0], cmd[1]
+            )
+        if body_state is not None:
+            body = np.asarray(body_state, dtype=float)
+            if body.shape != (n, 2):
+                raise ValueError(
+                    f"body_state must have shape ({n}, 2), got {body.shape}"
+                )
+            vy0 = np.where(np.isfinite(body[:, 0]), body[:, 0], vy0)
+            r0 = np.where(np.isfinite(body[:, 1]), body[:, 1], r0)
+        Y0[:, m - 2], Y0[:, m - 1] = vy0, r0
     if out is None:
         out = np.empty((n, m, T))
     elif out.shape != (n, m, T) or out.dtype != np.float64:
@@ -3239,6 +3415,8 @@ def compiled_outputs(
     out: np.ndarray | None = None,
     solution: CompiledSolution | None = None,
     t_eval: np.ndarray | None = None,
+    model: str = "kinematic",
+    tyre: str = "linear",
 ) -> np.ndarray:
     """All signals of :data:`~fws_control.simulation.engine.SIGNALS`, compiled.
 
@@ -3273,6 +3451,10 @@ def compiled_outputs(
         dense output (as the delayed rows of the numpy engine).
     t_eval : ndarray, optional
         The output times of `states` (needed with an input delay).
+    model, tyre : str, optional
+        As given to :func:`integrate_compiled`; with the dynamic model
+        ``v_y`` and the yaw rate are its states, the slip angles those of
+        its axles and the lateral acceleration ``dv_y/dt + u r``.
 
     Returns
     -------
@@ -3299,7 +3481,7 @@ def compiled_outputs(
     delay = 0.0 if solution is None else solution.delay
     q = shared_parameters(
         vehicle, table, feedforward=feedforward, time_constant=time_constant,
-        delay=delay,
+        delay=delay, model=model, tyre=tyre,
     )  # fmt: skip
     speed = np.ascontiguousarray(speed, dtype=float).ravel()
     P = _run_parameters(gains, speed)
@@ -3414,6 +3596,8 @@ def compiled_peaks(
     t_eval: np.ndarray,
     signals: np.ndarray,
     t_stop: np.ndarray,
+    model: str = "kinematic",
+    tyre: str = "linear",
 ) -> tuple[np.ndarray, np.ndarray]:
     r"""Peaks ``max |signal|`` of each run's continuous solution (compiled).
 
@@ -3448,6 +3632,8 @@ def compiled_peaks(
         :func:`compiled_outputs` of its states, ``(n, len(SIGNALS), T)``.
     t_stop : ndarray
         Per run end time, from :func:`integrate_compiled`.
+    model, tyre : str, optional
+        As given to :func:`integrate_compiled`.
 
     Returns
     -------
@@ -3481,13 +3667,13 @@ def compiled_peaks(
     table = path if isinstance(path, CurvatureTable) else curvature_table(path)
     q = shared_parameters(
         vehicle, table, feedforward=feedforward, time_constant=time_constant,
-        delay=solution.delay,
+        delay=solution.delay, model=model, tyre=tyre,
     )  # fmt: skip
     speed = np.ascontiguousarray(speed, dtype=float).ravel()
     n = speed.size
     P = _run_parameters(gains, speed)
     Y0 = np.ascontiguousarray(solution.initial_state, dtype=float)
-    m = 3 if time_constant is None else 5
+    m = (3 if time_constant is None else 5) + (2 if model == "dynamic" else 0)
     if Y0.shape != (n, m) or solution.offsets.shape != (n + 1,):
         raise ValueError(
             f"solution must hold {n} runs of {m} states, got initial states of "

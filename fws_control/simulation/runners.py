@@ -235,9 +235,7 @@ def _compiled_reason(path, gains, *, delay, method, model, feedforward):
     # imported here: numba's import is paid only by those who use it
     from .compiled import compiled_support
 
-    reason = compiled_support(path, gains, delay=delay, method=method)
-    if reason is None and model != "kinematic":
-        reason = f"only model='kinematic' is compiled, got model={model!r}"
+    reason = compiled_support(path, gains, delay=delay, method=method, model=model)
     if reason is None and feedforward == "dynamic":
         reason = "feedforward='dynamic' is not compiled"
     return reason
@@ -339,6 +337,9 @@ def _run_compiled_stages(
         method=compiled_method(opts["method"]),
         solution=(solution := []),
         delay=opts["delay"],
+        model=opts["model"],
+        tyre=opts["tyre"],
+        body_state=x0[:, 3:] if opts["model"] == "dynamic" else None,
     )
     signals = compiled_outputs(
         vehicle,
@@ -353,6 +354,8 @@ def _run_compiled_stages(
         out=out,
         solution=solution[0],
         t_eval=t,
+        model=opts["model"],
+        tyre=opts["tyre"],
     )
     peaks, peak_times = compiled_peaks(
         vehicle,
@@ -365,6 +368,8 @@ def _run_compiled_stages(
         t_eval=t,
         signals=signals,
         t_stop=t_stop,
+        model=opts["model"],
+        tyre=opts["tyre"],
     )
     return signals, status, message, t_stop, peaks, peak_times
 
@@ -947,12 +952,13 @@ def _simulate_batch(
         )
     if engine == "compiled" and auto_method:
         duration_run = float(t[-1] - t[0])
-        # (with a delay the compiled engine has DOP853 only, its steps at
-        # most the delay too)
+        # (with a delay or the dynamic model the compiled engine has DOP853
+        # only; with a delay its steps are at most the delay too)
         if (
             stiff_auto
             and duration_run > _RADAU_FROM_STEPS * _CAPPED_STEP * tau
             and not opts["delay"] > 0.0
+            and opts["model"] == "kinematic"
         ):
             opts["method"] = "Radau"
         else:
