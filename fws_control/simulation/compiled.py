@@ -76,12 +76,17 @@ before the start), DOP853 restarts at ``delay``, ``2 delay`` and ``3
 delay``, where the solution's derivatives jump, and the clips are min/max
 in the right-hand side (DOP853 only; ``tests/test_compiled_delay.py``).
 
+The dynamic single-track model (linear or saturating tyre) is compiled from
+the same functions of :mod:`fws_control.equations` as
+:func:`~fws_control.dynamics.dynamic_path_derivatives` (DOP853, no delay;
+``tests/test_compiled_dynamic.py``).
+
 Not supported here (the numpy engine remains the general path;
 ``simulate(..., engine="compiled")`` raises for these, and the default
 ``engine="auto"`` runs them on the numpy engine):
-:class:`~fws_control.LateralController` baselines, a delay with Radau,
-other solvers than DOP853 and Radau, and any model other than the
-kinematic one.
+:class:`~fws_control.LateralController` baselines, a delay with Radau or
+with the dynamic model, the dynamic model with Radau, and other solvers
+than DOP853 and Radau.
 A stiff actuator (small time constant) is detected with Hairer's test
 (``stiff`` in the statistics of DOP853, whose step is then limited by
 stability to about :math:`6\,T`); ``method="Radau"`` integrates it with

@@ -19,8 +19,8 @@ interactive terminals.
 That is the numpy engine. By default (``engine="auto"``) the runners use
 the compiled per-run engine of :mod:`~fws_control.simulation.compiled`
 instead wherever numba is installed and it covers the case (the paper's
-law on the kinematic model, DOP853 or Radau, with a delay DOP853): each
-run then has its own
+law on the kinematic model with DOP853 or Radau, with a delay DOP853; on
+the dynamic model DOP853 without delay): each run then has its own
 steps, error norm and stop, and its exact peaks come from its own dense
 output.
 """
@@ -1348,6 +1348,7 @@ def simulate(
         :mod:`fws_control.simulation.compiled` (extra ``fast``), each run
         with its own steps and stop, at compiled speed. It runs the paper's
         law (:class:`~fws_control.SteeringGains`) on the kinematic model
+        (and on the dynamic model with DOP853 and no delay)
         with ``method="DOP853"``, ``"Radau"`` or ``"auto"``
         (which then means DOP853; with an actuator of time constant T, its
         steps held to 3.2 T, half its stability bound, where its error
@@ -1517,7 +1518,8 @@ def simulate_batch(
         Integration engine, as in :func:`simulate` (default ``"auto"``: the
         compiled engine where numba is installed and it runs the case --
         the paper's law, kinematic model, DOP853, Radau or ``"auto"``
-        (with a delay DOP853 or ``"auto"``) -- else the numpy engine). With
+        (with a delay, or on the dynamic model without delay, DOP853 or
+        ``"auto"``) -- else the numpy engine). With
         ``"compiled"`` each run has its own steps, error norm and stop, so a
         run's result does not depend on the other runs (nor on
         `chunk_size`).
