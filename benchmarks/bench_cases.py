@@ -73,7 +73,7 @@ def cases(n_compiled: int, n_numpy: int) -> dict:
         "paper law": (kin, laws(n_compiled, veh), {}),
         "+ delay 0.24 s": (kin, laws(n_compiled, veh), {"delay": REALISTIC_DELAY}),
         "+ lag 0.27 s": (lag, laws(n_compiled, veh), {"delay": REALISTIC_DELAY}),
-        "dynamic, magic tyre": (dyn, laws(n_numpy, DYNAMIC), {}),
+        "dynamic, magic tyre": (dyn, laws(n_compiled, DYNAMIC), {}),
         "Stanley": (kin, fws.Stanley(gain=2.0, ratio=ratios), {}),
         "pure pursuit": (
             kin, fws.PurePursuit(lookahead=5.0, lookahead_time=0.6, ratio=ratios), {}
