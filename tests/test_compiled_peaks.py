@@ -308,7 +308,9 @@ CURVE = dict(initial_state=(0.0, -5.0, 0.0), duration=5.0)
         (None, {"steering_lag": 1e-5}, "compiled", "Radau"),
         (None, {"method": "Radau", "steering_lag": 0.05}, "compiled",
          "Radau"),
-        (None, {"delay": 0.1}, "numpy", "DOP853"),
+        # a delay: the method of steps, compiled with DOP853 only
+        (None, {"delay": 0.1}, "compiled", "DOP853"),
+        (None, {"delay": 0.1, "method": "Radau"}, "numpy", "Radau"),
         (None, {"method": "RK45"}, "numpy", "RK45"),
         (fws.PurePursuit(lookahead=5.0), {}, "numpy", "DOP853"),
     ],
@@ -330,8 +332,12 @@ def test_auto_engine_dynamic_model_and_table_failure(monkeypatch):
     g = _gains(dyn)
     dynamic = fws.LateralPlant(dyn, speed=5.0, model="dynamic")
     res = fws.simulate(dynamic, ARC, g, **CURVE)
+    assert res.engine == "compiled"  # (DOP853, no delay)
+    _same(res, fws.simulate(dynamic, ARC, g, **CURVE, engine="compiled"))
+    # with a delay: numpy
+    res = fws.simulate(dynamic, ARC, g, **CURVE, delay=0.1)
     assert res.engine == "numpy"
-    _same(res, fws.simulate(dynamic, ARC, g, **CURVE, engine="numpy"))
+    _same(res, fws.simulate(dynamic, ARC, g, **CURVE, delay=0.1, engine="numpy"))
     # a path whose curvature table misses its tolerance runs on numpy
     from fws_control.simulation import compiled
 

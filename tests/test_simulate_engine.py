@@ -164,10 +164,10 @@ DYN = fws.Vehicle(
 @pytest.mark.parametrize(
     ("vehicle", "gains", "kwargs", "reason"),
     [
-        (VEH, None, {"delay": 0.1}, "delay"),
+        (VEH, None, {"delay": 0.1, "method": "Radau"}, "delay"),
         (VEH, None, {"method": "RK45"}, "DOP853"),
         (VEH, fws.PurePursuit(lookahead=5.0), {}, "SteeringGains"),
-        (DYN, None, {"model": "dynamic"}, "model='kinematic'"),
+        (DYN, None, {"model": "dynamic", "delay": 0.1}, "model='dynamic'"),
         (DYN, None, {"feedforward": "dynamic"}, "feedforward='dynamic'"),
     ],
 )

@@ -69,11 +69,24 @@ engine; with it kept the stop conditions are also checked at three points
 inside every step (as the numpy engine checks its margins), so that a loose
 tolerance cannot step across a singular state and back.
 
+An input delay is integrated by the method of steps, as the numpy engine
+does it: the steps are at most the delay, the law acts on the state at
+``t - delay`` found on the run's own dense output (the initial state
+before the start), DOP853 restarts at ``delay``, ``2 delay`` and ``3
+delay``, where the solution's derivatives jump, and the clips are min/max
+in the right-hand side (DOP853 only; ``tests/test_compiled_delay.py``).
+
+The dynamic single-track model (linear or saturating tyre) is compiled from
+the same functions of :mod:`fws_control.equations` as
+:func:`~fws_control.dynamics.dynamic_path_derivatives` (DOP853, no delay;
+``tests/test_compiled_dynamic.py``).
+
 Not supported here (the numpy engine remains the general path;
 ``simulate(..., engine="compiled")`` raises for these, and the default
 ``engine="auto"`` runs them on the numpy engine):
-:class:`~fws_control.LateralController` baselines, an input delay, other
-solvers than DOP853 and Radau, and any model other than the kinematic one.
+:class:`~fws_control.LateralController` baselines, a delay with Radau or
+with the dynamic model, the dynamic model with Radau, and other solvers
+than DOP853 and Radau.
 A stiff actuator (small time constant) is detected with Hairer's test
 (``stiff`` in the statistics of DOP853, whose step is then limited by
 stability to about :math:`6\,T`); ``method="Radau"`` integrates it with
@@ -102,6 +115,7 @@ from scipy.integrate._ivp import dop853_coefficients as _dop
 
 from .. import equations
 from ..controllers import steering_command
+from ..dynamics import axle_loads, require_dynamics
 from ..gains import SteeringGains
 from ..paths import Arc, Clothoid, Path, PathChain, Straight
 from ..validation import check_positive
@@ -320,7 +334,13 @@ _Q_MAX_STEP = 14  # scipy's max_step (inf: none)
 _Q_KAPPA0, _Q_FF_ANGLE0 = 15, 16
 _Q_METHOD = 17  # 0: DOP853, 1: Radau (see METHODS)
 _RADAU = 1  # q[_Q_METHOD] of Radau, and the constant of its drivers
-_NQ = 18
+_Q_DELAY = 18  # input delay [s] (0: none)
+# the dynamic single-track model (q[_Q_DYNAMIC] = 1; its rows v_y, r last):
+# mass, yaw inertia, l_f, l_r, the axles' cornering stiffnesses and peak
+# forces (0: the linear tyre)
+_Q_DYNAMIC, _Q_MASS, _Q_INERTIA, _Q_L_F, _Q_L_R = 19, 20, 21, 22, 23
+_Q_C_F, _Q_C_R, _Q_PEAK_F, _Q_PEAK_R = 24, 25, 26, 27
+_NQ = 28
 # Layout of the per run parameter vector.
 _P_SPEED, _P_K1, _P_K2, _P_RATIO = 0, 1, 2, 3
 # modes of the four clips (front/rear angle, front/rear rate): -1, 0 or +1
@@ -329,6 +349,14 @@ _P_MODE = 4
 # the current step, 0 otherwise (see _events)
 _P_RELEASED = 8
 _NP = 12
+# With an input delay the driver extends a run's p by its past (the method
+# of steps), so that every function given p -- the right-hand side, the
+# events, the steps -- can look up the delayed state without another
+# argument: p[_P_NOW] is the time of the state the events are evaluated on
+# (they take no time), p[_P_N_HIST] the number of accepted steps held, then
+# the initial state (m values) and one row per accepted step laid out as the
+# rows of CompiledSolution.records: t_old, h, y_old, DOP853's F.
+_P_NOW, _P_N_HIST, _P_HIST = _NP, _NP + 1, _NP + 2
 # rows of compiled_outputs, in the order of engine.SIGNALS
 _NSIG = len(SIGNALS)
 _N_STOPS = 4
@@ -380,6 +408,11 @@ _lateral_acceleration = _EQUATIONS["lateral_acceleration"]
 _feedforward = _EQUATIONS["feedforward_angle"]
 _feedforward_rate = _EQUATIONS["feedforward_angle_rate"]
 _feedback_command = _EQUATIONS["feedback_command"]
+_slip_angles = _EQUATIONS["slip_angles"]
+_linear_tyre_force = _EQUATIONS["linear_tyre_force"]
+_magic_tyre_force = _EQUATIONS["magic_tyre_force"]
+_body_derivatives = _EQUATIONS["body_derivatives"]
+_dynamic_path_kinematics = _EQUATIONS["dynamic_path_kinematics"]
 
 
 # --------------------------------------------------------------------------
@@ -435,6 +468,109 @@ def _curvature(s, q, breaks, coefs):
     k = min(max(k, 0), coefs.shape[0] - 1)
     d = s - breaks[k]
     return coefs[k, 0] + d * (coefs[k, 1] + d * (coefs[k, 2] + d * coefs[k, 3]))
+
+
+@_jit_inline
+def _measured_state(t, y, p, q):
+    """``(s, e, theta)`` the law acts on at time `t`: those of `y` without a
+    delay; with an input delay D those at ``t - D``, from the run's past
+    held in `p` (see ``_P_HIST``) as ``engine._History.state`` finds them:
+    the initial state up to the start, then the dense output of the last
+    accepted step that starts at or before ``t - D``."""
+    delay = q[_Q_DELAY]
+    if not delay > 0.0:
+        return y[0], y[1], y[2]
+    m = y.size
+    n = int(p[_P_N_HIST])
+    base = _P_HIST + m
+    stride = 2 + (_NPOW + 1) * m
+    td = t - delay
+    if n == 0 or td <= p[base]:
+        return p[_P_HIST], p[_P_HIST + 1], p[_P_HIST + 2]
+    lo, hi = 0, n
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if p[base + mid * stride] <= td:
+            lo = mid
+        else:
+            hi = mid
+    r = base + lo * stride
+    x = (td - p[r]) / p[r + 1]
+    s, e, th = 0.0, 0.0, 0.0
+    for i in range(3):
+        v = 0.0
+        for k in range(_NPOW):
+            v += p[r + 2 + m + (_NPOW - 1 - k) * m + i]
+            if k % 2 == 0:
+                v *= x
+            else:
+                v *= 1 - x
+        v += p[r + 2 + i]
+        if i == 0:
+            s = v
+        elif i == 1:
+            e = v
+        else:
+            th = v
+    return s, e, th
+
+
+@_jit
+def _with_history(p, y0, rows):
+    """`p` extended by an empty past (see ``_P_HIST``) with room for `rows`
+    steps, the initial state `y0` held before the start."""
+    m = y0.size
+    out = np.empty(_P_HIST + m + rows * (2 + (_NPOW + 1) * m))
+    for i in range(_NP):
+        # (solve_run may be given the 4 run parameters alone: modes 0)
+        out[i] = p[i] if i < p.size else 0.0
+    out[_P_NOW] = 0.0
+    out[_P_N_HIST] = 0.0
+    for i in range(m):
+        out[_P_HIST + i] = y0[i]
+    return out
+
+
+@_jit
+def _add_to_history(p, t_old, h, y_old, F):
+    """Append an accepted step to the past held in `p`; returns `p`, or a
+    copy with twice the room when it was full."""
+    m = y_old.size
+    stride = 2 + (_NPOW + 1) * m
+    n = int(p[_P_N_HIST])
+    r = _P_HIST + m + n * stride
+    if r + stride > p.size:
+        grown = np.empty(_P_HIST + m + 2 * max(n, 16) * stride)
+        for i in range(r):
+            grown[i] = p[i]
+        p = grown
+    p[r] = t_old
+    p[r + 1] = h
+    for i in range(m):
+        p[r + 2 + i] = y_old[i]
+        for k in range(_NPOW):
+            p[r + 2 + m + k * m + i] = F[k, i]
+    p[_P_N_HIST] = n + 1
+    return p
+
+
+@_jit_inline
+def _dynamic_derivatives(V, kappa, e, th, vy, r, df, dr, q):
+    """``(s_dot, e_dot, theta_dot, v_y_dot, r_dot)`` of the dynamic model, as
+    dynamics.dynamic_path_derivatives (the same equations)."""
+    l_f, l_r = q[_Q_L_F], q[_Q_L_R]
+    alpha_f, alpha_r = _slip_angles(V, l_f, l_r, vy, r, df, dr)
+    if q[_Q_PEAK_F] > 0.0:
+        force_f = _magic_tyre_force(alpha_f, q[_Q_C_F], q[_Q_PEAK_F])
+        force_r = _magic_tyre_force(alpha_r, q[_Q_C_R], q[_Q_PEAK_R])
+    else:
+        force_f = _linear_tyre_force(alpha_f, q[_Q_C_F])
+        force_r = _linear_tyre_force(alpha_r, q[_Q_C_R])
+    vy_dot, r_dot = _body_derivatives(
+        V, q[_Q_MASS], q[_Q_INERTIA], l_f, l_r, r, force_f, force_r, df, dr
+    )
+    s_dot, e_dot, th_dot = _dynamic_path_kinematics(V, l_r, kappa, e, th, vy, r)
+    return s_dot, e_dot, th_dot, vy_dot, r_dot
 
 
 @_jit_inline
@@ -510,15 +646,26 @@ def closed_loop_rhs(t, y, p, q, breaks, coefs, out):
     """
     s, e, th = y[0], y[1], y[2]
     kappa = _curvature(s, q, breaks, coefs)
-    cf, cr = _command(e, th, kappa, p, q)
+    if q[_Q_DELAY] > 0.0:
+        # the law acts on the measurements of t - delay
+        s_m, e_m, th_m = _measured_state(t, y, p, q)
+        cf, cr = _command(e_m, th_m, _curvature(s_m, q, breaks, coefs), p, q)
+    else:
+        cf, cr = _command(e, th, kappa, p, q)
     tau = q[_Q_TAU]
     if tau > 0.0:
         df, dr = y[3], y[4]
     else:
         df, dr = cf, cr
-    out[0], out[1], out[2] = _path_frame_derivatives(
-        p[_P_SPEED], q[_Q_WHEELBASE], kappa, e, th, df, dr
-    )
+    if q[_Q_DYNAMIC] != 0.0:
+        m = y.size  # the body's rows v_y, r last
+        out[0], out[1], out[2], out[m - 2], out[m - 1] = _dynamic_derivatives(
+            p[_P_SPEED], kappa, e, th, y[m - 2], y[m - 1], df, dr, q
+        )
+    else:
+        out[0], out[1], out[2] = _path_frame_derivatives(
+            p[_P_SPEED], q[_Q_WHEELBASE], kappa, e, th, df, dr
+        )
     if tau > 0.0:
         rf = (cf - df) / tau
         rr = (cr - dr) / tau
@@ -636,6 +783,14 @@ def closed_loop_jac(t, y, p, q, breaks, coefs, out):
                 out[i, j] = r[j] + r[3] * df_x[j] + r[4] * dr_x[j]
 
 
+@_jit_inline
+def _set_now(t, p, q):
+    # the time of the state the events are next evaluated on (a delay's
+    # applied angle depends on it; see _P_NOW)
+    if q[_Q_DELAY] > 0.0:
+        p[_P_NOW] = t
+
+
 @_jit
 def _stop_events(y, p, q, breaks, coefs, g):
     """The stop events 0-3 of :func:`_events` (into ``g[:4]``)."""
@@ -643,6 +798,11 @@ def _stop_events(y, p, q, breaks, coefs, g):
     kappa = _curvature(s, q, breaks, coefs)
     if q[_Q_TAU] > 0.0:
         df = y[3]
+    elif q[_Q_DELAY] > 0.0:
+        # the applied angle: the law on the measurements of t - delay, for
+        # the time the caller set in p[_P_NOW]
+        s_m, e_m, th_m = _measured_state(p[_P_NOW], y, p, q)
+        df = _command(e_m, th_m, _curvature(s_m, q, breaks, coefs), p, q)[0]
     else:
         df = _command(e, y[2], kappa, p, q)[0]
     g[0] = (0.5 * math.pi - q[_Q_STEER_MARGIN]) - abs(df)
@@ -774,6 +934,7 @@ def _dense_eval(tt, t_old, t_new, y_old, F, out):
 @_jit
 def _event_at(tt, j, t_old, t_new, y_old, F, p, q, br, co, ytmp, g):
     _dense_eval(tt, t_old, t_new, y_old, F, ytmp)
+    _set_now(tt, p, q)
     _events(ytmp, p, q, br, co, g)
     return g[j]
 
@@ -1046,6 +1207,19 @@ def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):
     return r[0], r[1], r[2], r[3], r[4], r[5], r[6]
 
 
+@_jit
+def _segment_end(t, t0, t_bound, delay):
+    """End of the integration segment from `t`: the first of the restart
+    points ``t0 + k delay`` (k = 1, 2, 3) after `t` and before `t_bound`
+    (the numpy engine's ``breaks``), else `t_bound`."""
+    if delay > 0.0:
+        for k in (1, 2, 3):
+            b = t0 + k * delay
+            if t < b < t_bound:
+                return b
+    return t_bound
+
+
 def _drivers(method):
     """The per-run driver and the batch loop of one method, compiled apart.
 
@@ -1078,6 +1252,15 @@ def _drivers(method):
         t = t_eval[0]
         t_bound = t_eval[T - 1]
         y = y0.copy()
+        # an input delay: the run's past in p, and the segments of the
+        # method of steps, which end where the solution's derivatives jump
+        # (t0 + k delay, k = 1, 2, 3) and restart the method there, as the
+        # numpy engine does
+        delay = q[_Q_DELAY]
+        delayed = delay > 0.0
+        t_seg = _segment_end(t, t_eval[0], t_bound, delay)
+        if delayed:
+            p = _with_history(p, y0, 64)
         y_new = np.empty(m)
         f = np.empty(m)
         switches = 0
@@ -1112,6 +1295,7 @@ def _drivers(method):
         stiff = 0
 
         # a run that starts at or beyond a stop condition stops at once
+        _set_now(t, p, q)
         _events(y, p, q, breaks, coefs, g_old)
         worst = 0
         for j in range(_N_STOPS):
@@ -1127,7 +1311,7 @@ def _drivers(method):
             return 0, t, 0, 0, nfev, 0, 0, rec, n_rec
 
         h_abs = _select_initial_step(
-            t, y, t_bound, f, rtol, atol, p, q, breaks, coefs, work, order
+            t, y, t_seg, f, rtol, atol, p, q, breaks, coefs, work, order
         )
         nfev += 1
         if radau:
@@ -1146,7 +1330,7 @@ def _drivers(method):
             else:
                 # ---- RungeKutta._step_impl (direction +1, max_step q[_Q_MAX_STEP])
                 ok, t_new, h, h_abs, n_rej = dop853_step(
-                    t, y, f, h_abs, t_bound, rtol, atol, p, q, breaks, coefs, K, y_new,
+                    t, y, f, h_abs, t_seg, rtol, atol, p, q, breaks, coefs, K, y_new,
                     ystage,
                 )  # fmt: skip
                 nfev += _NS * (n_rej + 1)
@@ -1224,7 +1408,18 @@ def _drivers(method):
                     for k in range(_NPOW):
                         row[2 + m + k * m + i] = F[k, i]
                 n_rec += 1
+            if delayed:
+                # the step joins the past before its events are located, as
+                # the numpy engine records it before checking its margins
+                if not dense_ready:
+                    _dense_coefficients(
+                        t_old, h, y_old, y, f, K, p, q, breaks, coefs, F, ytmp
+                    )
+                    nfev += 3
+                    dense_ready = True
+                p = _add_to_history(p, t_old, h, y_old, F)
             # ---- solve_ivp: events (direction -1: g from >= 0 to <= 0)
+            _set_now(t, p, q)
             _events(y, p, q, breaks, coefs, g_new)
             code = 0
             t_hit = np.inf
@@ -1235,7 +1430,9 @@ def _drivers(method):
                 # engine checks its margins: a loose tolerance must not step
                 # across a singular state and back
                 for r in range(_N_INNER):
-                    _dense_eval(t_old + _INNER_NODES[r] * h, t_old, t, y_old, F, ytmp)
+                    t_in = t_old + _INNER_NODES[r] * h
+                    _dense_eval(t_in, t_old, t, y_old, F, ytmp)
+                    _set_now(t_in, p, q)
                     _stop_events(ytmp, p, q, breaks, coefs, g_inner[r])
             for j in range(_N_EVENTS):
                 lo_b, hi_b = t_old, t
@@ -1367,16 +1564,26 @@ def _drivers(method):
                     )
                 closed_loop_rhs(t, y, p, q, breaks, coefs, f)
                 h_abs = _select_initial_step(
-                    t, y, t_bound, f, rtol, atol, p, q, breaks, coefs, work, order
+                    t, y, t_seg, f, rtol, atol, p, q, breaks, coefs, work, order
                 )
                 nfev += 2
                 if radau:
                     # a new solver at the switch, as for DOP853
                     _radau_start(t, y, h_abs, p, q, breaks, coefs, rs, J)
+                _set_now(t, p, q)
                 _events(y, p, q, breaks, coefs, g_old)
                 continue
             if t == t_bound:
                 return 0, t, steps, rejected_total, nfev, stiff, switches, rec, n_rec
+            if t == t_seg:
+                # the next segment of a delay's method of steps: a new
+                # solver there (f and the first step anew, as scipy's)
+                t_seg = _segment_end(t, t_eval[0], t_bound, delay)
+                closed_loop_rhs(t, y, p, q, breaks, coefs, f)
+                h_abs = _select_initial_step(
+                    t, y, t_seg, f, rtol, atol, p, q, breaks, coefs, work, order
+                )
+                nfev += 2
             released = False
             if q[_Q_SWITCH] != 0.0 and p.size >= _NP:
                 for j in range(4):
@@ -1385,6 +1592,7 @@ def _drivers(method):
                         released = True
             if released:
                 # a step after a release: the clips watch both limits again
+                _set_now(t, p, q)
                 _events(y, p, q, breaks, coefs, g_old)
             else:
                 for j in range(_N_EVENTS):
@@ -1497,6 +1705,176 @@ def _point_signals(s, e, th, df_s, dr_s, V, k1, k2, a, q, breaks, coefs, d_cg):
     return df, dr, rf, rr, lat, vy, psi_dot, True
 
 
+@_jit_inline
+def _dynamic_point_signals(s, e, th, df_s, dr_s, vy, r, V, k1, k2, a, q, breaks,
+                           coefs):  # fmt: skip
+    """The signals of one state of the dynamic model, as compute_outputs.
+
+    Returns ``(delta_f, delta_r, their rates, lateral_accel, slip_front,
+    slip_rear, ok)``: the acceleration of G along the body's lateral axis
+    ``dv_y/dt + u r`` (NaN where ``|delta_f| >= pi/2``, as the rates).
+    """
+    f = q[_Q_WHEELBASE]
+    mf, mr = q[_Q_MAX_F], q[_Q_MAX_R]
+    tau = q[_Q_TAU]
+    ff = q[_Q_FF] != 0.0
+    if ff and not tau > 0.0:
+        kappa, dkappa = _curvature_and_rate(s, q, breaks, coefs)
+    else:
+        kappa, dkappa = _curvature(s, q, breaks, coefs), 0.0
+    raw_f, raw_r = _feedback_command(e, th, k1, k2, a)
+    if ff:
+        raw_f = raw_f + _feedforward_angle(kappa, q)
+    cf = min(max(raw_f, -mf), mf)
+    cr = min(max(raw_r, -mr), mr)
+    df, dr = (df_s, dr_s) if tau > 0.0 else (cf, cr)
+    s_dot, e_dot, th_dot, vy_dot, _ = _dynamic_derivatives(
+        V, kappa, e, th, vy, r, df, dr, q
+    )
+    if tau > 0.0:
+        rf = min(max((cf - df) / tau, -q[_Q_RATE_F]), q[_Q_RATE_F])
+        rr = min(max((cr - dr) / tau, -q[_Q_RATE_R]), q[_Q_RATE_R])
+    else:
+        rf, rr = _feedback_command(e_dot, th_dot, k1, k2, a)
+        if ff:
+            rf = rf + _feedforward_rate(f, kappa, dkappa * s_dot)
+        if abs(raw_f) > mf:
+            rf = 0.0
+        if abs(raw_r) > mr:
+            rr = 0.0
+    alpha_f, alpha_r = _slip_angles(V, q[_Q_L_F], q[_Q_L_R], vy, r, df, dr)
+    if not abs(df) < 0.5 * math.pi:
+        return df, dr, np.nan, np.nan, np.nan, alpha_f, alpha_r, False
+    return df, dr, rf, rr, vy_dot + V * r, alpha_f, alpha_r, True
+
+
+@_jit_inline
+def _path_state_at(tt, rec, n_pc, y0, m):
+    """``(s, e, theta)`` of a run at `tt` from its dense output (`rec`: its
+    pieces), the initial state up to the start (engine._History.states_at)."""
+    if n_pc == 0 or tt <= rec[0, 0]:
+        return y0[0], y0[1], y0[2]
+    lo, hi = 0, n_pc
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if rec[mid, 0] <= tt:
+            lo = mid
+        else:
+            hi = mid
+    row = rec[lo]
+    x = (tt - row[0]) / row[1]
+    v0, v1, v2 = 0.0, 0.0, 0.0
+    for k in range(_NPOW):
+        c = _NPOW - 1 - k
+        v0 += row[2 + m + c * m]
+        v1 += row[2 + m + c * m + 1]
+        v2 += row[2 + m + c * m + 2]
+        w = x if k % 2 == 0 else 1 - x
+        v0 *= w
+        v1 *= w
+        v2 *= w
+    return v0 + row[2], v1 + row[3], v2 + row[4]
+
+
+@_jit_inline
+def _delayed_point_signals(tt, df_s, dr_s, rec, n_pc, y0, m, V, k1, k2, a, q,
+                           breaks, coefs, d_cg):  # fmt: skip
+    """:func:`_point_signals` with an input delay, as compute_outputs with
+    the delayed rows: the law acts on the state at ``tt - delay`` (`rec`,
+    `y0`: the run's dense output and initial state), whose rates are its
+    closed-loop derivative there (the law then on the state at ``tt - 2
+    delay``), 0 before the start; ``df_s, dr_s``: the run's actuator states
+    at `tt`.
+    """
+    f = q[_Q_WHEELBASE]
+    mf, mr = q[_Q_MAX_F], q[_Q_MAX_R]
+    tau = q[_Q_TAU]
+    ff = q[_Q_FF] != 0.0
+    delay = q[_Q_DELAY]
+    td = tt - delay
+    s_m, e_m, th_m = _path_state_at(td, rec, n_pc, y0, m)
+    if ff and not tau > 0.0:
+        kappa, dkappa = _curvature_and_rate(s_m, q, breaks, coefs)
+    else:
+        kappa, dkappa = _curvature(s_m, q, breaks, coefs), 0.0
+    raw_f, raw_r = _feedback_command(e_m, th_m, k1, k2, a)
+    if ff:
+        raw_f = raw_f + _feedforward_angle(kappa, q)
+    cf = min(max(raw_f, -mf), mf)
+    cr = min(max(raw_r, -mr), mr)
+    if tau > 0.0:
+        df, dr = df_s, dr_s
+        rf = min(max((cf - df) / tau, -q[_Q_RATE_F]), q[_Q_RATE_F])
+        rr = min(max((cr - dr) / tau, -q[_Q_RATE_R]), q[_Q_RATE_R])
+    else:
+        df, dr = cf, cr
+        # the measured state is held before the start: no rate there
+        s_dot, e_dot, th_dot = 0.0, 0.0, 0.0
+        if n_pc > 0 and td > rec[0, 0]:
+            s2, e2, th2 = _path_state_at(td - delay, rec, n_pc, y0, m)
+            kappa2 = _curvature(s2, q, breaks, coefs)
+            c2f, c2r = _feedback_command(e2, th2, k1, k2, a)
+            if ff:
+                c2f = c2f + _feedforward_angle(kappa2, q)
+            c2f = min(max(c2f, -mf), mf)
+            c2r = min(max(c2r, -mr), mr)
+            s_dot, e_dot, th_dot = _path_frame_derivatives(
+                V, f, kappa, e_m, th_m, c2f, c2r
+            )
+        rf, rr = _feedback_command(e_dot, th_dot, k1, k2, a)
+        if ff:
+            rf = rf + _feedforward_rate(f, kappa, dkappa * s_dot)
+        if abs(raw_f) > mf:
+            rf = 0.0
+        if abs(raw_r) > mr:
+            rr = 0.0
+    psi_dot = _yaw_rate(V, f, df, dr)
+    if not abs(df) < 0.5 * math.pi:
+        return df, dr, rf, rr, np.nan, np.nan, psi_dot, False
+    psi_ddot = _yaw_acceleration(V, f, df, dr, rf, rr)
+    lat = _lateral_acceleration(V, d_cg, dr, rr, psi_dot, psi_ddot)
+    vy = _cg_lateral_velocity(V, d_cg, dr, psi_dot)
+    return df, dr, rf, rr, lat, vy, psi_dot, True
+
+
+@_jit
+def _delayed_signals_batch(states, P, q, breaks, coefs, d_cg, rec, offsets, Y0,
+                           t_eval, sig):  # fmt: skip
+    # rows 6-12 of sig (the steering angles, their rates, the lateral
+    # acceleration, v_y, the yaw rate) anew for an input delay: the law on
+    # the state at t - delay, from each run's dense output (rows 0-5 and the
+    # slip angles do not depend on the law)
+    n, m, T = states.shape
+    for i in range(n):
+        V = P[i, _P_SPEED]
+        k1, k2, a = P[i, _P_K1], P[i, _P_K2], P[i, _P_RATIO]
+        pc = rec[offsets[i] : offsets[i + 1]]
+        n_pc = pc.shape[0]
+        for k in range(T):
+            if not np.isfinite(states[i, 0, k]):
+                continue
+            df_s, dr_s = 0.0, 0.0
+            if q[_Q_TAU] > 0.0:
+                df_s, dr_s = states[i, 3, k], states[i, 4, k]
+            df, dr, rf, rr, lat, vy, psi_dot, ok = _delayed_point_signals(
+                t_eval[k], df_s, dr_s, pc, n_pc, Y0[i], m, V,
+                k1, k2, a, q, breaks, coefs, d_cg,
+            )  # fmt: skip
+            sig[i, 6, k] = df
+            sig[i, 7, k] = dr
+            if ok:
+                sig[i, 8, k] = rf
+                sig[i, 9, k] = rr
+                sig[i, 10, k] = lat
+                sig[i, 11, k] = vy
+                sig[i, 12, k] = psi_dot
+                sig[i, 13, k] = 0.0
+                sig[i, 14, k] = 0.0
+            else:
+                for r in range(8, _NSIG):
+                    sig[i, r, k] = np.nan
+
+
 @_jit
 def _signals_batch(states, P, q, breaks, coefs, d_cg, pose, sig):
     # sig (n, 15, T) in the order of engine.SIGNALS. Rows 3-14 -- s, e,
@@ -1528,15 +1906,31 @@ def _signals_batch(states, P, q, breaks, coefs, d_cg, pose, sig):
                 df_s, dr_s = states[i, 3, k], states[i, 4, k]
             else:
                 df_s, dr_s = 0.0, 0.0
-            df, dr, rf, rr, lat, vy, psi_dot, ok = _point_signals(
-                s, e, th, df_s, dr_s, V, k1, k2, a, q, breaks, coefs, d_cg
-            )
+            if q[_Q_DYNAMIC] != 0.0:
+                # v_y and the yaw rate are states, the slip angles signals
+                vy, psi_dot = states[i, m - 2, k], states[i, m - 1, k]
+                df, dr, rf, rr, lat, slip_f, slip_r, ok = _dynamic_point_signals(
+                    s, e, th, df_s, dr_s, vy, psi_dot, V, k1, k2, a, q, breaks, coefs
+                )
+                sig[i, 8, k] = rf
+                sig[i, 9, k] = rr
+                sig[i, 10, k] = lat
+                sig[i, 11, k] = vy
+                sig[i, 12, k] = psi_dot
+                sig[i, 13, k] = slip_f
+                sig[i, 14, k] = slip_r
+            else:
+                df, dr, rf, rr, lat, vy, psi_dot, ok = _point_signals(
+                    s, e, th, df_s, dr_s, V, k1, k2, a, q, breaks, coefs, d_cg
+                )
             sig[i, 3, k] = s
             sig[i, 4, k] = e
             sig[i, 5, k] = th
             sig[i, 6, k] = df
             sig[i, 7, k] = dr
-            if ok:
+            if q[_Q_DYNAMIC] != 0.0:
+                pass  # rows 8-14 above (rates, acceleration NaN as returned)
+            elif ok:
                 sig[i, 8, k] = rf
                 sig[i, 9, k] = rr
                 sig[i, 10, k] = lat
@@ -1636,11 +2030,21 @@ def _peak_values(tt, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, out)
     """|signal| of the six peak signals at `tt` on the run's dense output."""
     _state_at(tt, rec, n_pc, y0, m, ytmp)
     df_s, dr_s = 0.0, 0.0
-    if m == 5:
+    if q[_Q_TAU] > 0.0:
         df_s, dr_s = ytmp[3], ytmp[4]
-    df, dr, rf, rr, lat, _, _, ok = _point_signals(
-        ytmp[0], ytmp[1], ytmp[2], df_s, dr_s, V, k1, k2, a, q, br, co, d_cg
-    )
+    if q[_Q_DELAY] > 0.0:
+        df, dr, rf, rr, lat, _, _, ok = _delayed_point_signals(
+            tt, df_s, dr_s, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg
+        )
+    elif q[_Q_DYNAMIC] != 0.0:
+        df, dr, rf, rr, lat, _, _, ok = _dynamic_point_signals(
+            ytmp[0], ytmp[1], ytmp[2], df_s, dr_s, ytmp[m - 2], ytmp[m - 1], V, k1,
+            k2, a, q, br, co,
+        )  # fmt: skip
+    else:
+        df, dr, rf, rr, lat, _, _, ok = _point_signals(
+            ytmp[0], ytmp[1], ytmp[2], df_s, dr_s, V, k1, k2, a, q, br, co, d_cg
+        )
     out[0] = abs(ytmp[1])
     out[1] = abs(df)
     out[2] = abs(dr)
@@ -1661,14 +2065,14 @@ def _peak_values(tt, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, out)
 @_jit
 def _peak_value(tt, j, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals):
     """|signal j| at `tt`: :func:`_peak_values` computing only what j needs."""
-    if j > 2:
+    if j > 2 or (j > 0 and not q[_Q_TAU] > 0.0 and q[_Q_DELAY] > 0.0):
         # (_peak_values finds the state itself)
         _peak_values(tt, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals)
         return vals[j]
     _state_at(tt, rec, n_pc, y0, m, ytmp)
     if j == 0:
         v = abs(ytmp[1])
-    elif m == 5:
+    elif q[_Q_TAU] > 0.0:
         v = abs(ytmp[2 + j])  # the actuator's angles are states
     else:
         # the clipped commands, with the operations of _point_signals
@@ -2531,6 +2935,9 @@ def shared_parameters(
     switching: bool = False,
     max_step: float = math.inf,
     method: str = "DOP853",
+    delay: float = 0.0,
+    model: str = "kinematic",
+    tyre: str = "linear",
 ) -> np.ndarray:
     """The parameter vector shared by all runs of a call (for the kernels).
 
@@ -2555,11 +2962,22 @@ def shared_parameters(
         DOP853 only).
     method : {"DOP853", "Radau"}, optional
         Integration method (:data:`METHODS`).
+    delay : float, optional
+        Input delay [s], >= 0 (default 0): the law acts on the measurements
+        of ``t - delay`` (the method of steps: the steps are at most the
+        delay). DOP853 without `switching` only.
+    model : {"kinematic", "dynamic"}, optional
+        Vehicle model; the dynamic single-track model
+        (:func:`~fws_control.dynamics.dynamic_path_derivatives`) takes the
+        vehicle's mass, yaw inertia and cornering stiffnesses. DOP853 only.
+    tyre : {"linear", "magic"}, optional
+        Tyre model of the dynamic model (``"magic"``: saturating at the
+        friction times the axle's static load).
 
     Returns
     -------
     ndarray
-        Shape ``(18,)``.
+        Shape ``(28,)``.
 
     Examples
     --------
@@ -2585,6 +3003,25 @@ def shared_parameters(
             f"max_step applies to method='DOP853' only, got max_step={max_step!r} "
             "with method='Radau'"
         )
+    if not (isinstance(delay, (int, float)) and math.isfinite(delay) and delay >= 0.0):
+        raise ValueError(f"delay must be a finite number >= 0 [s], got {delay!r}")
+    if model not in ("kinematic", "dynamic"):
+        raise ValueError(f"model must be 'kinematic' or 'dynamic', got {model!r}")
+    if tyre not in ("linear", "magic"):
+        raise ValueError(f"tyre must be 'linear' or 'magic', got {tyre!r}")
+    if model == "dynamic" and method != "DOP853":
+        raise ValueError(
+            f"model='dynamic' is compiled with method='DOP853' only, got {method!r}"
+        )
+    if model == "dynamic" and delay > 0.0:
+        raise ValueError(
+            f"model='dynamic' is compiled without a delay only, got delay={delay!r}"
+        )
+    if delay > 0.0 and (method != "DOP853" or switching):
+        raise ValueError(
+            f"delay={delay!r} is compiled with method='DOP853' and switching=False "
+            f"only, got method={method!r}, switching={switching!r}"
+        )
     q = np.empty(_NQ)
     q[_Q_WHEELBASE] = vehicle.wheelbase
     q[_Q_FF] = 1.0 if feedforward else 0.0
@@ -2604,7 +3041,24 @@ def shared_parameters(
         q[_Q_S_LO], q[_Q_S_HI] = -math.inf, math.inf
     q[_Q_OPEN_LENGTH] = table.open_length
     q[_Q_SWITCH] = 1.0 if switching else 0.0
-    q[_Q_MAX_STEP] = float(max_step)
+    # the method of steps: a stage at t + h needs the state at t + h - delay,
+    # known (accepted) only if h <= delay
+    q[_Q_MAX_STEP] = float(min(max_step, delay)) if delay > 0.0 else float(max_step)
+    q[_Q_DELAY] = float(delay)
+    q[_Q_DYNAMIC:] = 0.0
+    if model == "dynamic":
+        require_dynamics(vehicle, tyre=tyre)
+        q[_Q_DYNAMIC] = 1.0
+        q[_Q_MASS] = vehicle.mass
+        q[_Q_INERTIA] = vehicle.yaw_inertia
+        q[_Q_L_F] = vehicle.wheelbase - vehicle.rear_to_cg
+        q[_Q_L_R] = vehicle.rear_to_cg
+        q[_Q_C_F] = vehicle.cornering_front
+        q[_Q_C_R] = vehicle.cornering_rear
+        if tyre == "magic":
+            load_f, load_r = axle_loads(vehicle)
+            q[_Q_PEAK_F] = vehicle.friction * load_f
+            q[_Q_PEAK_R] = vehicle.friction * load_r
     q[_Q_METHOD] = float(METHODS.index(method))
     # a curvature equal to the first piece's constant term (every s of an
     # arc or a straight) takes its feedforward angle from here, computed by
@@ -2647,7 +3101,12 @@ def compiled_method(method: Any) -> str | None:
 
 
 def compiled_support(
-    path: Path, gains: Any, *, delay: float = 0.0, method: Any = "DOP853"
+    path: Path,
+    gains: Any,
+    *,
+    delay: float = 0.0,
+    method: Any = "DOP853",
+    model: str = "kinematic",
 ) -> str | None:
     """Why :func:`integrate_compiled` cannot run this case, or None if it can.
 
@@ -2659,10 +3118,13 @@ def compiled_support(
         Only :class:`~fws_control.SteeringGains` (the paper's law) is
         compiled.
     delay : float, optional
-        Input delay [s]: only 0 is compiled.
+        Input delay [s]: compiled with DOP853 (the method of steps).
     method : str or scipy.integrate.OdeSolver, optional
         Only :data:`METHODS` (``"DOP853"``, ``"Radau"`` or their classes)
-        are compiled.
+        are compiled; with a delay only DOP853.
+    model : {"kinematic", "dynamic"}, optional
+        Vehicle model: the dynamic one is compiled with DOP853 and without
+        a delay.
 
     Returns
     -------
@@ -2674,17 +3136,25 @@ def compiled_support(
     >>> import fws_control as fws
     >>> from fws_control.simulation.compiled import compiled_support
     >>> g = fws.SteeringGains(0.1, 0.5, 0.0)
-    >>> compiled_support(fws.Straight(), g, delay=0.1)
-    'an input delay (method of steps) is not compiled'
+    >>> compiled_support(fws.Straight(), g, delay=0.1) is None
+    True
+    >>> compiled_support(fws.Straight(), g, delay=0.1, method="Radau")
+    "an input delay is compiled with method='DOP853' only, got 'Radau'"
     """
     if numba is None:
         return "numba is not installed (pip install fws-control[fast])"
     if not isinstance(gains, SteeringGains):
         return "only the paper's law (SteeringGains) is compiled, not controllers"
-    if delay != 0.0:
-        return "an input delay (method of steps) is not compiled"
     if compiled_method(method) is None:
         return f"only method={METHODS} is compiled, got {method!r}"
+    if delay != 0.0 and compiled_method(method) != "DOP853":
+        return f"an input delay is compiled with method='DOP853' only, got {method!r}"
+    if model == "dynamic" and compiled_method(method) != "DOP853":
+        return f"model='dynamic' is compiled with method='DOP853' only, got {method!r}"
+    if model == "dynamic" and delay != 0.0:
+        return "model='dynamic' with an input delay is not compiled"
+    if model not in ("kinematic", "dynamic"):
+        return f"model={model!r} is not compiled"
     if _exact_pieces(path) is None and not math.isfinite(float(path.length)):
         return "an unbounded path other than Straight has no curvature table"
     return None
@@ -2704,17 +3174,22 @@ def integrate_compiled(
     atol: float = 1e-12,
     steer_margin: float = DEFAULT_MARGIN,
     curvature_margin: float = DEFAULT_MARGIN,
-    switching: bool = True,
+    switching: bool | None = None,
     max_step: float = math.inf,
     method: str = "DOP853",
     out: np.ndarray | None = None,
     solution: list | None = None,
+    delay: float = 0.0,
+    model: str = "kinematic",
+    tyre: str = "linear",
+    body_state: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate ``n`` runs, each with its own steps and events.
 
     Same arguments and results as
-    :func:`~fws_control.simulation.engine.integrate` (without ``method``,
-    ``delay`` and ``solution``), plus the per run solver statistics.
+    :func:`~fws_control.simulation.engine.integrate` (with a delay without
+    its six rows of the delayed state: :func:`compiled_outputs` finds it on
+    the `solution`), plus the per run solver statistics.
 
     Parameters
     ----------
@@ -2743,8 +3218,9 @@ def integrate_compiled(
         Stop margins, in [0, 1) (see the module notes).
     switching : bool, optional
         Locate where the steering-angle and steering-rate limits start and
-        stop clipping as events and restart the step there (default), so
-        that the right-hand side is smooth within every step; False: clip
+        stop clipping as events and restart the step there (the default
+        without a delay), so that the right-hand side is smooth within every
+        step; False (the default with a delay, the only choice there): clip
         with min/max inside the right-hand side, as the numpy engine does
         (its kinks then fall inside steps).
     max_step : float, optional
@@ -2770,6 +3246,20 @@ def integrate_compiled(
         ``engine.integrate(..., solution=[])`` does. Keeping it costs the
         dense output of the steps that hold no output time and about
         ``8 (m + 1)`` floats per step.
+    delay : float, optional
+        Input delay [s] on the steering command (default 0), as
+        :func:`~fws_control.simulation.engine.integrate` takes it: the law
+        acts on the measurements of ``t - delay``, the initial state's
+        before the start; the method of steps (steps of at most the delay,
+        each run's past from its own dense output, DOP853 restarted at
+        ``delay``, ``2 delay`` and ``3 delay``). DOP853 only.
+    model, tyre : str, optional
+        Vehicle model and tyre (see :func:`shared_parameters`); the dynamic
+        model adds the rows ``v_y, r`` last. DOP853 without a delay only.
+    body_state : ndarray, optional
+        Initial ``(v_y, r)`` per run of the dynamic model, shape ``(n, 2)``;
+        where NaN (or None): the no-slip motion at the initial steering, as
+        :func:`~fws_control.simulation.engine.integrate`.
 
     Returns
     -------
@@ -2811,6 +3301,8 @@ def integrate_compiled(
     table = path if isinstance(path, CurvatureTable) else curvature_table(path)
     rtol = float(check_positive("rtol", rtol))
     atol = float(check_positive("atol", atol))
+    if switching is None:
+        switching = not (isinstance(delay, (int, float)) and delay > 0.0)
     q = shared_parameters(
         vehicle,
         table,
@@ -2821,6 +3313,9 @@ def integrate_compiled(
         switching=switching,
         max_step=max_step,
         method=method,
+        delay=delay,
+        model=model,
+        tyre=tyre,
     )
     speed = np.ascontiguousarray(speed, dtype=float).ravel()
     n = speed.size
@@ -2830,23 +3325,38 @@ def integrate_compiled(
         raise ValueError(f"path_state must have shape ({n}, 3), got {z0.shape}")
     t_eval = np.ascontiguousarray(t_eval, dtype=float)
     T = t_eval.size
-    m = 3 if time_constant is None else 5
+    dyn = model == "dynamic"
+    m = (3 if time_constant is None else 5) + (2 if dyn else 0)
     Y0 = np.empty((n, m))
     Y0[:, :3] = z0
+    if time_constant is not None or dyn:
+        kappa = table(z0[:, 0])
+        cmd = steering_command(
+            vehicle,
+            SteeringGains(P[:, _P_K1], P[:, _P_K2], P[:, _P_RATIO]),
+            z0[:, 1],
+            z0[:, 2],
+            curvature=kappa,
+            feedforward=feedforward,
+        )
     if time_constant is not None:
         # The actuator starts at the command: no initial transient of its own.
-        kappa = table(z0[:, 0])
-        Y0[:, 3:] = np.stack(
-            steering_command(
-                vehicle,
-                SteeringGains(P[:, _P_K1], P[:, _P_K2], P[:, _P_RATIO]),
-                z0[:, 1],
-                z0[:, 2],
-                curvature=kappa,
-                feedforward=feedforward,
-            ),
-            axis=1,
-        )
+        Y0[:, 3:5] = np.stack(cmd, axis=1)
+    if dyn:
+        # the no-slip motion at the initial steering, where not given
+        with np.errstate(invalid="ignore"):
+            vy0, r0 = equations.no_slip_body_state(
+                speed, vehicle.wheelbase, vehicle.rear_to_cg, cmd[0], cmd[1]
+            )
+        if body_state is not None:
+            body = np.asarray(body_state, dtype=float)
+            if body.shape != (n, 2):
+                raise ValueError(
+                    f"body_state must have shape ({n}, 2), got {body.shape}"
+                )
+            vy0 = np.where(np.isfinite(body[:, 0]), body[:, 0], vy0)
+            r0 = np.where(np.isfinite(body[:, 1]), body[:, 1], r0)
+        Y0[:, m - 2], Y0[:, m - 1] = vy0, r0
     if out is None:
         out = np.empty((n, m, T))
     elif out.shape != (n, m, T) or out.dtype != np.float64:
@@ -2870,7 +3380,10 @@ def integrate_compiled(
     if keep:
         solution.append(
             CompiledSolution(
-                records=rec[: offsets[-1]], offsets=offsets, initial_state=Y0
+                records=rec[: offsets[-1]],
+                offsets=offsets,
+                initial_state=Y0,
+                delay=float(q[_Q_DELAY]),
             )  # fmt: skip
         )
     status = np.array([STATUS_CODES[c] for c in codes], dtype=object)
@@ -2905,6 +3418,10 @@ def compiled_outputs(
     initial_heading: np.ndarray,
     table: CurvatureTable | None = None,
     out: np.ndarray | None = None,
+    solution: CompiledSolution | None = None,
+    t_eval: np.ndarray | None = None,
+    model: str = "kinematic",
+    tyre: str = "linear",
 ) -> np.ndarray:
     """All signals of :data:`~fws_control.simulation.engine.SIGNALS`, compiled.
 
@@ -2932,6 +3449,17 @@ def compiled_outputs(
         The path's table, if already built.
     out : ndarray, optional
         Preallocated ``(n, len(SIGNALS), T)`` float array for the result.
+    solution : CompiledSolution, optional
+        The integration's solution; needed with an input delay (its
+        ``delay``), where the law acts on the state at ``t - delay`` and
+        the rates of the angles are those of that state, found on the runs'
+        dense output (as the delayed rows of the numpy engine).
+    t_eval : ndarray, optional
+        The output times of `states` (needed with an input delay).
+    model, tyre : str, optional
+        As given to :func:`integrate_compiled`; with the dynamic model
+        ``v_y`` and the yaw rate are its states, the slip angles those of
+        its axles and the lateral acceleration ``dv_y/dt + u r``.
 
     Returns
     -------
@@ -2955,9 +3483,11 @@ def compiled_outputs(
     if numba is None:
         raise ImportError("compiled_outputs needs numba: pip install fws-control[fast]")
     table = curvature_table(path) if table is None else table
+    delay = 0.0 if solution is None else solution.delay
     q = shared_parameters(
-        vehicle, table, feedforward=feedforward, time_constant=time_constant
-    )
+        vehicle, table, feedforward=feedforward, time_constant=time_constant,
+        delay=delay, model=model, tyre=tyre,
+    )  # fmt: skip
     speed = np.ascontiguousarray(speed, dtype=float).ravel()
     P = _run_parameters(gains, speed)
     st = np.moveaxis(np.asarray(states, dtype=float), 0, 1)  # (n, m, T)
@@ -2981,6 +3511,18 @@ def compiled_outputs(
         _signals_batch(
             st, P, q, table.breaks, table.coefs, float(vehicle.rear_to_cg), pose, out
         )
+        if delay > 0.0:
+            if t_eval is None or t_eval.shape != (T,):
+                raise ValueError(
+                    f"t_eval must be the {T} output times of the states with an "
+                    f"input delay, got {None if t_eval is None else t_eval.shape}"
+                )
+            _delayed_signals_batch(
+                st, P, q, table.breaks, table.coefs, float(vehicle.rear_to_cg),
+                np.ascontiguousarray(solution.records), solution.offsets,
+                np.ascontiguousarray(solution.initial_state, dtype=float),
+                np.ascontiguousarray(t_eval, dtype=float), out,
+            )  # fmt: skip
     S = out[:, 3]
     valid = np.isfinite(S)
     if pose[0] == 0.0:
@@ -3023,6 +3565,8 @@ class CompiledSolution:
         Run ``i`` owns rows ``offsets[i]:offsets[i + 1]``, shape ``(n + 1,)``.
     initial_state : ndarray
         The runs' initial states, shape ``(n, m)``.
+    delay : float
+        The input delay of the integration [s] (0: none).
 
     Examples
     --------
@@ -3042,6 +3586,7 @@ class CompiledSolution:
     records: np.ndarray
     offsets: np.ndarray
     initial_state: np.ndarray
+    delay: float = 0.0
 
 
 def compiled_peaks(
@@ -3056,6 +3601,8 @@ def compiled_peaks(
     t_eval: np.ndarray,
     signals: np.ndarray,
     t_stop: np.ndarray,
+    model: str = "kinematic",
+    tyre: str = "linear",
 ) -> tuple[np.ndarray, np.ndarray]:
     r"""Peaks ``max |signal|`` of each run's continuous solution (compiled).
 
@@ -3090,6 +3637,8 @@ def compiled_peaks(
         :func:`compiled_outputs` of its states, ``(n, len(SIGNALS), T)``.
     t_stop : ndarray
         Per run end time, from :func:`integrate_compiled`.
+    model, tyre : str, optional
+        As given to :func:`integrate_compiled`.
 
     Returns
     -------
@@ -3122,13 +3671,14 @@ def compiled_peaks(
         raise ImportError("compiled_peaks needs numba: pip install fws-control[fast]")
     table = path if isinstance(path, CurvatureTable) else curvature_table(path)
     q = shared_parameters(
-        vehicle, table, feedforward=feedforward, time_constant=time_constant
-    )
+        vehicle, table, feedforward=feedforward, time_constant=time_constant,
+        delay=solution.delay, model=model, tyre=tyre,
+    )  # fmt: skip
     speed = np.ascontiguousarray(speed, dtype=float).ravel()
     n = speed.size
     P = _run_parameters(gains, speed)
     Y0 = np.ascontiguousarray(solution.initial_state, dtype=float)
-    m = 3 if time_constant is None else 5
+    m = (3 if time_constant is None else 5) + (2 if model == "dynamic" else 0)
     if Y0.shape != (n, m) or solution.offsets.shape != (n + 1,):
         raise ValueError(
             f"solution must hold {n} runs of {m} states, got initial states of "

@@ -19,7 +19,8 @@ interactive terminals.
 That is the numpy engine. By default (``engine="auto"``) the runners use
 the compiled per-run engine of :mod:`~fws_control.simulation.compiled`
 instead wherever numba is installed and it covers the case (the paper's
-law on the kinematic model, no delay, DOP853): each run then has its own
+law on the kinematic model with DOP853 or Radau, with a delay DOP853; on
+the dynamic model DOP853 without delay): each run then has its own
 steps, error norm and stop, and its exact peaks come from its own dense
 output.
 """
@@ -245,9 +246,7 @@ def _compiled_reason(path, gains, *, delay, method, model, feedforward):
     # imported here: numba's import is paid only by those who use it
     from .compiled import compiled_support
 
-    reason = compiled_support(path, gains, delay=delay, method=method)
-    if reason is None and model != "kinematic":
-        reason = f"only model='kinematic' is compiled, got model={model!r}"
+    reason = compiled_support(path, gains, delay=delay, method=method, model=model)
     if reason is None and feedforward == "dynamic":
         reason = "feedforward='dynamic' is not compiled"
     return reason
@@ -348,6 +347,10 @@ def _run_compiled_stages(
         max_step=opts.get("max_step", math.inf),
         method=compiled_method(opts["method"]),
         solution=(solution := []),
+        delay=opts["delay"],
+        model=opts["model"],
+        tyre=opts["tyre"],
+        body_state=x0[:, 3:] if opts["model"] == "dynamic" else None,
     )
     signals = compiled_outputs(
         vehicle,
@@ -360,6 +363,10 @@ def _run_compiled_stages(
         initial_heading=x0[:, 2],
         table=table,
         out=out,
+        solution=solution[0],
+        t_eval=t,
+        model=opts["model"],
+        tyre=opts["tyre"],
     )
     peaks, peak_times = compiled_peaks(
         vehicle,
@@ -372,6 +379,8 @@ def _run_compiled_stages(
         t_eval=t,
         signals=signals,
         t_stop=t_stop,
+        model=opts["model"],
+        tyre=opts["tyre"],
     )
     return signals, status, message, t_stop, peaks, peak_times
 
@@ -986,7 +995,14 @@ def _simulate_batch(
         )
     if engine == "compiled" and auto_method:
         duration_run = float(t[-1] - t[0])
-        if stiff_auto and duration_run > _RADAU_FROM_STEPS * _CAPPED_STEP * tau:
+        # (with a delay or the dynamic model the compiled engine has DOP853
+        # only; with a delay its steps are at most the delay too)
+        if (
+            stiff_auto
+            and duration_run > _RADAU_FROM_STEPS * _CAPPED_STEP * tau
+            and not opts["delay"] > 0.0
+            and opts["model"] == "kinematic"
+        ):
             opts["method"] = "Radau"
         else:
             opts["method"] = "DOP853"
@@ -1456,12 +1472,15 @@ def simulate(
         :mod:`fws_control.simulation.compiled` (extra ``fast``), each run
         with its own steps and stop, at compiled speed. It runs the paper's
         law (:class:`~fws_control.SteeringGains`) on the kinematic model
-        without delay, with ``method="DOP853"``, ``"Radau"`` or ``"auto"``
+        (and on the dynamic model with DOP853 and no delay)
+        with ``method="DOP853"``, ``"Radau"`` or ``"auto"``
         (which then means DOP853; with an actuator of time constant T, its
         steps held to 3.2 T, half its stability bound, where its error
         estimate bounds the error again, up to 2,500 such steps, and Radau
         beyond: 9-13 ms per run of the paper's curve scenario whatever T
-        and the duration) and `feedforward` True or
+        and the duration; with a delay DOP853 only, its steps at most the
+        delay: the method of steps, its clips min/max as the numpy
+        engine's) and `feedforward` True or
         False, on any path whose curvature it can tabulate; any other case
         raises :class:`ValueError` (no fallback). Its results agree with the
         numpy engine's to the solver tolerance (the same method; angle and
@@ -1673,8 +1692,9 @@ def simulate_batch(
     engine : {"auto", "numpy", "compiled"}, optional
         Integration engine, as in :func:`simulate` (default ``"auto"``: the
         compiled engine where numba is installed and it runs the case --
-        the paper's law, kinematic model, no delay, DOP853, Radau or
-        ``"auto"`` -- else the numpy engine). With
+        the paper's law, kinematic model, DOP853, Radau or ``"auto"``
+        (with a delay, or on the dynamic model without delay, DOP853 or
+        ``"auto"``) -- else the numpy engine). With
         ``"compiled"`` each run has its own steps, error norm and stop, so a
         run's result does not depend on the other runs (nor on
         `chunk_size`).

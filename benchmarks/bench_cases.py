@@ -1,0 +1,113 @@
+"""CPU per run of each closed-loop case, as a ratio to the paper's law.
+
+On the ISO 3888-1 double lane change (:func:`fws_control.double_lane_change`,
+vehicle width 1.8 m) at 20 m/s, from 0.5 m beside the path, over the
+course, output step 0.01 s, all signals and exact peaks,
+:func:`fws_control.simulate_batch` with its default engine (``"auto"``) and
+method, rtol 1e-10, atol 1e-12:
+
+1. the paper's law (double root -2, ratios spread over [-0.5, 0.5]) on the
+   kinematic model;
+2. the same with the input delay 0.24 s;
+3. the same with the delay and the steering lag 0.27 s;
+4. the paper's law on the dynamic single-track model with the saturating
+   ("magic") tyre;
+5. Stanley (gain 2, ratios as 1.);
+6. pure pursuit (look-ahead 0.6 s, at least 5 m).
+
+Each line gives the engine that ran the case, the CPU per run (best of
+``--repeat`` >= 3 rounds, the cases timed in turn every round so that a
+drift of the machine's speed does not enter the ratios) and the ratio to
+case 1. Cases on the numpy engine cost seconds per run: they run
+``--numpy-runs`` runs (default 2), the compiled ones ``--runs`` (default
+100). The machine load is printed before and after.
+
+Run: ``python benchmarks/bench_cases.py [--runs 100] [--numpy-runs 2]``
+(several minutes: the numpy cases dominate).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+from timing import best_of_interleaved, machine_line
+
+import fws_control as fws
+from fws_control.paper.data import REALISTIC_DELAY, REALISTIC_STEERING_LAG
+
+SPEED = 20.0
+DYNAMIC = fws.Vehicle(
+    wheelbase=2.7, rear_to_cg=1.2, mass=1500.0, yaw_inertia=2600.0,
+    cornering_front=8.0e4, cornering_rear=9.5e4, friction=1.0,
+)  # fmt: skip
+
+
+def cases(n_compiled: int, n_numpy: int) -> dict:
+    """name -> (number of runs, function running the batch, its engine)."""
+    course = fws.double_lane_change(vehicle_width=1.8)
+    path = course.path
+    duration = float(path.length) / SPEED
+    veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+
+    def laws(n, vehicle):
+        return fws.double_root_gains(
+            vehicle, speed=SPEED, curvature=0.0,
+            ratio=np.linspace(-0.5, 0.5, n), pole=-2.0,
+        )  # fmt: skip
+
+    def batch(plant, ctrl, n, **kw):
+        def run():
+            return fws.simulate_batch(
+                plant, path, ctrl, initial_state=(0.0, 0.5, 0.0),
+                duration=duration, dt=0.01, progress=False, **kw,
+            )  # fmt: skip
+
+        return run
+
+    kin = fws.LateralPlant(veh, speed=SPEED)
+    lag = fws.LateralPlant(veh, speed=SPEED, steering_lag=REALISTIC_STEERING_LAG)
+    dyn = fws.LateralPlant(DYNAMIC, speed=SPEED, model="dynamic", tyre="magic")
+    ratios = np.linspace(-0.5, 0.5, n_numpy)
+    table = {
+        "paper law": (kin, laws(n_compiled, veh), {}),
+        "+ delay 0.24 s": (kin, laws(n_compiled, veh), {"delay": REALISTIC_DELAY}),
+        "+ lag 0.27 s": (lag, laws(n_compiled, veh), {"delay": REALISTIC_DELAY}),
+        "dynamic, magic tyre": (dyn, laws(n_compiled, DYNAMIC), {}),
+        "Stanley": (kin, fws.Stanley(gain=2.0, ratio=ratios), {}),
+        "pure pursuit": (
+            kin, fws.PurePursuit(lookahead=5.0, lookahead_time=0.6, ratio=ratios), {}
+        ),
+    }  # fmt: skip
+    out = {}
+    for name, (plant, ctrl, kw) in table.items():
+        run = batch(plant, ctrl, n_compiled, **kw)
+        res = run()  # also the first (compiling) call
+        out[name] = (res.signals.shape[0], run, res.engine)
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--runs", type=int, default=100)
+    ap.add_argument("--numpy-runs", type=int, default=2)
+    ap.add_argument("--repeat", type=int, default=3)
+    args = ap.parse_args()
+    print(machine_line())
+    table = cases(args.runs, args.numpy_runs)
+    best = best_of_interleaved(
+        {name: run for name, (_, run, _) in table.items()}, repeat=args.repeat
+    )
+    base = best["paper law"] / table["paper law"][0]
+    print(f"ISO 3888-1 at {SPEED:g} m/s; CPU per run, best of {args.repeat}")
+    for name, (n, _, engine) in table.items():
+        per_run = best[name] / n
+        print(
+            f"  {name:22s} {engine:9s} {n:4d} runs  {per_run * 1e3:10.2f} ms  "
+            f"{per_run / base:8.1f}x"
+        )
+    print(machine_line())
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,155 @@
+"""The dynamic single-track model on the compiled engine.
+
+References: the numpy engine (stacked runs, scipy's DOP853, the same
+equations through :mod:`fws_control.dynamics`, its own signals and exact
+peaks); and the closed loop written here from the formulas (slip angles,
+linear and magic tyre forces, the body equations and the path kinematics
+of the rear axle) integrated by :func:`scipy.integrate.solve_ivp`, 100x
+tighter.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import fws_control as fws
+from fws_control.simulation.engine import PEAK_SIGNALS, SIGNALS
+
+pytest.importorskip(
+    "numba", reason="numba is not installed: the compiled engine (extra 'fast') "
+    "is not tested"
+)  # fmt: skip
+
+from fws_control.simulation.compiled import (  # noqa: E402
+    compiled_support,
+    integrate_compiled,
+)
+
+DYN = fws.Vehicle(
+    wheelbase=2.7, rear_to_cg=1.2, mass=1500.0, yaw_inertia=2600.0,
+    cornering_front=8.0e4, cornering_rear=9.5e4, friction=1.0,
+)  # fmt: skip
+ARC = fws.Arc(curvature=0.1)
+TOL = {"rtol": 1e-10, "atol": 1e-12}
+
+
+@pytest.mark.parametrize("lag", [None, 0.27], ids=["no-lag", "lag"])
+@pytest.mark.parametrize("tyre", ["linear", "magic"])
+def test_simulate_agrees_with_numpy_engine(tyre, lag):
+    """The curve scenario on the dynamic model: signals within 3e-7 of
+    each signal's largest value (the two integrations at rtol 1e-10 round
+    differently and their steps part, as along any run: measured 9e-8 on
+    the front slip angle, 1.2e-8 on the lateral acceleration, both engines
+    within 5 tolerances of the formulas, test_against_the_formulas) and
+    the exact peaks to 1e-9 (the kinematic agreement,
+    tests/test_compiled_peaks.py)."""
+    g = fws.double_root_gains(DYN, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
+    plant = fws.LateralPlant(DYN, speed=5.0, model="dynamic", tyre=tyre,
+                             steering_lag=lag)  # fmt: skip
+    kw = dict(initial_state=(0.0, -5.0, 0.0), duration=15.0, dt=0.3,
+              method="DOP853", **TOL)  # fmt: skip
+    ref = fws.simulate(plant, ARC, g, **kw, engine="numpy")
+    got = fws.simulate(plant, ARC, g, **kw)  # auto: compiled
+    assert got.engine == "compiled" and ref.engine == "numpy"
+    assert got.status == ref.status == "ok"
+    scale = np.nanmax(np.abs(ref.signals[0]), axis=1, keepdims=True)
+    err = np.abs(got.signals[0] - ref.signals[0]) / np.maximum(scale, 1e-300)
+    for r, sig in enumerate(SIGNALS):
+        assert np.nanmax(err[r]) <= 3e-7, sig
+    # the dynamic model slips: its slip angles are not the kinematic zeros
+    assert np.nanmax(np.abs(got.signals[0, SIGNALS.index("slip_front")])) > 1e-3
+    for sig in PEAK_SIGNALS:
+        p, r = getattr(got.peaks, sig), getattr(ref.peaks, sig)
+        assert p.value == pytest.approx(r.value, rel=1e-9, abs=1e-12), sig
+
+
+def _reference(vehicle, kappa, k1, k2, a, u, y0, t, *, magic):
+    """The closed loop on the dynamic model from the formulas (math only)."""
+    f, l_r = vehicle.wheelbase, vehicle.rear_to_cg
+    l_f = f - l_r
+    m, iz = vehicle.mass, vehicle.yaw_inertia
+    c_f, c_r = vehicle.cornering_front, vehicle.cornering_rear
+    g0 = 9.81  # [m/s^2], the value of fws_control.dynamics.GRAVITY
+    d_f = vehicle.friction * m * g0 * l_r / f  # static axle loads times mu
+    d_r = vehicle.friction * m * g0 * l_f / f
+
+    def force(alpha, c, d):
+        if not magic:
+            return c * alpha
+        return d * math.sin(1.3 * math.atan(c / (1.3 * d) * alpha))
+
+    def rhs(_, y):
+        s, e, th, vy, r = y
+        fb = -k1 * e - k2 * th
+        df, dr = fb + math.atan(kappa * f), a * fb
+        alpha_f = df - math.atan2(vy + l_f * r, u)
+        alpha_r = dr - math.atan2(vy - l_r * r, u)
+        ff = force(alpha_f, c_f, d_f) * math.cos(df)
+        fr = force(alpha_r, c_r, d_r) * math.cos(dr)
+        v_r = vy - l_r * r  # lateral velocity of R
+        s_dot = (u * math.cos(th) - v_r * math.sin(th)) / (1 - kappa * e)
+        return [
+            s_dot,
+            u * math.sin(th) + v_r * math.cos(th),
+            r - kappa * s_dot,
+            (ff + fr) / m - u * r,
+            (l_f * ff - l_r * fr) / iz,
+        ]
+
+    sol = solve_ivp(rhs, (t[0], t[-1]), y0, method="DOP853", t_eval=t,
+                    rtol=1e-12, atol=1e-14)  # fmt: skip
+    return sol.y
+
+
+@pytest.mark.parametrize("magic", [False, True], ids=["linear", "magic"])
+def test_against_the_formulas(magic):
+    """At rtol 1e-10 within 100x the tolerance (on each state's largest
+    value) of the loop written here at 1e-12; the initial body state given."""
+    kappa, u = 0.1, 8.0
+    k1, k2, a = 0.3, 0.9, -0.5
+    z0 = np.array([0.0, -1.0, 0.05])
+    body = np.array([0.1, 0.2])
+    t = np.linspace(0.0, 10.0, 101)
+    states, status, _, _, _ = integrate_compiled(
+        DYN, fws.Arc(kappa), fws.SteeringGains(k1, k2, a), speed=np.array([u]),
+        feedforward=True, path_state=z0[None], t_eval=t, time_constant=None,
+        model="dynamic", tyre="magic" if magic else "linear",
+        body_state=body[None], **TOL,
+    )  # fmt: skip
+    assert status[0] == "ok"
+    ref = _reference(DYN, kappa, k1, k2, a, u, np.concatenate([z0, body]), t,
+                     magic=magic)  # fmt: skip
+    scale = np.max(np.abs(ref), axis=1, keepdims=True)
+    err = np.abs(states[:, 0, :] - ref)
+    assert np.all(err <= 100 * (TOL["rtol"] * scale + TOL["atol"]))
+
+
+def test_default_body_state_rolls_without_slip():
+    """NaN body state: both slip angles zero at the start (no-slip motion at
+    the initial command), by hand from the slip-angle definitions."""
+    g = fws.SteeringGains(0.3, 0.9, -0.5)
+    z0 = np.array([[0.0, -1.0, 0.05]])
+    states = integrate_compiled(
+        DYN, ARC, g, speed=np.array([8.0]), feedforward=True, path_state=z0,
+        t_eval=np.array([0.0, 0.1]), time_constant=None, model="dynamic",
+        body_state=np.full((1, 2), np.nan),
+    )[0]  # fmt: skip
+    vy, r = states[3, 0, 0], states[4, 0, 0]
+    fb = -0.3 * -1.0 - 0.9 * 0.05
+    df, dr = fb + math.atan(0.1 * 2.7), -0.5 * fb
+    l_r = 1.2
+    assert df - math.atan2(vy + 1.5 * r, 8.0) == pytest.approx(0.0, abs=1e-15)
+    assert dr - math.atan2(vy - l_r * r, 8.0) == pytest.approx(0.0, abs=1e-15)
+
+
+def test_support():
+    g = fws.SteeringGains(0.1, 0.5, 0.0)
+    assert compiled_support(ARC, g, model="dynamic") is None
+    assert "DOP853" in compiled_support(ARC, g, model="dynamic", method="Radau")
+    assert "delay" in compiled_support(ARC, g, model="dynamic", delay=0.24)
+    plant = fws.LateralPlant(DYN, speed=5.0, model="dynamic")
+    res = fws.simulate(plant, ARC, g, initial_state=(0.0, -5.0, 0.0),
+                       duration=1.0, delay=0.24)  # fmt: skip
+    assert res.engine == "numpy"
