@@ -55,11 +55,13 @@ def _runs(veh, path, gains, speed, pose, duration, *, numpy=True):
     return {k: (r[0][1, 0], r[1][0], float(r[3][0])) for k, r in out.items()}
 
 
-def test_rate_limited_arc_finishes_and_agrees_with_numpy_engine():
+def test_rate_limited_arc_finishes_and_agrees_with_radau():
     """An arc at 24 m/s where the front rate clip, released at its lower
     limit, reaches its upper one within the next step: the compiled DOP853
     used to switch the clip back at once, for ever ("failed" at t = 1.548 s
-    after 100,000 switches), while its Radau and the numpy engine finish."""
+    after 100,000 switches), while its Radau and the numpy engine finish.
+    (The numpy engine costs ~50 s of CPU on this arc: the random scenarios
+    below compare with it.)"""
     veh = fws.Vehicle(
         2.7, 1.35, max_steer_front=0.36776410870848925,
         max_steer_rear=0.13052095651685824,
@@ -68,11 +70,12 @@ def test_rate_limited_arc_finishes_and_agrees_with_numpy_engine():
     )  # fmt: skip
     g = fws.SteeringGains(0.05979258349776821, 0.909652674447719, 0.3496068670563145)
     pose = (2.1483846365871435, -1.4668137740062281, -0.11955507186839875)
-    r = _runs(veh, fws.Arc(0.048301143578173555), g, 24.270710307492635, pose, 6.0)
+    r = _runs(
+        veh, fws.Arc(0.048301143578173555), g, 24.270710307492635, pose, 6.0,
+        numpy=False,
+    )  # fmt: skip
     for name, (_e, status, t_stop) in r.items():
         assert (status, t_stop) == ("ok", 6.0), name
-    assert np.max(np.abs(r["DOP853"][0] - r["numpy"][0])) < TOL_NUMPY
-    assert np.max(np.abs(r["Radau"][0] - r["numpy"][0])) < TOL_NUMPY
     assert np.max(np.abs(r["DOP853"][0] - r["Radau"][0])) < TOL
     # the default engine through simulate finishes too
     res = fws.simulate(
