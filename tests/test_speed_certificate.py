@@ -318,3 +318,26 @@ def test_plot_labels():
     for line in ax1.get_lines()[:2]:
         assert np.max(line.get_ydata()) < 0.0
     plt.close(cplt.figure)
+
+
+def test_paper_schedule_nonlinear_loop_converges_at_the_documented_bound():
+    """The nonlinear kinematic loop, its speed oscillating over the whole
+    range 5-30 m/s with the largest |dV/dt| the page certifies (a = 0):
+    the error decays. The schedule's table spans exactly the range, so the
+    rate of the scheduled command is one-sided at its ends."""
+    rho = doc_number("rate_a0")
+    veh = fws.Vehicle(wheelbase=F, rear_to_cg=1.35)
+    w = rho / 12.5  # V = 17.5 - 12.5 cos(w t): |dV/dt| <= 12.5 w = rho
+    prof = fws.SpeedProfile.from_function(lambda t: 17.5 - 12.5 * np.cos(w * t))
+    plant = fws.LateralPlant(veh, speed=5.0)
+    sch = fws.GainSchedule.double_root(
+        plant, speeds=np.linspace(5.0, 30.0, 25), pole=-1.0, ratio=0.0
+    )
+    res = fws.simulate(
+        plant, fws.Straight(), sch, initial_state=(0.0, 0.5, 0.0), duration=10.0,
+        speed=prof,
+    )  # fmt: skip
+    assert res.status == "ok"
+    v = np.asarray(res.longitudinal_speed)
+    assert v.min() == pytest.approx(5.0, abs=1e-3) and v.max() > 29.9
+    assert abs(res.e[-1]) < 1e-3 * 0.5 and abs(res.theta[-1]) < 1e-3

@@ -1195,11 +1195,17 @@ class _Engine:
             # state of the sample
             V_dot = self.speed_rate(t, Y[0], Ydot[0])
             h = _SCHEDULE_STEP * np.maximum(1.0, np.abs(V))
-            up = self.command(Y, kappa, t, V + h)
-            down = self.command(Y, kappa, t, V - h)
+            v_up, v_down = V + h, V - h
+            # a table does not extrapolate: one-sided at the ends of its range
+            speeds = getattr(self.schedule, "speeds", None)
+            if speeds is not None:
+                v_up = np.minimum(v_up, np.max(speeds))
+                v_down = np.maximum(v_down, np.min(speeds))
+            up = self.command(Y, kappa, t, v_up)
+            down = self.command(Y, kappa, t, v_down)
             return (
-                rf + (up[0] - down[0]) / (2.0 * h) * V_dot,
-                rr + (up[1] - down[1]) / (2.0 * h) * V_dot,
+                rf + (up[0] - down[0]) / (v_up - v_down) * V_dot,
+                rr + (up[1] - down[1]) / (v_up - v_down) * V_dot,
             )
         ctrl = self.gains
         kw = dict(
