@@ -69,10 +69,16 @@ def test_every_dynamic_row_within_the_friction_limit():
         j_use = head.index("peak a_lat / (mu g) [-]")
         j_beyond = head.index("beyond friction")
         for label, r in rows.items():
+            assert r[head.index("left lane")] in ("yes", "no")
+            if r[j_acc] == "—":
+                # stopped at singular steering: no finite exact peak (the
+                # rates diverge there), an uncompleted run
+                assert r[head.index("completed")] == "no", (speed, cond, label)
+                assert r[j_use] == "—" and r[j_beyond] == "yes"
+                continue
             assert float(r[j_acc]) <= MU_G * 1.01, (speed, cond, label)
             assert float(r[j_use]) == pytest.approx(float(r[j_acc]) / MU_G, abs=6e-3)
             assert r[j_beyond] == "no", (speed, cond, label)
-            assert r[head.index("left lane")] in ("yes", "no")
 
 
 def test_no_later_release_wording():
