@@ -190,13 +190,21 @@ def test_comparison_page_course_geometry():
     peak = float(np.max(np.abs(course.path.curvature(s))))
     m = re.search(r"curvature, peak ([\d.]+) 1/m\)", prose)
     assert _rounds_to(peak, m[1]), peak
-    # the footprint, 1.8 m wide, 0.5 m left of the centre line; the entry
-    # gate's left cone line 1.1 b / 2 + 0.125 m from it (ISO 3888-1)
+    # condition (A): the footprint, 1.8 m wide, 0.2 m left of the centre
+    # line; the entry gate's left cone line 1.1 b / 2 + 0.125 m from it
+    # (ISO 3888-1)
     gate = course.gates[0]
     assert gate.y_left == pytest.approx(0.5 * (1.1 * 1.8 + 0.25))
-    overlap = 0.5 + 0.5 * course.vehicle_width - gate.y_left
-    m = re.search(r"reaches ([\d.]+) m past the gate's left cone line", prose)
-    assert _rounds_to(overlap, m[1]), overlap
+    edge = 0.2 + 0.5 * course.vehicle_width
+    m = re.search(
+        r"left edge at ([\d.]+) m, inside the entry\s+gate's cone line at "
+        r"([\d.]+) m\)",
+        prose,
+    )
+    assert m is not None
+    assert _rounds_to(edge, m[1]), edge
+    assert _rounds_to(gate.y_left, m[2]), gate.y_left
+    assert edge < gate.y_left
 
 
 # --------------------------------------------------------------------------
