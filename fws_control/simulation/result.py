@@ -796,8 +796,10 @@ class SimulationResult:
     def friction_usage(self) -> np.ndarray:
         r"""Share of the friction circle the run uses at each sample [-].
 
-        .. math:: rac{\sqrt{(m\dot V)^2 + (m a_y)^2}}{\mu m g}
-            = rac{\sqrt{\dot V^2 + a_y^2}}{\mu g}
+        .. math::
+
+            \frac{\sqrt{(m\dot V)^2 + (m a_y)^2}}{\mu m g}
+            = \frac{\sqrt{\dot V^2 + a_y^2}}{\mu g}
 
         with :math:`a_y` = ``lateral_accel``, :math:`\mu` the vehicle's
         ``friction`` and :math:`g = 9.81` m/s² (a point-mass friction
