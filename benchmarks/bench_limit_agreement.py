@@ -31,14 +31,16 @@ measured it up to 1.03e-6 m off both compiled methods, which agree with
 each other to 3.9e-8 m there). 1e-5 m is 1/50 of the 5e-4 m the compiled engine
 was off when it integrated across a switch of the clips.
 
-Run: ``python benchmarks/bench_limit_agreement.py [--count 1000]`` (about
-3 s of CPU per scenario, most of it the numpy engine's).
+Run: ``python benchmarks/bench_limit_agreement.py [--count 1000] [--jobs 2]``
+(about 3 s of CPU per scenario, most of it the numpy engine's; ``--jobs``
+spreads the scenarios over worker processes, the results are the same).
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
@@ -150,6 +152,11 @@ def run(sc: dict, variant: str):
     return r[0][1, 0], str(r[1][0]), float(r[3][0])
 
 
+def run_all(sc: dict) -> list:
+    """Every variant on one scenario (one task of ``--jobs``)."""
+    return [run(sc, v) for v in VARIANTS]
+
+
 def compare(results) -> tuple[list[float], list[str]]:
     """Largest difference in e to the reference per variant, and statuses."""
     e_ref = results[VARIANTS.index(REFERENCE)][0]
@@ -189,13 +196,18 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--count", type=int, default=1000)
     ap.add_argument("--seed", type=int, default=20261127)
+    ap.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
     args = ap.parse_args()
     scs = scenarios(args.count, seed=args.seed)
     D = np.zeros((len(scs), len(VARIANTS)))
     failed_alone = np.zeros(len(VARIANTS), dtype=int)
     worst = [0] * len(VARIANTS)
-    for i, sc in enumerate(scs):
-        res = [run(sc, v) for v in VARIANTS]
+    if args.jobs > 1:
+        pool = ProcessPoolExecutor(args.jobs)
+        results = pool.map(run_all, scs, chunksize=4)
+    else:
+        pool, results = None, map(run_all, scs)
+    for i, (sc, res) in enumerate(zip(scs, results, strict=True)):
         d, st = compare(res)
         D[i] = d
         for j, s in enumerate(st):
@@ -211,6 +223,8 @@ def main() -> None:
         if (i + 1) % 100 == 0 and i + 1 < len(scs):
             summary(scs[: i + 1], D, failed_alone, worst)
     summary(scs, D, failed_alone, worst)
+    if pool is not None:
+        pool.shutdown()
 
 
 if __name__ == "__main__":
