@@ -29,14 +29,15 @@ and checks the page.
 from __future__ import annotations
 
 import math
-import os
 import pathlib
 import sys
-import tempfile
 
 import numpy as np
 
 import fws_control as fws
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from pages import write_blocks  # noqa: E402 - the folder is put on the path first
 
 PAGE = pathlib.Path(__file__).resolve().parents[1] / "comparison.md"
 
@@ -191,21 +192,8 @@ def tables_markdown(model: str, speeds, conditions=tuple(CONDITIONS)) -> str:
 
 
 def write_block(name: str, text: str, page: pathlib.Path = PAGE) -> None:
-    """Put `text` between the markers `name` of `page` (temporary file, then
-    replace)."""
-    start, end = f"<!-- {name}:start -->", f"<!-- {name}:end -->"
-    old = page.read_text()
-    head, rest = old.split(start, 1)
-    _, tail = rest.split(end, 1)
-    new = f"{head}{start}\n{text}\n{end}{tail}"
-    fd, tmp = tempfile.mkstemp(dir=page.parent, prefix=".comparison_tables.")
-    try:
-        with os.fdopen(fd, "w") as fh:
-            fh.write(new)
-        os.replace(tmp, page)
-    except BaseException:
-        os.unlink(tmp)
-        raise
+    """Put `text` between the markers `name` of `page` (atomically)."""
+    write_blocks(page, {name: text})
 
 
 def main() -> int:

@@ -16,17 +16,19 @@ and checks the page.
 from __future__ import annotations
 
 import math
-import os
 import pathlib
 import sys
-import tempfile
 
 import numpy as np
 
 import fws_control as fws
 
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from pages import markers, write_blocks  # noqa: E402 - the folder is put on the path first
+
 PAGE = pathlib.Path(__file__).resolve().parents[1] / "dynamic_simulation.md"
-START, END = "<!-- dynamic-table:start -->", "<!-- dynamic-table:end -->"
+BLOCK = "dynamic-table"
+START, END = markers(BLOCK)
 
 #: Speeds [m/s] of the table.
 SPEEDS = (5.0, 10.0, 20.0, 30.0, 40.0)
@@ -141,19 +143,8 @@ def markdown(table: list[dict]) -> str:
 
 
 def write_page(text: str, page: pathlib.Path = PAGE) -> None:
-    """Put `text` between the markers of `page` (temporary file, then replace)."""
-    old = page.read_text()
-    head, rest = old.split(START, 1)
-    _, tail = rest.split(END, 1)
-    new = f"{head}{START}\n{text}\n{END}{tail}"
-    fd, tmp = tempfile.mkstemp(dir=page.parent, prefix=".dynamic_table.")
-    try:
-        with os.fdopen(fd, "w") as fh:
-            fh.write(new)
-        os.replace(tmp, page)
-    except BaseException:
-        os.unlink(tmp)
-        raise
+    """Put `text` between the markers of `page` (atomically)."""
+    write_blocks(page, {BLOCK: text})
 
 
 def main() -> int:

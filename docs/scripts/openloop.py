@@ -15,14 +15,16 @@ this script computes now and recomputes entries by other routes.
 from __future__ import annotations
 
 import math
-import os
 import pathlib
 import sys
-import tempfile
 
 import numpy as np
 
 import fws_control as fws
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from pages import markers as block_markers  # noqa: E402 - the folder is put on the path first
+from pages import write_blocks  # noqa: E402
 
 PAGE = pathlib.Path(__file__).resolve().parents[1] / "openloop.md"
 TABLES = ("step", "frequency", "circle")
@@ -44,7 +46,8 @@ LATERAL_ACCELERATIONS = (1.0, 4.0, 7.0, 9.0, 10.0)
 
 
 def markers(name: str) -> tuple[str, str]:
-    return f"<!-- openloop-{name}:start -->", f"<!-- openloop-{name}:end -->"
+    """The markers of table `name` on the page."""
+    return block_markers(f"openloop-{name}")
 
 
 def step_rows() -> list[dict]:
@@ -188,21 +191,8 @@ def tables() -> dict[str, str]:
 
 
 def write_page(texts: dict[str, str], page: pathlib.Path = PAGE) -> None:
-    """Put each text between its markers of `page` (temporary file, then replace)."""
-    new = page.read_text()
-    for name, text in texts.items():
-        start, end = markers(name)
-        head, rest = new.split(start, 1)
-        _, tail = rest.split(end, 1)
-        new = f"{head}{start}\n{text}\n{end}{tail}"
-    fd, tmp = tempfile.mkstemp(dir=page.parent, prefix=".openloop.")
-    try:
-        with os.fdopen(fd, "w") as fh:
-            fh.write(new)
-        os.replace(tmp, page)
-    except BaseException:
-        os.unlink(tmp)
-        raise
+    """Put each text between its markers of `page` (atomically)."""
+    write_blocks(page, {f"openloop-{name}": text for name, text in texts.items()})
 
 
 def main() -> int:
