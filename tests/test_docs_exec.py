@@ -2,7 +2,8 @@
 
 The build itself checks the pages' code; these tests check the mechanism:
 one namespace per page, the printed output and the figures under their
-block, and a failing build that names the page and the block.
+block, a failing build that names the page and the block, and the
+``fws-cli-run`` transcripts of the command line.
 """
 
 from __future__ import annotations
@@ -120,3 +121,34 @@ def test_sphinx_build_fails_on_a_raising_block(tmp_path, capsys):
     # the page and the failing line (the fence is line 14)
     assert "index.md:15: WARNING: Python block 2 of index (line 15) raised" in err
     assert "NameError: name 'undefined_name' is not defined" in err
+
+
+def test_cli_transcript_is_run_at_build_time(tmp_path):
+    import control as ct
+    import numpy as np
+
+    page = (
+        "# CLI\n\n```{fws-cli-run} gains --speed 5 --curvature 0.1 --ratio -1"
+        " --pole -1\n```\n"
+    )
+    status, out = _build(tmp_path, page, warning_is_error=True)
+    assert status == 0
+    text = out.read_text()
+    assert "$ fws-control gains --speed 5 --curvature 0.1 --ratio -1 --pole -1" in text
+    # the double-root gains, from python-control's Ackermann formula on the
+    # kinematic Jacobian written out here (V = 5, kappa = 0.1, f = 2.7, a = -1)
+    V, kappa, f, a = 5.0, 0.1, 2.7, -1.0
+    A = np.array([[0.0, V], [-V * kappa**2, 0.0]])
+    B = np.array([[0.0, V], [(1 + f**2 * kappa**2) * V / f, -V / f]])
+    k1, k2 = ct.acker(A, (B @ [1.0, a])[:, None], [-1.0, -1.0]).ravel()
+    assert f"k1 = {k1:.6f} rad/m   k2 = {k2:.6f}" in text
+
+
+def test_a_failing_cli_transcript_fails_the_build(tmp_path, capsys):
+    # a = 1 on a straight road: no design exists, the command exits with 2
+    page = "# CLI\n\n```{fws-cli-run} gains --curvature 0 --ratio 1\n```\n"
+    status, _ = _build(tmp_path, page, warning_is_error=True)
+    assert status != 0
+    err = capsys.readouterr().err
+    assert "index.md:3" in err
+    assert "fws-control gains --curvature 0 --ratio 1 exited with status 2" in err

@@ -26,6 +26,13 @@ environment) carries the class ``no-exec``::
     client = Client("tcp://scheduler:8786")
     ```
 
+The directive ``fws-cli-run`` shows a command of ``fws-control`` with its
+output, run in this process when the page is read (a command that fails
+fails the build)::
+
+    ```{fws-cli-run} gains --speed 5 --curvature 0.1 --ratio -1 --pole -1
+    ```
+
 Blocks run in a temporary working directory (files they write vanish),
 with matplotlib's settings and numpy's print options restored after each
 page. An executed page is read again when a module of ``fws_control``
@@ -46,6 +53,7 @@ import functools
 import io
 import linecache
 import os
+import shlex
 import tempfile
 import time
 import traceback
@@ -55,6 +63,7 @@ from pathlib import Path
 from docutils import nodes
 from sphinx.transforms import SphinxTransform
 from sphinx.util import logging
+from sphinx.util.docutils import SphinxDirective
 
 logger = logging.getLogger(__name__)
 
@@ -65,7 +74,7 @@ OUTPUT_CLASS = "fws-exec-output"
 #: Resolution of the inserted figures.
 FIGURE_DPI = 96
 
-__all__ = ["BlockError", "ExecutePythonBlocks", "run_blocks", "setup"]
+__all__ = ["BlockError", "CliRun", "ExecutePythonBlocks", "run_blocks", "setup"]
 
 
 class BlockError(Exception):
@@ -257,6 +266,39 @@ class ExecutePythonBlocks(SphinxTransform):
         )
 
 
+class CliRun(SphinxDirective):
+    """``fws-control ARGS`` run in this process, shown as a terminal transcript.
+
+    The argument is the command line after ``fws-control``; the block shows
+    ``$ fws-control ARGS`` and what the command printed on standard output.
+    A command that exits with a status other than 0 fails the build.
+    """
+
+    required_arguments = 1
+    final_argument_whitespace = True
+
+    def run(self):
+        from fws_control.cli import main
+
+        args = shlex.split(self.arguments[0])
+        out = io.StringIO()
+        err = io.StringIO()
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            status = main(args)
+        if status != 0:
+            raise self.error(
+                f"fws-control {self.arguments[0]} exited with status {status}: "
+                f"{err.getvalue().strip()}"
+            )
+        for path in _package_sources():
+            self.env.note_dependency(str(path))
+        text = f"$ fws-control {self.arguments[0]}\n{out.getvalue()}"
+        node = nodes.literal_block(text, text, language="text")
+        node["classes"].append(OUTPUT_CLASS)
+        self.set_source_info(node)
+        return [node]
+
+
 def _package_sources() -> list[Path]:
     import fws_control
 
@@ -266,4 +308,5 @@ def _package_sources() -> list[Path]:
 def setup(app):
     app.add_config_value("fws_exec_pages", [], "env", types=[list, tuple])
     app.add_transform(ExecutePythonBlocks)
+    app.add_directive("fws-cli-run", CliRun)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}
