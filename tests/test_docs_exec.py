@@ -57,9 +57,9 @@ def test_figures_are_saved_per_block_and_closed(tmp_path):
         ("print(len(plt.get_fignums()))", 5),
     ]
     (text1, figs1), (text2, figs2) = fws_exec.run_blocks(
-        blocks, name="p", figure_dir=tmp_path
+        blocks, name="guide/p", figure_dir=tmp_path
     )
-    assert [f.name for f in figs1] == ["block1_1.png"]
+    assert [f.name for f in figs1] == ["guide-p-block1-1.png"]
     assert figs1[0].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     # the first block's figure was closed after it was saved
     assert (text2, figs2) == ("0\n", [])

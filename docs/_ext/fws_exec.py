@@ -71,6 +71,8 @@ logger = logging.getLogger(__name__)
 NO_EXEC_CLASS = "no-exec"
 #: Class of the inserted output blocks (styled in ``_static/custom.css``).
 OUTPUT_CLASS = "fws-exec-output"
+#: Class of the inserted figures.
+FIGURE_CLASS = "fws-exec-figure"
 #: Resolution of the inserted figures.
 FIGURE_DPI = 96
 
@@ -113,7 +115,9 @@ def run_blocks(blocks, *, name: str, figure_dir: Path | None = None):
         The page's name, used in tracebacks (``<name block N>``).
     figure_dir : pathlib.Path or None
         Where the figures open at the end of a block are saved
-        (``block<N>_<M>.png``); None leaves them out.
+        (``<name>-block<N>-<M>.png``, ``/`` in `name` replaced by ``-``, so
+        that every page's figures have names of their own); None leaves
+        them out.
 
     Yields
     ------
@@ -176,7 +180,8 @@ def run_blocks(blocks, *, name: str, figure_dir: Path | None = None):
                 for number in plt.get_fignums():
                     if figure_dir is not None:
                         figure_dir.mkdir(parents=True, exist_ok=True)
-                        path = figure_dir / f"block{index}_{number}.png"
+                        stem = name.replace("/", "-")
+                        path = figure_dir / f"{stem}-block{index}-{number}.png"
                         plt.figure(number).savefig(path, dpi=FIGURE_DPI)
                         figures.append(path)
                 plt.close("all")
@@ -240,9 +245,9 @@ class ExecutePythonBlocks(SphinxTransform):
                     new.append(out)
                 for fig in figures:
                     uri = os.path.relpath(fig, doc_dir).replace(os.sep, "/")
-                    new.append(
-                        nodes.image(uri=uri, alt="figure drawn by the block above")
-                    )
+                    image = nodes.image(uri=uri, alt="figure drawn by the block above")
+                    image["classes"].append(FIGURE_CLASS)
+                    new.append(image)
                 parent = node.parent
                 index = parent.index(node)
                 parent[index + 1 : index + 1] = new
