@@ -27,6 +27,7 @@ matplotlib.use("Agg")
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(DOCS / "_ext"))
 
 from sphinx_gallery.sorting import FunctionSortKey  # noqa: E402
 
@@ -54,6 +55,8 @@ extensions = [
     "numpydoc",
     "myst_parser",
     "sphinx_gallery.gen_gallery",
+    # runs the Python blocks of the pages below and shows their output
+    "fws_exec",
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
@@ -83,6 +86,13 @@ mathjax_path = "mathjax/tex-chtml.js"
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
 myst_heading_anchors = 3
 myst_dmath_double_inline = True
+
+# -- Executed pages (docs/_ext/fws_exec.py) ----------------------------------
+# Their Python blocks run at build time, one namespace per page, with what
+# each block prints and draws shown under it; a block that raises fails the
+# build. Slow pages (minutes of simulation) are left to the test suite.
+
+fws_exec_pages = ["index", "getting_started", "user_guide/*"]
 
 # -- autodoc / autosummary / numpydoc ----------------------------------------
 
