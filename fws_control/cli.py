@@ -76,7 +76,7 @@ EXIT_STOPPED = 3
 #: 2.4 s; ``rlocus --points 10000`` 2.3 s; ``simulate --duration 3600`` 0.4
 #: GB, 4.8 s; ``reproduce --dpi 600``: the widest figure is 10200 x 3120
 #: pixels).
-BUDGETS = {
+BUDGETS: dict[tuple[str, str], tuple[float, str, str]] = {
     ("chart", "--points"): (
         2001,
         "points per axis",

@@ -51,7 +51,7 @@ from __future__ import annotations
 import math
 import sys
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import control as ct
 import numpy as np
@@ -73,6 +73,10 @@ from .plant import LateralPlant
 from .simulation import STATUS_END_OF_PATH, SimulationResult, simulate
 from .validation import check_bool, check_delay, check_scalar, check_type
 from .vehicle import Vehicle
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.axes import Axes
 
 __all__ = [
     "ControllerComparison",
@@ -238,7 +242,7 @@ class ControllerComparison:
     delay: float
     labels: tuple[str, ...]
     results: tuple[SimulationResult, ...]
-    table: dict
+    table: dict[str, np.ndarray]
     plant: LateralPlant | None = None
     duration: float = math.nan
     initial_state: tuple[float, float, float] | None = None
@@ -259,7 +263,7 @@ class ControllerComparison:
         """Names of the table's columns, in order (units in the names)."""
         return tuple(n for n in COMPARISON_METRICS if n in self.table)
 
-    def to_pandas(self):
+    def to_pandas(self) -> pd.DataFrame:
         """The table as a :class:`pandas.DataFrame`, one row per controller.
 
         The index holds the labels (named ``controller``); the columns are
@@ -333,7 +337,7 @@ class ControllerComparison:
             rows.append(f"| {lab} | " + " | ".join(cells) + " |")
         return "\n".join(rows)
 
-    def plot(self, ax=None) -> ct.ControlPlot:
+    def plot(self, ax: Axes | None = None) -> ct.ControlPlot:
         """Trajectories with the gates, lateral error, front steering, a_lat.
 
         The lateral-acceleration panel marks the friction limit

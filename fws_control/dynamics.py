@@ -49,7 +49,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from . import equations
+from .equations import Real
 from .exceptions import SingularStateError
+from .hints import RealArrayLike, TyreName
 from .models import STEERING_INPUTS
 from .validation import check_finite, check_nonzero, check_scalar, check_type
 from .vehicle import Vehicle
@@ -133,7 +135,15 @@ def require_dynamics(vehicle: Vehicle, *, tyre: str = "linear") -> Vehicle:
     return vehicle
 
 
-def slip_angles(vehicle: Vehicle, v_y, yaw_rate, delta_f, delta_r, *, speed):
+def slip_angles(
+    vehicle: Vehicle,
+    v_y: Real,
+    yaw_rate: Real,
+    delta_f: Real,
+    delta_r: Real,
+    *,
+    speed: Real,
+) -> tuple[Real, Real]:
     r"""Slip angles ``(alpha_f, alpha_r)`` [rad] of the front and rear axle.
 
     Broadcasts over array arguments; see the module docstring for the
@@ -160,7 +170,9 @@ def axle_loads(vehicle: Vehicle) -> tuple[float, float]:
     return weight * vehicle.rear_to_cg / f, weight * (f - vehicle.rear_to_cg) / f
 
 
-def tyre_force(slip, *, stiffness: float, peak: float | None = None):
+def tyre_force(
+    slip: RealArrayLike, *, stiffness: float, peak: float | None = None
+) -> np.ndarray:
     r"""Lateral axle force [N] for slip angle(s) `slip` [rad].
 
     ``peak=None``: linear, :math:`F = C\alpha`. Otherwise the simplified magic
@@ -196,8 +208,15 @@ def _forces(vehicle: Vehicle, alpha_f, alpha_r, tyre: str):
 
 
 def body_derivatives(
-    vehicle: Vehicle, v_y, yaw_rate, delta_f, delta_r, *, speed, tyre: str = "linear"
-):
+    vehicle: Vehicle,
+    v_y: Real,
+    yaw_rate: Real,
+    delta_f: Real,
+    delta_r: Real,
+    *,
+    speed: Real,
+    tyre: TyreName = "linear",
+) -> tuple[Real, Real]:
     r"""Return ``(v_y_dot, r_dot)``: the lateral and yaw equations of motion.
 
     Broadcasts; no argument checks beyond the vehicle data (callers that
@@ -229,17 +248,17 @@ def body_derivatives(
 
 def dynamic_path_derivatives(
     vehicle: Vehicle,
-    curvature,
-    e,
-    theta,
-    v_y,
-    yaw_rate,
-    delta_f,
-    delta_r,
+    curvature: Real,
+    e: Real,
+    theta: Real,
+    v_y: Real,
+    yaw_rate: Real,
+    delta_f: Real,
+    delta_r: Real,
     *,
-    speed,
-    tyre: str = "linear",
-):
+    speed: Real,
+    tyre: TyreName = "linear",
+) -> tuple[Real, Real, Real, Real, Real]:
     r"""Path-frame right-hand side ``(s_dot, e_dot, theta_dot, v_y_dot, r_dot)``.
 
     Errors at the rear-axle point R (module docstring). Broadcasts.
@@ -268,15 +287,15 @@ def dynamic_path_derivatives(
 
 def dynamic_global_derivatives(
     vehicle: Vehicle,
-    psi,
-    v_y,
-    yaw_rate,
-    delta_f,
-    delta_r,
+    psi: Real,
+    v_y: Real,
+    yaw_rate: Real,
+    delta_f: Real,
+    delta_r: Real,
     *,
-    speed,
-    tyre: str = "linear",
-):
+    speed: Real,
+    tyre: TyreName = "linear",
+) -> tuple[Real, Real, Real, Real, Real]:
     r"""Global-frame right-hand side ``(x_dot, y_dot, psi_dot, v_y_dot, r_dot)``.
 
     ``x, y`` is the rear-axle point R, which moves with the body-frame
@@ -500,7 +519,9 @@ def dynamic_path_model(
     )
 
 
-def slip_for_force(force, *, stiffness: float, peak: float | None = None):
+def slip_for_force(
+    force: RealArrayLike, *, stiffness: float, peak: float | None = None
+) -> np.ndarray:
     r"""Slip angle [rad] at which :func:`tyre_force` gives `force` [N].
 
     The inverse of :func:`tyre_force` on its rising branch: ``force /
@@ -664,8 +685,12 @@ def _reach_error(vehicle: Vehicle, u, kappa, tyre: str) -> ValueError:
 
 
 def dynamic_feedforward(
-    vehicle: Vehicle, *, speed, curvature, tyre: str = "linear"
-) -> tuple[np.ndarray, np.ndarray]:
+    vehicle: Vehicle,
+    *,
+    speed: RealArrayLike,
+    curvature: RealArrayLike,
+    tyre: TyreName = "linear",
+) -> tuple[Real, Real]:
     r"""Front and rear angles that make ``e = theta = 0`` a steady state.
 
     On a path of constant curvature :math:`\kappa` at speed :math:`u`, the
@@ -758,8 +783,12 @@ def _steady_angles(vehicle: Vehicle, u, kappa, tyre: str):
 
 
 def dynamic_feedforward_derivative(
-    vehicle: Vehicle, *, speed, curvature, tyre: str = "linear"
-) -> tuple[np.ndarray, np.ndarray]:
+    vehicle: Vehicle,
+    *,
+    speed: RealArrayLike,
+    curvature: RealArrayLike,
+    tyre: TyreName = "linear",
+) -> tuple[Real, Real]:
     r"""Derivatives ``(d delta_f/d kappa, d delta_r/d kappa)`` [rad m].
 
     Of :func:`dynamic_feedforward`, by implicit differentiation of each
@@ -835,7 +864,11 @@ def _slope(alpha, stiffness, peak):
 
 
 def path_jacobians(
-    vehicle: Vehicle, *, speed, curvature, tyre: str = "linear"
+    vehicle: Vehicle,
+    *,
+    speed: RealArrayLike,
+    curvature: RealArrayLike,
+    tyre: TyreName = "linear",
 ) -> tuple[np.ndarray, np.ndarray]:
     r"""``(A, B)`` of the path-frame model at the dynamic-feedforward point.
 

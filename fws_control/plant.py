@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .dynamics import TYRES, dynamic_feedforward, path_jacobians, require_dynamics
+from .hints import RealArrayLike
 from .models import STEERING_INPUTS, feedforward_steering
 from .reprs import summary_repr, value_repr
 from .validation import (
@@ -518,7 +519,7 @@ class LoopMatrices:
         """Number of states ``n``."""
         return int(self.A.shape[-1])
 
-    def input_vector(self, ratio) -> np.ndarray:
+    def input_vector(self, ratio: RealArrayLike) -> np.ndarray:
         r"""Input column of the loop, :math:`\mathbf b = \mathbf B_f + a\mathbf B_r`.
 
         With :math:`\delta_r = a\,\delta_f` the two steering inputs act as

@@ -40,7 +40,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import control as ct
 import numpy as np
@@ -48,10 +48,16 @@ import numpy as np
 from .delay_design import most_stable_gains
 from .design import double_root_gains
 from .gains import SteeringGains
+from .hints import RealArrayLike
 from .plant import LateralPlant
 from .reprs import summary_repr
 from .validation import check_delay, check_finite
 from .vehicle import Vehicle
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
+    from .delay_design import MostStableDesign
 
 __all__ = ["GainSchedule", "schedule_gains"]
 
@@ -106,7 +112,7 @@ class GainSchedule:
     abscissa: np.ndarray | None = None
     critical_delay: np.ndarray | None = None
     delay: float | None = None
-    designs: tuple = ()
+    designs: tuple[MostStableDesign, ...] = ()
 
     def __post_init__(self) -> None:
         v = np.atleast_1d(np.asarray(check_finite("speeds", self.speeds), dtype=float))
@@ -220,7 +226,7 @@ class GainSchedule:
             ratio=[float(g.ratio) for g in designs],
         )
 
-    def at(self, speed) -> SteeringGains:
+    def at(self, speed: float) -> SteeringGains:
         r"""The gains at `speed` (scalar or array), interpolated.
 
         :math:`k_1 V^2`, :math:`k_2 V` and :math:`a` are interpolated
@@ -266,7 +272,7 @@ class GainSchedule:
             return SteeringGains(float(k1), float(k2), float(a))
         return SteeringGains(k1, k2, a)
 
-    def plot(self, ax=None) -> ct.ControlPlot:
+    def plot(self, ax: Axes | None = None) -> ct.ControlPlot:
         """Draw k1, k2, a and the abscissa against the speed.
 
         Lines: the interpolation of :meth:`at`; markers: the designs.
@@ -362,7 +368,7 @@ def _plant_at(plant, speed: float, steering_lag, curvature, model):
 def schedule_gains(
     plant: Vehicle | LateralPlant | Callable[[float], Any],
     *,
-    speeds,
+    speeds: RealArrayLike,
     delay: float,
     ratio: float = 0.0,
     ratio_bounds: tuple[float, float] | None = None,

@@ -46,7 +46,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import control as ct
 import numpy as np
@@ -57,6 +57,9 @@ from .gains import SteeringGains
 from .plant import as_plant
 from .reprs import summary_repr
 from .validation import check_delay, check_scalar
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
 
 __all__ = ["ParetoFront", "pareto_front"]
 
@@ -122,7 +125,7 @@ class ParetoFront:
     dropped: int
     evaluations: int
 
-    def plot(self, ax=None) -> ct.ControlPlot:
+    def plot(self, ax: Axes | None = None) -> ct.ControlPlot:
         """Both fronts: decay rate against delay margin and against effort.
 
         Parameters

@@ -20,6 +20,8 @@ on the ratio ``a`` or the model, so the margin is the same for every ``a``
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import control as ct
 import numpy as np
@@ -37,6 +39,9 @@ from .data import (
     REALISTIC_STEERING_LAG,
 )
 
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
 __all__ = ["PAPER_POLES", "delay_margin_table", "plot_actuator"]
 
 # Solver tolerances of the response panels (b), (c): see plot_actuator.
@@ -51,7 +56,7 @@ PAPER_POLES = (-1.0, -2.0, -3.0)
 def delay_margin_table(
     *,
     vehicle: Vehicle | None = None,
-    poles=PAPER_POLES,
+    poles: Sequence[float] = PAPER_POLES,
     delay: float = REALISTIC_DELAY,
     steering_lag: float = REALISTIC_STEERING_LAG,
 ) -> str:
@@ -115,7 +120,7 @@ def plot_actuator(
     quick: bool = False,
     delay: float = REALISTIC_DELAY,
     steering_lag: float = REALISTIC_STEERING_LAG,
-    ax=None,
+    ax: Axes | None = None,
 ) -> ct.ControlPlot:
     r"""The paper's designs with an input delay and a steering lag (extra figure).
 

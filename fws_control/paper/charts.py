@@ -9,7 +9,9 @@ include the curvatures of the simulations (0.1 and 0.01 1/m).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import control as ct
 import numpy as np
@@ -23,6 +25,9 @@ from ..reprs import summary_repr
 from ..validation import check_model
 from ..vehicle import Vehicle
 from .data import PAPER_CURVATURES, PAPER_VEHICLE
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
 
 __all__ = ["ChartPanel", "paper_figure_panels", "plot_paper_figure"]
 
@@ -120,7 +125,7 @@ def paper_figure_panels(
     model: str = "kinematic",
     vehicle: Vehicle | None = None,
     pole: float = -1.0,
-    curvatures=None,
+    curvatures: Sequence[float] | None = None,
     npoints: int = _DEFAULT_POINTS,
 ) -> list[ChartPanel]:
     r"""The data behind Figs. 2, 3 or 4 of the paper.
@@ -310,9 +315,9 @@ def plot_paper_figure(
     model: str = "kinematic",
     vehicle: Vehicle | None = None,
     pole: float = -1.0,
-    curvatures=None,
+    curvatures: Sequence[float] | None = None,
     npoints: int = _DEFAULT_POINTS,
-    ax=None,
+    ax: Axes | None = None,
 ) -> ct.ControlPlot:
     r"""Redraw Fig. 2, 3 or 4 of the paper as one matplotlib figure.
 

@@ -18,10 +18,11 @@ import gc
 import math
 import os
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import control as ct
 import numpy as np
@@ -44,6 +45,10 @@ from .data import (
     REALISTIC_DELAY,
     TABLE_RATIOS,
 )
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 __all__ = [
     "FigureSpec",
@@ -91,7 +96,7 @@ def plot_root_loci(
     vehicle: Vehicle | None = None,
     model: str = "kinematic",
     quick: bool = False,
-    ax=None,
+    ax: Axes | None = None,
 ) -> ct.ControlPlot:
     r"""Root loci of the :math:`\lambda_0 = -1` designs (extra figure).
 
@@ -311,7 +316,7 @@ def _fig6_to_9_data(model: str, quick: bool):
 _G = 9.81  # m/s^2
 
 
-def plot_fig5(model: str = "kinematic", quick: bool = False):
+def plot_fig5(model: str = "kinematic", quick: bool = False) -> Figure:
     r"""Fig. 5: peak absolute lateral acceleration of G versus the ratio ``a``.
 
     One panel per scenario, one curve per double root :math:`\lambda_0`
@@ -736,7 +741,7 @@ FIGURES: dict[str, FigureSpec] = {
 }
 
 
-def make_figure(name: str, *, model: str = "kinematic", quick: bool = False):
+def make_figure(name: str, *, model: str = "kinematic", quick: bool = False) -> Figure:
     """Draw one figure of :data:`FIGURES` by name.
 
     Parameters
@@ -800,8 +805,8 @@ def gains_table(
     *,
     vehicle: Vehicle | None = None,
     pole: float = -1.0,
-    ratios=TABLE_RATIOS,
-    cases=None,
+    ratios: Sequence[float] = TABLE_RATIOS,
+    cases: Sequence[tuple[float, float]] | None = None,
 ) -> str:
     r"""Markdown table of the double-root gains in both linearisations.
 
@@ -991,13 +996,13 @@ def _collector_per_figure():
 
 
 def reproduce(
-    out: str | os.PathLike,
+    out: str | os.PathLike[str],
     *,
     model: str = "kinematic",
     quick: bool = False,
     progress: bool = True,
     dpi: int = 110,
-    names=None,
+    names: Sequence[str] | None = None,
     format: str = "png",
 ) -> ReproduceResult:
     """Write every figure of :data:`FIGURES` (PNG, SVG or PDF) and ``summary.md``.

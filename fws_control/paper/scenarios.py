@@ -38,6 +38,7 @@ from scipy.optimize import brentq
 from ..deprecation import legacy_keyword, reject_unknown
 from ..design import UncontrollableError, double_root_gains
 from ..gains import SteeringGains
+from ..hints import RealArrayLike
 from ..paths import Arc, Straight
 from ..plant import LateralPlant
 from ..reprs import summary_repr
@@ -97,7 +98,7 @@ class Scenario:
     figure: int
 
     @property
-    def path(self):
+    def path(self) -> Straight | Arc:
         """The reference path: ``Straight()`` or ``Arc(curvature)``."""
         if self.curvature == 0.0:
             return Straight()
@@ -134,8 +135,8 @@ def paper_scenario(name: str) -> Scenario:
 
 def scenario_gains(
     scenario: Scenario | str,
-    ratios,
-    pole,
+    ratios: RealArrayLike,
+    pole: RealArrayLike,
     model: str = "kinematic",
     vehicle: Vehicle = PAPER_VEHICLE,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -298,7 +299,7 @@ def scenario_responses(
     vehicle: Vehicle = PAPER_VEHICLE,
     delay: float = 0.0,
     steering_lag: float | None = None,
-    client=None,
+    client: Any = None,
     progress: bool | None = None,
     **kwargs: Any,
 ) -> ScenarioResponses:
@@ -468,7 +469,7 @@ class PeakSweep:
 
 def fig5_peak_lateral_accel(
     model: str = "kinematic",
-    ratios=FIG5_RATIOS,
+    ratios: RealArrayLike = FIG5_RATIOS,
     poles: dict[float, Sequence[float]] | None = None,
     *,
     duration: float | None = None,
@@ -476,7 +477,7 @@ def fig5_peak_lateral_accel(
     vehicle: Vehicle = PAPER_VEHICLE,
     delay: float = 0.0,
     steering_lag: float | None = None,
-    client=None,
+    client: Any = None,
     progress: bool | None = None,
     **kwargs: Any,
 ) -> dict[str, PeakSweep]:
@@ -628,7 +629,7 @@ def _steady_state_scalar(f, kappa, k1, k2, a):
 
 
 def feedback_only_steady_state(
-    vehicle: Vehicle, gains: SteeringGains, *, curvature
+    vehicle: Vehicle, gains: SteeringGains, *, curvature: RealArrayLike
 ) -> SteadyState:
     r"""Steady state of the feedback-only controller on a circle.
 

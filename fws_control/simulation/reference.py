@@ -25,6 +25,7 @@ from ..controllers import path_tracking_controller, steering_actuator
 from ..deprecation import legacy_keyword, reject_unknown
 from ..dynamics import dynamic_global_model
 from ..gains import SteeringGains
+from ..hints import RealArrayLike
 from ..models import global_frame_model
 from ..paths import Path
 from ..validation import check_delay, check_nonzero, check_scalar, check_type
@@ -276,7 +277,7 @@ def reference_initial_state(
     path: Path,
     gains: SteeringGains,
     *,
-    initial_state,
+    initial_state: RealArrayLike,
     speed: float | None = None,
     feedforward: bool = True,
     steering_lag: float | None = None,
@@ -399,7 +400,7 @@ def simulate_reference(
     gains: SteeringGains,
     *,
     speed: float,
-    initial_state,
+    initial_state: RealArrayLike,
     duration: float,
     feedforward: bool = True,
     dt: float = 0.01,

@@ -37,7 +37,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar, overload
 
 import numpy as np
 
@@ -62,6 +62,7 @@ if TYPE_CHECKING:
     # python-control costs 0.7 s to import; a result needs it only for
     # to_time_response and plot, which import it
     import control as ct
+    import pandas as pd
 
 __all__ = ["Peak", "Peaks", "SimulationResult", "expand_runs"]
 
@@ -75,10 +76,18 @@ class _Signal:
         self.__doc__ = doc
 
     def __set_name__(self, owner: type, name: str) -> None:
-        self.name = name
-        self.index = SIGNALS.index(name)
+        self.name: str = name
+        self.index: int = SIGNALS.index(name)
 
-    def __get__(self, obj: Any, objtype: type | None = None) -> Any:
+    @overload
+    def __get__(self, obj: None, objtype: type | None = None) -> _Signal: ...
+    @overload
+    def __get__(
+        self, obj: SimulationResult, objtype: type | None = None
+    ) -> np.ndarray: ...
+    def __get__(
+        self, obj: SimulationResult | None, objtype: type | None = None
+    ) -> _Signal | np.ndarray:
         if obj is None:
             return self
         return obj.signal(self.name)
@@ -334,24 +343,36 @@ class SimulationResult:
     peaks_exact: bool = True
     speed_profile: Any = None
 
-    x = _Signal("Global x of the rear-axle centre R [m].")
-    y = _Signal("Global y of the rear-axle centre R [m].")
-    psi = _Signal("Heading [rad], continuous in time, on the initial branch.")
-    s = _Signal("Arclength of the projection point on the path [m].")
-    e = _Signal("Lateral error [m], positive left of the path.")
-    theta = _Signal("Heading error theta = psi - psi_C [rad].")
-    delta_f = _Signal("Front steering angle applied to the vehicle [rad].")
-    delta_r = _Signal("Rear steering angle applied to the vehicle [rad].")
-    delta_f_rate = _Signal("Front steering rate [rad/s].")
-    delta_r_rate = _Signal("Rear steering rate [rad/s].")
-    lateral_accel = _Signal(
+    x: ClassVar[_Signal] = _Signal("Global x of the rear-axle centre R [m].")
+    y: ClassVar[_Signal] = _Signal("Global y of the rear-axle centre R [m].")
+    psi: ClassVar[_Signal] = _Signal(
+        "Heading [rad], continuous in time, on the initial branch."
+    )
+    s: ClassVar[_Signal] = _Signal("Arclength of the projection point on the path [m].")
+    e: ClassVar[_Signal] = _Signal("Lateral error [m], positive left of the path.")
+    theta: ClassVar[_Signal] = _Signal("Heading error theta = psi - psi_C [rad].")
+    delta_f: ClassVar[_Signal] = _Signal(
+        "Front steering angle applied to the vehicle [rad]."
+    )
+    delta_r: ClassVar[_Signal] = _Signal(
+        "Rear steering angle applied to the vehicle [rad]."
+    )
+    delta_f_rate: ClassVar[_Signal] = _Signal("Front steering rate [rad/s].")
+    delta_r_rate: ClassVar[_Signal] = _Signal("Rear steering rate [rad/s].")
+    lateral_accel: ClassVar[_Signal] = _Signal(
         "Lateral acceleration of G along the vehicle's lateral axis [m/s^2] "
         "(eq. (13) for the kinematic model, dv_y/dt + u r for the dynamic one)."
     )
-    v_y = _Signal("Lateral velocity of G in the vehicle's frame [m/s].")
-    yaw_rate = _Signal("Yaw rate [rad/s].")
-    slip_front = _Signal("Slip angle of the front axle [rad] (0: kinematic model).")
-    slip_rear = _Signal("Slip angle of the rear axle [rad] (0: kinematic model).")
+    v_y: ClassVar[_Signal] = _Signal(
+        "Lateral velocity of G in the vehicle's frame [m/s]."
+    )
+    yaw_rate: ClassVar[_Signal] = _Signal("Yaw rate [rad/s].")
+    slip_front: ClassVar[_Signal] = _Signal(
+        "Slip angle of the front axle [rad] (0: kinematic model)."
+    )
+    slip_rear: ClassVar[_Signal] = _Signal(
+        "Slip angle of the rear axle [rad] (0: kinematic model)."
+    )
 
     def __post_init__(self) -> None:
         t = np.asarray(self.t, dtype=float)
@@ -1011,7 +1032,7 @@ class SimulationResult:
             message="; ".join(notes) if notes else None,
         )
 
-    def to_pandas(self):
+    def to_pandas(self) -> pd.DataFrame:
         """Long-format :class:`pandas.DataFrame`, one row per run and sample.
 
         Columns ``run, t``, the signals of
