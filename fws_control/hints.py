@@ -55,8 +55,10 @@ RealArrayLike: TypeAlias = (
 #: a schedule ``ratio(vehicle, speed=...)`` evaluated at the plant's speed.
 RatioLike: TypeAlias = RealArrayLike | Callable[..., Any]
 
-#: The plant model of a design or simulation (``model=``).
-ModelName: TypeAlias = Literal["kinematic", "dynamic"]
+#: The plant model of a design or simulation (``model=``): the kinematic
+#: model, the paper's linearisation of it, or the dynamic single-track model
+#: (:data:`fws_control.validation.MODELS`).
+ModelName: TypeAlias = Literal["kinematic", "paper", "dynamic"]
 
 #: The tyre law of the dynamic model (``tyre=``).
 TyreName: TypeAlias = Literal["linear", "magic"]

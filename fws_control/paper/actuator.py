@@ -28,6 +28,7 @@ import numpy as np
 
 from ..charts import delay_margin_chart
 from ..gains import SteeringGains
+from ..hints import ModelName
 from ..layout import grid_margins
 from ..plant import LateralPlant
 from ..vehicle import Vehicle
@@ -116,7 +117,7 @@ def delay_margin_table(
 
 def plot_actuator(
     *,
-    model: str = "kinematic",
+    model: ModelName = "kinematic",
     quick: bool = False,
     delay: float = REALISTIC_DELAY,
     steering_lag: float = REALISTIC_STEERING_LAG,
@@ -231,7 +232,7 @@ def plot_actuator(
                 else "ideal steering"
             )
             if r.status[i] != "ok":
-                label += f" ({r.status[i]} at {r.t_stop[i]:.3g} s)"
+                label += f" ({r.status[i]} at {np.asarray(r.t_stop)[i]:.3g} s)"
             ax_i.plot(r.t, r.e[i], style, color="C3" if act else "C0", label=label)
         ax_i.set_xlabel("time t [s]")
         ax_i.set_ylabel("lateral error e [m]")

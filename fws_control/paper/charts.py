@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import control as ct
 import numpy as np
@@ -19,6 +19,7 @@ import numpy as np
 from ..charts import StabilityChart, stability_chart
 from ..design import double_root_gains
 from ..exceptions import UncontrollableError
+from ..hints import ModelName
 from ..layout import grid_margins
 from ..plant import LateralPlant
 from ..reprs import summary_repr
@@ -122,7 +123,7 @@ def _build_panel(
 def paper_figure_panels(
     n: int,
     *,
-    model: str = "kinematic",
+    model: ModelName = "kinematic",
     vehicle: Vehicle | None = None,
     pole: float = -1.0,
     curvatures: Sequence[float] | None = None,
@@ -312,7 +313,7 @@ def _draw_panel(ax, panel: ChartPanel, legend: bool = True, notes_here: bool = T
 def plot_paper_figure(
     n: int,
     *,
-    model: str = "kinematic",
+    model: ModelName = "kinematic",
     vehicle: Vehicle | None = None,
     pole: float = -1.0,
     curvatures: Sequence[float] | None = None,
@@ -385,7 +386,7 @@ def plot_paper_figure(
         fig = axs.flat[0].figure
     axes = list(axs.flat)
     lines = np.empty(shape, dtype=object)
-    handles = []
+    handles: list[Any] = []
     all_notes = []
     for i, (a, panel) in enumerate(zip(axes, panels, strict=False)):
         drawn, notes = _draw_panel(a, panel, legend=n == 2, notes_here=n == 2)

@@ -22,13 +22,14 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, cast
 
 import control as ct
 import numpy as np
 
 from ..design import UncontrollableError, double_root_gains
 from ..files import atomic_write, lock_folder, remove_stale_temporaries
+from ..hints import ModelName
 from ..layout import grid_margins
 from ..linear import closed_loop
 from ..plant import LateralPlant
@@ -85,7 +86,7 @@ class FigureSpec:
 
 
 def _chart_figure(n):
-    def make(model: str = "kinematic", quick: bool = False):
+    def make(model: ModelName = "kinematic", quick: bool = False):
         return plot_paper_figure(n, model=model, npoints=201 if quick else 401).figure
 
     return make
@@ -94,7 +95,7 @@ def _chart_figure(n):
 def plot_root_loci(
     *,
     vehicle: Vehicle | None = None,
-    model: str = "kinematic",
+    model: ModelName = "kinematic",
     quick: bool = False,
     ax: Axes | None = None,
 ) -> ct.ControlPlot:
@@ -188,7 +189,7 @@ def plot_root_loci(
     ax.set_ylabel("Im [1/s]")
 
     ax = axes[1]
-    kap = np.linspace(0.0, 0.4, n)
+    kappas = np.linspace(0.0, 0.4, n)
     for i, a in enumerate((-1.0, 0.0, 0.5)):
         plant = LateralPlant(vehicle, speed=5.0, model="kinematic")
         g0 = double_root_gains(
@@ -198,13 +199,13 @@ def plot_root_loci(
             plant,
             g0,
             parameter="curvature",
-            values=kap,
+            values=kappas,
             redesign_pole=-1.0,
             design_model="paper",
         )
         for j, branch in enumerate(pz.loci.T):
             ax.plot(
-                kap,
+                kappas,
                 branch.real,
                 color=f"C{i}",
                 ls="-" if j == 0 else "--",
@@ -263,7 +264,7 @@ def plot_root_loci(
     return ct.ControlPlot(lines, np.array([list(axes)], dtype=object), fig)
 
 
-def _comparison_figure(model: str = "kinematic", quick: bool = False):
+def _comparison_figure(model: ModelName = "kinematic", quick: bool = False):
     from ..comparison import compare_linear_nonlinear
 
     plant = LateralPlant(PAPER_VEHICLE, speed=5.0, curvature=0.1, model=model)
@@ -278,7 +279,7 @@ def _comparison_figure(model: str = "kinematic", quick: bool = False):
     return cmp.plot().figure
 
 
-def _turning_figure(model: str = "kinematic", quick: bool = False):
+def _turning_figure(model: ModelName = "kinematic", quick: bool = False):
     return plot_turning_radius(PAPER_VEHICLE).figure
 
 
@@ -295,7 +296,7 @@ _FIG5_TITLES = {
 
 
 @lru_cache(maxsize=4)
-def _fig5_data(model: str, quick: bool):
+def _fig5_data(model: ModelName, quick: bool):
     from .data import FIG5_RATIOS
     from .scenarios import fig5_peak_lateral_accel
 
@@ -307,7 +308,7 @@ def _fig5_data(model: str, quick: bool):
 
 
 @lru_cache(maxsize=4)
-def _fig6_to_9_data(model: str, quick: bool):
+def _fig6_to_9_data(model: ModelName, quick: bool):
     from .scenarios import fig6_to_9_responses
 
     return fig6_to_9_responses(model, dt=0.05 if quick else 0.01, progress=False)
@@ -316,7 +317,7 @@ def _fig6_to_9_data(model: str, quick: bool):
 _G = 9.81  # m/s^2
 
 
-def plot_fig5(model: str = "kinematic", quick: bool = False) -> Figure:
+def plot_fig5(model: ModelName = "kinematic", quick: bool = False) -> Figure:
     r"""Fig. 5: peak absolute lateral acceleration of G versus the ratio ``a``.
 
     One panel per scenario, one curve per double root :math:`\lambda_0`
@@ -451,7 +452,7 @@ def plot_fig5(model: str = "kinematic", quick: bool = False) -> Figure:
     return fig
 
 
-def _responses_figure(n: int, model: str, quick: bool):
+def _responses_figure(n: int, model: ModelName, quick: bool):
     import matplotlib.pyplot as plt
 
     sr = _fig6_to_9_data(model, quick)[n]
@@ -624,13 +625,13 @@ def _clip_initial_spike(ax, t, values, ratios, frac: float = 0.03) -> None:
 
 
 def _response_maker(n):
-    def make(model: str = "kinematic", quick: bool = False):
+    def make(model: ModelName = "kinematic", quick: bool = False):
         return _responses_figure(n, model, quick)
 
     return make
 
 
-def _fig5_table(model: str, quick: bool) -> str:
+def _fig5_table(model: ModelName, quick: bool) -> str:
     data = _fig5_data(model, quick)
     show = (-1.5, -1.0, -0.5, 0.0, 0.5, 1.0, 1.5)
     lines = []
@@ -741,7 +742,9 @@ FIGURES: dict[str, FigureSpec] = {
 }
 
 
-def make_figure(name: str, *, model: str = "kinematic", quick: bool = False) -> Figure:
+def make_figure(
+    name: str, *, model: ModelName = "kinematic", quick: bool = False
+) -> Figure:
     """Draw one figure of :data:`FIGURES` by name.
 
     Parameters
@@ -773,7 +776,7 @@ def make_figure(name: str, *, model: str = "kinematic", quick: bool = False) -> 
     return _make(name, model, quick)
 
 
-def _make(name: str, model: str, quick: bool):
+def _make(name: str, model: ModelName, quick: bool):
     """``FIGURES[name].make`` with the titles at a fixed height.
 
     Matplotlib lifts an axes title above top tick labels and a y offset
@@ -998,7 +1001,7 @@ def _collector_per_figure():
 def reproduce(
     out: str | os.PathLike[str],
     *,
-    model: str = "kinematic",
+    model: ModelName = "kinematic",
     quick: bool = False,
     progress: bool = True,
     dpi: int = 110,
@@ -1089,7 +1092,7 @@ def reproduce(
                 fig = _make(name, model, quick)
                 path = out / f"{name}.{format}"
                 try:
-                    with atomic_write(path) as fh, plt.rc_context(_DRAW_RC):
+                    with atomic_write(path) as fh, plt.rc_context(cast(Any, _DRAW_RC)):
                         fig.savefig(fh, format=format, dpi=int(dpi), **options)
                 finally:
                     plt.close(fig)
@@ -1106,7 +1109,7 @@ def reproduce(
     return ReproduceResult(out, tuple(written), summary)
 
 
-def _summary_text(model: str, written, quick: bool = False) -> str:
+def _summary_text(model: ModelName, written, quick: bool = False) -> str:
     lines = [
         "# fws-control reproduce: summary",
         "",
