@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, cast
 
 import numpy as np
 
@@ -216,8 +216,9 @@ def steering_command(
             )
             delta_f = fb
     if feedforward == "dynamic":
+        # check_feedforward has refused "dynamic" without a speed
         ff_f, ff_r = dynamic_feedforward(
-            vehicle, speed=speed, curvature=curvature, tyre=tyre
+            vehicle, speed=cast(RealArrayLike, speed), curvature=curvature, tyre=tyre
         )
         delta_f = fb + ff_f
         delta_r = delta_r + ff_r
@@ -315,8 +316,9 @@ def steering_command_rate(
             )
             rate_f = fb_rate
     if feedforward == "dynamic":
+        # check_feedforward has refused "dynamic" without a speed
         d_f, d_r = dynamic_feedforward_derivative(
-            vehicle, speed=speed, curvature=curvature, tyre=tyre
+            vehicle, speed=cast(RealArrayLike, speed), curvature=curvature, tyre=tyre
         )
         rate_f = fb_rate + d_f * kr
         rate_r = rate_r + d_r * kr

@@ -397,7 +397,7 @@ def most_stable_gains(
                     f"(its scale {top!r} is not finite); give {name}, or design "
                     "without the delay (double_root_gains, stability_chart)"
                 )
-            bounds = (top / 100.0, top)
+            bounds = (float(top) / 100.0, float(top))
         scale.append(_check_bounds(name, bounds))
     (k1_lo, k1_hi), (k2_lo, k2_hi) = scale
     spaced = [

@@ -61,7 +61,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -322,7 +322,8 @@ class _Family:
         veh = t.vehicle
         vfields = {n: vals[n] for n in _VEHICLE_FIELDS if n in vals}
         if vfields:
-            veh = dataclasses.replace(veh, **vfields)
+            # (mypy reads the KW_ONLY marker as a field of that type)
+            veh = dataclasses.replace(veh, **cast(dict[str, Any], vfields))
         lag = vals.get("steering_lag", t.steering_lag)
         return LateralPlant(
             veh,
@@ -924,7 +925,8 @@ class RobustRegion:
 
         if ax is None:
             _, ax = plt.subplots(figsize=(6.0, 5.0), layout="constrained")
-        artists, handles = [], []
+        artists: list[Any] = []
+        handles: list[Any] = []
         X, Y = np.meshgrid(self.k1, self.k2)
         if nominal:
             fam = _Family(self.plant, self.box, None)
@@ -1332,7 +1334,7 @@ def robust_gains(
     cand = [(region.k1[ix[i]], region.k2[iy[i]]) for i in pick]
     scored = sorted(cand, key=lambda x: worst(x)[0])[:n_starts]
     span = np.array([np.ptp(region.k1), np.ptp(region.k2)])
-    best = None
+    best: Any = None
     for x0 in scored:
         res = minimize(
             objective,

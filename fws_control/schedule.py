@@ -38,7 +38,7 @@ SteeringGains`` is a schedule too (evaluated exactly, at every step).
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -221,12 +221,12 @@ class GainSchedule:
                 raise ValueError(f"at speed {speed:g} m/s: {exc}") from exc
         return cls(
             speeds=v,
-            k1=[float(g.k1) for g in designs],
-            k2=[float(g.k2) for g in designs],
-            ratio=[float(g.ratio) for g in designs],
+            k1=np.array([float(g.k1) for g in designs]),
+            k2=np.array([float(g.k2) for g in designs]),
+            ratio=np.array([float(g.ratio) for g in designs]),
         )
 
-    def at(self, speed: float) -> SteeringGains:
+    def at(self, speed: RealArrayLike) -> SteeringGains:
         r"""The gains at `speed` (scalar or array), interpolated.
 
         :math:`k_1 V^2`, :math:`k_2 V` and :math:`a` are interpolated
@@ -272,7 +272,7 @@ class GainSchedule:
             return SteeringGains(float(k1), float(k2), float(a))
         return SteeringGains(k1, k2, a)
 
-    def plot(self, ax: Axes | None = None) -> ct.ControlPlot:
+    def plot(self, ax: Sequence[Axes] | np.ndarray | None = None) -> ct.ControlPlot:
         """Draw k1, k2, a and the abscissa against the speed.
 
         Lines: the interpolation of :meth:`at`; markers: the designs.
@@ -455,11 +455,11 @@ def schedule_gains(
             raise ValueError(f"at speed {speed:g} m/s: {exc}") from exc
     return GainSchedule(
         speeds=v,
-        k1=[float(d.gains.k1) for d in designs],
-        k2=[float(d.gains.k2) for d in designs],
-        ratio=[float(d.gains.ratio) for d in designs],
-        abscissa=[d.abscissa for d in designs],
-        critical_delay=[d.critical_delay for d in designs],
+        k1=np.array([float(d.gains.k1) for d in designs]),
+        k2=np.array([float(d.gains.k2) for d in designs]),
+        ratio=np.array([float(d.gains.ratio) for d in designs]),
+        abscissa=np.array([d.abscissa for d in designs]),
+        critical_delay=np.array([d.critical_delay for d in designs]),
         delay=tau,
         designs=tuple(designs),
     )

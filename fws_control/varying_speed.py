@@ -88,7 +88,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -233,7 +233,7 @@ class SpeedCertificate:
         t = t[..., np.newaxis, np.newaxis]
         return (1.0 - t) * self.P[i] + t * self.P[i + 1]
 
-    def plot(self, ax: Axes | None = None) -> ct.ControlPlot:
+    def plot(self, ax: Sequence[Axes] | np.ndarray | None = None) -> ct.ControlPlot:
         r"""Draw the certificate: :math:`\mathbf P(V)` and its decay.
 
         Left: the eigenvalues of :math:`\mathbf P(V)` [-]. Right: the

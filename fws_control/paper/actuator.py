@@ -121,7 +121,7 @@ def plot_actuator(
     quick: bool = False,
     delay: float = REALISTIC_DELAY,
     steering_lag: float = REALISTIC_STEERING_LAG,
-    ax: Axes | None = None,
+    ax: Sequence[Axes] | np.ndarray | None = None,
 ) -> ct.ControlPlot:
     r"""The paper's designs with an input delay and a steering lag (extra figure).
 

@@ -318,7 +318,7 @@ def plot_paper_figure(
     pole: float = -1.0,
     curvatures: Sequence[float] | None = None,
     npoints: int = _DEFAULT_POINTS,
-    ax: Axes | None = None,
+    ax: Sequence[Axes] | np.ndarray | None = None,
 ) -> ct.ControlPlot:
     r"""Redraw Fig. 2, 3 or 4 of the paper as one matplotlib figure.
 

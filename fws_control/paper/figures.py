@@ -97,7 +97,7 @@ def plot_root_loci(
     vehicle: Vehicle | None = None,
     model: ModelName = "kinematic",
     quick: bool = False,
-    ax: Axes | None = None,
+    ax: Sequence[Axes] | np.ndarray | None = None,
 ) -> ct.ControlPlot:
     r"""Root loci of the :math:`\lambda_0 = -1` designs (extra figure).
 
@@ -159,7 +159,7 @@ def plot_root_loci(
         fig = axes[0].figure
     n = 200 if quick else 800
 
-    ax = axes[0]
+    panel = axes[0]
     # For any double-root design the loop is L(s) = (-2 l0 s + l0^2 - V^2 k^2)
     # / (s^2 + V^2 k^2): it depends on V*kappa only, not on a or the model.
     for i, (V, kap) in enumerate(((5.0, 0.0), (20.0, 0.01), (5.0, 0.1))):
@@ -169,26 +169,26 @@ def plot_root_loci(
         rl = ct.root_locus_map(loop, gains=refined_scale(0.0, 4.0, n))
         lab = rf"V = {V:g} m/s, $\kappa$ = {kap:g} 1/m"
         for j, branch in enumerate(rl.loci.T):
-            ax.plot(
+            panel.plot(
                 branch.real, branch.imag, color=f"C{i}", label=lab if j == 0 else None
             )
-        ax.plot(rl.loci[0].real, rl.loci[0].imag, "x", color=f"C{i}", ms=8)
+        panel.plot(rl.loci[0].real, rl.loci[0].imag, "x", color=f"C{i}", ms=8)
         at1 = ct.root_locus_map(loop, gains=[1.0]).loci[0]
-        ax.plot(at1.real, at1.imag, "s", color=f"C{i}", mec="k", ms=6)
+        panel.plot(at1.real, at1.imag, "s", color=f"C{i}", mec="k", ms=6)
         z = loop.zeros()
-        ax.plot(z.real, z.imag, "o", mfc="none", color=f"C{i}", ms=8)
-    ax.plot([], [], "x", color="0.3", label="g = 0 (open loop)")
-    ax.plot([], [], "o", mfc="none", color="0.3", label="zero of L(s)")
-    ax.plot([], [], "s", color="0.6", mec="k", label=r"g = 1 ($\lambda_0 = -1$)")
-    ax.set_title(
+        panel.plot(z.real, z.imag, "o", mfc="none", color=f"C{i}", ms=8)
+    panel.plot([], [], "x", color="0.3", label="g = 0 (open loop)")
+    panel.plot([], [], "o", mfc="none", color="0.3", label="zero of L(s)")
+    panel.plot([], [], "s", color="0.6", mec="k", label=r"g = 1 ($\lambda_0 = -1$)")
+    panel.set_title(
         "(a) gain locus: poles of $g\\,(k_1, k_2)$, g in [0, 4], for the\n"
         r"$\lambda_0 = -1$ designs (the same for every a: L(s) depends on V$\kappa$)",
         fontsize=10,
     )
-    ax.set_xlabel("Re [1/s]")
-    ax.set_ylabel("Im [1/s]")
+    panel.set_xlabel("Re [1/s]")
+    panel.set_ylabel("Im [1/s]")
 
-    ax = axes[1]
+    panel = axes[1]
     kappas = np.linspace(0.0, 0.4, n)
     for i, a in enumerate((-1.0, 0.0, 0.5)):
         plant = LateralPlant(vehicle, speed=5.0, model="kinematic")
@@ -204,59 +204,63 @@ def plot_root_loci(
             design_model="paper",
         )
         for j, branch in enumerate(pz.loci.T):
-            ax.plot(
+            panel.plot(
                 kappas,
                 branch.real,
                 color=f"C{i}",
                 ls="-" if j == 0 else "--",
                 label=f"a = {a:g}" if j == 0 else None,
             )
-    ax.axhline(-1.0, color="k", lw=1.0, ls=":", label=r"target $\lambda_0 = -1$")
-    ax.axvline(0.1, color="0.6", lw=0.8)
-    ax.text(
+    panel.axhline(-1.0, color="k", lw=1.0, ls=":", label=r"target $\lambda_0 = -1$")
+    panel.axvline(0.1, color="0.6", lw=0.8)
+    panel.text(
         0.102,
         0.97,
         r"$\kappa$ = 0.1 (Fig. 7)",
         va="top",
-        transform=ax.get_xaxis_transform(),
+        transform=panel.get_xaxis_transform(),
         fontsize=8,
     )
-    ax.plot([], [], "k-", label="pole 1 (solid), pole 2 (dashed)")
-    ax.set_title(
+    panel.plot([], [], "k-", label="pole 1 (solid), pole 2 (dashed)")
+    panel.set_title(
         "(b) real parts of the exact-model poles with the paper-model\n"
         r"$\lambda_0 = -1$ gains (eqs. 43-46), V = 5 m/s (parameter locus)",
         fontsize=10,
     )
-    ax.set_xlabel(r"curvature $\kappa$ [1/m]")
-    ax.set_ylabel("Re [1/s]")
+    panel.set_xlabel(r"curvature $\kappa$ [1/m]")
+    panel.set_ylabel("Re [1/s]")
 
-    ax = axes[2]
+    panel = axes[2]
     plant = LateralPlant(vehicle, speed=20.0, model=model)
     g = double_root_gains(plant, ratio=0.5, pole=-1.0)
     ratios = np.linspace(-1.5, 0.99, n)
     pz = parameter_locus(plant, g, parameter="ratio", values=ratios)
     for j, branch in enumerate(pz.loci.T):
-        ax.plot(
+        panel.plot(
             branch.real,
             branch.imag,
             color="C3",
             label="poles, a from -1.5 to 0.99" if j == 0 else None,
         )
-    ax.plot(pz.loci[0].real, pz.loci[0].imag, "x", color="C3", ms=8, label="a = -1.5")
-    ax.plot(pz.loci[-1].real, pz.loci[-1].imag, ">", color="C3", ms=7, label="a = 0.99")
+    panel.plot(
+        pz.loci[0].real, pz.loci[0].imag, "x", color="C3", ms=8, label="a = -1.5"
+    )
+    panel.plot(
+        pz.loci[-1].real, pz.loci[-1].imag, ">", color="C3", ms=7, label="a = 0.99"
+    )
     at05 = parameter_locus(plant, g, parameter="ratio", values=[0.5]).loci[0]
-    ax.plot(at05.real, at05.imag, "s", color="C3", mec="k", label="a = 0.5 (design)")
-    ax.set_title(
+    panel.plot(at05.real, at05.imag, "s", color="C3", mec="k", label="a = 0.5 (design)")
+    panel.set_title(
         f"(c) ratio locus, gains k1 = {float(g.k1):.3f}, k2 = {float(g.k2):.3f} "
         "fixed\nV = 20 m/s, straight path",
         fontsize=10,
     )
-    ax.set_xlabel("Re [1/s]")
-    ax.set_ylabel("Im [1/s]")
-    for ax in axes:
-        ax.axhline(0.0, color="0.5", lw=0.8)
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8, loc="lower left" if ax is axes[1] else "upper left")
+    panel.set_xlabel("Re [1/s]")
+    panel.set_ylabel("Im [1/s]")
+    for panel in axes:
+        panel.axhline(0.0, color="0.5", lw=0.8)
+        panel.grid(alpha=0.3)
+        panel.legend(fontsize=8, loc="lower left" if panel is axes[1] else "upper left")
     fig.suptitle("Root loci of the structured 4WS loop", fontsize=13)
     lines = np.empty((1, 3), dtype=object)
     for i, a in enumerate(axes):

@@ -37,7 +37,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar, overload
+from typing import TYPE_CHECKING, Any, ClassVar, cast, overload
 
 import numpy as np
 
@@ -500,7 +500,7 @@ class SimulationResult:
                 raise IndexError(f"run index {index} out of range for {n} runs")
             i = int(index) % n
             # Keep the samples up to the stop.
-            return self._select([i], int(self.run_samples[i]), squeeze=True)
+            return self._select([i], int(self._samples[i]), squeeze=True)
         if isinstance(index, slice):
             return self._select(np.arange(n)[index], self.t.size, squeeze=False)
         idx = np.asarray(index)
@@ -537,13 +537,17 @@ class SimulationResult:
             vehicle=self.vehicle,
             path=self.path,
             run_peak=None if self.run_peak is None else self.run_peak[idx],
-            run_peak_time=None if self.run_peak is None else self.run_peak_time[idx],
+            run_peak_time=(
+                None
+                if self.run_peak is None
+                else cast(np.ndarray, self.run_peak_time)[idx]
+            ),
             method=self.method,
             model=self.model,
             tyre=self.tyre,
             engine=self.engine,
             signal_names=self.signal_names,
-            run_samples=np.minimum(self.run_samples[idx], count),
+            run_samples=np.minimum(self._samples[idx], count),
             run_metrics=None if self.run_metrics is None else self.run_metrics[idx],
             peaks_exact=self.peaks_exact,
             speed_profile=self.speed_profile,
@@ -600,6 +604,11 @@ class SimulationResult:
                 raise _not_kept(name, self.signal_names, what)
 
     @property
+    def _samples(self) -> np.ndarray:
+        # run_samples after __post_init__: always an array of sample counts
+        return cast(np.ndarray, self.run_samples)
+
+    @property
     def peaks(self) -> Peaks:
         """Peaks ``max |signal|`` per run, with their times (:class:`Peaks`).
 
@@ -609,7 +618,7 @@ class SimulationResult:
         ``exact=False``.
         """
         if self.run_peak is not None:
-            values, times = self.run_peak, self.run_peak_time
+            values, times = self.run_peak, cast(np.ndarray, self.run_peak_time)
             exact = self.peaks_exact
         else:
             self._require(PEAK_SIGNALS, "peaks from the samples")
@@ -635,7 +644,7 @@ class SimulationResult:
         return list(self)
 
     def __repr__(self) -> str:
-        counts = {}
+        counts: dict[str, int] = {}
         for s in self.run_status.tolist():
             counts[s] = counts.get(s, 0) + 1
         span = f"[{self.t[0]:g}, {self.t[-1]:g}] s" if self.t.size else "[]"
@@ -1086,7 +1095,7 @@ class SimulationResult:
         names = self.signal_names
         n = len(self)
         # a run's samples up to its stop
-        have = np.arange(self.t.size)[None, :] < self.run_samples[:, None]
+        have = np.arange(self.t.size)[None, :] < self._samples[:, None]
         rows_run, rows_k = np.nonzero(have)
         # A run without samples keeps one row of NaN, so that it is not lost.
         empty = np.setdiff1d(np.arange(n), rows_run)
@@ -1250,7 +1259,7 @@ class SimulationResult:
                 text = f"{text} ({status} at t={self.run_t_stop[i]:.3g} s)".strip()
             legend_needed |= bool(text)
             label = text or None
-            count = int(self.run_samples[i])
+            count = int(self._samples[i])
             t = self.t[:count]
             color = None
             for a, name, scale, _ in panels:
@@ -1449,6 +1458,7 @@ def expand_runs(
     # Runs that were not simulated have NaN peaks.
     peak = np.full((n, len(PEAK_SIGNALS)), np.nan)
     peak_time = np.full((n, len(PEAK_SIGNALS)), np.nan)
+    peaks_known = True
     if result is not None:
         if len(result) != positions.size or result.t.shape != t.shape:
             raise ValueError(
@@ -1466,7 +1476,7 @@ def expand_runs(
             run_message[p] = m
         t_stop[positions] = result.run_t_stop
         if result.run_peak is None:
-            peak = peak_time = None
+            peaks_known = False
         else:
             peak[positions] = result.run_peak
             peak_time[positions] = result.run_peak_time
@@ -1489,8 +1499,8 @@ def expand_runs(
         squeeze=False,
         vehicle=vehicle,
         path=path,
-        run_peak=peak,
-        run_peak_time=peak_time,
+        run_peak=peak if peaks_known else None,
+        run_peak_time=peak_time if peaks_known else None,
         method=None if result is None else result.method,
         engine="numpy" if result is None else result.engine,
         # the simulated runs' model: a dynamic batch stays dynamic
