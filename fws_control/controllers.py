@@ -84,7 +84,7 @@ FEEDFORWARDS = ("kinematic", "dynamic")
 
 
 def check_feedforward(
-    feedforward: FeedforwardLike, *, speed: RealArrayLike | None = None
+    feedforward: bool | str, *, speed: RealArrayLike | None = None
 ) -> Literal[False, "kinematic", "dynamic"]:
     """Normalise a feedforward option: ``False``, ``"kinematic"`` or ``"dynamic"``.
 
@@ -114,7 +114,7 @@ def check_feedforward(
             "feedforward='dynamic' needs the keyword speed= (m/s, > 0): the "
             "tyre slip angles it supplies grow with the speed"
         )
-    return feedforward
+    return cast('Literal["kinematic", "dynamic"]', feedforward)  # checked above
 
 
 def _limit(value: float | None) -> float:

@@ -37,7 +37,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar, cast, overload
+from typing import TYPE_CHECKING, Any, ClassVar, Literal, cast, overload
 
 import numpy as np
 
@@ -327,7 +327,7 @@ class SimulationResult:
     run_k2: np.ndarray
     run_ratio: np.ndarray
     run_initial_state: np.ndarray
-    feedforward: bool = True
+    feedforward: bool | Literal["dynamic"] = True
     squeeze: bool = False
     vehicle: Vehicle | None = None
     path: Path | None = None
@@ -1379,7 +1379,7 @@ def expand_runs(
     speed: Any,
     initial_state: Any,
     t: np.ndarray,
-    feedforward: bool,
+    feedforward: bool | Literal["dynamic"],
     vehicle: Vehicle | None,
     path: Path | None,
     status: str = STATUS_UNCONTROLLABLE,
