@@ -44,6 +44,7 @@ psi_C``, positive steering turns left.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, fields, replace
 from typing import TYPE_CHECKING, Any
 
@@ -51,7 +52,9 @@ import numpy as np
 
 from . import equations
 from .controllers import FEEDFORWARDS
+from .equations import Real
 from .gains import SteeringGains
+from .hints import FeedforwardLike, RealArrayLike
 from .models import STEERING_INPUTS, check_inputs
 from .plant import LateralPlant, as_plant, loop_matrices
 from .validation import check_finite, check_positive, check_scalar, check_type
@@ -61,6 +64,8 @@ if TYPE_CHECKING:
     # python-control costs 0.7 s to import; a simulation of these
     # controllers does not need it, so it is imported where it is used
     import control as ct
+
+    from .paths import Path
 
 __all__ = [
     "LateralController",
@@ -82,7 +87,9 @@ CONTROLLER_SIGNALS = ("s", "e", "theta", "curvature")
 _RATE_STEP = 1e-6
 
 
-def saturate(vehicle: Vehicle, delta_f, delta_r) -> tuple[np.ndarray, np.ndarray]:
+def saturate(
+    vehicle: Vehicle, delta_f: RealArrayLike, delta_r: RealArrayLike
+) -> tuple[np.ndarray, np.ndarray]:
     """Clip the steering angles to the vehicle's angle limits (where set).
 
     Parameters
@@ -158,7 +165,17 @@ class LateralController:
     #: ``k * sample_time + delay`` (zero-order hold), on the numpy engine.
     sample_time: float | None = None
 
-    def steering(self, vehicle, path, *, s, e, theta, curvature, speed):
+    def steering(
+        self,
+        vehicle: Vehicle,
+        path: Path,
+        *,
+        s: RealArrayLike,
+        e: RealArrayLike,
+        theta: RealArrayLike,
+        curvature: RealArrayLike,
+        speed: RealArrayLike,
+    ) -> tuple[Real, Real]:
         """Steering angles ``(delta_f, delta_r)`` [rad], before saturation.
 
         Parameters
@@ -182,8 +199,19 @@ class LateralController:
         raise NotImplementedError
 
     def steering_rate(
-        self, vehicle, path, *, s, e, theta, curvature, speed, s_dot, e_dot, theta_dot
-    ):
+        self,
+        vehicle: Vehicle,
+        path: Path,
+        *,
+        s: RealArrayLike,
+        e: RealArrayLike,
+        theta: RealArrayLike,
+        curvature: RealArrayLike,
+        speed: RealArrayLike,
+        s_dot: RealArrayLike,
+        e_dot: RealArrayLike,
+        theta_dot: RealArrayLike,
+    ) -> tuple[Real, Real]:
         """Time derivative of :meth:`steering` along the motion [rad/s].
 
         Default: a central difference of :meth:`steering` at ``state ± h
@@ -240,7 +268,7 @@ class LateralController:
             out.append(central)
         return out[0], out[1]
 
-    def subset(self, idx) -> LateralController:
+    def subset(self, idx: Sequence[int] | np.ndarray) -> LateralController:
         """The controller of the runs `idx` (array parameters indexed).
 
         Parameters
@@ -272,7 +300,7 @@ class LateralController:
         return sizes.pop() if sizes else None
 
     def system(
-        self, vehicle: Vehicle, path, *, speed: float, name: str = "controller"
+        self, vehicle: Vehicle, path: Path, *, speed: float, name: str = "controller"
     ) -> ct.NonlinearIOSystem:
         """The controller as a static :class:`control.NonlinearIOSystem`.
 
@@ -383,7 +411,9 @@ class StateFeedback(LateralController):
         object.__setattr__(self, "feedforward", bool(self.feedforward))
 
     @classmethod
-    def from_gains(cls, gains: SteeringGains, *, feedforward: bool = True):
+    def from_gains(
+        cls, gains: SteeringGains, *, feedforward: bool = True
+    ) -> StateFeedback:
         """The paper's law with these (scalar) gains.
 
         Parameters
@@ -400,13 +430,23 @@ class StateFeedback(LateralController):
         check_type("gains", gains, SteeringGains)
         return cls(np.asarray(gains.K, dtype=float), feedforward=feedforward)
 
-    def subset(self, idx) -> StateFeedback:  # noqa: D102 - K is shared by all runs
+    def subset(self, idx: Sequence[int] | np.ndarray) -> StateFeedback:  # noqa: D102 - K is shared by all runs
         return self
 
     def runs(self) -> int | None:  # noqa: D102
         return None
 
-    def steering(self, vehicle, path, *, s, e, theta, curvature, speed):  # noqa: D102
+    def steering(
+        self,
+        vehicle: Vehicle,
+        path: Path,
+        *,
+        s: RealArrayLike,
+        e: RealArrayLike,
+        theta: RealArrayLike,
+        curvature: RealArrayLike,
+        speed: RealArrayLike,
+    ) -> tuple[Real, Real]:  # noqa: D102
         e = np.asarray(e, dtype=float)
         theta = np.asarray(theta, dtype=float)
         K = self.K
@@ -418,8 +458,19 @@ class StateFeedback(LateralController):
         return df, dr
 
     def steering_rate(  # noqa: D102 - exact: linear law plus the feedforward's rate
-        self, vehicle, path, *, s, e, theta, curvature, speed, s_dot, e_dot, theta_dot
-    ):
+        self,
+        vehicle: Vehicle,
+        path: Path,
+        *,
+        s: RealArrayLike,
+        e: RealArrayLike,
+        theta: RealArrayLike,
+        curvature: RealArrayLike,
+        speed: RealArrayLike,
+        s_dot: RealArrayLike,
+        e_dot: RealArrayLike,
+        theta_dot: RealArrayLike,
+    ) -> tuple[Real, Real]:
         K = self.K
         e_dot = np.asarray(e_dot, dtype=float)
         theta_dot = np.asarray(theta_dot, dtype=float)
@@ -439,8 +490,8 @@ class StateFeedback(LateralController):
 def LQRController(  # noqa: N802 - a constructor in the issue's naming
     plant: Any,
     *,
-    Q,
-    R,
+    Q: RealArrayLike,
+    R: RealArrayLike,
     ratio: float | None = None,
     feedforward: bool = True,
     speed: Any = None,
@@ -586,7 +637,7 @@ class PurePursuit(LateralController):
             )
         object.__setattr__(self, "ratio", _per_run("ratio", self.ratio))
 
-    def distance(self, speed) -> np.ndarray:
+    def distance(self, speed: RealArrayLike) -> np.ndarray:
         """Look-ahead distance :math:`L_d` [m] at `speed` [m/s].
 
         Parameters
@@ -603,7 +654,17 @@ class PurePursuit(LateralController):
             ld = np.maximum(ld, np.asarray(self.lookahead_time) * np.abs(speed))
         return np.broadcast_to(ld, np.shape(speed)) if np.ndim(speed) else ld
 
-    def steering(self, vehicle, path, *, s, e, theta, curvature, speed):  # noqa: D102
+    def steering(
+        self,
+        vehicle: Vehicle,
+        path: Path,
+        *,
+        s: RealArrayLike,
+        e: RealArrayLike,
+        theta: RealArrayLike,
+        curvature: RealArrayLike,
+        speed: RealArrayLike,
+    ) -> tuple[Real, Real]:  # noqa: D102
         s = np.asarray(s, dtype=float)
         e = np.asarray(e, dtype=float)
         theta = np.asarray(theta, dtype=float)
@@ -669,7 +730,17 @@ class Stanley(LateralController):
         object.__setattr__(self, "softening", soft)
         object.__setattr__(self, "ratio", _per_run("ratio", self.ratio))
 
-    def steering(self, vehicle, path, *, s, e, theta, curvature, speed):  # noqa: D102
+    def steering(
+        self,
+        vehicle: Vehicle,
+        path: Path,
+        *,
+        s: RealArrayLike,
+        e: RealArrayLike,
+        theta: RealArrayLike,
+        curvature: RealArrayLike,
+        speed: RealArrayLike,
+    ) -> tuple[Real, Real]:  # noqa: D102
         s = np.asarray(s, dtype=float)
         e = np.asarray(e, dtype=float)
         theta = np.asarray(theta, dtype=float)
@@ -736,7 +807,17 @@ class RearWheelFeedback(LateralController):
         )
         object.__setattr__(self, "ratio", _per_run("ratio", self.ratio))
 
-    def steering(self, vehicle, path, *, s, e, theta, curvature, speed):  # noqa: D102
+    def steering(
+        self,
+        vehicle: Vehicle,
+        path: Path,
+        *,
+        s: RealArrayLike,
+        e: RealArrayLike,
+        theta: RealArrayLike,
+        curvature: RealArrayLike,
+        speed: RealArrayLike,
+    ) -> tuple[Real, Real]:  # noqa: D102
         e = np.asarray(e, dtype=float)
         theta = np.asarray(theta, dtype=float)
         kap = np.asarray(curvature, dtype=float)
@@ -751,7 +832,9 @@ class RearWheelFeedback(LateralController):
         return df, np.asarray(self.ratio) * df
 
 
-def as_controller(gains: Any, *, feedforward: bool = True):
+def as_controller(
+    gains: Any, *, feedforward: FeedforwardLike = True
+) -> LateralController | SteeringGains:
     """Return `gains` unchanged if it is a controller or SteeringGains.
 
     Parameters

@@ -45,8 +45,12 @@ import re
 import signal
 import sys
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, cast
+
+if TYPE_CHECKING:
+    from .manoeuvres import Manoeuvre
 
 __all__ = [
     "main",
@@ -76,7 +80,7 @@ EXIT_STOPPED = 3
 #: 2.4 s; ``rlocus --points 10000`` 2.3 s; ``simulate --duration 3600`` 0.4
 #: GB, 4.8 s; ``reproduce --dpi 600``: the widest figure is 10200 x 3120
 #: pixels).
-BUDGETS = {
+BUDGETS: dict[tuple[str, str], tuple[int | float, str, str]] = {
     ("chart", "--points"): (
         2001,
         "points per axis",
@@ -268,7 +272,7 @@ def _budget_int(command: str, option: str, low: int = 2):
     high, unit, hint = BUDGETS[(command, option)]
 
     def parse(text: str) -> int:
-        return _positive_int(text, low=low, high=high, unit=unit, hint=hint)
+        return _positive_int(text, low=low, high=int(high), unit=unit, hint=hint)
 
     parse.__name__ = "integer"  # argparse names the type in some messages
     return parse
@@ -742,7 +746,7 @@ def _add_design_parser(sub) -> None:
     p.set_defaults(func=_cmd_design)
 
 
-def _design_numbers(args) -> tuple[dict, object]:
+def _design_numbers(args) -> tuple[dict[str, Any], Callable[[], Any]]:
     """The design the arguments ask for, as a dict of plain numbers, and its plot."""
     import numpy as np
 
@@ -1050,8 +1054,9 @@ def _cmd_chart(args) -> int:
     if args.paper_figure is not None:
         fig = plot_paper_figure(args.paper_figure, model=args.model).figure
     else:
-        k1 = np.linspace(*args.k1_range, args.points)
-        k2 = np.linspace(*args.k2_range, args.points)
+        (k1_lo, k1_hi), (k2_lo, k2_hi) = args.k1_range, args.k2_range
+        k1 = np.linspace(k1_lo, k1_hi, args.points)
+        k2 = np.linspace(k2_lo, k2_hi, args.points)
         ch = stability_chart(
             _plant(args, _vehicle(args)),
             ratio=args.ratio,
@@ -1186,14 +1191,15 @@ def _cmd_rlocus(args) -> int:
 COURSES = ("lane-change", "obstacle", "slalom")
 
 
-def _course(name: str):
+def _course(name: str) -> Manoeuvre:
     from .manoeuvres import double_lane_change, obstacle_avoidance, slalom
 
-    return {
+    courses: dict[str, Callable[[], Manoeuvre]] = {
         "lane-change": double_lane_change,
         "obstacle": obstacle_avoidance,
         "slalom": slalom,
-    }[name]()
+    }
+    return courses[name]()
 
 
 def _simulate_course(args, veh, g):
@@ -1512,13 +1518,14 @@ def _delay_margin_numbers(args) -> dict:
         "k2": float(g.k2),
         "design": "given gains" if args.k1 is not None else f"lambda0 = {args.pole:g}",
         "model": args.model,
+        # LateralPlant holds the lag as a (front, rear) pair
         "steering_lag": None
         if plant.steering_lag is None
-        else list(plant.steering_lag),
+        else list(cast("tuple[float, float]", plant.steering_lag)),
         "stable_without_delay": bool(cd.stable_without_delay),
         # JSON has no infinity: null where no delay destabilises the loop
-        "critical_delay": _json_number(cd.delay),
-        "frequency": _json_number(cd.frequency),
+        "critical_delay": _json_number(float(cd.delay)),
+        "frequency": _json_number(float(cd.frequency)),
     }
     if args.delay is not None:
         roots = rightmost_roots(plant, g, delay=args.delay, n=2)
@@ -1640,7 +1647,7 @@ def _short(value, limit: int = 60) -> str:
     return r.repr(value)
 
 
-def _bounded(message: str, limit: int = MAX_MESSAGE) -> str:
+def _bounded(message: object, limit: int = MAX_MESSAGE) -> str:
     """One line of at most about ``limit`` characters.
 
     A message that quotes a whole array would fill the terminal; keep its

@@ -50,8 +50,9 @@ from __future__ import annotations
 
 import math
 import sys
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import control as ct
 import numpy as np
@@ -73,6 +74,11 @@ from .plant import LateralPlant
 from .simulation import STATUS_END_OF_PATH, SimulationResult, simulate
 from .validation import check_bool, check_delay, check_scalar, check_type
 from .vehicle import Vehicle
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 __all__ = [
     "ControllerComparison",
@@ -238,7 +244,7 @@ class ControllerComparison:
     delay: float
     labels: tuple[str, ...]
     results: tuple[SimulationResult, ...]
-    table: dict
+    table: dict[str, np.ndarray]
     plant: LateralPlant | None = None
     duration: float = math.nan
     initial_state: tuple[float, float, float] | None = None
@@ -259,7 +265,7 @@ class ControllerComparison:
         """Names of the table's columns, in order (units in the names)."""
         return tuple(n for n in COMPARISON_METRICS if n in self.table)
 
-    def to_pandas(self):
+    def to_pandas(self) -> pd.DataFrame:
         """The table as a :class:`pandas.DataFrame`, one row per controller.
 
         The index holds the labels (named ``controller``); the columns are
@@ -333,7 +339,7 @@ class ControllerComparison:
             rows.append(f"| {lab} | " + " | ".join(cells) + " |")
         return "\n".join(rows)
 
-    def plot(self, ax=None) -> ct.ControlPlot:
+    def plot(self, ax: Sequence[Axes] | np.ndarray | None = None) -> ct.ControlPlot:
         """Trajectories with the gates, lateral error, front steering, a_lat.
 
         The lateral-acceleration panel marks the friction limit
@@ -377,7 +383,7 @@ class ControllerComparison:
             axes = list(np.asarray(ax, dtype=object).ravel())
             if len(axes) != 4:
                 raise ValueError(f"ax must hold 4 axes, got {len(axes)}")
-            fig = axes[0].figure
+            fig = cast("Figure", axes[0].figure)  # drawn into; a SubFigure works too
         a_xy, a_e, a_df, a_acc = axes
         self.manoeuvre.draw_gates(a_xy)
         deg = 180.0 / math.pi
@@ -543,14 +549,15 @@ def _resolve_plant(plant: Any, kwargs: dict) -> tuple:
                 f"row per controller), got an array of shape {np.shape(plant.speed)}: "
                 f"{np.array2string(np.asarray(plant.speed), threshold=6)}"
             )
-        lag = plant.steering_lag
+        # LateralPlant holds the lag as a (front, rear) pair
+        lag = cast("tuple[float, float] | None", plant.steering_lag)
         if lag is not None:
             if lag[0] != lag[1]:
                 raise ValueError(
                     "plant.steering_lag must hold one time constant for both "
                     f"axles in the simulation (front == rear >= 0.001 s), got {lag!r}"
                 )
-            lag = lag[0]
+            return plant.vehicle, plant.speed, lag[0], plant
         return plant.vehicle, plant.speed, lag, plant
     if isinstance(plant, Vehicle):
         if "speed" not in kwargs:

@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal, cast
 
 import numpy as np
 
@@ -46,6 +46,7 @@ from . import equations
 from .deprecation import legacy_keyword, reject_unknown
 from .dynamics import dynamic_feedforward, dynamic_feedforward_derivative
 from .gains import SteeringGains
+from .hints import FeedforwardLike, RealArrayLike, TyreName
 from .models import STEERING_INPUTS, check_inputs, check_result
 from .validation import check_positive, check_scalar, check_type
 from .vehicle import Vehicle
@@ -82,7 +83,9 @@ DEFAULT_ACTUATOR_TIME_CONSTANT = 0.05
 FEEDFORWARDS = ("kinematic", "dynamic")
 
 
-def check_feedforward(feedforward, *, speed=None) -> bool | str:
+def check_feedforward(
+    feedforward: bool | str, *, speed: RealArrayLike | None = None
+) -> Literal[False, "kinematic", "dynamic"]:
     """Normalise a feedforward option: ``False``, ``"kinematic"`` or ``"dynamic"``.
 
     ``True`` means ``"kinematic"`` (paper eq. 26). ``"dynamic"`` needs the
@@ -111,7 +114,7 @@ def check_feedforward(feedforward, *, speed=None) -> bool | str:
             "feedforward='dynamic' needs the keyword speed= (m/s, > 0): the "
             "tyre slip angles it supplies grow with the speed"
         )
-    return feedforward
+    return cast('Literal["kinematic", "dynamic"]', feedforward)  # checked above
 
 
 def _limit(value: float | None) -> float:
@@ -127,13 +130,13 @@ def _check_gains(gains) -> SteeringGains:
 def steering_command(
     vehicle: Vehicle,
     gains: SteeringGains,
-    e,
-    theta,
+    e: RealArrayLike,
+    theta: RealArrayLike,
     *,
-    curvature=0.0,
-    feedforward: bool | str = True,
-    speed=None,
-    tyre: str = "linear",
+    curvature: RealArrayLike = 0.0,
+    feedforward: FeedforwardLike = True,
+    speed: RealArrayLike | None = None,
+    tyre: TyreName = "linear",
 ) -> tuple[np.ndarray, np.ndarray]:
     r"""Steering angles of the path-tracking controller, paper eqs. (24)-(29).
 
@@ -213,8 +216,9 @@ def steering_command(
             )
             delta_f = fb
     if feedforward == "dynamic":
+        # check_feedforward has refused "dynamic" without a speed
         ff_f, ff_r = dynamic_feedforward(
-            vehicle, speed=speed, curvature=curvature, tyre=tyre
+            vehicle, speed=cast(RealArrayLike, speed), curvature=curvature, tyre=tyre
         )
         delta_f = fb + ff_f
         delta_r = delta_r + ff_r
@@ -233,16 +237,16 @@ def steering_command(
 def steering_command_rate(
     vehicle: Vehicle,
     gains: SteeringGains,
-    e,
-    theta,
-    e_rate,
-    theta_rate,
+    e: RealArrayLike,
+    theta: RealArrayLike,
+    e_rate: RealArrayLike,
+    theta_rate: RealArrayLike,
     *,
-    curvature,
-    curvature_rate=0.0,
-    feedforward: bool | str = True,
-    speed=None,
-    tyre: str = "linear",
+    curvature: RealArrayLike,
+    curvature_rate: RealArrayLike = 0.0,
+    feedforward: FeedforwardLike = True,
+    speed: RealArrayLike | None = None,
+    tyre: TyreName = "linear",
 ) -> tuple[np.ndarray, np.ndarray]:
     r"""Time derivatives of :func:`steering_command` by the chain rule.
 
@@ -312,8 +316,9 @@ def steering_command_rate(
             )
             rate_f = fb_rate
     if feedforward == "dynamic":
+        # check_feedforward has refused "dynamic" without a speed
         d_f, d_r = dynamic_feedforward_derivative(
-            vehicle, speed=speed, curvature=curvature, tyre=tyre
+            vehicle, speed=cast(RealArrayLike, speed), curvature=curvature, tyre=tyre
         )
         rate_f = fb_rate + d_f * kr
         rate_r = rate_r + d_r * kr
@@ -350,9 +355,9 @@ def path_tracking_controller(
     vehicle: Vehicle,
     gains: SteeringGains,
     *,
-    feedforward: bool | str = True,
+    feedforward: FeedforwardLike = True,
     speed: float | None = None,
-    tyre: str = "linear",
+    tyre: TyreName = "linear",
     name: str = "controller",
 ) -> ct.NonlinearIOSystem:
     r"""Static path-tracking controller block, paper eqs. (24)-(29).
@@ -528,7 +533,11 @@ def feedforward_feedback_controller(
 
 
 def actuator_rate(
-    vehicle: Vehicle, command, angle, *, time_constant: float
+    vehicle: Vehicle,
+    command: RealArrayLike,
+    angle: RealArrayLike,
+    *,
+    time_constant: float,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Rates of the rate-limited first-order actuator (see module docstring).
 

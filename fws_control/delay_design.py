@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import control as ct
 import numpy as np
@@ -36,6 +36,9 @@ from .gains import SteeringGains
 from .linear import characteristic_coefficients, horner
 from .plant import as_plant, loop_matrices
 from .validation import check_delay, check_scalar
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
 
 __all__ = ["MostStableDesign", "most_stable_gains"]
 
@@ -105,7 +108,7 @@ class MostStableDesign:
         """Whether the roots solve D (residual <= 1e-9) and none was missed."""
         return bool(self.residual <= 1e-9 and self.roots_right == 0)
 
-    def plot(self, ax=None) -> ct.ControlPlot:
+    def plot(self, ax: Axes | None = None) -> ct.ControlPlot:
         """The delayed stability chart with contours of the abscissa and the optimum.
 
         Chart and contours are at the ratio of the start grid; with a free
@@ -394,7 +397,7 @@ def most_stable_gains(
                     f"(its scale {top!r} is not finite); give {name}, or design "
                     "without the delay (double_root_gains, stability_chart)"
                 )
-            bounds = (top / 100.0, top)
+            bounds = (float(top) / 100.0, float(top))
         scale.append(_check_bounds(name, bounds))
     (k1_lo, k1_hi), (k2_lo, k2_hi) = scale
     spaced = [

@@ -26,6 +26,7 @@ from __future__ import annotations
 import sys
 import warnings
 from pathlib import Path
+from types import FrameType
 from typing import Any
 
 __all__ = [
@@ -61,7 +62,7 @@ def _in_package(frame) -> bool:
 def _user_stacklevel() -> int:
     """The `stacklevel` for :func:`warnings.warn`, called in this module's
     caller, that names the first frame outside the package."""
-    frame = sys._getframe(1)  # the function that calls warnings.warn
+    frame: FrameType | None = sys._getframe(1)  # the function that calls warnings.warn
     level = 1
     while frame is not None and _in_package(frame):
         frame = frame.f_back

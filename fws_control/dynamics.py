@@ -44,18 +44,34 @@ speeds coincide; with rear steering they differ by a factor
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
 from . import equations
+from .equations import Real
 from .exceptions import SingularStateError
+from .hints import RealArrayLike, TyreName
 from .models import STEERING_INPUTS
 from .validation import check_finite, check_nonzero, check_scalar, check_type
 from .vehicle import Vehicle
 
 if TYPE_CHECKING:  # imported where a model is built: ~1 s of start-up
     import control as ct
+
+    class DynamicVehicle(Vehicle):
+        """For type checkers: a Vehicle whose dynamic data are set.
+
+        :func:`require_dynamics` returns its argument as this type once it
+        has checked the fields; at run time it is the same Vehicle.
+        """
+
+        rear_to_cg: float
+        mass: float
+        yaw_inertia: float
+        cornering_front: float
+        cornering_rear: float
+
 
 __all__ = [
     "GRAVITY",
@@ -98,7 +114,7 @@ MAGIC_SHAPE = equations.MAGIC_SHAPE
 TYRES = ("linear", "magic")
 
 
-def require_dynamics(vehicle: Vehicle, *, tyre: str = "linear") -> Vehicle:
+def require_dynamics(vehicle: Vehicle, *, tyre: str = "linear") -> DynamicVehicle:
     """Return `vehicle` if it carries the data the dynamic model needs.
 
     Raises
@@ -130,10 +146,18 @@ def require_dynamics(vehicle: Vehicle, *, tyre: str = "linear") -> Vehicle:
             + ", ".join(f"{name} [{units[name]}]" for name in missing)
             + "; they are None in the vehicle given"
         )
-    return vehicle
+    return cast("DynamicVehicle", vehicle)
 
 
-def slip_angles(vehicle: Vehicle, v_y, yaw_rate, delta_f, delta_r, *, speed):
+def slip_angles(
+    vehicle: Vehicle,
+    v_y: Real,
+    yaw_rate: Real,
+    delta_f: Real,
+    delta_r: Real,
+    *,
+    speed: Real,
+) -> tuple[Real, Real]:
     r"""Slip angles ``(alpha_f, alpha_r)`` [rad] of the front and rear axle.
 
     Broadcasts over array arguments; see the module docstring for the
@@ -147,20 +171,23 @@ def slip_angles(vehicle: Vehicle, v_y, yaw_rate, delta_f, delta_r, *, speed):
     >>> float(af), float(ar)
     (0.1, -0.1)
     """
-    l_f = vehicle.wheelbase - vehicle.rear_to_cg
-    l_r = vehicle.rear_to_cg
+    # a ValueError naming the missing field (not a TypeError from None - 1)
+    l_r = vehicle.cg_distance(needed_by="the slip angles")
+    l_f = vehicle.wheelbase - l_r
     return equations.slip_angles(speed, l_f, l_r, v_y, yaw_rate, delta_f, delta_r)
 
 
 def axle_loads(vehicle: Vehicle) -> tuple[float, float]:
     """Static normal loads ``(F_zf, F_zr)`` [N] of the front and rear axle."""
-    require_dynamics(vehicle)
+    vehicle = require_dynamics(vehicle)
     weight = vehicle.mass * GRAVITY
     f = vehicle.wheelbase
     return weight * vehicle.rear_to_cg / f, weight * (f - vehicle.rear_to_cg) / f
 
 
-def tyre_force(slip, *, stiffness: float, peak: float | None = None):
+def tyre_force(
+    slip: RealArrayLike, *, stiffness: float, peak: float | None = None
+) -> Real:
     r"""Lateral axle force [N] for slip angle(s) `slip` [rad].
 
     ``peak=None``: linear, :math:`F = C\alpha`. Otherwise the simplified magic
@@ -181,14 +208,17 @@ def tyre_force(slip, *, stiffness: float, peak: float | None = None):
     return equations.magic_tyre_force(np.asarray(slip), stiffness, peak)
 
 
-def _forces(vehicle: Vehicle, alpha_f, alpha_r, tyre: str):
+def _forces(
+    vehicle: DynamicVehicle, alpha_f: Real, alpha_r: Real, tyre: str
+) -> tuple[Real, Real]:
     if tyre == "linear":
         return (
             tyre_force(alpha_f, stiffness=vehicle.cornering_front),
             tyre_force(alpha_r, stiffness=vehicle.cornering_rear),
         )
     fz_f, fz_r = axle_loads(vehicle)
-    mu = vehicle.friction
+    # require_dynamics(tyre="magic") has checked it
+    mu = cast(float, vehicle.friction)
     return (
         tyre_force(alpha_f, stiffness=vehicle.cornering_front, peak=mu * fz_f),
         tyre_force(alpha_r, stiffness=vehicle.cornering_rear, peak=mu * fz_r),
@@ -196,8 +226,15 @@ def _forces(vehicle: Vehicle, alpha_f, alpha_r, tyre: str):
 
 
 def body_derivatives(
-    vehicle: Vehicle, v_y, yaw_rate, delta_f, delta_r, *, speed, tyre: str = "linear"
-):
+    vehicle: Vehicle,
+    v_y: Real,
+    yaw_rate: Real,
+    delta_f: Real,
+    delta_r: Real,
+    *,
+    speed: Real,
+    tyre: TyreName = "linear",
+) -> tuple[Real, Real]:
     r"""Return ``(v_y_dot, r_dot)``: the lateral and yaw equations of motion.
 
     Broadcasts; no argument checks beyond the vehicle data (callers that
@@ -215,7 +252,7 @@ def body_derivatives(
     >>> round(float(vy_dot), 6), round(float(r_dot), 6)
     (0.533307, 0.431978)
     """
-    require_dynamics(vehicle, tyre=tyre)
+    vehicle = require_dynamics(vehicle, tyre=tyre)
     alpha_f, alpha_r = slip_angles(
         vehicle, v_y, yaw_rate, delta_f, delta_r, speed=speed
     )
@@ -229,17 +266,17 @@ def body_derivatives(
 
 def dynamic_path_derivatives(
     vehicle: Vehicle,
-    curvature,
-    e,
-    theta,
-    v_y,
-    yaw_rate,
-    delta_f,
-    delta_r,
+    curvature: Real,
+    e: Real,
+    theta: Real,
+    v_y: Real,
+    yaw_rate: Real,
+    delta_f: Real,
+    delta_r: Real,
     *,
-    speed,
-    tyre: str = "linear",
-):
+    speed: Real,
+    tyre: TyreName = "linear",
+) -> tuple[Real, Real, Real, Real, Real]:
     r"""Path-frame right-hand side ``(s_dot, e_dot, theta_dot, v_y_dot, r_dot)``.
 
     Errors at the rear-axle point R (module docstring). Broadcasts.
@@ -260,6 +297,7 @@ def dynamic_path_derivatives(
     vy_dot, r_dot = body_derivatives(
         vehicle, v_y, yaw_rate, delta_f, delta_r, speed=speed, tyre=tyre
     )
+    vehicle = cast("DynamicVehicle", vehicle)  # body_derivatives has checked it
     s_dot, e_dot, theta_dot = equations.dynamic_path_kinematics(
         speed, vehicle.rear_to_cg, curvature, e, theta, v_y, yaw_rate
     )
@@ -268,15 +306,15 @@ def dynamic_path_derivatives(
 
 def dynamic_global_derivatives(
     vehicle: Vehicle,
-    psi,
-    v_y,
-    yaw_rate,
-    delta_f,
-    delta_r,
+    psi: Real,
+    v_y: Real,
+    yaw_rate: Real,
+    delta_f: Real,
+    delta_r: Real,
     *,
-    speed,
-    tyre: str = "linear",
-):
+    speed: Real,
+    tyre: TyreName = "linear",
+) -> tuple[Real, Real, Real, Real, Real]:
     r"""Global-frame right-hand side ``(x_dot, y_dot, psi_dot, v_y_dot, r_dot)``.
 
     ``x, y`` is the rear-axle point R, which moves with the body-frame
@@ -303,6 +341,7 @@ def dynamic_global_derivatives(
     vy_dot, r_dot = body_derivatives(
         vehicle, v_y, yaw_rate, delta_f, delta_r, speed=speed, tyre=tyre
     )
+    vehicle = cast("DynamicVehicle", vehicle)  # body_derivatives has checked it
     x_dot, y_dot = equations.dynamic_global_kinematics(
         speed, vehicle.rear_to_cg, psi, v_y, yaw_rate
     )
@@ -310,7 +349,7 @@ def dynamic_global_derivatives(
     return x_dot, y_dot, yaw_rate + 0.0 * x_dot, vy_dot, r_dot
 
 
-def _check_model_args(vehicle, speed, tyre):
+def _check_model_args(vehicle: Vehicle, speed: float, tyre: str) -> float:
     require_dynamics(vehicle, tyre=tyre)
     speed = check_scalar("speed", check_nonzero("speed", speed))
     if speed <= 0.0:
@@ -500,7 +539,9 @@ def dynamic_path_model(
     )
 
 
-def slip_for_force(force, *, stiffness: float, peak: float | None = None):
+def slip_for_force(
+    force: RealArrayLike, *, stiffness: float, peak: float | None = None
+) -> np.ndarray:
     r"""Slip angle [rad] at which :func:`tyre_force` gives `force` [N].
 
     The inverse of :func:`tyre_force` on its rising branch: ``force /
@@ -532,11 +573,14 @@ def slip_for_force(force, *, stiffness: float, peak: float | None = None):
     return np.tan(np.arcsin(ratio) / MAGIC_SHAPE) / b
 
 
-def _axle_peaks(vehicle: Vehicle, tyre: str) -> tuple[float | None, float | None]:
+def _axle_peaks(
+    vehicle: DynamicVehicle, tyre: str
+) -> tuple[float | None, float | None]:
     if tyre == "linear":
         return None, None
     fz_f, fz_r = axle_loads(vehicle)
-    return vehicle.friction * fz_f, vehicle.friction * fz_r
+    mu = cast(float, vehicle.friction)  # require_dynamics(tyre="magic") checked it
+    return mu * fz_f, mu * fz_r
 
 
 def _check_point(speed, curvature):
@@ -579,7 +623,7 @@ def _solve_axle(base, lateral, stiffness, peak, name):
     )
 
 
-def _axle_reach(vehicle: Vehicle, speed: float, tyre: str, front: bool) -> float:
+def _axle_reach(vehicle: DynamicVehicle, speed: float, tyre: str, front: bool) -> float:
     """Largest curvature [1/m] one axle holds in the steady turn at `speed`.
 
     The steady equation of the axle, ``F(alpha) cos(beta + alpha) = q kappa``
@@ -617,7 +661,9 @@ def _axle_reach(vehicle: Vehicle, speed: float, tyre: str, front: bool) -> float
     return float(brentq(margin, 0.0, top / q, xtol=1e-15, rtol=1e-12))
 
 
-def _reach_error(vehicle: Vehicle, u, kappa, tyre: str) -> ValueError:
+def _reach_error(
+    vehicle: DynamicVehicle, u: np.ndarray, kappa: np.ndarray, tyre: str
+) -> ValueError:
     """The error for a curve the tyres cannot hold, naming its largest curvature."""
     u, kappa = np.broadcast_arrays(u, kappa)
     peaks = _axle_peaks(vehicle, tyre)
@@ -637,7 +683,7 @@ def _reach_error(vehicle: Vehicle, u, kappa, tyre: str) -> ValueError:
         axle: _axle_reach(vehicle, ui, tyre, axle == "front")
         for axle in ("front", "rear")
     }
-    axle = min(reach, key=reach.get)
+    axle = min(reach, key=reach.__getitem__)
     lever = vehicle.rear_to_cg if axle == "front" else vehicle.front_to_cg
     need = vehicle.mass * ui**2 * abs(ki) * lever / f
     peak = peaks[0 if axle == "front" else 1]
@@ -664,8 +710,12 @@ def _reach_error(vehicle: Vehicle, u, kappa, tyre: str) -> ValueError:
 
 
 def dynamic_feedforward(
-    vehicle: Vehicle, *, speed, curvature, tyre: str = "linear"
-) -> tuple[np.ndarray, np.ndarray]:
+    vehicle: Vehicle,
+    *,
+    speed: RealArrayLike,
+    curvature: RealArrayLike,
+    tyre: TyreName = "linear",
+) -> tuple[Real, Real]:
     r"""Front and rear angles that make ``e = theta = 0`` a steady state.
 
     On a path of constant curvature :math:`\kappa` at speed :math:`u`, the
@@ -727,7 +777,7 @@ def dynamic_feedforward(
     To first order: atan(0.027) + 1500*20**2*0.01*1.35/(2.7*8e4) = 0.02699 +
     0.0375 and 0.0375.
     """
-    require_dynamics(vehicle, tyre=tyre)
+    vehicle = require_dynamics(vehicle, tyre=tyre)
     u, kappa = _check_point(speed, curvature)
     try:
         delta_f, delta_r = _steady_angles(vehicle, u, kappa, tyre)
@@ -738,7 +788,9 @@ def dynamic_feedforward(
     return delta_f, delta_r
 
 
-def _steady_angles(vehicle: Vehicle, u, kappa, tyre: str):
+def _steady_angles(
+    vehicle: DynamicVehicle, u: np.ndarray, kappa: np.ndarray, tyre: str
+) -> tuple[np.ndarray, np.ndarray]:
     """The fixed points of :func:`dynamic_feedforward` (checked arguments)."""
     f = vehicle.wheelbase
     l_f, l_r = vehicle.front_to_cg, vehicle.rear_to_cg
@@ -758,8 +810,12 @@ def _steady_angles(vehicle: Vehicle, u, kappa, tyre: str):
 
 
 def dynamic_feedforward_derivative(
-    vehicle: Vehicle, *, speed, curvature, tyre: str = "linear"
-) -> tuple[np.ndarray, np.ndarray]:
+    vehicle: Vehicle,
+    *,
+    speed: RealArrayLike,
+    curvature: RealArrayLike,
+    tyre: TyreName = "linear",
+) -> tuple[Real, Real]:
     r"""Derivatives ``(d delta_f/d kappa, d delta_r/d kappa)`` [rad m].
 
     Of :func:`dynamic_feedforward`, by implicit differentiation of each
@@ -788,6 +844,7 @@ def dynamic_feedforward_derivative(
     delta_f, delta_r = dynamic_feedforward(
         vehicle, speed=speed, curvature=curvature, tyre=tyre
     )
+    vehicle = cast("DynamicVehicle", vehicle)  # dynamic_feedforward checked it
     u, kappa = _check_point(speed, curvature)
     f = vehicle.wheelbase
     peak_f, peak_r = _axle_peaks(vehicle, tyre)
@@ -835,7 +892,11 @@ def _slope(alpha, stiffness, peak):
 
 
 def path_jacobians(
-    vehicle: Vehicle, *, speed, curvature, tyre: str = "linear"
+    vehicle: Vehicle,
+    *,
+    speed: RealArrayLike,
+    curvature: RealArrayLike,
+    tyre: TyreName = "linear",
 ) -> tuple[np.ndarray, np.ndarray]:
     r"""``(A, B)`` of the path-frame model at the dynamic-feedforward point.
 
@@ -888,6 +949,7 @@ def path_jacobians(
     delta_f, delta_r = dynamic_feedforward(
         vehicle, speed=speed, curvature=curvature, tyre=tyre
     )
+    vehicle = cast("DynamicVehicle", vehicle)  # dynamic_feedforward checked it
     u, kappa = _check_point(speed, curvature)
     u, kappa, delta_f, delta_r = np.broadcast_arrays(u, kappa, delta_f, delta_r)
     l_f, l_r = vehicle.front_to_cg, vehicle.rear_to_cg

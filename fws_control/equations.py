@@ -25,7 +25,13 @@ Symbols (paper names): :math:`V` `speed`, :math:`f` `wheelbase`, :math:`d`
 
 from __future__ import annotations
 
+from typing import TypeAlias
+
 import numpy as np
+
+#: A float, or an array of them broadcasting with the other arguments (numba
+#: compiles the same functions on float scalars).
+Real: TypeAlias = "float | np.ndarray"
 
 __all__ = [
     "MAGIC_SHAPE",
@@ -59,7 +65,7 @@ MAGIC_SHAPE = 1.3
 # Kinematic single-track model
 
 
-def yaw_rate(speed, wheelbase, delta_f, delta_r):
+def yaw_rate(speed: Real, wheelbase: Real, delta_f: Real, delta_r: Real) -> Real:
     r"""Yaw rate of the kinematic model, paper eq. (10).
 
     .. math:: \dot\psi = \frac{V\sin(\delta_f-\delta_r)}{f\cos\delta_f}
@@ -73,7 +79,9 @@ def yaw_rate(speed, wheelbase, delta_f, delta_r):
     return speed * np.sin(delta_f - delta_r) / (wheelbase * np.cos(delta_f))
 
 
-def global_frame_derivatives(speed, wheelbase, psi, delta_f, delta_r):
+def global_frame_derivatives(
+    speed: Real, wheelbase: Real, psi: Real, delta_f: Real, delta_r: Real
+) -> tuple[Real, Real, Real]:
     r"""Rear-axle point R in the global frame, paper eqs. (8)-(10).
 
     .. math::
@@ -96,7 +104,15 @@ def global_frame_derivatives(speed, wheelbase, psi, delta_f, delta_r):
     )
 
 
-def path_frame_derivatives(speed, wheelbase, curvature, e, theta, delta_f, delta_r):
+def path_frame_derivatives(
+    speed: Real,
+    wheelbase: Real,
+    curvature: Real,
+    e: Real,
+    theta: Real,
+    delta_f: Real,
+    delta_r: Real,
+) -> tuple[Real, Real, Real]:
     r"""Path-frame kinematics, the corrected paper eqs. (17)-(19).
 
     .. math::
@@ -120,7 +136,9 @@ def path_frame_derivatives(speed, wheelbase, curvature, e, theta, delta_f, delta
     return s_dot, e_dot, theta_dot
 
 
-def cg_lateral_velocity(speed, rear_to_cg, delta_r, yaw_rate):
+def cg_lateral_velocity(
+    speed: Real, rear_to_cg: Real, delta_r: Real, yaw_rate: Real
+) -> Real:
     r"""Lateral velocity of G in the vehicle frame, from paper eq. (11).
 
     G moves with the velocity of R, :math:`V(\cos\delta_r, \sin\delta_r)`
@@ -137,7 +155,14 @@ def cg_lateral_velocity(speed, rear_to_cg, delta_r, yaw_rate):
     return speed * np.sin(delta_r) + rear_to_cg * yaw_rate
 
 
-def yaw_acceleration(speed, wheelbase, delta_f, delta_r, delta_f_rate, delta_r_rate):
+def yaw_acceleration(
+    speed: Real,
+    wheelbase: Real,
+    delta_f: Real,
+    delta_r: Real,
+    delta_f_rate: Real,
+    delta_r_rate: Real,
+) -> Real:
     r"""Time derivative of the yaw rate of eq. (10) at constant speed.
 
     .. math::
@@ -159,8 +184,13 @@ def yaw_acceleration(speed, wheelbase, delta_f, delta_r, delta_f_rate, delta_r_r
 
 
 def lateral_acceleration(
-    speed, rear_to_cg, delta_r, delta_r_rate, yaw_rate, yaw_acceleration
-):
+    speed: Real,
+    rear_to_cg: Real,
+    delta_r: Real,
+    delta_r_rate: Real,
+    yaw_rate: Real,
+    yaw_acceleration: Real,
+) -> Real:
     r"""Lateral acceleration of the centre of gravity G, paper eq. (13).
 
     .. math:: a_G^{lat} = V(\dot\psi + \dot\delta_r)\cos\delta_r + d\,\ddot\psi
@@ -190,7 +220,7 @@ def lateral_acceleration(
 # The paper's control law
 
 
-def feedforward_angle(wheelbase, curvature):
+def feedforward_angle(wheelbase: Real, curvature: Real) -> Real:
     r"""Front feedforward angle, paper eq. (26): :math:`\delta_f^{FF} =
     \arctan(\kappa_C f)` (and :math:`\delta_r^{FF} = 0`, eq. 27).
 
@@ -203,7 +233,9 @@ def feedforward_angle(wheelbase, curvature):
     return np.arctan(wheelbase * curvature)
 
 
-def feedforward_angle_rate(wheelbase, curvature, curvature_rate):
+def feedforward_angle_rate(
+    wheelbase: Real, curvature: Real, curvature_rate: Real
+) -> Real:
     r"""Time derivative of :func:`feedforward_angle`.
 
     .. math:: \dot\delta_f^{FF} = \frac{f\dot\kappa}{1 + (f\kappa)^2}
@@ -222,7 +254,7 @@ def feedforward_angle_rate(wheelbase, curvature, curvature_rate):
     return wheelbase * curvature_rate / (1.0 + fk**2)
 
 
-def feedback_angle(e, theta, k_e, k_theta):
+def feedback_angle(e: Real, theta: Real, k_e: Real, k_theta: Real) -> Real:
     r"""Linear feedback angle of paper eqs. (28)-(29).
 
     .. math:: \delta^{FB} = -k_e e_C - k_\theta\theta_C
@@ -238,7 +270,9 @@ def feedback_angle(e, theta, k_e, k_theta):
     return -k_e * e - k_theta * theta
 
 
-def feedback_command(e, theta, k1, k2, ratio):
+def feedback_command(
+    e: Real, theta: Real, k1: Real, k2: Real, ratio: Real
+) -> tuple[Real, Real]:
     r"""The feedback part of the law with :math:`\delta_r = a\delta_f`.
 
     .. math::
@@ -259,7 +293,15 @@ def feedback_command(e, theta, k1, k2, ratio):
     return fb, ratio * fb
 
 
-def steering_law(e, theta, curvature, wheelbase, k1, k2, ratio):
+def steering_law(
+    e: Real,
+    theta: Real,
+    curvature: Real,
+    wheelbase: Real,
+    k1: Real,
+    k2: Real,
+    ratio: Real,
+) -> tuple[Real, Real]:
     r"""The paper's law with the curvature feedforward, eqs. (24)-(29).
 
     .. math::
@@ -281,8 +323,15 @@ def steering_law(e, theta, curvature, wheelbase, k1, k2, ratio):
 
 
 def steering_law_rate(
-    e_rate, theta_rate, curvature, curvature_rate, wheelbase, k1, k2, ratio
-):
+    e_rate: Real,
+    theta_rate: Real,
+    curvature: Real,
+    curvature_rate: Real,
+    wheelbase: Real,
+    k1: Real,
+    k2: Real,
+    ratio: Real,
+) -> tuple[Real, Real]:
     r"""Time derivative of :func:`steering_law` (chain rule).
 
     .. math::
@@ -307,7 +356,9 @@ def steering_law_rate(
 # Dynamic single-track model (see fws_control.dynamics for the conventions)
 
 
-def no_slip_body_state(speed, wheelbase, rear_to_cg, delta_f, delta_r):
+def no_slip_body_state(
+    speed: Real, wheelbase: Real, rear_to_cg: Real, delta_f: Real, delta_r: Real
+) -> tuple[Real, Real]:
     r"""Lateral velocity of G and yaw rate with both slip angles zero.
 
     .. math::
@@ -328,7 +379,15 @@ def no_slip_body_state(speed, wheelbase, rear_to_cg, delta_f, delta_r):
     return speed * tan_r + rear_to_cg * r, r
 
 
-def slip_angles(speed, front_to_cg, rear_to_cg, v_y, yaw_rate, delta_f, delta_r):
+def slip_angles(
+    speed: Real,
+    front_to_cg: Real,
+    rear_to_cg: Real,
+    v_y: Real,
+    yaw_rate: Real,
+    delta_f: Real,
+    delta_r: Real,
+) -> tuple[Real, Real]:
     r"""Slip angles ``(alpha_f, alpha_r)`` of the front and rear axle [rad].
 
     .. math::
@@ -346,7 +405,7 @@ def slip_angles(speed, front_to_cg, rear_to_cg, v_y, yaw_rate, delta_f, delta_r)
     return alpha_f, alpha_r
 
 
-def linear_tyre_force(slip, stiffness):
+def linear_tyre_force(slip: Real, stiffness: Real) -> Real:
     r"""Linear axle force :math:`F = C\alpha` [N].
 
     Examples
@@ -358,7 +417,7 @@ def linear_tyre_force(slip, stiffness):
     return stiffness * slip
 
 
-def magic_tyre_force(slip, stiffness, peak):
+def magic_tyre_force(slip: Real, stiffness: Real, peak: Real) -> Real:
     r"""Saturating axle force, the simplified magic formula [N].
 
     .. math:: F = D\sin(c\arctan(B\alpha)),\qquad B = \frac{C}{cD}
@@ -377,9 +436,17 @@ def magic_tyre_force(slip, stiffness, peak):
 
 
 def body_derivatives(
-    speed, mass, yaw_inertia, front_to_cg, rear_to_cg, yaw_rate,
-    force_f, force_r, delta_f, delta_r,
-):  # fmt: skip
+    speed: Real,
+    mass: Real,
+    yaw_inertia: Real,
+    front_to_cg: Real,
+    rear_to_cg: Real,
+    yaw_rate: Real,
+    force_f: Real,
+    force_r: Real,
+    delta_f: Real,
+    delta_r: Real,
+) -> tuple[Real, Real]:
     r"""Lateral and yaw equations of motion ``(v_y_dot, r_dot)``.
 
     .. math::
@@ -404,7 +471,15 @@ def body_derivatives(
     return vy_dot, r_dot
 
 
-def dynamic_path_kinematics(speed, rear_to_cg, curvature, e, theta, v_y, yaw_rate):
+def dynamic_path_kinematics(
+    speed: Real,
+    rear_to_cg: Real,
+    curvature: Real,
+    e: Real,
+    theta: Real,
+    v_y: Real,
+    yaw_rate: Real,
+) -> tuple[Real, Real, Real]:
     r"""Path-frame errors of R for the dynamic model ``(s_dot, e_dot, theta_dot)``.
 
     R moves with the body-frame velocity :math:`(u, v_y - l_r r)`:
@@ -429,7 +504,9 @@ def dynamic_path_kinematics(speed, rear_to_cg, curvature, e, theta, v_y, yaw_rat
     return s_dot, e_dot, theta_dot
 
 
-def dynamic_global_kinematics(speed, rear_to_cg, psi, v_y, yaw_rate):
+def dynamic_global_kinematics(
+    speed: Real, rear_to_cg: Real, psi: Real, v_y: Real, yaw_rate: Real
+) -> tuple[Real, Real]:
     r"""Global velocity of R for the dynamic model ``(x_dot, y_dot)``.
 
     .. math::

@@ -9,6 +9,11 @@ the input was fine, the environment failed.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .simulation.result import SimulationResult
+
 __all__ = [
     "UncontrollableError",
     "SingularStateError",
@@ -129,6 +134,6 @@ class ClusterLostError(RuntimeError):
     True
     """
 
-    def __init__(self, message: str, *, result=None) -> None:
+    def __init__(self, message: str, *, result: SimulationResult | None = None) -> None:
         super().__init__(message)
-        self.result = result
+        self.result: SimulationResult | None = result

@@ -19,11 +19,18 @@ array([0.5, 1.5])
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import Any, Protocol, TypeAlias, runtime_checkable
+from typing import Any, Literal, Protocol, TypeAlias, runtime_checkable
 
 import numpy as np
 
-__all__ = ["RealArrayLike", "RatioLike", "SupportsArray"]
+__all__ = [
+    "RealArrayLike",
+    "RatioLike",
+    "SupportsArray",
+    "ModelName",
+    "TyreName",
+    "FeedforwardLike",
+]
 
 
 @runtime_checkable
@@ -47,3 +54,15 @@ RealArrayLike: TypeAlias = (
 #: A rear-to-front steering ratio: real numbers as :data:`RealArrayLike`, or
 #: a schedule ``ratio(vehicle, speed=...)`` evaluated at the plant's speed.
 RatioLike: TypeAlias = RealArrayLike | Callable[..., Any]
+
+#: The plant model of a design or simulation (``model=``): the kinematic
+#: model, the paper's linearisation of it, or the dynamic single-track model
+#: (:data:`fws_control.validation.MODELS`).
+ModelName: TypeAlias = Literal["kinematic", "paper", "dynamic"]
+
+#: The tyre law of the dynamic model (``tyre=``).
+TyreName: TypeAlias = Literal["linear", "magic"]
+
+#: The feedforward of the paper's law (``feedforward=``): on, off, or the
+#: kinematic or dynamic curvature feedforward by name.
+FeedforwardLike: TypeAlias = bool | Literal["kinematic", "dynamic"]

@@ -53,12 +53,14 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
 from .baselines import LateralController
+from .hints import RealArrayLike
 from .paths import Path
 from .plant import LateralPlant
 from .validation import (
@@ -96,7 +98,9 @@ def _import_osqp():
     return osqp
 
 
-def zoh_discretize(A, B, sample_time: float) -> tuple[np.ndarray, np.ndarray]:
+def zoh_discretize(
+    A: RealArrayLike, B: RealArrayLike, sample_time: float
+) -> tuple[np.ndarray, np.ndarray]:
     r"""Exact zero-order-hold discretisation, broadcast over leading axes.
 
     :math:`A_d = e^{A T_s}`, :math:`B_d = \int_0^{T_s} e^{A\tau}\,d\tau\,B`,
@@ -353,10 +357,20 @@ class MPCController(LateralController):
     def runs(self) -> int | None:  # noqa: D102 - one controller for all runs
         return None
 
-    def subset(self, idx) -> MPCController:  # noqa: D102
+    def subset(self, idx: Sequence[int] | np.ndarray) -> MPCController:  # noqa: D102
         return self
 
-    def steering(self, vehicle, path, *, s, e, theta, curvature, speed):
+    def steering(
+        self,
+        vehicle: Vehicle,
+        path: Path,
+        *,
+        s: RealArrayLike,
+        e: RealArrayLike,
+        theta: RealArrayLike,
+        curvature: RealArrayLike,
+        speed: RealArrayLike,
+    ) -> NoReturn:
         """Not a static law: an MPC is sampled (use :meth:`start`).
 
         Parameters
@@ -378,7 +392,9 @@ class MPCController(LateralController):
             "computes one command"
         )
 
-    def system(self, vehicle, path, *, speed, name="controller"):
+    def system(
+        self, vehicle: Vehicle, path: Path, *, speed: float, name: str = "controller"
+    ) -> NoReturn:
         """Not available: the python-control reference runs static laws only.
 
         Parameters

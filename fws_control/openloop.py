@@ -34,7 +34,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import KW_ONLY, dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -47,6 +47,8 @@ from .vehicle import Vehicle
 
 if TYPE_CHECKING:
     import control as ct
+
+    from .dynamics import DynamicVehicle
 
 __all__ = [
     "MODELS",
@@ -343,7 +345,7 @@ def _metrics(
 # the nonlinear model
 
 
-def _body_rates(vehicle: Vehicle, tyre: str, speed: Any) -> Callable[..., Any]:
+def _body_rates(vehicle: DynamicVehicle, tyre: str, speed: Any) -> Callable[..., Any]:
     """``rates(v_y, r, delta_f, delta_r) -> (v_y_dot, r_dot)`` of one vehicle.
 
     :func:`fws_control.dynamics.body_derivatives` with the vehicle data
@@ -354,7 +356,8 @@ def _body_rates(vehicle: Vehicle, tyre: str, speed: Any) -> Callable[..., Any]:
     c_f, c_r = vehicle.cornering_front, vehicle.cornering_rear
     if tyre == "magic":
         fz_f, fz_r = axle_loads(vehicle)
-        d_f, d_r = vehicle.friction * fz_f, vehicle.friction * fz_r
+        mu = cast(float, vehicle.friction)  # require_dynamics checked it
+        d_f, d_r = mu * fz_f, mu * fz_r
 
         def forces(alpha_f, alpha_r):
             return (
@@ -381,7 +384,14 @@ def _body_rates(vehicle: Vehicle, tyre: str, speed: Any) -> Callable[..., Any]:
     return rates
 
 
-def _steady_body(vehicle, delta_f, delta_r, speed, tyre, guess):
+def _steady_body(
+    vehicle: DynamicVehicle,
+    delta_f: float,
+    delta_r: float,
+    speed: float,
+    tyre: str,
+    guess: tuple[float, float],
+) -> tuple[float, float]:
     """``(v_y, r)`` with both body derivatives zero at fixed steering angles."""
     from scipy.optimize import root
 
@@ -638,17 +648,17 @@ def step_steer(
     >>> round(nl.yaw_rate_metrics.steady_state, 4)
     0.0776
     """
-    require_dynamics(vehicle, tyre=tyre)
+    vehicle = require_dynamics(vehicle, tyre=tyre)
     u = _check_speed(speed)
-    amp = check_real("amplitude", amplitude)
-    if amp.ndim != 0 or not (
-        math.isfinite(float(amp)) and 0.0 < abs(float(amp)) <= 0.5
+    amp_in = check_real("amplitude", amplitude)
+    if amp_in.ndim != 0 or not (
+        math.isfinite(float(amp_in)) and 0.0 < abs(float(amp_in)) <= 0.5
     ):
         raise ValueError(
             f"amplitude must be a nonzero scalar with |amplitude| <= 0.5 rad, "
             f"got {amplitude!r}"
         )
-    amp = float(amp)
+    amp = float(amp_in)
     a = float(_ratio_at(vehicle, ratio, u))
     if steer_rate is None:
         rate = 0.8 * abs(amp) / ISO_STEER_RISE
@@ -1000,7 +1010,7 @@ def steering_frequency_response(
     >>> (big.lateral_acceleration_gain / lin.lateral_acceleration_gain).round(2)
     array([0.99, 0.92, 0.86])
     """
-    require_dynamics(vehicle, tyre=tyre)
+    vehicle = require_dynamics(vehicle, tyre=tyre)
     u = _check_speed(speed)
     w = _check_grid("omega", omega, "rad/s", 1e4)
     a = float(_ratio_at(vehicle, ratio, u))
@@ -1225,14 +1235,14 @@ class SteadyStateCircle:
         )  # fmt: skip
 
 
-def _rising_limit(vehicle: Vehicle, tyre: str) -> tuple[float, float]:
+def _rising_limit(vehicle: DynamicVehicle, tyre: str) -> tuple[float, float]:
     """Slip angles [rad] of the peak force of each axle (inf for linear tyres)."""
     if tyre == "linear":
         return math.inf, math.inf
     fz_f, fz_r = axle_loads(vehicle)
     out = []
     for c, fz in ((vehicle.cornering_front, fz_f), (vehicle.cornering_rear, fz_r)):
-        b = c / (equations.MAGIC_SHAPE * vehicle.friction * fz)
+        b = c / (equations.MAGIC_SHAPE * cast(float, vehicle.friction) * fz)
         out.append(math.tan(math.pi / (2.0 * equations.MAGIC_SHAPE)) / b)
     return out[0], out[1]
 
@@ -1311,7 +1321,7 @@ def steady_state_circle(
     """
     from scipy.optimize import root
 
-    require_dynamics(vehicle, tyre=tyre)
+    vehicle = require_dynamics(vehicle, tyre=tyre)
     tyre = _check_choice("tyre", tyre, TYRES)
     a_y = _check_grid("lateral_acceleration", lateral_acceleration, "m/s^2", 100.0)
     rad = check_real("radius", radius)
@@ -1394,7 +1404,7 @@ def steady_state_circle(
         lateral_velocity=v_y,
         yaw_rate=r,
         sideslip=np.arctan2(v_y, u),
-        slip_front=alpha_f,
-        slip_rear=alpha_r,
+        slip_front=np.asarray(alpha_f),
+        slip_rear=np.asarray(alpha_r),
         understeer_gradient=grad,
     )

@@ -28,11 +28,12 @@ from __future__ import annotations
 import re
 import sys
 from dataclasses import KW_ONLY, dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
 from .dynamics import TYRES, dynamic_feedforward, path_jacobians, require_dynamics
+from .hints import ModelName, RealArrayLike, TyreName
 from .models import STEERING_INPUTS, feedforward_steering
 from .reprs import summary_repr, value_repr
 from .validation import (
@@ -176,9 +177,9 @@ class LateralPlant:
     # must not silently mean a curvature
     _: KW_ONLY
     curvature: float | np.ndarray = 0.0
-    model: str = "kinematic"
+    model: ModelName = "kinematic"
     steering_lag: float | tuple[float, float] | None = None
-    tyre: str = "linear"
+    tyre: TyreName = "linear"
 
     def __post_init__(self) -> None:
         check_type("vehicle", self.vehicle, Vehicle)
@@ -318,7 +319,9 @@ class LateralPlant:
         # the wheel angles become states; the commands drive them through the
         # lag
         n = A.shape[-1]
-        inv = np.diag([1.0 / t for t in self.steering_lag])
+        # __post_init__ has made the lag a (front, rear) pair
+        lag = cast("tuple[float, float]", self.steering_lag)
+        inv = np.diag([1.0 / t for t in lag])
         shape = A.shape[:-2]
         A_lag = np.zeros(shape + (n + 2, n + 2))
         A_lag[..., :n, :n] = A
@@ -518,7 +521,7 @@ class LoopMatrices:
         """Number of states ``n``."""
         return int(self.A.shape[-1])
 
-    def input_vector(self, ratio) -> np.ndarray:
+    def input_vector(self, ratio: RealArrayLike) -> np.ndarray:
         r"""Input column of the loop, :math:`\mathbf b = \mathbf B_f + a\mathbf B_r`.
 
         With :math:`\delta_r = a\,\delta_f` the two steering inputs act as

@@ -20,14 +20,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import control as ct
 import numpy as np
 
+from .hints import RealArrayLike
 from .reprs import summary_repr
 from .validation import check_finite, check_scalar
 from .vehicle import Vehicle
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
 
 __all__ = ["RearLimitBand", "rear_limit_band", "RearSaturation", "rear_saturation"]
 
@@ -78,7 +82,7 @@ class RearLimitBand:
     low: np.ndarray
     high: np.ndarray
 
-    def allows(self, ratio) -> np.ndarray:
+    def allows(self, ratio: RealArrayLike) -> np.ndarray:
         """Whether :math:`|a\\,\\delta_f| \\le L` (broadcasts over front angles).
 
         Parameters
@@ -102,7 +106,7 @@ class RearLimitBand:
         return np.abs(a * self.front_angle) <= self.rear_limit
 
     def plot(
-        self, ax=None, *, ratio_range: tuple[float, float] = (-2.0, 2.0)
+        self, ax: Axes | None = None, *, ratio_range: tuple[float, float] = (-2.0, 2.0)
     ) -> ct.ControlPlot:
         """The band in the plane of front angle [deg] and ratio :math:`a`.
 
@@ -160,7 +164,7 @@ class RearLimitBand:
 
 
 def rear_limit_band(
-    vehicle: Vehicle, *, front_angle, rear_limit: float | None = None
+    vehicle: Vehicle, *, front_angle: RealArrayLike, rear_limit: float | None = None
 ) -> RearLimitBand:
     r"""The band of ratios :math:`|a| \le L/|\delta_f|` a rear limit allows.
 

@@ -61,11 +61,12 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
 from .gains import SteeringGains
+from .hints import RealArrayLike
 from .linear import AffinePolynomial, characteristic_coefficients, check_gains, horner
 from .plant import LateralPlant, as_plant, resolve_ratio
 from .reprs import summary_repr
@@ -79,6 +80,10 @@ from .validation import (
     check_scalar,
 )
 from .vehicle import Vehicle
+
+if TYPE_CHECKING:
+    import control as ct
+    from matplotlib.axes import Axes
 
 __all__ = [
     "ParameterBox",
@@ -317,7 +322,8 @@ class _Family:
         veh = t.vehicle
         vfields = {n: vals[n] for n in _VEHICLE_FIELDS if n in vals}
         if vfields:
-            veh = dataclasses.replace(veh, **vfields)
+            # (mypy reads the KW_ONLY marker as a field of that type)
+            veh = dataclasses.replace(veh, **cast(dict[str, Any], vfields))
         lag = vals.get("steering_lag", t.steering_lag)
         return LateralPlant(
             veh,
@@ -586,7 +592,7 @@ class BoundaryPiece:
     k1: np.ndarray
     k2: np.ndarray
     omega: np.ndarray
-    parameters: dict
+    parameters: dict[str, np.ndarray]
 
 
 def _frequencies(cp: AffinePolynomial, delay: float) -> np.ndarray:
@@ -850,10 +856,10 @@ class RobustRegion:
     k2: np.ndarray
     stable: np.ndarray
     boundary: tuple[BoundaryPiece, ...]
-    worst_parameters: tuple[dict, ...]
+    worst_parameters: tuple[dict[str, float], ...]
     failing_point: np.ndarray
     failing_delay: np.ndarray
-    samples: dict
+    samples: dict[str, np.ndarray]
     evaluations: int
 
     @property
@@ -878,7 +884,9 @@ class RobustRegion:
         a = self.ratio if not callable(self.ratio) else "a(V)"
         return f"a = {a}, " + ", ".join(parts)
 
-    def plot(self, ax=None, *, nominal: bool = True, title: bool | str = True):
+    def plot(
+        self, ax: Axes | None = None, *, nominal: bool = True, title: bool | str = True
+    ) -> ct.ControlPlot:
         r"""Draw the robust region over the chart of the box's centre.
 
         Parameters
@@ -917,7 +925,8 @@ class RobustRegion:
 
         if ax is None:
             _, ax = plt.subplots(figsize=(6.0, 5.0), layout="constrained")
-        artists, handles = [], []
+        artists: list[Any] = []
+        handles: list[Any] = []
         X, Y = np.meshgrid(self.k1, self.k2)
         if nominal:
             fam = _Family(self.plant, self.box, None)
@@ -1001,7 +1010,7 @@ def robust_stable(
     plant: Any,
     gains: SteeringGains,
     *,
-    box: ParameterBox | dict,
+    box: ParameterBox | dict[str, Any],
     samples: int = 9,
     depth: int = 6,
     model: str | None = None,
@@ -1068,9 +1077,9 @@ def robust_region(
     plant: Any,
     *,
     ratio: Any,
-    box: ParameterBox | dict,
-    k1=None,
-    k2=None,
+    box: ParameterBox | dict[str, Any],
+    k1: RealArrayLike | None = None,
+    k2: RealArrayLike | None = None,
     samples: int = 9,
     depth: int = 6,
     model: str | None = None,
@@ -1207,7 +1216,7 @@ class RobustDesign:
 
     gains: SteeringGains
     abscissa: float
-    worst: dict
+    worst: dict[str, float]
     region: RobustRegion
 
 
@@ -1232,9 +1241,9 @@ def robust_gains(
     plant: Any,
     *,
     ratio: Any,
-    box: ParameterBox | dict,
-    k1=None,
-    k2=None,
+    box: ParameterBox | dict[str, Any],
+    k1: RealArrayLike | None = None,
+    k2: RealArrayLike | None = None,
     samples: int = 3,
     starts: int = 2,
     model: str | None = None,
@@ -1325,7 +1334,7 @@ def robust_gains(
     cand = [(region.k1[ix[i]], region.k2[iy[i]]) for i in pick]
     scored = sorted(cand, key=lambda x: worst(x)[0])[:n_starts]
     span = np.array([np.ptp(region.k1), np.ptp(region.k2)])
-    best = None
+    best: Any = None
     for x0 in scored:
         res = minimize(
             objective,

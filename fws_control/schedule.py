@@ -38,9 +38,9 @@ SteeringGains`` is a schedule too (evaluated exactly, at every step).
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import control as ct
 import numpy as np
@@ -48,10 +48,16 @@ import numpy as np
 from .delay_design import most_stable_gains
 from .design import double_root_gains
 from .gains import SteeringGains
+from .hints import RealArrayLike
 from .plant import LateralPlant
 from .reprs import summary_repr
 from .validation import check_delay, check_finite
 from .vehicle import Vehicle
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
+    from .delay_design import MostStableDesign
 
 __all__ = ["GainSchedule", "schedule_gains"]
 
@@ -106,7 +112,7 @@ class GainSchedule:
     abscissa: np.ndarray | None = None
     critical_delay: np.ndarray | None = None
     delay: float | None = None
-    designs: tuple = ()
+    designs: tuple[MostStableDesign, ...] = ()
 
     def __post_init__(self) -> None:
         v = np.atleast_1d(np.asarray(check_finite("speeds", self.speeds), dtype=float))
@@ -215,12 +221,12 @@ class GainSchedule:
                 raise ValueError(f"at speed {speed:g} m/s: {exc}") from exc
         return cls(
             speeds=v,
-            k1=[float(g.k1) for g in designs],
-            k2=[float(g.k2) for g in designs],
-            ratio=[float(g.ratio) for g in designs],
+            k1=np.array([float(g.k1) for g in designs]),
+            k2=np.array([float(g.k2) for g in designs]),
+            ratio=np.array([float(g.ratio) for g in designs]),
         )
 
-    def at(self, speed) -> SteeringGains:
+    def at(self, speed: RealArrayLike) -> SteeringGains:
         r"""The gains at `speed` (scalar or array), interpolated.
 
         :math:`k_1 V^2`, :math:`k_2 V` and :math:`a` are interpolated
@@ -266,7 +272,7 @@ class GainSchedule:
             return SteeringGains(float(k1), float(k2), float(a))
         return SteeringGains(k1, k2, a)
 
-    def plot(self, ax=None) -> ct.ControlPlot:
+    def plot(self, ax: Sequence[Axes] | np.ndarray | None = None) -> ct.ControlPlot:
         """Draw k1, k2, a and the abscissa against the speed.
 
         Lines: the interpolation of :meth:`at`; markers: the designs.
@@ -362,7 +368,7 @@ def _plant_at(plant, speed: float, steering_lag, curvature, model):
 def schedule_gains(
     plant: Vehicle | LateralPlant | Callable[[float], Any],
     *,
-    speeds,
+    speeds: RealArrayLike,
     delay: float,
     ratio: float = 0.0,
     ratio_bounds: tuple[float, float] | None = None,
@@ -449,11 +455,11 @@ def schedule_gains(
             raise ValueError(f"at speed {speed:g} m/s: {exc}") from exc
     return GainSchedule(
         speeds=v,
-        k1=[float(d.gains.k1) for d in designs],
-        k2=[float(d.gains.k2) for d in designs],
-        ratio=[float(d.gains.ratio) for d in designs],
-        abscissa=[d.abscissa for d in designs],
-        critical_delay=[d.critical_delay for d in designs],
+        k1=np.array([float(d.gains.k1) for d in designs]),
+        k2=np.array([float(d.gains.k2) for d in designs]),
+        ratio=np.array([float(d.gains.ratio) for d in designs]),
+        abscissa=np.array([d.abscissa for d in designs]),
+        critical_delay=np.array([d.critical_delay for d in designs]),
         delay=tau,
         designs=tuple(designs),
     )

@@ -41,7 +41,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -282,7 +282,7 @@ class SpeedProfile:
         >>> prof.is_constant, float(prof(3.0)), float(prof.derivative(3.0))
         (True, 15.0, 0.0)
         """
-        return cls("time", speeds=[check_finite("v", v)])
+        return cls("time", speeds=np.array([check_finite("v", v)], dtype=float))
 
     @classmethod
     def braking(
@@ -409,16 +409,18 @@ class SpeedProfile:
         ndarray
         """
         x = np.asarray(x, dtype=float)
-        if self.is_constant:
-            return np.full(x.shape, self.speeds[0])
         if self.function is not None:
             return np.broadcast_to(
                 np.asarray(self.function(x), dtype=float), x.shape
             ).copy()
-        xc = np.clip(x, self.points[0], self.points[-1])
+        # without a function, __post_init__ has stored the table as arrays
+        points, speeds = cast(np.ndarray, self.points), cast(np.ndarray, self.speeds)
+        if self.is_constant:
+            return np.full(x.shape, speeds[0])
+        xc = np.clip(x, points[0], points[-1])
         if self._interp is not None:
             return np.asarray(self._interp(xc), dtype=float)
-        return np.interp(xc, self.points, self.speeds)
+        return np.interp(xc, points, speeds)
 
     def derivative(self, x: Any) -> np.ndarray:
         """``dV/dt`` [m/s²] (time) or ``dV/ds`` [1/s] (distance) at `x`.
@@ -451,23 +453,25 @@ class SpeedProfile:
             up = np.asarray(self.function(x + h), dtype=float)
             down = np.asarray(self.function(x - h), dtype=float)
             return np.broadcast_to((up - down) / (2.0 * h), x.shape).copy()
-        outside = (x < self.points[0]) | (x > self.points[-1])
+        # without a function, __post_init__ has stored the table as arrays
+        points, speeds = cast(np.ndarray, self.points), cast(np.ndarray, self.speeds)
+        outside = (x < points[0]) | (x > points[-1])
         if self._interp is not None:
             d = np.asarray(self._interp(x, 1), dtype=float)
         else:
             # the slope of the segment on the right (the braking step starts
             # at its time)
             k = np.clip(
-                np.searchsorted(self.points, x, side="right") - 1,
+                np.searchsorted(points, x, side="right") - 1,
                 0,
-                self.points.size - 2,
+                points.size - 2,
             )
-            d = np.diff(self.speeds)[k] / np.diff(self.points)[k]
+            d = np.diff(speeds)[k] / np.diff(points)[k]
         return np.where(outside, 0.0, d)
 
     def __repr__(self) -> str:
         if self.is_constant:
-            return f"SpeedProfile.constant({float(self.speeds[0])!r})"
+            return f"SpeedProfile.constant({float(cast(np.ndarray, self.speeds)[0])!r})"
         if self.function is not None:
             return f"SpeedProfile.from_function({self.function!r}, of={self.of!r})"
         return (

@@ -45,8 +45,9 @@ returned point beats in both objectives is dropped (and counted).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import control as ct
 import numpy as np
@@ -57,6 +58,9 @@ from .gains import SteeringGains
 from .plant import as_plant
 from .reprs import summary_repr
 from .validation import check_delay, check_scalar
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
 
 __all__ = ["ParetoFront", "pareto_front"]
 
@@ -122,7 +126,7 @@ class ParetoFront:
     dropped: int
     evaluations: int
 
-    def plot(self, ax=None) -> ct.ControlPlot:
+    def plot(self, ax: Sequence[Axes] | np.ndarray | None = None) -> ct.ControlPlot:
         """Both fronts: decay rate against delay margin and against effort.
 
         Parameters
@@ -152,7 +156,7 @@ class ParetoFront:
         if ax is None:
             fig, axes = plt.subplots(1, 2, figsize=(9.0, 3.8), layout="constrained")
         else:
-            axes = np.ravel(ax)
+            axes = np.ravel(np.asarray(ax, dtype=object))
             if axes.size != 2:
                 raise ValueError(f"ax must hold two axes, got {axes.size}")
             fig = axes[0].figure
@@ -441,7 +445,9 @@ def pareto_front(
         design=design,
         delay=tau,
         ratio=a,
-        margin_gains=SteeringGains(m_gains.k1[keep_m], m_gains.k2[keep_m], a),
+        margin_gains=SteeringGains(
+            np.asarray(m_gains.k1)[keep_m], np.asarray(m_gains.k2)[keep_m], a
+        ),
         margin_decay=m_decay[keep_m],
         margin=margin[keep_m],
         effort_gains=SteeringGains(np.array(e_k1)[keep_e], np.array(e_k2)[keep_e], a),

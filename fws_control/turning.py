@@ -153,7 +153,7 @@ def steady_turn(
         )
         centre = np.stack([-t * np.sin(dr), t * np.cos(dr)], axis=-1)
     centre = np.where(np.isfinite(centre), centre, np.inf)
-    return TurningGeometry(df, dr, kappa, rear, cg, centre)
+    return TurningGeometry(df, dr, np.asarray(kappa), rear, cg, centre)
 
 
 def turning_radius(

@@ -7,11 +7,12 @@ value and the valid range, as the design card asks.
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
 from .deprecation import LEGACY_MODELS, warn_deprecated
+from .hints import ModelName
 
 __all__ = [
     "check_real",
@@ -229,7 +230,7 @@ def check_type(name: str, value: Any, cls: type, what: str | None = None) -> Any
     return value
 
 
-def check_model(model: Any, *, name: str = "model") -> str:
+def check_model(model: Any, *, name: str = "model") -> ModelName:
     """Return `model` if it names a known linearisation (:data:`MODELS`).
 
     The deprecated ``"exact"`` is returned as ``"kinematic"``, with a
@@ -238,10 +239,10 @@ def check_model(model: Any, *, name: str = "model") -> str:
     if isinstance(model, str) and model in LEGACY_MODELS:
         new = LEGACY_MODELS[model]
         warn_deprecated(f"{name}={model!r}", f"{name}={new!r}")
-        return new
+        return cast("ModelName", new)
     if not isinstance(model, str) or model not in MODELS:
         raise ValueError(f"{name} must be one of {MODELS}, got {_short(model)}")
-    return model
+    return cast("ModelName", model)
 
 
 def _float_or_nan(value: Any) -> float:

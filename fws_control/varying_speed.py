@@ -88,19 +88,23 @@ from __future__ import annotations
 import dataclasses
 import math
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import control as ct
 import numpy as np
 
 from .gains import SteeringGains
+from .hints import RealArrayLike
 from .plant import LateralPlant, loop_matrices
 from .reprs import summary_repr
 from .schedule import GainSchedule
 from .validation import check_finite
 from .vehicle import Vehicle
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
 
 __all__ = ["SpeedCertificate", "speed_certificate"]
 
@@ -196,7 +200,7 @@ class SpeedCertificate:
     # the loop's matrices, for plot(); set by speed_certificate
     _cells: Any = dataclasses.field(default=None, init=False, repr=False)
 
-    def P_at(self, speed) -> np.ndarray:
+    def P_at(self, speed: RealArrayLike) -> np.ndarray:
         r""":math:`\mathbf P(V)` at `speed` (piecewise affine between nodes).
 
         Parameters
@@ -229,7 +233,7 @@ class SpeedCertificate:
         t = t[..., np.newaxis, np.newaxis]
         return (1.0 - t) * self.P[i] + t * self.P[i + 1]
 
-    def plot(self, ax=None) -> ct.ControlPlot:
+    def plot(self, ax: Sequence[Axes] | np.ndarray | None = None) -> ct.ControlPlot:
         r"""Draw the certificate: :math:`\mathbf P(V)` and its decay.
 
         Left: the eigenvalues of :math:`\mathbf P(V)` [-]. Right: the

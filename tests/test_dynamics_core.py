@@ -116,6 +116,9 @@ def test_missing_data_is_named():
         dynamics.require_dynamics(VEH, tyre="pacejka")
     with pytest.raises(TypeError, match="vehicle must be"):
         dynamics.require_dynamics("car")
+    # the slip angles need only G's position: without it, the field is named
+    with pytest.raises(ValueError, match="rear_to_cg is None, but the slip angles"):
+        dynamics.slip_angles(fws.Vehicle(2.7), 0.0, 0.0, 0.1, 0.0, speed=10.0)
 
 
 @pytest.mark.parametrize(

@@ -20,12 +20,15 @@ on the ratio ``a`` or the model, so the margin is the same for every ``a``
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import control as ct
 import numpy as np
 
 from ..charts import delay_margin_chart
 from ..gains import SteeringGains
+from ..hints import ModelName
 from ..layout import grid_margins
 from ..plant import LateralPlant
 from ..vehicle import Vehicle
@@ -36,6 +39,9 @@ from .data import (
     REALISTIC_DELAY,
     REALISTIC_STEERING_LAG,
 )
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
 
 __all__ = ["PAPER_POLES", "delay_margin_table", "plot_actuator"]
 
@@ -51,7 +57,7 @@ PAPER_POLES = (-1.0, -2.0, -3.0)
 def delay_margin_table(
     *,
     vehicle: Vehicle | None = None,
-    poles=PAPER_POLES,
+    poles: Sequence[float] = PAPER_POLES,
     delay: float = REALISTIC_DELAY,
     steering_lag: float = REALISTIC_STEERING_LAG,
 ) -> str:
@@ -111,11 +117,11 @@ def delay_margin_table(
 
 def plot_actuator(
     *,
-    model: str = "kinematic",
+    model: ModelName = "kinematic",
     quick: bool = False,
     delay: float = REALISTIC_DELAY,
     steering_lag: float = REALISTIC_STEERING_LAG,
-    ax=None,
+    ax: Sequence[Axes] | np.ndarray | None = None,
 ) -> ct.ControlPlot:
     r"""The paper's designs with an input delay and a steering lag (extra figure).
 
@@ -226,7 +232,7 @@ def plot_actuator(
                 else "ideal steering"
             )
             if r.status[i] != "ok":
-                label += f" ({r.status[i]} at {r.t_stop[i]:.3g} s)"
+                label += f" ({r.status[i]} at {np.asarray(r.t_stop)[i]:.3g} s)"
             ax_i.plot(r.t, r.e[i], style, color="C3" if act else "C0", label=label)
         ax_i.set_xlabel("time t [s]")
         ax_i.set_ylabel("lateral error e [m]")

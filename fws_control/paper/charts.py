@@ -9,7 +9,9 @@ include the curvatures of the simulations (0.1 and 0.01 1/m).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import control as ct
 import numpy as np
@@ -17,12 +19,16 @@ import numpy as np
 from ..charts import StabilityChart, stability_chart
 from ..design import double_root_gains
 from ..exceptions import UncontrollableError
+from ..hints import ModelName
 from ..layout import grid_margins
 from ..plant import LateralPlant
 from ..reprs import summary_repr
 from ..validation import check_model
 from ..vehicle import Vehicle
 from .data import PAPER_CURVATURES, PAPER_VEHICLE
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
 
 __all__ = ["ChartPanel", "paper_figure_panels", "plot_paper_figure"]
 
@@ -117,10 +123,10 @@ def _build_panel(
 def paper_figure_panels(
     n: int,
     *,
-    model: str = "kinematic",
+    model: ModelName = "kinematic",
     vehicle: Vehicle | None = None,
     pole: float = -1.0,
-    curvatures=None,
+    curvatures: Sequence[float] | None = None,
     npoints: int = _DEFAULT_POINTS,
 ) -> list[ChartPanel]:
     r"""The data behind Figs. 2, 3 or 4 of the paper.
@@ -307,12 +313,12 @@ def _draw_panel(ax, panel: ChartPanel, legend: bool = True, notes_here: bool = T
 def plot_paper_figure(
     n: int,
     *,
-    model: str = "kinematic",
+    model: ModelName = "kinematic",
     vehicle: Vehicle | None = None,
     pole: float = -1.0,
-    curvatures=None,
+    curvatures: Sequence[float] | None = None,
     npoints: int = _DEFAULT_POINTS,
-    ax=None,
+    ax: Sequence[Axes] | np.ndarray | None = None,
 ) -> ct.ControlPlot:
     r"""Redraw Fig. 2, 3 or 4 of the paper as one matplotlib figure.
 
@@ -380,7 +386,7 @@ def plot_paper_figure(
         fig = axs.flat[0].figure
     axes = list(axs.flat)
     lines = np.empty(shape, dtype=object)
-    handles = []
+    handles: list[Any] = []
     all_notes = []
     for i, (a, panel) in enumerate(zip(axes, panels, strict=False)):
         drawn, notes = _draw_panel(a, panel, legend=n == 2, notes_here=n == 2)

@@ -42,7 +42,10 @@ PAPER_CURVATURES = {3: (0.0, 0.05, 0.1, 0.2), 4: (0.0, 0.01, 0.02, 0.05)}
 FIG5_RATIOS = np.round(np.linspace(-1.5, 1.5, 61), 12)
 
 #: Default double roots of Fig. 5 per speed [1/s].
-FIG5_POLES = {5.0: (-1.0, -2.0), 20.0: (-1.0, -2.0, -3.0)}
+FIG5_POLES: dict[float, tuple[float, ...]] = {
+    5.0: (-1.0, -2.0),
+    20.0: (-1.0, -2.0, -3.0),
+}
 
 #: Ratios of Figs. 6-9.
 FIG6_TO_9_RATIOS = (-1.0, -0.5, 0.0, 0.5, 1.0)

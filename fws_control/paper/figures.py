@@ -18,16 +18,18 @@ import gc
 import math
 import os
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, cast
 
 import control as ct
 import numpy as np
 
 from ..design import UncontrollableError, double_root_gains
 from ..files import atomic_write, lock_folder, remove_stale_temporaries
+from ..hints import ModelName
 from ..layout import grid_margins
 from ..linear import closed_loop
 from ..plant import LateralPlant
@@ -44,6 +46,10 @@ from .data import (
     REALISTIC_DELAY,
     TABLE_RATIOS,
 )
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 __all__ = [
     "FigureSpec",
@@ -80,7 +86,7 @@ class FigureSpec:
 
 
 def _chart_figure(n):
-    def make(model: str = "kinematic", quick: bool = False):
+    def make(model: ModelName = "kinematic", quick: bool = False):
         return plot_paper_figure(n, model=model, npoints=201 if quick else 401).figure
 
     return make
@@ -89,9 +95,9 @@ def _chart_figure(n):
 def plot_root_loci(
     *,
     vehicle: Vehicle | None = None,
-    model: str = "kinematic",
+    model: ModelName = "kinematic",
     quick: bool = False,
-    ax=None,
+    ax: Sequence[Axes] | np.ndarray | None = None,
 ) -> ct.ControlPlot:
     r"""Root loci of the :math:`\lambda_0 = -1` designs (extra figure).
 
@@ -153,7 +159,7 @@ def plot_root_loci(
         fig = axes[0].figure
     n = 200 if quick else 800
 
-    ax = axes[0]
+    panel = axes[0]
     # For any double-root design the loop is L(s) = (-2 l0 s + l0^2 - V^2 k^2)
     # / (s^2 + V^2 k^2): it depends on V*kappa only, not on a or the model.
     for i, (V, kap) in enumerate(((5.0, 0.0), (20.0, 0.01), (5.0, 0.1))):
@@ -163,27 +169,27 @@ def plot_root_loci(
         rl = ct.root_locus_map(loop, gains=refined_scale(0.0, 4.0, n))
         lab = rf"V = {V:g} m/s, $\kappa$ = {kap:g} 1/m"
         for j, branch in enumerate(rl.loci.T):
-            ax.plot(
+            panel.plot(
                 branch.real, branch.imag, color=f"C{i}", label=lab if j == 0 else None
             )
-        ax.plot(rl.loci[0].real, rl.loci[0].imag, "x", color=f"C{i}", ms=8)
+        panel.plot(rl.loci[0].real, rl.loci[0].imag, "x", color=f"C{i}", ms=8)
         at1 = ct.root_locus_map(loop, gains=[1.0]).loci[0]
-        ax.plot(at1.real, at1.imag, "s", color=f"C{i}", mec="k", ms=6)
+        panel.plot(at1.real, at1.imag, "s", color=f"C{i}", mec="k", ms=6)
         z = loop.zeros()
-        ax.plot(z.real, z.imag, "o", mfc="none", color=f"C{i}", ms=8)
-    ax.plot([], [], "x", color="0.3", label="g = 0 (open loop)")
-    ax.plot([], [], "o", mfc="none", color="0.3", label="zero of L(s)")
-    ax.plot([], [], "s", color="0.6", mec="k", label=r"g = 1 ($\lambda_0 = -1$)")
-    ax.set_title(
+        panel.plot(z.real, z.imag, "o", mfc="none", color=f"C{i}", ms=8)
+    panel.plot([], [], "x", color="0.3", label="g = 0 (open loop)")
+    panel.plot([], [], "o", mfc="none", color="0.3", label="zero of L(s)")
+    panel.plot([], [], "s", color="0.6", mec="k", label=r"g = 1 ($\lambda_0 = -1$)")
+    panel.set_title(
         "(a) gain locus: poles of $g\\,(k_1, k_2)$, g in [0, 4], for the\n"
         r"$\lambda_0 = -1$ designs (the same for every a: L(s) depends on V$\kappa$)",
         fontsize=10,
     )
-    ax.set_xlabel("Re [1/s]")
-    ax.set_ylabel("Im [1/s]")
+    panel.set_xlabel("Re [1/s]")
+    panel.set_ylabel("Im [1/s]")
 
-    ax = axes[1]
-    kap = np.linspace(0.0, 0.4, n)
+    panel = axes[1]
+    kappas = np.linspace(0.0, 0.4, n)
     for i, a in enumerate((-1.0, 0.0, 0.5)):
         plant = LateralPlant(vehicle, speed=5.0, model="kinematic")
         g0 = double_root_gains(
@@ -193,64 +199,68 @@ def plot_root_loci(
             plant,
             g0,
             parameter="curvature",
-            values=kap,
+            values=kappas,
             redesign_pole=-1.0,
             design_model="paper",
         )
         for j, branch in enumerate(pz.loci.T):
-            ax.plot(
-                kap,
+            panel.plot(
+                kappas,
                 branch.real,
                 color=f"C{i}",
                 ls="-" if j == 0 else "--",
                 label=f"a = {a:g}" if j == 0 else None,
             )
-    ax.axhline(-1.0, color="k", lw=1.0, ls=":", label=r"target $\lambda_0 = -1$")
-    ax.axvline(0.1, color="0.6", lw=0.8)
-    ax.text(
+    panel.axhline(-1.0, color="k", lw=1.0, ls=":", label=r"target $\lambda_0 = -1$")
+    panel.axvline(0.1, color="0.6", lw=0.8)
+    panel.text(
         0.102,
         0.97,
         r"$\kappa$ = 0.1 (Fig. 7)",
         va="top",
-        transform=ax.get_xaxis_transform(),
+        transform=panel.get_xaxis_transform(),
         fontsize=8,
     )
-    ax.plot([], [], "k-", label="pole 1 (solid), pole 2 (dashed)")
-    ax.set_title(
+    panel.plot([], [], "k-", label="pole 1 (solid), pole 2 (dashed)")
+    panel.set_title(
         "(b) real parts of the exact-model poles with the paper-model\n"
         r"$\lambda_0 = -1$ gains (eqs. 43-46), V = 5 m/s (parameter locus)",
         fontsize=10,
     )
-    ax.set_xlabel(r"curvature $\kappa$ [1/m]")
-    ax.set_ylabel("Re [1/s]")
+    panel.set_xlabel(r"curvature $\kappa$ [1/m]")
+    panel.set_ylabel("Re [1/s]")
 
-    ax = axes[2]
+    panel = axes[2]
     plant = LateralPlant(vehicle, speed=20.0, model=model)
     g = double_root_gains(plant, ratio=0.5, pole=-1.0)
     ratios = np.linspace(-1.5, 0.99, n)
     pz = parameter_locus(plant, g, parameter="ratio", values=ratios)
     for j, branch in enumerate(pz.loci.T):
-        ax.plot(
+        panel.plot(
             branch.real,
             branch.imag,
             color="C3",
             label="poles, a from -1.5 to 0.99" if j == 0 else None,
         )
-    ax.plot(pz.loci[0].real, pz.loci[0].imag, "x", color="C3", ms=8, label="a = -1.5")
-    ax.plot(pz.loci[-1].real, pz.loci[-1].imag, ">", color="C3", ms=7, label="a = 0.99")
+    panel.plot(
+        pz.loci[0].real, pz.loci[0].imag, "x", color="C3", ms=8, label="a = -1.5"
+    )
+    panel.plot(
+        pz.loci[-1].real, pz.loci[-1].imag, ">", color="C3", ms=7, label="a = 0.99"
+    )
     at05 = parameter_locus(plant, g, parameter="ratio", values=[0.5]).loci[0]
-    ax.plot(at05.real, at05.imag, "s", color="C3", mec="k", label="a = 0.5 (design)")
-    ax.set_title(
+    panel.plot(at05.real, at05.imag, "s", color="C3", mec="k", label="a = 0.5 (design)")
+    panel.set_title(
         f"(c) ratio locus, gains k1 = {float(g.k1):.3f}, k2 = {float(g.k2):.3f} "
         "fixed\nV = 20 m/s, straight path",
         fontsize=10,
     )
-    ax.set_xlabel("Re [1/s]")
-    ax.set_ylabel("Im [1/s]")
-    for ax in axes:
-        ax.axhline(0.0, color="0.5", lw=0.8)
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8, loc="lower left" if ax is axes[1] else "upper left")
+    panel.set_xlabel("Re [1/s]")
+    panel.set_ylabel("Im [1/s]")
+    for panel in axes:
+        panel.axhline(0.0, color="0.5", lw=0.8)
+        panel.grid(alpha=0.3)
+        panel.legend(fontsize=8, loc="lower left" if panel is axes[1] else "upper left")
     fig.suptitle("Root loci of the structured 4WS loop", fontsize=13)
     lines = np.empty((1, 3), dtype=object)
     for i, a in enumerate(axes):
@@ -258,7 +268,7 @@ def plot_root_loci(
     return ct.ControlPlot(lines, np.array([list(axes)], dtype=object), fig)
 
 
-def _comparison_figure(model: str = "kinematic", quick: bool = False):
+def _comparison_figure(model: ModelName = "kinematic", quick: bool = False):
     from ..comparison import compare_linear_nonlinear
 
     plant = LateralPlant(PAPER_VEHICLE, speed=5.0, curvature=0.1, model=model)
@@ -273,7 +283,7 @@ def _comparison_figure(model: str = "kinematic", quick: bool = False):
     return cmp.plot().figure
 
 
-def _turning_figure(model: str = "kinematic", quick: bool = False):
+def _turning_figure(model: ModelName = "kinematic", quick: bool = False):
     return plot_turning_radius(PAPER_VEHICLE).figure
 
 
@@ -290,7 +300,7 @@ _FIG5_TITLES = {
 
 
 @lru_cache(maxsize=4)
-def _fig5_data(model: str, quick: bool):
+def _fig5_data(model: ModelName, quick: bool):
     from .data import FIG5_RATIOS
     from .scenarios import fig5_peak_lateral_accel
 
@@ -302,7 +312,7 @@ def _fig5_data(model: str, quick: bool):
 
 
 @lru_cache(maxsize=4)
-def _fig6_to_9_data(model: str, quick: bool):
+def _fig6_to_9_data(model: ModelName, quick: bool):
     from .scenarios import fig6_to_9_responses
 
     return fig6_to_9_responses(model, dt=0.05 if quick else 0.01, progress=False)
@@ -311,7 +321,7 @@ def _fig6_to_9_data(model: str, quick: bool):
 _G = 9.81  # m/s^2
 
 
-def plot_fig5(model: str = "kinematic", quick: bool = False):
+def plot_fig5(model: ModelName = "kinematic", quick: bool = False) -> Figure:
     r"""Fig. 5: peak absolute lateral acceleration of G versus the ratio ``a``.
 
     One panel per scenario, one curve per double root :math:`\lambda_0`
@@ -446,7 +456,7 @@ def plot_fig5(model: str = "kinematic", quick: bool = False):
     return fig
 
 
-def _responses_figure(n: int, model: str, quick: bool):
+def _responses_figure(n: int, model: ModelName, quick: bool):
     import matplotlib.pyplot as plt
 
     sr = _fig6_to_9_data(model, quick)[n]
@@ -619,13 +629,13 @@ def _clip_initial_spike(ax, t, values, ratios, frac: float = 0.03) -> None:
 
 
 def _response_maker(n):
-    def make(model: str = "kinematic", quick: bool = False):
+    def make(model: ModelName = "kinematic", quick: bool = False):
         return _responses_figure(n, model, quick)
 
     return make
 
 
-def _fig5_table(model: str, quick: bool) -> str:
+def _fig5_table(model: ModelName, quick: bool) -> str:
     data = _fig5_data(model, quick)
     show = (-1.5, -1.0, -0.5, 0.0, 0.5, 1.0, 1.5)
     lines = []
@@ -736,7 +746,9 @@ FIGURES: dict[str, FigureSpec] = {
 }
 
 
-def make_figure(name: str, *, model: str = "kinematic", quick: bool = False):
+def make_figure(
+    name: str, *, model: ModelName = "kinematic", quick: bool = False
+) -> Figure:
     """Draw one figure of :data:`FIGURES` by name.
 
     Parameters
@@ -768,7 +780,7 @@ def make_figure(name: str, *, model: str = "kinematic", quick: bool = False):
     return _make(name, model, quick)
 
 
-def _make(name: str, model: str, quick: bool):
+def _make(name: str, model: ModelName, quick: bool):
     """``FIGURES[name].make`` with the titles at a fixed height.
 
     Matplotlib lifts an axes title above top tick labels and a y offset
@@ -800,8 +812,8 @@ def gains_table(
     *,
     vehicle: Vehicle | None = None,
     pole: float = -1.0,
-    ratios=TABLE_RATIOS,
-    cases=None,
+    ratios: Sequence[float] = TABLE_RATIOS,
+    cases: Sequence[tuple[float, float]] | None = None,
 ) -> str:
     r"""Markdown table of the double-root gains in both linearisations.
 
@@ -991,13 +1003,13 @@ def _collector_per_figure():
 
 
 def reproduce(
-    out: str | os.PathLike,
+    out: str | os.PathLike[str],
     *,
-    model: str = "kinematic",
+    model: ModelName = "kinematic",
     quick: bool = False,
     progress: bool = True,
     dpi: int = 110,
-    names=None,
+    names: Sequence[str] | None = None,
     format: str = "png",
 ) -> ReproduceResult:
     """Write every figure of :data:`FIGURES` (PNG, SVG or PDF) and ``summary.md``.
@@ -1084,7 +1096,7 @@ def reproduce(
                 fig = _make(name, model, quick)
                 path = out / f"{name}.{format}"
                 try:
-                    with atomic_write(path) as fh, plt.rc_context(_DRAW_RC):
+                    with atomic_write(path) as fh, plt.rc_context(cast(Any, _DRAW_RC)):
                         fig.savefig(fh, format=format, dpi=int(dpi), **options)
                 finally:
                     plt.close(fig)
@@ -1101,7 +1113,7 @@ def reproduce(
     return ReproduceResult(out, tuple(written), summary)
 
 
-def _summary_text(model: str, written, quick: bool = False) -> str:
+def _summary_text(model: ModelName, written, quick: bool = False) -> str:
     lines = [
         "# fws-control reproduce: summary",
         "",

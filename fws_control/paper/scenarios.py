@@ -28,7 +28,7 @@ there with status ``"singular_steering"`` (see :func:`simulate`).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -38,6 +38,7 @@ from scipy.optimize import brentq
 from ..deprecation import legacy_keyword, reject_unknown
 from ..design import UncontrollableError, double_root_gains
 from ..gains import SteeringGains
+from ..hints import ModelName, RealArrayLike
 from ..paths import Arc, Straight
 from ..plant import LateralPlant
 from ..reprs import summary_repr
@@ -97,7 +98,7 @@ class Scenario:
     figure: int
 
     @property
-    def path(self):
+    def path(self) -> Straight | Arc:
         """The reference path: ``Straight()`` or ``Arc(curvature)``."""
         if self.curvature == 0.0:
             return Straight()
@@ -112,7 +113,7 @@ PAPER_SCENARIOS: dict[str, Scenario] = {
 }
 
 
-def paper_scenario(name: str) -> Scenario:
+def paper_scenario(name: Scenario | str) -> Scenario:
     """The scenario called `name` (see :data:`PAPER_SCENARIOS`).
 
     Examples
@@ -134,9 +135,9 @@ def paper_scenario(name: str) -> Scenario:
 
 def scenario_gains(
     scenario: Scenario | str,
-    ratios,
-    pole,
-    model: str = "kinematic",
+    ratios: RealArrayLike,
+    pole: RealArrayLike,
+    model: ModelName = "kinematic",
     vehicle: Vehicle = PAPER_VEHICLE,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Double-root gains for each ratio, with uncontrollable designs marked.
@@ -175,9 +176,9 @@ def scenario_gains(
     )
     plant = LateralPlant(vehicle, speed=sc.speed, curvature=sc.curvature, model=model)
     a_flat, lam_flat = a.ravel(), lam.ravel()
-    k1 = np.full(a_flat.shape, np.nan)
-    k2 = np.full(a_flat.shape, np.nan)
-    ok = np.ones(a_flat.shape, dtype=bool)
+    k1: np.ndarray = np.full(a_flat.shape, np.nan)
+    k2: np.ndarray = np.full(a_flat.shape, np.nan)
+    ok: np.ndarray = np.ones(a_flat.shape, dtype=bool)
 
     def design(idx: np.ndarray) -> None:
         # One vectorised design for all of idx; double_root_gains refuses
@@ -281,7 +282,7 @@ class ScenarioResponses:
     scenario: Scenario
     ratios: np.ndarray
     pole: float
-    model: str
+    model: ModelName
     feedforward: bool
     result: SimulationResult = field(repr=False)
 
@@ -290,7 +291,7 @@ def scenario_responses(
     scenario: Scenario | str,
     ratios: Sequence[float] = FIG6_TO_9_RATIOS,
     pole: float = -1.0,
-    model: str = "kinematic",
+    model: ModelName = "kinematic",
     *,
     feedforward: bool | None = None,
     duration: float | None = None,
@@ -298,7 +299,7 @@ def scenario_responses(
     vehicle: Vehicle = PAPER_VEHICLE,
     delay: float = 0.0,
     steering_lag: float | None = None,
-    client=None,
+    client: Any = None,
     progress: bool | None = None,
     **kwargs: Any,
 ) -> ScenarioResponses:
@@ -347,23 +348,23 @@ def scenario_responses(
     2.0
     """
     sc = paper_scenario(scenario)
-    ratios = np.atleast_1d(np.asarray(check_finite("ratios", ratios), dtype=float))
+    a = np.atleast_1d(np.asarray(check_finite("ratios", ratios), dtype=float))
     ff = sc.feedforward if feedforward is None else bool(feedforward)
     dur = sc.duration if duration is None else duration
     steering_lag = legacy_keyword(
         kwargs, "actuator_time_constant", "steering_lag", steering_lag
     )
     reject_unknown("scenario_responses", kwargs)
-    k1, k2, ok = scenario_gains(sc, ratios, pole, model, vehicle)
+    k1, k2, ok = scenario_gains(sc, a, pole, model, vehicle)
     res = _simulate_designs(
-        sc, vehicle, ratios, k1, k2, ok, ff, dur, dt, client, progress,
+        sc, vehicle, a, k1, k2, ok, ff, dur, dt, client, progress,
         delay, steering_lag,
     )  # fmt: skip
-    return ScenarioResponses(sc, ratios, float(pole), model, ff, res)
+    return ScenarioResponses(sc, a, float(pole), model, ff, res)
 
 
 def fig6_to_9_responses(
-    model: str = "kinematic",
+    model: ModelName = "kinematic",
     ratios: Sequence[float] = FIG6_TO_9_RATIOS,
     pole: float = -1.0,
     *,
@@ -453,7 +454,7 @@ class PeakSweep:
     """
 
     scenario: Scenario
-    model: str
+    model: ModelName
     ratios: np.ndarray
     poles: np.ndarray
     peak_lateral_accel: np.ndarray
@@ -467,16 +468,16 @@ class PeakSweep:
 
 
 def fig5_peak_lateral_accel(
-    model: str = "kinematic",
-    ratios=FIG5_RATIOS,
-    poles: dict[float, Sequence[float]] | None = None,
+    model: ModelName = "kinematic",
+    ratios: RealArrayLike = FIG5_RATIOS,
+    poles: Mapping[float, Sequence[float]] | None = None,
     *,
     duration: float | None = None,
     dt: float = 0.01,
     vehicle: Vehicle = PAPER_VEHICLE,
     delay: float = 0.0,
     steering_lag: float | None = None,
-    client=None,
+    client: Any = None,
     progress: bool | None = None,
     **kwargs: Any,
 ) -> dict[str, PeakSweep]:
@@ -563,8 +564,8 @@ def fig5_peak_lateral_accel(
             peak_time=np.where(good, exact.lateral_accel.time, np.nan).reshape(shape),
             peak_delta_f=peak("delta_f").reshape(shape),
             peak_delta_r=peak("delta_r").reshape(shape),
-            status=res.status.reshape(shape),
-            t_stop=res.t_stop.reshape(shape),
+            status=np.asarray(res.status).reshape(shape),
+            t_stop=np.asarray(res.t_stop).reshape(shape),
             k1=k1,
             k2=k2,
         )
@@ -628,7 +629,7 @@ def _steady_state_scalar(f, kappa, k1, k2, a):
 
 
 def feedback_only_steady_state(
-    vehicle: Vehicle, gains: SteeringGains, *, curvature
+    vehicle: Vehicle, gains: SteeringGains, *, curvature: RealArrayLike
 ) -> SteadyState:
     r"""Steady state of the feedback-only controller on a circle.
 
@@ -679,7 +680,7 @@ def feedback_only_steady_state(
     for idx in np.ndindex(k1.shape):
         r = _steady_state_scalar(vehicle.wheelbase, kappa, k1[idx], k2[idx], a[idx])
         if r is not None:
-            out[(slice(None), *idx)] = r
+            out[(slice(None),) + idx] = r
             exists[idx] = True
 
     def cast(v):
@@ -715,7 +716,7 @@ def feedback_only_curve(
     scenario: Scenario | str = "curve_5",
     ratios: Sequence[float] = FIG6_TO_9_RATIOS,
     pole: float = -1.0,
-    model: str = "kinematic",
+    model: ModelName = "kinematic",
     *,
     duration: float | None = None,
     dt: float = 0.01,
@@ -748,15 +749,19 @@ def feedback_only_curve(
         vehicle=vehicle,
     )
     g = resp.result
-    ok = np.isfinite(g.k1)
+    k1, k2, a = np.asarray(g.k1), np.asarray(g.k2), np.asarray(g.ratio)
+    ok = np.isfinite(k1)
     ss_all = SteadyState(
-        *(np.full(g.k1.shape, np.nan) for _ in range(4)),
-        exists=np.zeros(g.k1.shape, dtype=bool),
+        np.full(k1.shape, np.nan),
+        np.full(k1.shape, np.nan),
+        np.full(k1.shape, np.nan),
+        np.full(k1.shape, np.nan),
+        exists=np.zeros(k1.shape, dtype=bool),
     )
     if np.any(ok):
         ss = feedback_only_steady_state(
             vehicle,
-            SteeringGains(g.k1[ok], g.k2[ok], g.ratio[ok]),
+            SteeringGains(k1[ok], k2[ok], a[ok]),
             curvature=sc.curvature,
         )
         for name in ("e", "theta", "delta_f", "delta_r", "exists"):

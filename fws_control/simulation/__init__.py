@@ -21,7 +21,7 @@ becomes singular (``status`` :data:`STATUS_SINGULAR_STEERING`,
 (:data:`STATUS_END_OF_PATH`); the data up to that time are kept.
 """
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from .engine import (
     SIGNALS,
@@ -59,7 +59,7 @@ _REFERENCE = frozenset(
 )
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> Any:
     if name in _REFERENCE:
         from . import reference
 

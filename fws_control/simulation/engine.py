@@ -123,7 +123,7 @@ STATUSES = (
 )
 
 #: The scipy solvers accepted by name as ``method``.
-SOLVERS = {
+SOLVERS: dict[str, type[OdeSolver]] = {
     "DOP853": DOP853,
     "RK45": RK45,
     "RK23": RK23,
@@ -794,7 +794,7 @@ class _History:
         self._table: _Dop853Table | None = None
         self._table_built = False
 
-    def add(self, t_old: float, t_new: float, dense, runs: np.ndarray) -> None:
+    def add(self, t_old: float, t_new: float, dense: Any, runs: np.ndarray) -> None:
         self.starts.append(t_old)
         self.pieces.append((t_new, dense, runs))
         self._table, self._table_built = None, False
@@ -877,7 +877,18 @@ class _Dop853Table:
     step, so the values are the same to the last bit.
     """
 
-    def __init__(self, m, keys, base, width, t_old, h, F, y_old, n_runs):
+    def __init__(
+        self,
+        m: int,
+        keys: np.ndarray,
+        base: np.ndarray,
+        width: np.ndarray,
+        t_old: np.ndarray,
+        h: np.ndarray,
+        F: np.ndarray,
+        y_old: np.ndarray,
+        n_runs: int,
+    ) -> None:
         self.m = m  # state rows
         self.keys = keys  # step * n_runs + run, ascending
         self.base = base  # first column of each entry (component 0)
@@ -887,7 +898,9 @@ class _Dop853Table:
         self.n_runs = n_runs
 
     @classmethod
-    def build(cls, pieces, shape):
+    def build(
+        cls, pieces: list[tuple[float, Any, np.ndarray]], shape: tuple[int, ...]
+    ) -> _Dop853Table | None:
         """The table, or None if a step is not DOP853 or it would be too big."""
         from scipy.integrate._ivp.rk import Dop853DenseOutput
 
@@ -928,7 +941,9 @@ class _Dop853Table:
             n_runs=n_runs,
         )
 
-    def evaluate(self, runs, times, step) -> np.ndarray:
+    def evaluate(
+        self, runs: np.ndarray, times: np.ndarray, step: np.ndarray
+    ) -> np.ndarray:
         """States ``(m, len(runs))`` of run ``runs[j]`` at ``times[j]``.
 
         Each pair in step ``step[j]``, or the latest earlier step that holds
@@ -1474,7 +1489,7 @@ def integrate(
     rtol: float = 1e-10,
     atol: float = 1e-12,
     delay: float = 0.0,
-    solution: list | None = None,
+    solution: list[DenseSolution] | None = None,
     model: str = "kinematic",
     tyre: str = "linear",
     body_state: np.ndarray | None = None,

@@ -14,7 +14,7 @@ for loops the engine does not cover.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import control as ct
 import numpy as np
@@ -25,6 +25,7 @@ from ..controllers import path_tracking_controller, steering_actuator
 from ..deprecation import legacy_keyword, reject_unknown
 from ..dynamics import dynamic_global_model
 from ..gains import SteeringGains
+from ..hints import RealArrayLike, TyreName
 from ..models import global_frame_model
 from ..paths import Path
 from ..validation import check_delay, check_nonzero, check_scalar, check_type
@@ -98,7 +99,7 @@ def closed_loop_system(
     delay: float = 0.0,
     pade_order: int = DEFAULT_PADE_ORDER,
     model: str = "kinematic",
-    tyre: str = "linear",
+    tyre: TyreName = "linear",
     **kwargs: Any,
 ) -> ct.InterconnectedSystem:
     r"""The closed loop as a python-control interconnection (the reference).
@@ -181,7 +182,7 @@ def closed_loop_system(
     if steering_lag is not None:
         steering_lag = check_scalar("steering_lag", steering_lag)
     tau = resolve_time_constant(vehicle, steering_lag)
-    model, tyre = check_model(vehicle, model, tyre)
+    model, _ = check_model(vehicle, model, tyre)  # tyre is returned unchanged
     if model == "dynamic":
         veh_sys = dynamic_global_model(vehicle, speed=speed, tyre=tyre, name="vehicle")
     else:
@@ -276,14 +277,14 @@ def reference_initial_state(
     path: Path,
     gains: SteeringGains,
     *,
-    initial_state,
+    initial_state: RealArrayLike,
     speed: float | None = None,
     feedforward: bool = True,
     steering_lag: float | None = None,
     delay: float = 0.0,
     pade_order: int = DEFAULT_PADE_ORDER,
     model: str = "kinematic",
-    tyre: str = "linear",
+    tyre: TyreName = "linear",
     **kwargs: Any,
 ) -> np.ndarray:
     """Initial state of :func:`closed_loop_system` matching the fast engine's.
@@ -370,7 +371,7 @@ def reference_initial_state(
                 speed=speed,
                 tyre=tyre,
             ),
-            dtype=float,
+            dtype=np.float64,
         )
     parts = [x0]
     if model == "dynamic":
@@ -379,7 +380,12 @@ def reference_initial_state(
         if not np.all(np.isfinite(body)):  # rolling without slip, as the engine
             body = np.array(
                 equations.no_slip_body_state(
-                    speed, vehicle.wheelbase, vehicle.rear_to_cg, u0[0], u0[1]
+                    speed,
+                    vehicle.wheelbase,
+                    # the dynamic model has required it
+                    cast(float, vehicle.rear_to_cg),
+                    u0[0],
+                    u0[1],
                 ),
                 dtype=float,
             )
@@ -399,7 +405,7 @@ def simulate_reference(
     gains: SteeringGains,
     *,
     speed: float,
-    initial_state,
+    initial_state: RealArrayLike,
     duration: float,
     feedforward: bool = True,
     dt: float = 0.01,
@@ -409,7 +415,7 @@ def simulate_reference(
     rtol: float = 1e-10,
     atol: float = 1e-12,
     model: str = "kinematic",
-    tyre: str = "linear",
+    tyre: TyreName = "linear",
     **kwargs: Any,
 ) -> ct.TimeResponseData:
     """Simulate :func:`closed_loop_system` with :func:`control.input_output_response`.

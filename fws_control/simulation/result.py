@@ -37,7 +37,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar, Literal, cast, overload
 
 import numpy as np
 
@@ -62,6 +62,7 @@ if TYPE_CHECKING:
     # python-control costs 0.7 s to import; a result needs it only for
     # to_time_response and plot, which import it
     import control as ct
+    import pandas as pd
 
 __all__ = ["Peak", "Peaks", "SimulationResult", "expand_runs"]
 
@@ -75,10 +76,18 @@ class _Signal:
         self.__doc__ = doc
 
     def __set_name__(self, owner: type, name: str) -> None:
-        self.name = name
-        self.index = SIGNALS.index(name)
+        self.name: str = name
+        self.index: int = SIGNALS.index(name)
 
-    def __get__(self, obj: Any, objtype: type | None = None) -> Any:
+    @overload
+    def __get__(self, obj: None, objtype: type | None = None) -> _Signal: ...
+    @overload
+    def __get__(
+        self, obj: SimulationResult, objtype: type | None = None
+    ) -> np.ndarray: ...
+    def __get__(
+        self, obj: SimulationResult | None, objtype: type | None = None
+    ) -> _Signal | np.ndarray:
         if obj is None:
             return self
         return obj.signal(self.name)
@@ -318,7 +327,7 @@ class SimulationResult:
     run_k2: np.ndarray
     run_ratio: np.ndarray
     run_initial_state: np.ndarray
-    feedforward: bool = True
+    feedforward: bool | Literal["dynamic"] = True
     squeeze: bool = False
     vehicle: Vehicle | None = None
     path: Path | None = None
@@ -334,24 +343,36 @@ class SimulationResult:
     peaks_exact: bool = True
     speed_profile: Any = None
 
-    x = _Signal("Global x of the rear-axle centre R [m].")
-    y = _Signal("Global y of the rear-axle centre R [m].")
-    psi = _Signal("Heading [rad], continuous in time, on the initial branch.")
-    s = _Signal("Arclength of the projection point on the path [m].")
-    e = _Signal("Lateral error [m], positive left of the path.")
-    theta = _Signal("Heading error theta = psi - psi_C [rad].")
-    delta_f = _Signal("Front steering angle applied to the vehicle [rad].")
-    delta_r = _Signal("Rear steering angle applied to the vehicle [rad].")
-    delta_f_rate = _Signal("Front steering rate [rad/s].")
-    delta_r_rate = _Signal("Rear steering rate [rad/s].")
-    lateral_accel = _Signal(
+    x: ClassVar[_Signal] = _Signal("Global x of the rear-axle centre R [m].")
+    y: ClassVar[_Signal] = _Signal("Global y of the rear-axle centre R [m].")
+    psi: ClassVar[_Signal] = _Signal(
+        "Heading [rad], continuous in time, on the initial branch."
+    )
+    s: ClassVar[_Signal] = _Signal("Arclength of the projection point on the path [m].")
+    e: ClassVar[_Signal] = _Signal("Lateral error [m], positive left of the path.")
+    theta: ClassVar[_Signal] = _Signal("Heading error theta = psi - psi_C [rad].")
+    delta_f: ClassVar[_Signal] = _Signal(
+        "Front steering angle applied to the vehicle [rad]."
+    )
+    delta_r: ClassVar[_Signal] = _Signal(
+        "Rear steering angle applied to the vehicle [rad]."
+    )
+    delta_f_rate: ClassVar[_Signal] = _Signal("Front steering rate [rad/s].")
+    delta_r_rate: ClassVar[_Signal] = _Signal("Rear steering rate [rad/s].")
+    lateral_accel: ClassVar[_Signal] = _Signal(
         "Lateral acceleration of G along the vehicle's lateral axis [m/s^2] "
         "(eq. (13) for the kinematic model, dv_y/dt + u r for the dynamic one)."
     )
-    v_y = _Signal("Lateral velocity of G in the vehicle's frame [m/s].")
-    yaw_rate = _Signal("Yaw rate [rad/s].")
-    slip_front = _Signal("Slip angle of the front axle [rad] (0: kinematic model).")
-    slip_rear = _Signal("Slip angle of the rear axle [rad] (0: kinematic model).")
+    v_y: ClassVar[_Signal] = _Signal(
+        "Lateral velocity of G in the vehicle's frame [m/s]."
+    )
+    yaw_rate: ClassVar[_Signal] = _Signal("Yaw rate [rad/s].")
+    slip_front: ClassVar[_Signal] = _Signal(
+        "Slip angle of the front axle [rad] (0: kinematic model)."
+    )
+    slip_rear: ClassVar[_Signal] = _Signal(
+        "Slip angle of the rear axle [rad] (0: kinematic model)."
+    )
 
     def __post_init__(self) -> None:
         t = np.asarray(self.t, dtype=float)
@@ -479,7 +500,7 @@ class SimulationResult:
                 raise IndexError(f"run index {index} out of range for {n} runs")
             i = int(index) % n
             # Keep the samples up to the stop.
-            return self._select([i], int(self.run_samples[i]), squeeze=True)
+            return self._select([i], int(self._samples[i]), squeeze=True)
         if isinstance(index, slice):
             return self._select(np.arange(n)[index], self.t.size, squeeze=False)
         idx = np.asarray(index)
@@ -516,13 +537,17 @@ class SimulationResult:
             vehicle=self.vehicle,
             path=self.path,
             run_peak=None if self.run_peak is None else self.run_peak[idx],
-            run_peak_time=None if self.run_peak is None else self.run_peak_time[idx],
+            run_peak_time=(
+                None
+                if self.run_peak is None
+                else cast(np.ndarray, self.run_peak_time)[idx]
+            ),
             method=self.method,
             model=self.model,
             tyre=self.tyre,
             engine=self.engine,
             signal_names=self.signal_names,
-            run_samples=np.minimum(self.run_samples[idx], count),
+            run_samples=np.minimum(self._samples[idx], count),
             run_metrics=None if self.run_metrics is None else self.run_metrics[idx],
             peaks_exact=self.peaks_exact,
             speed_profile=self.speed_profile,
@@ -579,6 +604,11 @@ class SimulationResult:
                 raise _not_kept(name, self.signal_names, what)
 
     @property
+    def _samples(self) -> np.ndarray:
+        # run_samples after __post_init__: always an array of sample counts
+        return cast(np.ndarray, self.run_samples)
+
+    @property
     def peaks(self) -> Peaks:
         """Peaks ``max |signal|`` per run, with their times (:class:`Peaks`).
 
@@ -588,7 +618,7 @@ class SimulationResult:
         ``exact=False``.
         """
         if self.run_peak is not None:
-            values, times = self.run_peak, self.run_peak_time
+            values, times = self.run_peak, cast(np.ndarray, self.run_peak_time)
             exact = self.peaks_exact
         else:
             self._require(PEAK_SIGNALS, "peaks from the samples")
@@ -614,7 +644,7 @@ class SimulationResult:
         return list(self)
 
     def __repr__(self) -> str:
-        counts = {}
+        counts: dict[str, int] = {}
         for s in self.run_status.tolist():
             counts[s] = counts.get(s, 0) + 1
         span = f"[{self.t[0]:g}, {self.t[-1]:g}] s" if self.t.size else "[]"
@@ -1011,7 +1041,7 @@ class SimulationResult:
             message="; ".join(notes) if notes else None,
         )
 
-    def to_pandas(self):
+    def to_pandas(self) -> pd.DataFrame:
         """Long-format :class:`pandas.DataFrame`, one row per run and sample.
 
         Columns ``run, t``, the signals of
@@ -1065,7 +1095,7 @@ class SimulationResult:
         names = self.signal_names
         n = len(self)
         # a run's samples up to its stop
-        have = np.arange(self.t.size)[None, :] < self.run_samples[:, None]
+        have = np.arange(self.t.size)[None, :] < self._samples[:, None]
         rows_run, rows_k = np.nonzero(have)
         # A run without samples keeps one row of NaN, so that it is not lost.
         empty = np.setdiff1d(np.arange(n), rows_run)
@@ -1229,7 +1259,7 @@ class SimulationResult:
                 text = f"{text} ({status} at t={self.run_t_stop[i]:.3g} s)".strip()
             legend_needed |= bool(text)
             label = text or None
-            count = int(self.run_samples[i])
+            count = int(self._samples[i])
             t = self.t[:count]
             color = None
             for a, name, scale, _ in panels:
@@ -1349,7 +1379,7 @@ def expand_runs(
     speed: Any,
     initial_state: Any,
     t: np.ndarray,
-    feedforward: bool,
+    feedforward: bool | Literal["dynamic"],
     vehicle: Vehicle | None,
     path: Path | None,
     status: str = STATUS_UNCONTROLLABLE,
@@ -1428,6 +1458,7 @@ def expand_runs(
     # Runs that were not simulated have NaN peaks.
     peak = np.full((n, len(PEAK_SIGNALS)), np.nan)
     peak_time = np.full((n, len(PEAK_SIGNALS)), np.nan)
+    peaks_known = True
     if result is not None:
         if len(result) != positions.size or result.t.shape != t.shape:
             raise ValueError(
@@ -1445,7 +1476,7 @@ def expand_runs(
             run_message[p] = m
         t_stop[positions] = result.run_t_stop
         if result.run_peak is None:
-            peak = peak_time = None
+            peaks_known = False
         else:
             peak[positions] = result.run_peak
             peak_time[positions] = result.run_peak_time
@@ -1468,8 +1499,8 @@ def expand_runs(
         squeeze=False,
         vehicle=vehicle,
         path=path,
-        run_peak=peak,
-        run_peak_time=peak_time,
+        run_peak=peak if peaks_known else None,
+        run_peak_time=peak_time if peaks_known else None,
         method=None if result is None else result.method,
         engine="numpy" if result is None else result.engine,
         # the simulated runs' model: a dynamic batch stays dynamic
