@@ -404,6 +404,13 @@ def _check_quoted_output(app, docname, source) -> None:
         )  # fmt: skip
 
 
+def _reread_quoting_pages(app, env, added, changed, removed) -> list[str]:
+    """The quoting pages, read again in every build: their example may have
+    printed something else since (an incremental build reads only the
+    changed pages)."""
+    return [docname for docname in QUOTED_OUTPUT if docname in env.found_docs]
+
+
 # -- ``fws-cli-help`` directive: the CLI's --help text, always current -------
 
 
@@ -446,4 +453,5 @@ def _cli_help_directive():
 def setup(app):
     app.connect("builder-inited", _check_api_complete)
     app.connect("source-read", _check_quoted_output)
+    app.connect("env-get-outdated", _reread_quoting_pages)
     app.add_directive("fws-cli-help", _cli_help_directive())
