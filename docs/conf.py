@@ -369,6 +369,58 @@ def _check_api_complete(app) -> None:
         )
 
 
+# -- Pages that quote an example's output ------------------------------------
+
+#: Page -> (example, marker): the page quotes, between ``<!-- marker -->``
+#: and ``<!-- end-marker -->``, the Markdown table the example prints. The
+#: example runs here (sphinx-gallery records its output in the generated
+#: page), not in pytest, so the quote is checked here: a difference is a
+#: warning, fatal with -W.
+QUOTED_OUTPUT = {"varying_speed": ("plot_varying_speed", "varying-speed-table")}
+
+
+def table_rows(text: str) -> list[str]:
+    """The rows of the Markdown tables in `text`, stripped (header included)."""
+    rows = (line.strip() for line in text.splitlines())
+    return [row for row in rows if row.startswith("| ")]
+
+
+def _check_quoted_output(app, docname, source) -> None:
+    """Warn where a page's quote differs from its example's recorded output."""
+    if docname not in QUOTED_OUTPUT or _SKIP_GALLERY:
+        return
+    from sphinx.util import logging
+
+    logger = logging.getLogger("fws_control.quoted")
+    example, marker = QUOTED_OUTPUT[docname]
+    generated = Path(app.srcdir) / "auto_examples" / f"{example}.rst"
+    text = source[0]
+    begin, end = f"<!-- {marker} -->", f"<!-- end-{marker} -->"
+    if begin not in text or end not in text or not generated.exists():
+        logger.warning(
+            "%s: no quote between %s and %s, or no output of %s (%s)",
+            docname, begin, end, example, generated,
+            type="fws_control", subtype="quoted",
+        )  # fmt: skip
+        return
+    quoted = table_rows(text.split(begin, 1)[1].split(end, 1)[0])
+    printed = table_rows(generated.read_text(encoding="utf-8"))
+    if quoted != printed:
+        logger.warning(
+            "%s: the table between %s and %s is not what examples/%s.py "
+            "printed:\n%s",
+            docname, begin, end, example, "\n".join(printed),
+            type="fws_control", subtype="quoted",
+        )  # fmt: skip
+
+
+def _reread_quoting_pages(app, env, added, changed, removed) -> list[str]:
+    """The quoting pages, read again in every build: their example may have
+    printed something else since (an incremental build reads only the
+    changed pages)."""
+    return [docname for docname in QUOTED_OUTPUT if docname in env.found_docs]
+
+
 # -- ``fws-cli-help`` directive: the CLI's --help text, always current -------
 
 
@@ -410,4 +462,6 @@ def _cli_help_directive():
 
 def setup(app):
     app.connect("builder-inited", _check_api_complete)
+    app.connect("source-read", _check_quoted_output)
+    app.connect("env-get-outdated", _reread_quoting_pages)
     app.add_directive("fws-cli-help", _cli_help_directive())

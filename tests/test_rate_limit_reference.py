@@ -21,6 +21,7 @@ falls; DOP853 at its stability bound is 10^2-10^3 units off).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import numpy as np
@@ -86,9 +87,19 @@ def _reference(g, tau, rate, duration, h):
     return np.array(out)
 
 
+@functools.cache
+def _cached_reference(k1, k2, ratio, tau, rate, duration, h):
+    """:func:`_reference`, once per process: several tests and cases
+    compare with the same run (the reference is pure Python, seconds)."""
+    ref = _reference(fws.SteeringGains(k1, k2, ratio), tau, rate, duration, h)
+    ref.flags.writeable = False
+    return ref
+
+
 def _check_reference(g, tau, rate, duration, h, rtol, atol):
-    coarse = _reference(g, tau, rate, duration, h)
-    ref = _reference(g, tau, rate, duration, h / 2)
+    case = (float(g.k1), float(g.k2), float(g.ratio), tau, rate, duration)
+    coarse = _cached_reference(*case, h)
+    ref = _cached_reference(*case, h / 2)
     tol = atol + rtol * np.max(np.abs(ref), axis=0)
     own = np.max(np.abs(ref - coarse), axis=0) / 15.0
     assert np.all(own < 0.1 * tol), (own, tol)
