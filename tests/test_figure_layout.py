@@ -60,3 +60,30 @@ def test_fig3_hatches_apart_and_notes_beside_the_legend():
         assert spare[0].get_fontsize() >= 9
     finally:
         plt.close(fig)
+
+
+def test_fig4_notes_break_where_matplotlib_wraps_them():
+    # Reference: matplotlib's own Text(wrap=True) on the unbroken notes, at
+    # the same place, drawn at two resolutions.
+    fig = make_figure("fig4", quick=True)
+    try:
+        (text,) = fig.axes[7].texts
+        notes = ["notes:"]
+        for panel in paper_figure_panels(4, npoints=201):
+            letter = panel.title.split(" ", 1)[0]
+            for ch, lab in zip(panel.charts, panel.labels, strict=True):
+                notes += [f"{letter} {n}" for n in ch.notes(label=lab)]
+        got = text.get_text().split("\n")
+        # every note, in order, and some too long for one line
+        assert " ".join(got) == " ".join(notes) and len(got) > len(notes)
+        ref = fig.axes[7].text(
+            *text.get_position(), "\n".join(notes), transform=text.get_transform(),
+            ha="left", va="bottom", fontsize=text.get_fontsize(), wrap=True,
+        )  # fmt: skip
+        for dpi in (110, 300):
+            fig.set_dpi(dpi)
+            fig.canvas.draw()
+            # the lines Text.draw printed (private: matplotlib keeps no copy)
+            assert ref._get_wrapped_text().split("\n") == got
+    finally:
+        plt.close(fig)

@@ -216,6 +216,8 @@ def _simulate_designs(
     progress,
     delay: float = 0.0,
     steering_lag: float | None = None,
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
 ) -> SimulationResult:
     """Simulate the controllable designs; keep the others as marked runs."""
     n = ratios.size
@@ -231,6 +233,8 @@ def _simulate_designs(
             delay=delay,
             feedforward=feedforward,
             dt=dt,
+            rtol=rtol,
+            atol=atol,
             client=client,
             progress=progress,
         )
@@ -299,6 +303,8 @@ def scenario_responses(
     vehicle: Vehicle = PAPER_VEHICLE,
     delay: float = 0.0,
     steering_lag: float | None = None,
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
     client: Any = None,
     progress: bool | None = None,
     **kwargs: Any,
@@ -327,6 +333,8 @@ def scenario_responses(
         Input delay [s] of the loop and steering lag [s] of the simulated
         plant (:func:`~fws_control.simulate`); the gains are designed
         without them, as in the paper.
+    rtol, atol : float, optional
+        Solver tolerances, as in :func:`simulate_batch`.
     client, progress
         Passed to :func:`simulate_batch`.
     **kwargs
@@ -358,7 +366,7 @@ def scenario_responses(
     k1, k2, ok = scenario_gains(sc, a, pole, model, vehicle)
     res = _simulate_designs(
         sc, vehicle, a, k1, k2, ok, ff, dur, dt, client, progress,
-        delay, steering_lag,
+        delay, steering_lag, rtol, atol,
     )  # fmt: skip
     return ScenarioResponses(sc, a, float(pole), model, ff, res)
 
@@ -373,6 +381,8 @@ def fig6_to_9_responses(
     vehicle: Vehicle = PAPER_VEHICLE,
     delay: float = 0.0,
     steering_lag: float | None = None,
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
     progress: bool | None = None,
     **kwargs: Any,
 ) -> dict[int, ScenarioResponses]:
@@ -382,6 +392,8 @@ def fig6_to_9_responses(
     ----------
     model, ratios, pole, duration, dt, vehicle, delay, steering_lag, progress
         As in :func:`scenario_responses`.
+    rtol, atol : float, optional
+        Solver tolerances, as in :func:`simulate_batch`.
     **kwargs
         ``actuator_time_constant=``, the former name of `steering_lag`,
         accepted with a :class:`FutureWarning` until fws_control 0.4.
@@ -416,6 +428,8 @@ def fig6_to_9_responses(
             vehicle=vehicle,
             delay=delay,
             steering_lag=steering_lag,
+            rtol=rtol,
+            atol=atol,
             progress=progress,
         )
     return dict(sorted(out.items()))
@@ -477,6 +491,8 @@ def fig5_peak_lateral_accel(
     vehicle: Vehicle = PAPER_VEHICLE,
     delay: float = 0.0,
     steering_lag: float | None = None,
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
     client: Any = None,
     progress: bool | None = None,
     **kwargs: Any,
@@ -495,7 +511,7 @@ def fig5_peak_lateral_accel(
     poles : dict, optional
         Double roots per speed; default ``{5: (-1, -2), 20: (-1, -2, -3)}``
         as in the paper.
-    duration, dt, vehicle, delay, steering_lag, client, progress
+    duration, dt, vehicle, delay, steering_lag, rtol, atol, client, progress
         As in :func:`scenario_responses`.
     **kwargs
         ``actuator_time_constant=``, the former name of `steering_lag`,
@@ -547,6 +563,8 @@ def fig5_peak_lateral_accel(
             progress,
             delay,
             steering_lag,
+            rtol,
+            atol,
         )
         good = res.status == "ok"
         exact = res.peaks  # maxima of the continuous solution
