@@ -23,7 +23,7 @@ becomes singular (``status`` :data:`STATUS_SINGULAR_STEERING`,
 
 from typing import TYPE_CHECKING
 
-from .engine import (
+from .outcomes import (
     SIGNALS,
     STATUS_END_OF_PATH,
     STATUS_FAILED,

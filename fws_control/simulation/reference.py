@@ -29,7 +29,7 @@ from ..models import global_frame_model
 from ..paths import Path
 from ..validation import check_delay, check_nonzero, check_scalar, check_type
 from ..vehicle import Vehicle
-from .engine import check_model, resolve_time_constant, split_initial_state
+from .options import check_model, resolve_time_constant, split_initial_state
 
 __all__ = [
     "closed_loop_system",
@@ -462,7 +462,7 @@ def simulate_reference(
         kwargs, "actuator_time_constant", "steering_lag", steering_lag
     )
     reject_unknown("simulate_reference", kwargs)
-    from .engine import check_tolerances, time_grid
+    from .options import check_tolerances, time_grid
 
     rtol, atol = check_tolerances(rtol, atol)
 

@@ -48,8 +48,8 @@ from ..metrics import HORIZON_METRICS
 from ..paths import Path
 from ..reprs import brief, html_table, import_pandas
 from ..vehicle import Vehicle
-from .engine import (
-    MODELS,
+from .options import MODELS
+from .outcomes import (
     PEAK_SIGNALS,
     SIGNALS,
     STATUS_OK,
