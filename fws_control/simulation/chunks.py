@@ -36,7 +36,7 @@ __all__ = [
 ]
 
 #: Samples (runs x output times) whose signals are computed at once: the
-#: temporaries of :func:`~fws_control.simulation.engine.compute_outputs`
+#: temporaries of :func:`~fws_control.simulation.signals.compute_outputs`
 #: (about forty-five arrays of this size, 12 MB) stay bounded, whatever the
 #: size of the output.
 OUTPUT_BLOCK = 1 << 15
@@ -75,7 +75,7 @@ def run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ct
 
     Returns ``(signals (n, len(SIGNALS), T), status, message, t_stop,
     peaks (n, len(PEAK_SIGNALS)), peak_times)``: the peaks are those of the
-    continuous solution (:func:`~fws_control.simulation.engine.exact_peaks`).
+    continuous solution (:func:`~fws_control.simulation.peaks.exact_peaks`).
     """
     g = SteeringGains(k1, k2, a) if ctrl is None else ctrl
     # x0: pose and (v_y, r) of the dynamic model (NaN: the default)

@@ -107,7 +107,7 @@ def closed_loop_system(
     :func:`projection_system`, :func:`~fws_control.path_tracking_controller`
     with a delay, a :func:`control.pade` block per steering channel, and, if
     there is an actuator (see
-    :func:`~fws_control.simulation.engine.resolve_time_constant`),
+    :func:`~fws_control.simulation.options.resolve_time_constant`),
     :func:`~fws_control.steering_actuator` (states ``delta_f, delta_r``
     appended last).
 
@@ -434,7 +434,7 @@ def simulate_reference(
         Order of the Pade approximation of the delay.
     rtol, atol : float, optional
         Solver tolerances, in the ranges of
-        :func:`~fws_control.simulation.engine.check_tolerances`.
+        :func:`~fws_control.simulation.options.check_tolerances`.
     model, tyre : str, optional
         Vehicle and tyre model, as in :func:`closed_loop_system`.
 

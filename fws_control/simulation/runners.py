@@ -1,9 +1,12 @@
 r"""The public runners: :func:`simulate` (one run) and :func:`simulate_batch`.
 
-Both validate the arguments, project the initial poses onto the path, let
-the engine (:mod:`~fws_control.simulation.engine`) integrate the closed loop
-and return a :class:`~fws_control.simulation.result.SimulationResult`;
-:func:`simulate` is a batch of one run, squeezed.
+Both resolve and validate the arguments
+(:mod:`~fws_control.simulation.arguments`), let an engine integrate the
+closed loop chunk by chunk (:mod:`~fws_control.simulation.chunks` on the
+numpy engine, :mod:`~fws_control.simulation.engine`; on a Dask cluster
+:mod:`~fws_control.simulation.cluster`) and return a
+:class:`~fws_control.simulation.result.SimulationResult`; :func:`simulate`
+is a batch of one run, squeezed.
 
 :func:`simulate_batch` stacks the path-frame states of the runs of a chunk
 into one state vector and integrates them with one solver. Gains, ratios,
@@ -718,7 +721,7 @@ def simulate(
         one interval): pass `t_eval` for exact times. It sets the output
         only, not the accuracy (`rtol`, `atol`); the signals of one call may
         not exceed
-        :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES` (2 GiB).
+        :data:`~fws_control.simulation.options.MAX_OUTPUT_BYTES` (2 GiB).
     t_eval : array_like, optional
         Output times instead of `dt`; increasing, from 0 to at most
         `duration`.
@@ -740,14 +743,14 @@ def simulate(
         DOP853, or Radau when a fast actuator makes the loop stiff, or LSODA
         for a run long enough that the actuator's stability bound would cost
         DOP853 more than 10 steps (rule and measurements in
-        :func:`~fws_control.simulation.engine.choose_method`); the result's
+        :func:`~fws_control.simulation.options.choose_method`); the result's
         ``method`` says which. An explicit method chosen for a stiff loop
         gives a :class:`RuntimeWarning`.
     rtol, atol : float, optional
         Relative and absolute tolerances of the solver: rtol in
         ``[100 eps, 0.1]`` (scipy's own floor to a 10 % error per step),
         atol in ``[1e-20, 0.1]`` [m, rad]; see
-        :func:`~fws_control.simulation.engine.check_tolerances`.
+        :func:`~fws_control.simulation.options.check_tolerances`.
     engine : {"auto", "numpy", "compiled"}, optional
         ``"compiled"``: the numba ports of DOP853 and Radau of
         :mod:`fws_control.simulation.compiled` (extra ``fast``), each run
@@ -774,7 +777,7 @@ def simulate(
         ``"auto"`` (default): the compiled engine where numba is installed
         and it runs the case (with ``method="auto"`` and an actuator: DOP853
         held to 3.2 T or Radau, as above; the numpy engine's own choice is
-        :func:`~fws_control.simulation.engine.choose_method`); the numpy
+        :func:`~fws_control.simulation.options.choose_method`); the numpy
         engine otherwise. The result's
         ``engine`` says which ran, and is bitwise the result of asking for
         that engine explicitly.
@@ -823,7 +826,7 @@ def simulate(
         :func:`simulate_batch`), a plant whose front and rear lags differ, a
         non-positive duration, an unknown method or feedforward, tolerances
         out of range, or an output larger than
-        :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES`; for
+        :data:`~fws_control.simulation.options.MAX_OUTPUT_BYTES`; for
         ``feedforward="dynamic"`` a vehicle without the dynamic data or a
         negative speed; for an unknown `engine`, or ``engine="compiled"``
         for a case it does not run (the message says why).
@@ -959,7 +962,7 @@ def simulate_batch(
     chunk_size : int, optional
         Runs per chunk (one solver; one Dask task); default
         :data:`DEFAULT_CHUNK_SIZE`, or
-        :data:`~fws_control.simulation.engine.LSODA_MAX_RUNS` (16) when the
+        :data:`~fws_control.simulation.options.LSODA_MAX_RUNS` (16) when the
         numpy engine integrates with LSODA (``method="LSODA"``, or what
         ``method="auto"`` picks for a stiff actuator over a long run).
         Smaller chunks decouple the step sizes of runs with very different
@@ -985,7 +988,7 @@ def simulate_batch(
         computes its signals, writes the kept ones into the preallocated
         result and is freed, so the peak memory is the returned data and one
         chunk's working set, and the budget
-        :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES` counts the
+        :data:`~fws_control.simulation.options.MAX_OUTPUT_BYTES` counts the
         kept signals only (and one chunk's full signals). Whatever is kept,
         the result holds per run the status, ``t_stop``, the peaks
         (:attr:`~fws_control.SimulationResult.peaks`, computed before the
@@ -1011,7 +1014,7 @@ def simulate_batch(
         memory map of a ``.npy`` file
         (:func:`numpy.lib.format.open_memmap`) streams a sweep larger than
         memory to disk. The output budget
-        :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES` then counts
+        :data:`~fws_control.simulation.options.MAX_OUTPUT_BYTES` then counts
         one chunk's working set only. If the call raises, `out` may hold
         some runs' signals. Not with ``signals="metrics"``. A result whose
         `out` is written again (by another sweep) shows the new signals
