@@ -27,12 +27,12 @@ import control as ct
 import numpy as np
 
 from .delay import critical_delay
-from .design import double_root_gains
 from .exceptions import UncontrollableError
 from .gains import SteeringGains
 from .hints import RatioLike, RealArrayLike
 from .linear import AffinePolynomial, characteristic_coefficients, horner
 from .plant import LateralPlant, as_plant, loop_matrices, resolve_ratio
+from .pole_placement import double_root_gains
 from .reprs import summary_repr
 from .stability import (
     STABLE,

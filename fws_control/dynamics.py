@@ -50,7 +50,7 @@ import numpy as np
 
 from . import equations
 from .exceptions import SingularStateError
-from .models import STEERING_INPUTS
+from .kinematic_models import STEERING_INPUTS
 from .validation import check_finite, check_nonzero, check_scalar, check_type
 from .vehicle import Vehicle
 

@@ -58,7 +58,7 @@ from typing import Any
 
 import numpy as np
 
-from .baselines import LateralController
+from .lateral_controller import LateralController
 from .paths import Path
 from .plant import LateralPlant
 from .validation import (

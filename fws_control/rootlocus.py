@@ -35,11 +35,11 @@ import control as ct
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from .design import double_root_gains
 from .gains import SteeringGains
 from .hints import RealArrayLike
 from .linear import characteristic_coefficients, check_gains
 from .plant import LateralPlant, as_plant
+from .pole_placement import double_root_gains
 from .validation import check_finite, check_model
 
 __all__ = [

@@ -1066,6 +1066,14 @@ def test_plot_returns_controlplot(label):
 # --------------------------------------------------------------------------
 
 
+#: Old module paths kept for one release as shims that warn on import.
+DEPRECATED_MODULES = {
+    "fws_control.models",
+    "fws_control.comparison",
+    "fws_control.design",
+}
+
+
 def _module_name(path):
     rel = path.resolve().relative_to(PACKAGE_DIR.parent).with_suffix("")
     parts = rel.parts[:-1] if rel.name == "__init__" else rel.parts
@@ -1355,7 +1363,12 @@ def test_every_module_has_all():
     violations = []
     for mod in _modules():
         try:
-            module = importlib.import_module(mod)
+            with warnings.catch_warnings():
+                # a renamed module's old path warns on import (tested in
+                # tests/test_module_renames.py); its __all__ is checked here
+                if mod in DEPRECATED_MODULES:
+                    warnings.simplefilter("ignore", FutureWarning)
+                module = importlib.import_module(mod)
         except Exception as exc:
             violations.append(f"{mod}: cannot be imported: {exc!r}")
             continue

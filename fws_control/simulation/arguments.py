@@ -18,9 +18,9 @@ from typing import Any
 import numpy as np
 from scipy.integrate import DOP853, RK23, RK45
 
-from ..baselines import LateralController
 from ..deprecation import legacy_keyword, reject_unknown, warn_deprecated
 from ..gains import SteeringGains
+from ..lateral_controller import LateralController
 from ..paths import Path
 from ..plant import LateralPlant
 from ..speed_profile import SpeedProfile

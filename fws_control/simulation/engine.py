@@ -38,8 +38,8 @@ from scipy.integrate import BDF, Radau
 from scipy.optimize import brentq
 
 from .. import equations
-from ..baselines import saturate
 from ..gains import SteeringGains
+from ..lateral_controller import saturate
 from ..paths import Path
 from ..vehicle import Vehicle
 from .dense import DenseSolution, History, delayed_rows

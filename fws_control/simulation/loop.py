@@ -18,7 +18,6 @@ from typing import Any
 import numpy as np
 
 from .. import equations
-from ..baselines import saturate
 from ..controllers import (
     actuator_rate,
     steering_command,
@@ -28,6 +27,7 @@ from ..dynamics import (
     dynamic_path_derivatives,
 )
 from ..gains import SteeringGains
+from ..lateral_controller import saturate
 from ..paths import Arc, Path, Straight
 from .outcomes import STOP_MARGIN
 

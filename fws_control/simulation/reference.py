@@ -20,12 +20,12 @@ import control as ct
 import numpy as np
 
 from .. import equations
-from ..baselines import LateralController, saturate
 from ..controllers import path_tracking_controller, steering_actuator
 from ..deprecation import legacy_keyword, reject_unknown
 from ..dynamics import dynamic_global_model
 from ..gains import SteeringGains
-from ..models import global_frame_model
+from ..kinematic_models import global_frame_model
+from ..lateral_controller import LateralController, saturate
 from ..paths import Path
 from ..validation import check_delay, check_nonzero, check_scalar, check_type
 from ..vehicle import Vehicle

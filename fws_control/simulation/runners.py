@@ -38,11 +38,11 @@ from typing import Any
 
 import numpy as np
 
-from ..baselines import LateralController
 from ..controllers import check_feedforward
 from ..dynamics import require_dynamics
 from ..exceptions import ClusterLostError
 from ..gains import SteeringGains
+from ..lateral_controller import LateralController
 from ..metrics import HORIZON_METRICS
 from ..paths import Path
 from ..plant import LateralPlant

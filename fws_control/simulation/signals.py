@@ -19,7 +19,7 @@ from ..dynamics import (
     slip_angles,
 )
 from ..gains import SteeringGains
-from ..models import yaw_rate
+from ..kinematic_models import yaw_rate
 from ..paths import Path
 from ..vehicle import Vehicle
 from .loop import ClosedLoop, hold_row, is_sampled
