@@ -115,8 +115,8 @@ if TYPE_CHECKING:
     from .gains import SteeringGains as SteeringGains
     from .linear import (
         AffinePolynomial as AffinePolynomial,
-        characteristic_coefficients as characteristic_coefficients,
-        characteristic_polynomial as characteristic_polynomial,
+        affine_characteristic_polynomial as affine_characteristic_polynomial,
+        characteristic_polynomial_coefficients as characteristic_polynomial_coefficients,  # noqa: E501
         closed_loop as closed_loop,
         linearize as linearize,
     )
@@ -285,11 +285,19 @@ def _origin() -> dict[str, str]:
     return origin
 
 
+# Former names, accepted until fws_control 0.4 and not in __all__: the
+# module that defines each (its function warns, naming the current name).
+_RENAMED = {
+    "characteristic_coefficients": "linear",
+    "characteristic_polynomial": "linear",
+}
+
+
 def __getattr__(name: str) -> Any:
     if name in ("__all__", "_ORIGIN"):
         _origin()
         return globals()[name]
-    module = _origin().get(name)
+    module = _origin().get(name) or _RENAMED.get(name)
     if module is not None:
         value = getattr(importlib.import_module(f".{module}", __name__), name)
         globals()[name] = value

@@ -2,7 +2,7 @@ r"""Closed-form double-root pole placement, paper section 4.2.
 
 For a second-order plant the closed-loop polynomial
 :math:`s^2 + p_1 s + p_0` is affine in ``(k1, k2)``
-(:func:`~fws_control.characteristic_coefficients`), so matching
+(:func:`~fws_control.affine_characteristic_polynomial`), so matching
 :math:`(s-\lambda_0)^2` — eqs. (39)-(40) — is a 2 x 2 *linear* system,
 solved here by Cramer's rule. For the kinematic plant its determinant is
 
@@ -31,7 +31,7 @@ import numpy as np
 from .exceptions import UncontrollableError
 from .gains import SteeringGains
 from .hints import RatioLike, RealArrayLike
-from .linear import characteristic_coefficients
+from .linear import affine_characteristic_polynomial
 from .plant import LateralPlant, as_plant, loop_matrices, resolve_ratio
 from .validation import check_finite
 
@@ -221,7 +221,7 @@ def double_root_gains(
     lam = check_finite("pole", pole)
     if np.any(np.asarray(lam) >= 0):
         raise ValueError(f"pole must be finite and < 0, got {pole!r}")
-    cp = characteristic_coefficients(p, ratio=a)
+    cp = affine_characteristic_polynomial(p, ratio=a)
     if cp.order != 2:
         raise ValueError(
             f"double_root_gains needs a 2-state plant, got one of order {cp.order}: "

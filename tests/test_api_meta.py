@@ -299,8 +299,8 @@ VK = ("speed", "curvature", "model")
 SPEC_SIGNATURES = {
     "linearize": (("plant",), VK),
     "closed_loop": (("plant", "gains"), VK),
-    "characteristic_coefficients": (("plant",), ("ratio", *VK)),
-    "characteristic_polynomial": (("plant", "gains"), VK),
+    "affine_characteristic_polynomial": (("plant",), ("ratio", *VK)),
+    "characteristic_polynomial_coefficients": (("plant", "gains"), VK),
     "is_stable": (("plant", "gains"), VK),
     "stability_boundaries": (("plant",), ("ratio", "omega", *VK)),
     "stability_chart": (("plant",), ("ratio", "k1", "k2", "pole", *VK)),
@@ -856,8 +856,8 @@ def _analysis_calls():
     return {
         "linearize": ((plant,), {}),
         "closed_loop": ((plant, g), {}),
-        "characteristic_coefficients": ((plant,), {"ratio": -1.0}),
-        "characteristic_polynomial": ((plant, g), {}),
+        "affine_characteristic_polynomial": ((plant,), {"ratio": -1.0}),
+        "characteristic_polynomial_coefficients": ((plant, g), {}),
         "is_stable": ((plant, g), {}),
         "stability_boundaries": ((plant,), {"ratio": -1.0}),
         "stability_chart": ((plant,), {"ratio": -1.0}),
@@ -1365,7 +1365,7 @@ def test_every_module_has_all():
         try:
             with warnings.catch_warnings():
                 # a renamed module's old path warns on import (tested in
-                # tests/test_module_renames.py); its __all__ is checked here
+                # tests/test_renames.py); its __all__ is checked here
                 if mod in DEPRECATED_MODULES:
                     warnings.simplefilter("ignore", FutureWarning)
                 module = importlib.import_module(mod)

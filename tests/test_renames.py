@@ -1,5 +1,5 @@
-"""Renamed modules: the old paths import for one release, with a FutureWarning
-that names the new module, and give the same objects.
+"""Renamed modules and functions: the old names work for one release, with a
+FutureWarning that names the new one, and give the same objects and values.
 
 Each old path is imported afresh (removed from ``sys.modules`` first), so the
 warning of the import itself is seen whatever the order of the tests.
@@ -11,6 +11,7 @@ import importlib
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 import fws_control
@@ -84,3 +85,74 @@ def test_lateral_controller_interface_has_its_own_module():
     assert baselines.LateralController is lateral_controller.LateralController
     assert baselines.saturate is lateral_controller.saturate
     assert baselines.CONTROLLER_SIGNALS == ("s", "e", "theta", "curvature")
+
+
+VEH = fws_control.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+
+
+@pytest.mark.parametrize("curvature", [0.0, 0.05])
+@pytest.mark.parametrize("ratio", [-1.0, 0.0, 0.5])
+def test_each_characteristic_name_says_what_it_returns(curvature, ratio):
+    plant = fws_control.LateralPlant(VEH, speed=7.0, curvature=curvature)
+    gains = fws_control.SteeringGains(0.3, 0.9, ratio)
+    # the independent reference: det(sI - A_cl) of python-control's loop
+    want = np.poly(fws_control.closed_loop(plant, gains).A)
+    coefficients = fws_control.characteristic_polynomial_coefficients(plant, gains)
+    assert isinstance(coefficients, np.ndarray)
+    np.testing.assert_allclose(coefficients, want, rtol=1e-12, atol=1e-14)
+    # the polynomial as an affine map of the gains, then its coefficients
+    poly = fws_control.affine_characteristic_polynomial(plant, ratio=ratio)
+    assert isinstance(poly, fws_control.AffinePolynomial)
+    np.testing.assert_allclose(
+        poly.coefficients(gains.k1, gains.k2), want, rtol=1e-12, atol=1e-14
+    )
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "args", "kwargs"),
+    [
+        (
+            "characteristic_coefficients",
+            "affine_characteristic_polynomial",
+            (),
+            {"ratio": -1.0},
+        ),
+        (
+            "characteristic_polynomial",
+            "characteristic_polynomial_coefficients",
+            (fws_control.SteeringGains(0.3, 0.9, -1.0),),
+            {},
+        ),
+    ],
+)
+def test_former_function_names_warn_and_give_the_same_values(old, new, args, kwargs):
+    plant = fws_control.LateralPlant(VEH, speed=7.0, curvature=0.05)
+    assert old not in fws_control.__all__ and new in fws_control.__all__
+    former = getattr(fws_control, old)
+    expected = (
+        f"{old}() is deprecated and is removed in fws_control {REMOVED_IN}; use {new}()"
+    )
+    with pytest.warns(FutureWarning) as caught:
+        got = former(plant, *args, **kwargs)
+    assert [str(w.message) for w in caught] == [expected]
+    assert caught[0].filename == __file__
+    want = getattr(fws_control, new)(plant, *args, **kwargs)
+    if isinstance(want, np.ndarray):
+        np.testing.assert_array_equal(got, want)
+    else:
+        for field in ("open_loop", "n1", "n2"):
+            np.testing.assert_array_equal(getattr(got, field), getattr(want, field))
+    # `from fws_control import <old name>` too
+    ns = {}
+    exec(f"from fws_control import {old} as f", ns)
+    assert ns["f"] is former
+
+
+def test_symbolic_characteristic_polynomial_is_the_polynomial():
+    # its name stays: it returns the polynomial itself (a sympy Poly in s)
+    import sympy as sp
+
+    from fws_control import symbolic
+
+    p = symbolic.characteristic_polynomial("kinematic")
+    assert isinstance(p, sp.Poly) and p.degree() == 2 and p.LC() == 1
