@@ -12,6 +12,7 @@ array are checked by :func:`check_signals` and :func:`check_out`.
 
 from __future__ import annotations
 
+import math
 import warnings
 from typing import Any
 
@@ -47,6 +48,7 @@ from .options import (
 from .outcomes import SIGNALS
 
 __all__ = [
+    "check_chunk_size",
     "check_signals",
     "check_out",
     "prepare_runs",
@@ -446,3 +448,45 @@ def with_profile(profile, speed, controller):
         schedule = controller
         controller = scheduled_gains(schedule, profile(_profile_start(profile)))
     return profile, profile.initial_sign or 1.0, controller, schedule
+
+
+def check_chunk_size(
+    chunk_size: Any,
+    *,
+    runs: int,
+    kept: tuple[str, ...],
+    out: Any,
+    duration: Any,
+    dt: Any,
+    t_eval: Any,
+    samples: int,
+) -> int:
+    """The runs per chunk as an int, refused unless an integer >= 1 or when
+    a chunk's full signals (all of :data:`~fws_control.simulation.outcomes.SIGNALS`,
+    computed before the kept ones are taken or written to `out`) exceed
+    :data:`~fws_control.simulation.options.MAX_OUTPUT_BYTES`."""
+    if (
+        isinstance(chunk_size, bool)
+        or not isinstance(chunk_size, (int, np.integer, float))
+        or not math.isfinite(chunk_size)
+        or int(chunk_size) != chunk_size
+        or chunk_size < 1
+    ):
+        raise ValueError(f"chunk_size must be an integer >= 1, got {chunk_size!r}")
+    chunk_size = int(chunk_size)
+    if kept != SIGNALS or out is not None:
+        # the working set: one chunk's full signals (the kept ones are counted
+        # in prepare_runs, unless they go to out)
+        try:
+            check_output_budget(
+                min(chunk_size, runs), samples, duration=duration, dt=dt, t_eval=t_eval
+            )
+        except ValueError as exc:
+            where = f"keeps {len(kept)} of them"
+            if out is not None:
+                where = "writes them into out"
+            raise ValueError(
+                f"chunk_size={chunk_size}: a chunk computes all {len(SIGNALS)} "
+                f"signals before it {where}, and {exc}; or a smaller chunk_size"
+            ) from None
+    return chunk_size

@@ -54,6 +54,7 @@ from ..validation import (
 )
 from ..vehicle import Vehicle
 from .arguments import (
+    check_chunk_size,
     check_out,
     check_profile_run,
     check_signals,
@@ -68,7 +69,6 @@ from .loop import scheduled_gains
 from .options import (
     LSODA_MAX_RUNS,
     SAFE_STEP,
-    check_output_budget,
     initial_path_state,
     run_gains,
 )
@@ -486,30 +486,10 @@ def _simulate_batch(
             # in two mixed chunks (within its tolerance, not bitwise alone;
             # chunk_size=1 is).
             chunk_size = LSODA_MAX_RUNS
-    if (
-        isinstance(chunk_size, bool)
-        or not isinstance(chunk_size, (int, np.integer, float))
-        or not math.isfinite(chunk_size)
-        or int(chunk_size) != chunk_size
-        or chunk_size < 1
-    ):
-        raise ValueError(f"chunk_size must be an integer >= 1, got {chunk_size!r}")
-    chunk_size = int(chunk_size)
-    if kept != SIGNALS or out is not None:
-        # the working set: one chunk's full signals (the kept ones are counted
-        # in prepare_runs, unless they go to out)
-        try:
-            check_output_budget(
-                min(chunk_size, n), t.size, duration=duration, dt=dt, t_eval=t_eval
-            )
-        except ValueError as exc:
-            where = f"keeps {len(kept)} of them"
-            if out is not None:
-                where = "writes them into out"
-            raise ValueError(
-                f"chunk_size={chunk_size}: a chunk computes all {len(SIGNALS)} "
-                f"signals before it {where}, and {exc}; or a smaller chunk_size"
-            ) from None
+    chunk_size = check_chunk_size(
+        chunk_size, runs=n, kept=kept, out=out, duration=duration, dt=dt,
+        t_eval=t_eval, samples=t.size,
+    )  # fmt: skip
     bounds = [(i, min(i + chunk_size, n)) for i in range(0, n, chunk_size)]
     if progress is None:
         progress = _stderr_is_tty()
