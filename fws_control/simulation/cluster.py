@@ -36,13 +36,14 @@ def lost_chunk(n: int, t_size: int, note: str):
     )
 
 
-# Seconds simulate_batch waits on a Dask cluster that has no worker
-# before it gives up the pending chunks (marked "failed", then
-# ClusterLostError, see run_on_dask):
-# long enough for a cluster that scales up from zero to start one.
+#: Seconds simulate_batch waits on a Dask cluster that has no worker
+#: before it gives up the pending chunks (marked "failed", then
+#: ClusterLostError, see run_on_dask):
+#: long enough for a cluster that scales up from zero to start one.
 LOST_CLUSTER_WAIT = 60.0
 
-# Seconds between two checks of the cluster's workers while chunks are pending.
+#: Seconds between two checks of the cluster's workers while chunks are
+#: pending.
 POLL_INTERVAL = 1.0
 
 
