@@ -40,7 +40,7 @@ def main(n: int = 5000, seed: int = 1) -> None:
             worst[name] = max(
                 worst[name], np.linalg.norm(got - ref) / np.linalg.norm(ref)
             )
-        poly = fws.characteristic_polynomial(plant, g)
+        poly = fws.characteristic_polynomial_coefficients(plant, g)
         target = np.array([1.0, -2 * lam, lam**2])
         worst["poly"] = max(
             worst["poly"], np.abs(poly - target).max() / np.abs(target).max()

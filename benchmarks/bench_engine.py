@@ -17,7 +17,7 @@ DOP853 with rtol 1e-10, atol 1e-12 everywhere:
    preallocated reused arrays (the strict reference) and into fresh arrays
    (what a caller that returns the signals pays: the first touch of the
    output's pages); also followed by the numpy
-   :func:`~fws_control.simulation.engine.compute_outputs`;
+   :func:`~fws_control.simulation.signals.compute_outputs`;
 3. a loop of plain :func:`scipy.integrate.solve_ivp` with a scalar
    right-hand side written here from the formulas (on ``--loop-runs`` runs):
    the states only; and with the same 15 signals (the library's numpy

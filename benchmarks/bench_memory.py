@@ -7,7 +7,7 @@ root -1, ratios spread over [-1.5, 0.6]; DOP853, rtol 1e-10, atol 1e-12),
 
 (a) ``signals=("e", "lateral_accel")`` at the output step 0.02 s (``--dt``):
     two signals at the default 0.01 s over 10^5 runs are 2.4 GB, above the
-    2 GiB of ``simulation.engine.MAX_OUTPUT_BYTES``, and refused (printed);
+    2 GiB of ``simulation.options.MAX_OUTPUT_BYTES``, and refused (printed);
 (b) ``signals="metrics"`` at the default output step 0.01 s: no time
     series; per run the status, the peaks and the horizon metrics of
     ``tracking_metrics``, computed per chunk before its signals are freed.

@@ -3,7 +3,7 @@
 With the steering actuator of ``T = 0.05 s`` the paper's curve scenario
 (``curve_5``: V = 5 m/s, curvature 1/10, R(0) = (0, -5 m), double root -1;
 ``--runs`` ratios over [-1, 0.5]) is stiff over long runs: ``method="auto"``
-takes LSODA (``fws_control.simulation.engine.choose_method``) and
+takes LSODA (``fws_control.simulation.options.choose_method``) and
 ``simulate_batch`` stacks 16 runs per chunk on the numpy engine
 (``LSODA_MAX_RUNS``). Printed for 15 s and 150 s (output step 0.1 s), CPU
 per run, best of ``--repeat`` >= 3: numpy LSODA at 1, 4, 8, 16 and 32 runs

@@ -3,31 +3,32 @@ r"""fws_control: path tracking of automated vehicles with four-wheel steering.
 A control-systems toolbox built on python-control. The data flow runs one
 way, one module per concept; a module knows only the modules above it::
 
-    Vehicle ──► models (ct.NonlinearIOSystem: global and path frame)
+    Vehicle ──► kinematic_models (ct.NonlinearIOSystem: global, path frame)
        │            │ exact Jacobian / paper eq. (33)
        │            ▼
        │        LateralPlant (operating point) ──► ct.StateSpace ◄── or any plant
        │            │                     (inputs delta_f, delta_r; outputs e, theta)
        │            ▼
-       │        plant-first analysis (linear, stability, design, charts, rootlocus):
+       │        plant-first analysis (linear, stability, pole_placement, charts,
+       │            rootlocus):
        │            u = [1, a]^T (-k1 e - k2 theta) is rank one, so the
        │            characteristic polynomial is affine in (k1, k2) for any order
        │
        └──► paths (Straight, Arc, Clothoid, Spline, chains: projection → s, e, θ, κ)
                 controllers (the paper's law as static nlsys)
                 simulation/ (engine, runners, one result type, python-control reference)
-                metrics, comparison (linear vs nonlinear), turning
+                metrics, linear_vs_nonlinear, turning
                 paper/ (the paper's scenarios and figures, reproduce) ──► cli
 
 Modules: :mod:`~fws_control.vehicle`, :mod:`~fws_control.exceptions`,
-:mod:`~fws_control.validation`, :mod:`~fws_control.models`,
+:mod:`~fws_control.validation`, :mod:`~fws_control.kinematic_models`,
 :mod:`~fws_control.acceleration`, :mod:`~fws_control.gains`,
 :mod:`~fws_control.plant`, :mod:`~fws_control.linear`,
-:mod:`~fws_control.stability`, :mod:`~fws_control.design`,
+:mod:`~fws_control.stability`, :mod:`~fws_control.pole_placement`,
 :mod:`~fws_control.charts`, :mod:`~fws_control.rootlocus`,
 :mod:`~fws_control.turning`, :mod:`~fws_control.paths`,
 :mod:`~fws_control.controllers`, :mod:`~fws_control.simulation`,
-:mod:`~fws_control.metrics`, :mod:`~fws_control.comparison`,
+:mod:`~fws_control.metrics`, :mod:`~fws_control.linear_vs_nonlinear`,
 :mod:`~fws_control.openloop` (ISO 7401 and ISO 4138 open-loop tests),
 :mod:`~fws_control.symbolic` (sympy derivations, the tests' reference) and
 :mod:`~fws_control.paper` (imported only by the CLI).
@@ -56,14 +57,12 @@ if TYPE_CHECKING:
         yaw_acceleration as yaw_acceleration,
     )
     from .baselines import (
-        LateralController as LateralController,
         LQRController as LQRController,
         PurePursuit as PurePursuit,
         RearWheelFeedback as RearWheelFeedback,
         Stanley as Stanley,
         StateFeedback as StateFeedback,
         as_controller as as_controller,
-        saturate as saturate,
     )
     from .charts import (
         DelayMarginChart as DelayMarginChart,
@@ -71,7 +70,7 @@ if TYPE_CHECKING:
         delay_margin_chart as delay_margin_chart,
         stability_chart as stability_chart,
     )
-    from .comparison import (
+    from .linear_vs_nonlinear import (
         LinearNonlinearComparison as LinearNonlinearComparison,
         compare_linear_nonlinear as compare_linear_nonlinear,
     )
@@ -98,7 +97,7 @@ if TYPE_CHECKING:
         MostStableDesign as MostStableDesign,
         most_stable_gains as most_stable_gains,
     )
-    from .design import double_root_gains as double_root_gains
+    from .pole_placement import double_root_gains as double_root_gains
     from .dynamic_design import (
         KinematicDesignLimit as KinematicDesignLimit,
         kinematic_design_limit as kinematic_design_limit,
@@ -116,8 +115,8 @@ if TYPE_CHECKING:
     from .gains import SteeringGains as SteeringGains
     from .linear import (
         AffinePolynomial as AffinePolynomial,
-        characteristic_coefficients as characteristic_coefficients,
-        characteristic_polynomial as characteristic_polynomial,
+        affine_characteristic_polynomial as affine_characteristic_polynomial,
+        characteristic_polynomial_coefficients as characteristic_polynomial_coefficients,  # noqa: E501
         closed_loop as closed_loop,
         linearize as linearize,
     )
@@ -138,7 +137,11 @@ if TYPE_CHECKING:
         steady_state as steady_state,
         tracking_metrics as tracking_metrics,
     )
-    from .models import (
+    from .lateral_controller import (
+        LateralController as LateralController,
+        saturate as saturate,
+    )
+    from .kinematic_models import (
         feedforward_steering as feedforward_steering,
         global_frame_model as global_frame_model,
         path_frame_model as path_frame_model,
@@ -282,11 +285,19 @@ def _origin() -> dict[str, str]:
     return origin
 
 
+# Former names, accepted until fws_control 0.4 and not in __all__: the
+# module that defines each (its function warns, naming the current name).
+_RENAMED = {
+    "characteristic_coefficients": "linear",
+    "characteristic_polynomial": "linear",
+}
+
+
 def __getattr__(name: str) -> Any:
     if name in ("__all__", "_ORIGIN"):
         _origin()
         return globals()[name]
-    module = _origin().get(name)
+    module = _origin().get(name) or _RENAMED.get(name)
     if module is not None:
         value = getattr(importlib.import_module(f".{module}", __name__), name)
         globals()[name] = value

@@ -18,7 +18,7 @@ import numpy as np
 
 from . import equations
 from .hints import RealArrayLike
-from .models import check_inputs, check_result, check_steering, yaw_rate
+from .kinematic_models import check_inputs, check_result, check_steering, yaw_rate
 from .validation import check_type
 from .vehicle import Vehicle
 
@@ -73,7 +73,8 @@ def yaw_acceleration(
         If an argument is not real numbers or a scalar is not finite (naming
         it), the shapes do not broadcast, or magnitudes so extreme that the
         result overflows. Non-finite elements of arrays give non-finite
-        elements in their place (see :func:`~fws_control.models.check_inputs`).
+        elements in their place (see
+        :func:`~fws_control.kinematic_models.check_inputs`).
 
     Examples
     --------
@@ -143,9 +144,9 @@ def lateral_acceleration(
         If an argument is not real numbers or a scalar is not finite (naming
         it), the shapes do not broadcast, or magnitudes so extreme that the
         result overflows. Non-finite elements of arrays give non-finite
-        elements in their place (see :func:`~fws_control.models.check_inputs`).
-        Also a ValueError if ``vehicle.rear_to_cg`` is None (the
-        acceleration is that of G).
+        elements in their place (see
+        :func:`~fws_control.kinematic_models.check_inputs`). Also a ValueError if
+        ``vehicle.rear_to_cg`` is None (the acceleration is that of G).
 
     Examples
     --------

@@ -2,7 +2,7 @@ r"""Stability charts in the ``(k1, k2)`` gain plane, for plants of any order.
 
 A chart evaluates stability on a whole grid of gains at once: the
 characteristic polynomial is affine in ``k1, k2``
-(:func:`~fws_control.characteristic_coefficients`), so its coefficients on
+(:func:`~fws_control.affine_characteristic_polynomial`), so its coefficients on
 the grid are one broadcast expression and the test is the closed form
 :math:`p_1 > 0,\ p_0 > 0` (two states, eqs. 35-36) or the vectorised
 Routh-Hurwitz test, both run in interval arithmetic on the coefficients'
@@ -27,12 +27,12 @@ import control as ct
 import numpy as np
 
 from .delay import critical_delay
-from .design import double_root_gains
 from .exceptions import UncontrollableError
 from .gains import SteeringGains
 from .hints import RatioLike, RealArrayLike
-from .linear import AffinePolynomial, characteristic_coefficients, horner
+from .linear import AffinePolynomial, affine_characteristic_polynomial, horner
 from .plant import LateralPlant, as_plant, loop_matrices, resolve_ratio
+from .pole_placement import double_root_gains
 from .reprs import summary_repr
 from .stability import (
     STABLE,
@@ -858,7 +858,9 @@ def stability_chart(
     grid = SteeringGains(k1a[np.newaxis, :], k2a[:, np.newaxis], ratio)
     tau = check_delay(delay)
     if tau > 0.0:
-        _check_delay_work(characteristic_coefficients(p, ratio=ratio), k1a, k2a, tau)
+        _check_delay_work(
+            affine_characteristic_polynomial(p, ratio=ratio), k1a, k2a, tau
+        )
     verdict = stability_verdict(p, grid, delay=tau).code
     stable = verdict == STABLE
     undecided = int(np.count_nonzero(verdict == UNDECIDED))
@@ -866,7 +868,7 @@ def stability_chart(
     k1r = (float(k1a.min()), float(k1a.max()))
     k2r = (float(k2a.min()), float(k2a.max()))
     if bounds.order > 2 or tau > 0.0:
-        cp = characteristic_coefficients(p, ratio=ratio)
+        cp = affine_characteristic_polynomial(p, ratio=ratio)
         curve = _curve_in_box(cp, k1r, k2r, tau)
     else:
         curve = bounds.complex_root

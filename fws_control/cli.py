@@ -858,8 +858,8 @@ def _plant(args, veh, model=None):
 
 
 def _gains(args, veh):
-    from .design import double_root_gains
     from .gains import SteeringGains
+    from .pole_placement import double_root_gains
 
     if (args.k1 is None) != (args.k2 is None):
         raise ValueError("give both --k1 and --k2, or neither (then --pole is used)")
@@ -964,7 +964,7 @@ def _roots_json(roots) -> list[list[float | None]]:
 
 def _gains_numbers(args) -> dict:
     """The gains command's designs as plain numbers (one entry per model)."""
-    from .design import UncontrollableError, double_root_gains
+    from .pole_placement import UncontrollableError, double_root_gains
 
     veh = _vehicle(args)
     # Design first so that bad input fails before anything is printed.
@@ -1231,7 +1231,7 @@ def _cmd_simulate(args) -> int:
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from .comparison import compare_linear_nonlinear
+    from .linear_vs_nonlinear import compare_linear_nonlinear
 
     veh = _vehicle(args)
     course = args.path in COURSES

@@ -58,7 +58,6 @@ import control as ct
 import numpy as np
 
 from .baselines import (
-    LateralController,
     LQRController,
     PurePursuit,
     RearWheelFeedback,
@@ -66,11 +65,12 @@ from .baselines import (
     StateFeedback,
 )
 from .deprecation import legacy_keyword, reject_unknown, warn_deprecated
-from .design import double_root_gains
 from .dynamics import GRAVITY
 from .gains import SteeringGains
+from .lateral_controller import LateralController
 from .manoeuvres import Manoeuvre
 from .plant import LateralPlant
+from .pole_placement import double_root_gains
 from .simulation import STATUS_END_OF_PATH, SimulationResult, simulate
 from .validation import check_bool, check_delay, check_scalar, check_type
 from .vehicle import Vehicle

@@ -47,7 +47,7 @@ from .deprecation import legacy_keyword, reject_unknown
 from .dynamics import dynamic_feedforward, dynamic_feedforward_derivative
 from .gains import SteeringGains
 from .hints import FeedforwardLike, RealArrayLike, TyreName
-from .models import STEERING_INPUTS, check_inputs, check_result
+from .kinematic_models import STEERING_INPUTS, check_inputs, check_result
 from .validation import check_positive, check_scalar, check_type
 from .vehicle import Vehicle
 
@@ -186,7 +186,7 @@ def steering_command(
     ValueError
         If an argument is not real numbers or a scalar is not finite (naming
         it; non-finite elements of arrays give non-finite elements in their
-        place, see :func:`~fws_control.models.check_inputs`), or magnitudes
+        place, see :func:`~fws_control.kinematic_models.check_inputs`), or magnitudes
         so extreme that the command overflows.
 
     Examples

@@ -7,7 +7,7 @@ quasi-polynomial
 .. math::
     D(s) = d(s) + e^{-s\tau} q(s),\qquad q(s) = k_1 n_1(s) + k_2 n_2(s),
 
-with :math:`d, n_1, n_2` of :func:`~fws_control.characteristic_coefficients`
+with :math:`d, n_1, n_2` of :func:`~fws_control.affine_characteristic_polynomial`
 (a steering lag is part of the plant, so it simply adds states). Since
 :math:`\deg q < \deg d` the equation is of *retarded* type: finitely many
 roots lie in any right half plane and they move continuously with the
@@ -48,7 +48,12 @@ from typing import Any
 import numpy as np
 
 from .gains import SteeringGains
-from .linear import AffinePolynomial, characteristic_coefficients, check_gains, horner
+from .linear import (
+    AffinePolynomial,
+    affine_characteristic_polynomial,
+    check_gains,
+    horner,
+)
 from .plant import as_plant, loop_matrices
 from .validation import check_delay
 
@@ -191,7 +196,7 @@ def critical_delay(
     """
     g = check_gains(gains)
     p = as_plant(plant, speed=speed, curvature=curvature, model=model)
-    cp = characteristic_coefficients(p, ratio=g.ratio)
+    cp = affine_characteristic_polynomial(p, ratio=g.ratio)
     k1 = np.asarray(g.k1, dtype=float)[..., np.newaxis]
     k2 = np.asarray(g.k2, dtype=float)[..., np.newaxis]
     q = k1 * cp.n1 + k2 * cp.n2
@@ -365,7 +370,7 @@ def rightmost_roots(
     lam0 = np.linalg.eigvals(A + A1)
     if tau == 0.0:
         return lam0[np.argsort(-lam0.real, kind="stable")][:k]
-    cp = characteristic_coefficients(p, ratio=g.ratio)
+    cp = affine_characteristic_polynomial(p, ratio=g.ratio)
     quasi = _Quasi(cp, float(g.k1), float(g.k2), tau)
     m = A.shape[0]
     # start at least so fine that the matrix has a few eigenvalues per root
@@ -697,7 +702,7 @@ def unstable_root_count(
     g = check_gains(gains)
     tau = check_delay(delay)
     p = as_plant(plant, speed=speed, curvature=curvature, model=model)
-    cp = characteristic_coefficients(p, ratio=g.ratio)
+    cp = affine_characteristic_polynomial(p, ratio=g.ratio)
     if cp.open_loop.ndim > 1 or cp.n1.ndim > 1:
         # one operating point and a scalar ratio: the polynomials are shared
         if np.ndim(g.ratio) or cp.open_loop.shape[:-1]:

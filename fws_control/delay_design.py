@@ -33,7 +33,7 @@ import numpy as np
 
 from .delay import critical_delay, rightmost_roots, unstable_root_count
 from .gains import SteeringGains
-from .linear import characteristic_coefficients, horner
+from .linear import affine_characteristic_polynomial, horner
 from .plant import as_plant, loop_matrices
 from .validation import check_delay, check_scalar
 
@@ -174,8 +174,8 @@ class _Loop:
     def __init__(self, plant, tau: float):
         self.plant = plant
         self.tau = tau
-        cp0 = characteristic_coefficients(plant, ratio=0.0)
-        cp1 = characteristic_coefficients(plant, ratio=1.0)
+        cp0 = affine_characteristic_polynomial(plant, ratio=0.0)
+        cp1 = affine_characteristic_polynomial(plant, ratio=1.0)
         self.d = np.asarray(cp0.open_loop, dtype=float)
         # n1, n2 are linear in the ratio (the input column is)
         self.n1 = np.asarray(cp0.n1, dtype=float)

@@ -29,11 +29,11 @@ import control as ct
 import numpy as np
 from scipy.optimize import brentq
 
-from .design import double_root_gains
 from .dynamics import TYRES, dynamic_feedforward, require_dynamics
 from .gains import SteeringGains
 from .hints import RealArrayLike
 from .plant import LateralPlant, resolve_ratio
+from .pole_placement import double_root_gains
 from .reprs import summary_repr
 from .validation import (
     MAX_CURVATURE,

@@ -52,7 +52,7 @@ from . import equations
 from .equations import Real
 from .exceptions import SingularStateError
 from .hints import RealArrayLike, TyreName
-from .models import STEERING_INPUTS
+from .kinematic_models import STEERING_INPUTS
 from .validation import check_finite, check_nonzero, check_scalar, check_type
 from .vehicle import Vehicle
 

@@ -37,6 +37,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .deprecation import warn_deprecated
 from .gains import SteeringGains
 from .hints import RatioLike, RealArrayLike
 from .plant import LateralPlant, LoopMatrices, as_plant, loop_matrices, resolve_ratio
@@ -51,8 +52,8 @@ __all__ = [
     "linearize",
     "closed_loop",
     "AffinePolynomial",
-    "characteristic_coefficients",
-    "characteristic_polynomial",
+    "affine_characteristic_polynomial",
+    "characteristic_polynomial_coefficients",
     "check_gains",
     "horner",
 ]
@@ -230,7 +231,7 @@ class AffinePolynomial:
     open_loop_error, n1_error, n2_error : ndarray or None
         Bounds on the absolute errors of those coefficients against the
         exact polynomials of the plant's (double-precision) data; None: the
-        coefficients are exact. :func:`characteristic_coefficients` fills
+        coefficients are exact. :func:`affine_characteristic_polynomial` fills
         them: half a unit in the last place for a state space (exact, then
         rounded once), a few units for the closed form.
 
@@ -238,7 +239,7 @@ class AffinePolynomial:
     --------
     >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> cp = fws.characteristic_coefficients(fws.LateralPlant(veh, speed=5.0),
+    >>> cp = fws.affine_characteristic_polynomial(fws.LateralPlant(veh, speed=5.0),
     ...                                      ratio=0.0)
     >>> cp.order, cp.coefficients(0.2, 0.5).round(9)
     (2, array([1.        , 0.92592593, 1.85185185]))
@@ -277,7 +278,7 @@ class AffinePolynomial:
         --------
         >>> import fws_control as fws
         >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-        >>> cp = fws.characteristic_coefficients(fws.LateralPlant(veh, speed=5.0),
+        >>> cp = fws.affine_characteristic_polynomial(fws.LateralPlant(veh, speed=5.0),
         ...                                      ratio=0.0)
         >>> cp.coefficients([0.1, 0.2], 0.5).shape
         (2, 3)
@@ -316,7 +317,7 @@ class AffinePolynomial:
         --------
         >>> import fws_control as fws
         >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-        >>> cp = fws.characteristic_coefficients(fws.LateralPlant(veh, speed=5.0),
+        >>> cp = fws.affine_characteristic_polynomial(fws.LateralPlant(veh, speed=5.0),
         ...                                      ratio=0.0)
         >>> p, r = cp.coefficient_bounds(0.2, 0.5)
         >>> [float(v) for v in p], all(float(e) < 1e-14 for e in r)
@@ -372,7 +373,7 @@ class AffinePolynomial:
         --------
         >>> import fws_control as fws
         >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-        >>> cp = fws.characteristic_coefficients(fws.LateralPlant(veh, speed=5.0),
+        >>> cp = fws.affine_characteristic_polynomial(fws.LateralPlant(veh, speed=5.0),
         ...                                      ratio=0.0)
         >>> v = complex(cp.evaluate(1j, 0.2, 0.5))
         >>> round(v.real, 9), round(v.imag, 9)
@@ -399,7 +400,7 @@ class AffinePolynomial:
         --------
         >>> import fws_control as fws
         >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-        >>> cp = fws.characteristic_coefficients(fws.LateralPlant(veh, speed=5.0),
+        >>> cp = fws.affine_characteristic_polynomial(fws.LateralPlant(veh, speed=5.0),
         ...                                      ratio=0.0)
         >>> [complex(v) for v in cp.polynomials_at(0.0)]
         [0j, (9.25925925925926+0j), 0j]
@@ -569,7 +570,7 @@ def _statespace_coefficients(lm: LoopMatrices, ratio) -> AffinePolynomial:
     )
 
 
-def characteristic_coefficients(
+def affine_characteristic_polynomial(
     plant: Any,
     *,
     ratio: RatioLike,
@@ -609,7 +610,7 @@ def characteristic_coefficients(
     --------
     >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> cp = fws.characteristic_coefficients(veh, speed=5.0, ratio=0.0)
+    >>> cp = fws.affine_characteristic_polynomial(veh, speed=5.0, ratio=0.0)
     >>> cp.n1.round(6), cp.n2.round(6)
     (array([0.      , 0.      , 9.259259]), array([0.      , 1.851852, 0.      ]))
     """
@@ -620,7 +621,7 @@ def characteristic_coefficients(
     return _statespace_coefficients(loop_matrices(p), ratio)
 
 
-def characteristic_polynomial(
+def characteristic_polynomial_coefficients(
     plant: Any,
     gains: SteeringGains,
     *,
@@ -651,11 +652,77 @@ def characteristic_polynomial(
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     >>> plant = fws.LateralPlant(veh, speed=20.0, curvature=0.01)
     >>> g = fws.double_root_gains(plant, ratio=0.5, pole=-2.0)
-    >>> fws.characteristic_polynomial(plant, g).round(9)
+    >>> fws.characteristic_polynomial_coefficients(plant, g).round(9)
     array([1., 4., 4.])
     """
     g = check_gains(gains)
-    cp = characteristic_coefficients(
+    cp = affine_characteristic_polynomial(
         plant, ratio=g.ratio, speed=speed, curvature=curvature, model=model
     )
     return cp.coefficients(g.k1, g.k2)
+
+
+def characteristic_coefficients(
+    plant: Any,
+    *,
+    ratio: RatioLike,
+    speed: Any = None,
+    curvature: Any = None,
+    model: Any = None,
+) -> AffinePolynomial:
+    """Deprecated name of :func:`affine_characteristic_polynomial`.
+
+    It returns the polynomial as an affine map of the gains (an
+    :class:`AffinePolynomial`), not coefficients; the name is accepted until
+    fws_control 0.4 with a :class:`FutureWarning`.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     cp = fws.characteristic_coefficients(veh, speed=5.0, ratio=0.0)
+    >>> print(caught[0].message)
+    characteristic_coefficients() is deprecated and is removed in fws_control 0.4; use affine_characteristic_polynomial()
+    """  # noqa: E501
+    warn_deprecated(
+        "characteristic_coefficients()", "affine_characteristic_polynomial()"
+    )
+    return affine_characteristic_polynomial(
+        plant, ratio=ratio, speed=speed, curvature=curvature, model=model
+    )
+
+
+def characteristic_polynomial(
+    plant: Any,
+    gains: SteeringGains,
+    *,
+    speed: Any = None,
+    curvature: Any = None,
+    model: Any = None,
+) -> np.ndarray:
+    """Deprecated name of :func:`characteristic_polynomial_coefficients`.
+
+    It returns the coefficients of the polynomial (an array); the name is
+    accepted until fws_control 0.4 with a :class:`FutureWarning`.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> import fws_control as fws
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     p = fws.characteristic_polynomial(fws.LateralPlant(veh, speed=5.0),
+    ...                                       fws.SteeringGains(0.1, 0.5, 0.0))
+    >>> print(caught[0].message)
+    characteristic_polynomial() is deprecated and is removed in fws_control 0.4; use characteristic_polynomial_coefficients()
+    """  # noqa: E501
+    warn_deprecated(
+        "characteristic_polynomial()", "characteristic_polynomial_coefficients()"
+    )
+    return characteristic_polynomial_coefficients(
+        plant, gains, speed=speed, curvature=curvature, model=model
+    )

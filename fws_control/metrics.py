@@ -127,7 +127,7 @@ def peak_abs(signal: RealArrayLike, *, name: str | None = None) -> float | np.nd
         (``result.peaks[name].value``) is returned.
     name : str, optional
         With a result: the signal, one of
-        :data:`~fws_control.simulation.engine.PEAK_SIGNALS` (``"e"``,
+        :data:`~fws_control.simulation.outcomes.PEAK_SIGNALS` (``"e"``,
         ``"delta_f"``, ``"delta_r"``, ``"delta_f_rate"``, ``"delta_r_rate"``,
         ``"lateral_accel"``).
 

@@ -59,8 +59,8 @@ from typing import Any, NoReturn
 
 import numpy as np
 
-from .baselines import LateralController
 from .hints import RealArrayLike
+from .lateral_controller import LateralController
 from .paths import Path
 from .plant import LateralPlant
 from .validation import (

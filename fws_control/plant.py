@@ -34,7 +34,7 @@ import numpy as np
 
 from .dynamics import TYRES, dynamic_feedforward, path_jacobians, require_dynamics
 from .hints import ModelName, RealArrayLike, TyreName
-from .models import STEERING_INPUTS, feedforward_steering
+from .kinematic_models import STEERING_INPUTS, feedforward_steering
 from .reprs import summary_repr, value_repr
 from .validation import (
     MAX_CURVATURE,

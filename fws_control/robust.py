@@ -17,7 +17,7 @@ With the input delay :math:`\tau` the characteristic quasi-polynomial is
 
 .. math:: D(s) = d(s; p) + e^{-s\tau}\bigl(k_1 n_1(s; p) + k_2 n_2(s; p)\bigr),
 
-affine in the gains (:func:`~fws_control.characteristic_coefficients`). A
+affine in the gains (:func:`~fws_control.affine_characteristic_polynomial`). A
 root can leave the left half plane only through the imaginary axis
 (the equation is retarded: no root comes from infinity), so a gain point is
 in :math:`R` when it is stable at one parameter point and no parameter of
@@ -67,7 +67,12 @@ import numpy as np
 
 from .gains import SteeringGains
 from .hints import RealArrayLike
-from .linear import AffinePolynomial, characteristic_coefficients, check_gains, horner
+from .linear import (
+    AffinePolynomial,
+    affine_characteristic_polynomial,
+    check_gains,
+    horner,
+)
 from .plant import LateralPlant, as_plant, resolve_ratio
 from .reprs import summary_repr
 from .stability import complex_root_curve, default_frequencies, hurwitz_columns
@@ -471,7 +476,7 @@ class _Sweep:
         if cp is None:
             plant = self.family.plant(dict(point))
             ratio = resolve_ratio(plant, self.ratio)
-            cp = characteristic_coefficients(plant, ratio=ratio)
+            cp = affine_characteristic_polynomial(plant, ratio=ratio)
             self.cache[point] = cp
         return cp
 

@@ -35,11 +35,11 @@ import control as ct
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from .design import double_root_gains
 from .gains import SteeringGains
 from .hints import RealArrayLike
-from .linear import characteristic_coefficients, check_gains
+from .linear import affine_characteristic_polynomial, check_gains
 from .plant import LateralPlant, as_plant
+from .pole_placement import double_root_gains
 from .validation import check_finite, check_model
 
 __all__ = [
@@ -70,7 +70,7 @@ def gain_loop(
     .. math:: L(s) = \frac{k_1 n_1(s) + k_2 n_2(s)}{d(s)}
               = [k_1\ k_2]\,\mathbf C_s(s\mathbf I-\mathbf A)^{-1}\mathbf b
 
-    with :math:`d, n_1, n_2` of :func:`characteristic_coefficients`. Closing
+    with :math:`d, n_1, n_2` of :func:`affine_characteristic_polynomial`. Closing
     ``u = -g y`` gives the structured controller with gains ``g*k1, g*k2``;
     python-control's root locus computes the roots of :math:`1 + g L(s)`, so
     its locus at ``g = 1`` is the pole set of :func:`closed_loop`.
@@ -111,7 +111,7 @@ def gain_loop(
     g = check_gains(gains, scalar=True)
     p = as_plant(plant, speed=speed, curvature=curvature, model=model)
     _one_point(p)
-    cp = characteristic_coefficients(p, ratio=g.ratio)
+    cp = affine_characteristic_polynomial(p, ratio=g.ratio)
     num = np.trim_zeros(g.k1 * cp.n1 + g.k2 * cp.n2, "f")
     if num.size == 0:
         num = np.zeros(1)
@@ -447,7 +447,7 @@ def parameter_locus(
             target = replace(swept, model=design_model, tyre=tyre)
         d = double_root_gains(target, ratio=par["ratio"], pole=redesign_pole)
         par["k1"], par["k2"] = d.k1, d.k2
-    cp = characteristic_coefficients(swept, ratio=par["ratio"])
+    cp = affine_characteristic_polynomial(swept, ratio=par["ratio"])
     coeffs = cp.coefficients(par["k1"], par["k2"])
     coeffs = np.broadcast_to(coeffs, vals.shape + coeffs.shape[-1:])
     if cp.order == 2:

@@ -46,10 +46,10 @@ import control as ct
 import numpy as np
 
 from .delay_design import most_stable_gains
-from .design import double_root_gains
 from .gains import SteeringGains
 from .hints import RealArrayLike
 from .plant import LateralPlant
+from .pole_placement import double_root_gains
 from .reprs import summary_repr
 from .validation import check_delay, check_finite
 from .vehicle import Vehicle

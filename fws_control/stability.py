@@ -2,7 +2,7 @@ r"""Stability of the structured steering loop for plants of any order.
 
 The closed-loop characteristic polynomial is affine in the gains,
 :math:`p(s) = d(s) + k_1 n_1(s) + k_2 n_2(s)`
-(:func:`~fws_control.characteristic_coefficients`), so
+(:func:`~fws_control.affine_characteristic_polynomial`), so
 
 * **stability** on whole arrays of gains is a vectorised Routh-Hurwitz test
   on the coefficient arrays (:func:`routh_hurwitz`); for the second-order
@@ -33,7 +33,7 @@ import numpy as np
 from .delay import unstable_root_count
 from .gains import SteeringGains
 from .hints import RealArrayLike
-from .linear import AffinePolynomial, characteristic_coefficients, check_gains
+from .linear import AffinePolynomial, affine_characteristic_polynomial, check_gains
 from .plant import LateralPlant, LoopMatrices, as_plant, loop_matrices, resolve_ratio
 from .reprs import summary_repr
 from .validation import (
@@ -443,7 +443,7 @@ def stability_verdict(
             # s = 0, and p(0) < 0 a positive real root (D(sigma) -> +inf as
             # sigma -> +inf, since deg q < deg d). Both are decided.
             p_ = as_plant(plant, speed=speed, curvature=curvature, model=model)
-            cp = characteristic_coefficients(p_, ratio=resolve_ratio(p_, g.ratio))
+            cp = affine_characteristic_polynomial(p_, ratio=resolve_ratio(p_, g.ratio))
             pc, rc = cp.coefficient_bounds(g.k1, g.k2)
             sign = np.sign(pc[0])
             at_zero = np.broadcast_to(sign * pc[-1] + rc[-1] <= 0, code.shape)
@@ -453,7 +453,7 @@ def stability_verdict(
         return StabilityVerdict(code=code, bound=bound)
     p = as_plant(plant, speed=speed, curvature=curvature, model=model)
     ratio = resolve_ratio(p, g.ratio)
-    cp = characteristic_coefficients(p, ratio=ratio)
+    cp = affine_characteristic_polynomial(p, ratio=ratio)
     k1, k2 = np.asarray(g.k1, dtype=float), np.asarray(g.k2, dtype=float)
     code = _polynomial_verdict(cp, k1, k2)
     bound = np.zeros(code.shape)
@@ -847,7 +847,7 @@ def default_frequencies(cp: AffinePolynomial, num: int = 2001) -> np.ndarray:
     --------
     >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> cp = fws.characteristic_coefficients(veh, speed=5.0, ratio=0.0)
+    >>> cp = fws.affine_characteristic_polynomial(veh, speed=5.0, ratio=0.0)
     >>> w = fws.stability.default_frequencies(cp, num=5)
     >>> float(w[0]), float(w[-1])
     (0.001, 1000.0)
@@ -889,7 +889,7 @@ def complex_root_curve(
     --------
     >>> import fws_control as fws
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> cp = fws.characteristic_coefficients(veh, speed=5.0, ratio=0.0)
+    >>> cp = fws.affine_characteristic_polynomial(veh, speed=5.0, ratio=0.0)
     >>> fws.stability.complex_root_curve(cp, [1.0]).k1.round(6)
     array([0.108])
     """
@@ -972,7 +972,7 @@ def stability_boundaries(
         raise ValueError(
             "stability_boundaries needs one operating point and a scalar ratio"
         )
-    cp = characteristic_coefficients(p, ratio=a)
+    cp = affine_characteristic_polynomial(p, ratio=a)
     last = cp.order
     real = StabilityBoundary.from_coefficients(
         cp.n1[..., last], cp.n2[..., last], cp.open_loop[..., last], "p0 > 0"

@@ -38,8 +38,8 @@ import numpy as np
 
 from . import equations
 from .hints import RatioLike, RealArrayLike
+from .kinematic_models import check_steering
 from .layout import grid_margins
-from .models import check_steering
 from .reprs import summary_repr
 from .validation import check_finite, check_scalar, check_type
 from .vehicle import Vehicle

@@ -29,7 +29,7 @@ from scipy.integrate import solve_ivp
 
 import fws_control as fws
 from fws_control.paths import Arc
-from fws_control.simulation import SIGNALS, engine
+from fws_control.simulation import SIGNALS, options
 
 VEH = PAPER_VEHICLE
 PLANT = fws.LateralPlant(VEH, speed=CURVE_SPEED)
@@ -143,7 +143,7 @@ def test_the_budget_does_not_count_a_given_out(monkeypatch):
     kw = {"initial_state": (0.0, -5.0, 0.0), "duration": 1.0}
     g = fws.SteeringGains(np.full(n, 0.2), 0.9, -1.0)
     one_run = len(SIGNALS) * 101 * 8  # a chunk of one run, all signals
-    monkeypatch.setattr(engine, "MAX_OUTPUT_BYTES", one_run)
+    monkeypatch.setattr(options, "MAX_OUTPUT_BYTES", one_run)
     with pytest.raises(ValueError, match="budget"):
         fws.simulate_batch(PLANT, PATH, g, chunk_size=1, **kw)
     out = np.empty((n, len(SIGNALS), 101))

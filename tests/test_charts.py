@@ -110,7 +110,7 @@ def test_boundaries_are_zero_sets(veh, speed, curvature, ratio, model):
         for t in np.linspace(0, 1, 5):
             k1, k2 = seg[0] + t * (seg[1] - seg[0])
             g = fws.SteeringGains(k1, k2, ratio)
-            poly = fws.characteristic_polynomial(plant, g)
+            poly = fws.characteristic_polynomial_coefficients(plant, g)
             assert abs(poly[which]) < 1e-9 * max(1.0, speed**2)
 
 

@@ -115,7 +115,7 @@ def test_closed_loop_polynomial_is_double_root(model, speed, curvature, ratio, p
     assume(_well_conditioned(VEH, speed, curvature, ratio, model, pole))
     plant = _plant(speed, curvature, model)
     g = fws.double_root_gains(plant, ratio=ratio, pole=pole)
-    poly = fws.characteristic_polynomial(plant, g)
+    poly = fws.characteristic_polynomial_coefficients(plant, g)
     target = np.array([1.0, -2 * pole, pole**2])
     assert np.max(np.abs(poly - target)) <= 1e-9 * np.max(np.abs(target))
 

@@ -76,7 +76,10 @@ def test_closed_loop_engine_on_the_dynamic_plant(ratio, u):
     poles = np.sort_complex(fws.closed_loop(plant, g).poles())
     np.testing.assert_allclose(poles, eig, rtol=1e-4, atol=1e-4)
     np.testing.assert_allclose(
-        fws.characteristic_polynomial(plant, g), np.poly(A_cl), rtol=1e-4, atol=1e-4
+        fws.characteristic_polynomial_coefficients(plant, g),
+        np.poly(A_cl),
+        rtol=1e-4,
+        atol=1e-4,
     )
     assert fws.is_stable(plant, g) == bool(np.all(eig.real < 0))
     # the gain root locus passes through the same poles at g = 1

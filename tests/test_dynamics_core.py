@@ -69,7 +69,7 @@ def test_kinematic_limit_of_the_path_derivatives(delta_f, delta_r):
     s_dot, e_dot, th_dot, _, _ = dynamics.dynamic_path_derivatives(
         VEH, kappa, e, theta, v_y, r, delta_f, delta_r, speed=u
     )
-    kin = fws.models.path_frame_derivatives(
+    kin = fws.kinematic_models.path_frame_derivatives(
         u / np.cos(delta_r), f, kappa, e, theta, delta_f, delta_r
     )
     np.testing.assert_allclose([s_dot, e_dot, th_dot], kin, rtol=1e-13)

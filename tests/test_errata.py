@@ -205,8 +205,8 @@ def test_erratum_7_reversing_flips_condition_35_only():
     k, a, k1, k2 = 0.05, -0.5, 0.3, 0.6
     forward = fws.LateralPlant(VEH, speed=5.0, curvature=k)
     reverse = fws.LateralPlant(VEH, speed=-5.0, curvature=k)
-    fwd = fws.characteristic_coefficients(forward, ratio=a)
-    rev = fws.characteristic_coefficients(reverse, ratio=a)
+    fwd = fws.affine_characteristic_polynomial(forward, ratio=a)
+    rev = fws.affine_characteristic_polynomial(reverse, ratio=a)
     _, p1_f, p0_f = fwd.coefficients(k1, k2)
     _, p1_r, p0_r = rev.coefficients(k1, k2)
     assert p1_r == pytest.approx(-p1_f)
@@ -226,5 +226,7 @@ def test_erratum_7_reversing_flips_condition_35_only():
     # the paper's (35), p1 = (V/f)(f a k1 + (1 - a) k2), carries the signed V
     for speed in (5.0, -5.0):
         plant = fws.LateralPlant(VEH, speed=speed, curvature=k, model="paper")
-        _, p1, _ = fws.characteristic_coefficients(plant, ratio=a).coefficients(k1, k2)
+        _, p1, _ = fws.affine_characteristic_polynomial(plant, ratio=a).coefficients(
+            k1, k2
+        )
         assert p1 == pytest.approx(speed / 2.7 * (2.7 * a * k1 + (1 - a) * k2))

@@ -421,10 +421,12 @@ CASES: dict[str, Case] = {
     ),
     "as_plant": Case(fws.as_plant, dict(plant=VEH), dict(speed=5.0, curvature=0.1)),
     "loop_matrices": Case(fws.loop_matrices, dict(plant=PLANT)),
-    "characteristic_coefficients": Case(
-        fws.characteristic_coefficients, dict(plant=PLANT), dict(ratio=-1.0)
+    "affine_characteristic_polynomial": Case(
+        fws.affine_characteristic_polynomial, dict(plant=PLANT), dict(ratio=-1.0)
     ),
-    "characteristic_polynomial": Case(fws.characteristic_polynomial, PG),
+    "characteristic_polynomial_coefficients": Case(
+        fws.characteristic_polynomial_coefficients, PG
+    ),
     "SteeringGains": Case(fws.SteeringGains, dict(k1=0.1, k2=0.5, ratio=-1.0)),
     "critical_delay": Case(fws.critical_delay, PG),
     "rightmost_roots": Case(

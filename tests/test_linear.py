@@ -94,7 +94,7 @@ def test_characteristic_polynomial_equals_sympy_and_eigenvalues(veh, rng, model)
         k1, k2 = rng.uniform(-2, 2, size=2)
         g = fws.SteeringGains(k1, k2, a)
         plant = fws.LateralPlant(veh, speed=V, curvature=k, model=model)
-        num = fws.characteristic_polynomial(plant, g)
+        num = fws.characteristic_polynomial_coefficients(plant, g)
         ref = [
             1.0,
             f1(V, veh.wheelbase, k, a, k1, k2, 0),
@@ -123,7 +123,7 @@ def test_affine_parts_equal_sympy_derivatives(veh, rng, model):
     for _ in range(30):
         V, k, a = rng.uniform(-30, 30), rng.uniform(-0.3, 0.3), rng.uniform(-2, 2)
         plant = fws.LateralPlant(veh, speed=V, curvature=k, model=model)
-        cp = fws.characteristic_coefficients(plant, ratio=a)
+        cp = fws.affine_characteristic_polynomial(plant, ratio=a)
         assert cp.order == 2
         args = (V, veh.wheelbase, k, a, 0, 0, 0)
         for got, funcs in zip((cp.open_loop, cp.n1, cp.n2), parts, strict=True):
@@ -134,13 +134,13 @@ def test_affine_parts_equal_sympy_derivatives(veh, rng, model):
 def test_affine_polynomial_evaluate_equals_polyval(veh, rng):
     """evaluate(s, k1, k2) and polynomials_at(s) against numpy.polyval."""
     for V, k, a, model in ((5.0, 0.1, -1.0, "kinematic"), (-20.0, 0.02, 0.7, "paper")):
-        cp = fws.characteristic_coefficients(
+        cp = fws.affine_characteristic_polynomial(
             fws.LateralPlant(veh, speed=V, curvature=k, model=model), ratio=a
         )
         s = rng.uniform(-3, 3, 40) + 1j * rng.uniform(-3, 3, 40)
         for k1, k2 in rng.uniform(-2, 2, (10, 2)):
             g = fws.SteeringGains(k1, k2, a)
-            coeffs = fws.characteristic_polynomial(
+            coeffs = fws.characteristic_polynomial_coefficients(
                 fws.LateralPlant(veh, speed=V, curvature=k, model=model), g
             )
             ref = np.polyval(coeffs, s)
@@ -178,10 +178,12 @@ def test_characteristic_polynomial_broadcasts(veh):
     ratios = np.linspace(-1.5, 1.5, 7)
     plant = fws.LateralPlant(veh, speed=5.0, curvature=0.1)
     g = fws.SteeringGains(0.2, 0.4, ratios)
-    out = fws.characteristic_polynomial(plant, g)
+    out = fws.characteristic_polynomial_coefficients(plant, g)
     assert out.shape == (7, 3)
     for i, a in enumerate(ratios):
-        ref = fws.characteristic_polynomial(plant, fws.SteeringGains(0.2, 0.4, a))
+        ref = fws.characteristic_polynomial_coefficients(
+            plant, fws.SteeringGains(0.2, 0.4, a)
+        )
         np.testing.assert_allclose(out[i], ref, rtol=1e-15)
 
 

@@ -25,6 +25,7 @@ from conftest import (
 
 import fws_control as fws
 from fws_control.paths import Arc
+from fws_control.simulation import cluster as dask_chunks
 from fws_control.simulation import runners
 
 VEH = PAPER_VEHICLE
@@ -61,8 +62,8 @@ class _GatedClient:
 
 def test_cluster_without_workers_raises_after_a_bounded_wait(monkeypatch):
     distributed = dask_distributed()
-    monkeypatch.setattr(runners, "_LOST_CLUSTER_WAIT", 1.0, raising=False)
-    monkeypatch.setattr(runners, "_POLL_INTERVAL", 0.1, raising=False)
+    monkeypatch.setattr(dask_chunks, "LOST_CLUSTER_WAIT", 1.0)
+    monkeypatch.setattr(dask_chunks, "POLL_INTERVAL", 0.1)
     kw = dict(CURVE_BATCH_KW, engine="numpy")  # two chunks of 4 and 2 runs
     local = fws.simulate_batch(PLANT, Arc(0.1), CURVE_GAINS_WITH_STOP, **kw)
     box = {}

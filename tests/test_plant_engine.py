@@ -431,11 +431,13 @@ def test_unnamed_two_state_system_is_taken_as_e_theta(op):
         K = np.ravel(ct.acker(A, B @ np.array([1.0, a]), [-1.0, -1.0]))
         assert_close(gains_of(ref), K, 1e-9)
         gains = fws.SteeringGains(k1, k2, a)
-        want = fws.characteristic_polynomial(named, gains)
+        want = fws.characteristic_polynomial_coefficients(named, gains)
         for sys in (unnamed, skewed):
             g = fws.double_root_gains(sys, ratio=a, pole=-1.0)
             assert_close(gains_of(g), gains_of(ref), 1e-12)
-            assert_close(fws.characteristic_polynomial(sys, gains), want, 1e-12, -1)
+            assert_close(
+                fws.characteristic_polynomial_coefficients(sys, gains), want, 1e-12, -1
+            )
             np.testing.assert_array_equal(
                 fws.is_stable(sys, gains), fws.is_stable(named, gains)
             )
@@ -566,12 +568,16 @@ def test_lagged_plant_characteristic_polynomial_is_np_poly(case):
     rng = np.random.default_rng(404)
     k1, k2 = rng.uniform(lo, hi, (2, 40))
     for x1, x2 in zip(k1, k2, strict=True):
-        got = fws.characteristic_polynomial(plant, fws.SteeringGains(x1, x2, a))
+        got = fws.characteristic_polynomial_coefficients(
+            plant, fws.SteeringGains(x1, x2, a)
+        )
         want = np.poly(closed_loop_matrix(plant, x1, x2, a))
         assert got.shape == (5,)
         assert_close(got, want, 1e-9)
     # Array gains: one call, shape (..., n + 1).
-    got = fws.characteristic_polynomial(plant, fws.SteeringGains(k1, k2, a))
+    got = fws.characteristic_polynomial_coefficients(
+        plant, fws.SteeringGains(k1, k2, a)
+    )
     want = np.array([np.poly(M) for M in closed_loop_matrix(plant, k1, k2, a)])
     assert got.shape == (40, 5)
     assert_close(got, want, 1e-9, axis=-1)
@@ -582,7 +588,7 @@ def test_lagged_plant_affine_polynomial(case):
     """open_loop = det(sI - A), n_i(s) = c_i adj(sI - A) b, evaluated at s."""
     V, kap, a, _ = case
     plant = lagged_plant(V, kap)
-    ap = fws.characteristic_coefficients(plant, ratio=a)
+    ap = fws.affine_characteristic_polynomial(plant, ratio=a)
     assert isinstance(ap, fws.AffinePolynomial)
     assert ap.order == 4
     A, b, ce, cth = loop_vectors(plant, a)
@@ -604,9 +610,9 @@ def test_lagged_plant_affine_polynomial(case):
     )
     # A ratio array broadcasts: fields of shape (3, n + 1), row i = ratio[i].
     ratios = np.array([a, a + 0.5, -2.0])
-    apa = fws.characteristic_coefficients(plant, ratio=ratios)
+    apa = fws.affine_characteristic_polynomial(plant, ratio=ratios)
     for i, r in enumerate(ratios):
-        one = fws.characteristic_coefficients(plant, ratio=r)
+        one = fws.affine_characteristic_polynomial(plant, ratio=r)
         for field in ("open_loop", "n1", "n2"):
             arr = np.broadcast_to(getattr(apa, field), (3, 5))
             assert_close(arr[i], getattr(one, field), 1e-14)
@@ -631,7 +637,7 @@ def test_lateral_plant_steering_lag_is_the_interconnected_plant(case):
     k1, k2 = rng.uniform(lo, hi, (2, 5000))
     gains = fws.SteeringGains(k1, k2, a)
     Acl = closed_loop_matrix(ref_plant, k1, k2, a)
-    got = fws.characteristic_polynomial(plant, gains)
+    got = fws.characteristic_polynomial_coefficients(plant, gains)
     assert got.shape == (5000, 5)
     assert_close(got[:100], np.array([np.poly(M) for M in Acl[:100]]), 1e-9, -1)
     eig = np.linalg.eigvals(Acl)
@@ -644,7 +650,9 @@ def test_lateral_plant_steering_lag_is_the_interconnected_plant(case):
     speeds = np.array([V, 2.0 * V, -V])
     curv = np.array([kap, 0.0, 0.2])
     sweep = fws.LateralPlant(VEH, speeds, curvature=curv, steering_lag=(TAU_F, TAU_R))
-    got = fws.characteristic_polynomial(sweep, fws.SteeringGains(k1[:3], k2[:3], a))
+    got = fws.characteristic_polynomial_coefficients(
+        sweep, fws.SteeringGains(k1[:3], k2[:3], a)
+    )
     for i in range(3):
         M = closed_loop_matrix(lagged_plant(speeds[i], curv[i]), k1[i], k2[i], a)
         assert_close(got[i], np.poly(M), 1e-9)
@@ -819,7 +827,7 @@ def test_random_higher_order_plants_against_eigenvalues():
             total += n_pts
             # The polynomial itself, against np.poly of the closed loop.
             assert_close(
-                fws.characteristic_polynomial(plant, gains)[:50],
+                fws.characteristic_polynomial_coefficients(plant, gains)[:50],
                 np.array(
                     [np.poly(M) for M in closed_loop_matrix(plant, k1[:50], k2[:50], a)]
                 ),
@@ -853,12 +861,12 @@ def test_two_state_engine_equals_closed_forms_on_random_points():
             hand_plant(V, kap, model),
             fws.LateralPlant(VEH, V, curvature=kap, model=model),
         ):
-            got = fws.characteristic_polynomial(plant, gains)
+            got = fws.characteristic_polynomial_coefficients(plant, gains)
             assert got.shape == (n, 3)
             assert np.all(got[:, 0] == 1.0)
             assert np.all(np.abs(got[:, 1] - p1) <= 1e-12 * s1)
             assert np.all(np.abs(got[:, 2] - p0) <= 1e-12 * s0)
-            ap = fws.characteristic_coefficients(plant, ratio=a)
+            ap = fws.affine_characteristic_polynomial(plant, ratio=a)
             assert ap.order == 2
             got = ap.coefficients(k1, k2)
             assert np.all(np.abs(got[:, 1] - p1) <= 1e-12 * s1)
@@ -878,7 +886,7 @@ def test_lateral_plant_arrays_broadcast_like_the_closed_forms():
     plant = fws.LateralPlant(VEH, speed=V, curvature=kap)
     gains = fws.SteeringGains(k1, k2, a)
     p1, p0, s1, s0 = closed_form_p(V, kap, k1, k2, a)
-    got = fws.characteristic_polynomial(plant, gains)
+    got = fws.characteristic_polynomial_coefficients(plant, gains)
     assert got.shape == (n, 3)
     assert np.all(np.abs(got[:, 1] - p1) <= 1e-12 * s1)
     assert np.all(np.abs(got[:, 2] - p0) <= 1e-12 * s0)
@@ -897,7 +905,7 @@ def test_lateral_plant_arrays_broadcast_like_the_closed_forms():
     k2=st.floats(-3.0, 3.0),
 )
 def test_two_state_polynomial_equals_closed_form(speed, curvature, ratio, k1, k2):
-    got = fws.characteristic_polynomial(
+    got = fws.characteristic_polynomial_coefficients(
         hand_plant(speed, curvature), fws.SteeringGains(k1, k2, ratio)
     )
     p1, p0, s1, s0 = closed_form_p(speed, curvature, k1, k2, ratio)
@@ -1007,7 +1015,7 @@ def test_positional_operating_point_is_a_type_error():
         lambda: fws.linearize(veh, 5.0),
         lambda: fws.closed_loop(plant, g, 5.0),
         lambda: fws.stability_boundaries(plant, -1.0),
-        lambda: fws.characteristic_coefficients(plant, -1.0),
+        lambda: fws.affine_characteristic_polynomial(plant, -1.0),
         lambda: fws.parameter_locus(plant, g, "ratio", [0.0, 1.0]),
         lambda: fws.gain_locus(plant, g, [1.0, 2.0]),
     ]
@@ -1030,7 +1038,7 @@ def test_vehicle_keywords_with_a_plant_are_a_type_error(keyword, kind):
         lambda: fws.is_stable(plant, g, **kw),
         lambda: fws.double_root_gains(plant, ratio=-1.0, pole=-1.0, **kw),
         lambda: fws.stability_chart(plant, ratio=-1.0, **kw),
-        lambda: fws.characteristic_polynomial(plant, g, **kw),
+        lambda: fws.characteristic_polynomial_coefficients(plant, g, **kw),
     ]
     for call in calls:
         with pytest.raises(TypeError, match=keyword):
@@ -1055,8 +1063,8 @@ def _refusals(sys):
     g = fws.SteeringGains(0.1, 0.5, -1.0)
     return [
         lambda: fws.is_stable(sys, g),
-        lambda: fws.characteristic_polynomial(sys, g),
-        lambda: fws.characteristic_coefficients(sys, ratio=-1.0),
+        lambda: fws.characteristic_polynomial_coefficients(sys, g),
+        lambda: fws.affine_characteristic_polynomial(sys, ratio=-1.0),
         lambda: fws.stability_chart(sys, ratio=-1.0, k1=[0.0, 1.0], k2=[0.0, 1.0]),
         lambda: fws.double_root_gains(sys, ratio=-1.0, pole=-1.0),
     ]

@@ -54,7 +54,7 @@ def _objects():
             "linear=<TimeResponseData>",
         ),
         "AffinePolynomial": (
-            fws.characteristic_coefficients(plant, ratio=0.0),
+            fws.affine_characteristic_polynomial(plant, ratio=0.0),
             "AffinePolynomial(",
         ),
         "LoopMatrices": (fws.loop_matrices(plant), "LoopMatrices("),

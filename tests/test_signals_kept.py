@@ -24,7 +24,7 @@ from hypothesis import strategies as st
 
 import fws_control as fws
 from fws_control.paths import Arc
-from fws_control.simulation import SIGNALS, engine
+from fws_control.simulation import SIGNALS, options
 from fws_control.simulation.engine import PEAK_SIGNALS
 
 matplotlib.use("Agg")
@@ -212,7 +212,7 @@ def test_the_budget_counts_the_kept_signals_only(monkeypatch):
     two = n * 2 * T * 8  # e and theta of all runs [bytes]
     one_run = 1 * len(SIGNALS) * T * 8  # a chunk of one run, all signals
     assert one_run < two < n * len(SIGNALS) * T * 8
-    monkeypatch.setattr(engine, "MAX_OUTPUT_BYTES", two)
+    monkeypatch.setattr(options, "MAX_OUTPUT_BYTES", two)
     with pytest.raises(ValueError, match="budget"):
         fws.simulate_batch(PLANT, PATH, g, **kw)  # all signals: refused
     res = fws.simulate_batch(PLANT, PATH, g, signals=("e", "theta"), chunk_size=1, **kw)
@@ -228,7 +228,7 @@ def test_the_budget_counts_the_kept_signals_only(monkeypatch):
     ):
         fws.simulate_batch(PLANT, PATH, g, signals=("e", "theta"), chunk_size=8, **kw)
     # only the metrics: no signal bytes at all
-    monkeypatch.setattr(engine, "MAX_OUTPUT_BYTES", one_run)
+    monkeypatch.setattr(options, "MAX_OUTPUT_BYTES", one_run)
     assert fws.simulate_batch(
         PLANT, PATH, g, signals="metrics", chunk_size=1, **kw
     ).ok.all()

@@ -326,7 +326,7 @@ def test_peak_memory_scales_with_the_output_not_more():
 
 
 def test_signals_computed_in_blocks_equal_one_pass(monkeypatch):
-    from fws_control.simulation import runners
+    from fws_control.simulation import chunks
 
     g = fws.double_root_gains(
         VEH, speed=5.0, curvature=0.1, ratio=np.array([-1.0, 0.5]), pole=-1.0
@@ -334,7 +334,7 @@ def test_signals_computed_in_blocks_equal_one_pass(monkeypatch):
     # a full turn and more: psi must stay continuous across the blocks
     kw = {"initial_state": (0.0, -5.0, 6.0), "duration": 20.0}
     one = fws.simulate_batch(PLANT, Arc(0.1), g, **kw)
-    monkeypatch.setattr(runners, "_OUTPUT_BLOCK", 2 * 37)  # blocks of 37 samples
+    monkeypatch.setattr(chunks, "OUTPUT_BLOCK", 2 * 37)  # blocks of 37 samples
     blocks = fws.simulate_batch(PLANT, Arc(0.1), g, **kw)
     # equal up to rounding (numpy's SIMD loops round by array length)
     np.testing.assert_allclose(blocks.signals, one.signals, rtol=1e-14, atol=1e-14)

@@ -85,7 +85,7 @@ def test_boundaries_reproduce_eigenvalues(model, speed, curvature, ratio, k1, k2
 )
 def test_points_on_boundary_have_a_zero_coefficient(model, curvature, ratio, t):
     plant = fws.LateralPlant(VEH, speed=5.0, curvature=curvature, model=model)
-    cp = fws.characteristic_coefficients(plant, ratio=ratio)
+    cp = fws.affine_characteristic_polynomial(plant, ratio=ratio)
     lines = fws.stability_boundaries(plant, ratio=ratio, omega=[1.0]).lines
     for b, which in zip(lines, (1, 2), strict=True):
         if b.degenerate:
@@ -208,7 +208,7 @@ def test_two_state_fast_path_equals_routh_hurwitz(model):
     k1[500:1000] = 0.0
     a[500:1000] = gain_factor(VEH.wheelbase, kap[500:1000], model)
     kap[1000:1500] = k1[1000:1500] = 0.0
-    p = fws.characteristic_polynomial(
+    p = fws.characteristic_polynomial_coefficients(
         fws.LateralPlant(VEH, speed=V[:1500], curvature=kap[:1500], model=model),
         fws.SteeringGains(k1[:1500], k2[:1500], a[:1500]),
     )
@@ -217,7 +217,7 @@ def test_two_state_fast_path_equals_routh_hurwitz(model):
     plant = fws.LateralPlant(VEH, speed=V, curvature=kap, model=model)
     g = fws.SteeringGains(k1, k2, a)
     fast = fws.is_stable(plant, g)
-    general = routh_hurwitz(fws.characteristic_polynomial(plant, g))
+    general = routh_hurwitz(fws.characteristic_polynomial_coefficients(plant, g))
     np.testing.assert_array_equal(fast, general)
     assert not fast[:1500].any()
     assert 0.1 < fast.mean() < 0.9
@@ -226,7 +226,7 @@ def test_two_state_fast_path_equals_routh_hurwitz(model):
         gi = fws.SteeringGains(k1[i], k2[i], a[i])
         pi = fws.LateralPlant(VEH, speed=V[i], curvature=kap[i], model=model)
         assert fws.is_stable(pi, gi) is routh_hurwitz(
-            fws.characteristic_polynomial(pi, gi)
+            fws.characteristic_polynomial_coefficients(pi, gi)
         )
 
 

@@ -49,7 +49,7 @@ G = fws.SteeringGains(0.1, 0.5, 0.0)
         (lambda: fws.SteeringGains(0.1, 0.5, np.inf), ValueError, "ratio"),
         (lambda: fws.is_stable(VEH, (0.1, 0.5, 0.0), speed=5.0), TypeError, "gains"),
         (
-            lambda: fws.characteristic_coefficients(VEH, speed=5.0, ratio=np.nan),
+            lambda: fws.affine_characteristic_polynomial(VEH, speed=5.0, ratio=np.nan),
             ValueError,
             "ratio",
         ),

@@ -101,7 +101,8 @@ def test_order6_spread_poles_unstable_root_is_not_stable(seed):
             key=lambda z: (z.real, z.imag),
         )
     roots = sorted(
-        np.roots(fws.characteristic_polynomial(sys, g)), key=lambda z: (z.real, z.imag)
+        np.roots(fws.characteristic_polynomial_coefficients(sys, g)),
+        key=lambda z: (z.real, z.imag),
     )
     for r, e in zip(roots, ev, strict=True):
         assert abs(r - e) <= 1e-9 * abs(e)
@@ -109,7 +110,7 @@ def test_order6_spread_poles_unstable_root_is_not_stable(seed):
 
 def test_coefficients_are_correctly_rounded_against_60_digits():
     sys, A, B, C, _, _ = _spread_plant(253)
-    cp = fws.characteristic_coefficients(sys, ratio=0.0)
+    cp = fws.affine_characteristic_polynomial(sys, ratio=0.0)
     d, n1, n2 = _mp_affine(A, B[:, 0], C[0], C[1])
     for got, ref, err in (
         (cp.open_loop, d, cp.open_loop_error),
@@ -139,7 +140,7 @@ def test_non_finite_plant_refused_once_in_as_plant(matrix):
         lambda: fws.is_stable(sys, g),
         lambda: fws.stability_verdict(sys, g),
         lambda: fws.closed_loop(sys, g),
-        lambda: fws.characteristic_polynomial(sys, g),
+        lambda: fws.characteristic_polynomial_coefficients(sys, g),
         lambda: fws.critical_delay(sys, g),
         lambda: fws.gain_locus(sys, g),
         lambda: fws.rightmost_roots(sys, g, delay=0.1),

@@ -89,8 +89,8 @@ def test_schedule_in_designs_and_charts(u, kappa):
     )
     np.testing.assert_allclose(np.linalg.eigvals(poles), [-1.5, -1.5], atol=2e-4)
     dyn = fws.LateralPlant(VEH, speed=u, curvature=kappa, model="dynamic")
-    cp_s = fws.characteristic_coefficients(dyn, ratio=fws.zero_sideslip_ratio)
-    cp_v = fws.characteristic_coefficients(dyn, ratio=a)
+    cp_s = fws.affine_characteristic_polynomial(dyn, ratio=fws.zero_sideslip_ratio)
+    cp_v = fws.affine_characteristic_polynomial(dyn, ratio=a)
     np.testing.assert_array_equal(cp_s.n1, cp_v.n1)
 
 
@@ -104,7 +104,7 @@ def test_schedule_broadcasts_and_is_checked():
     )
     assert ch.ratio == fws.zero_sideslip_ratio(VEH, speed=20.0)
     with pytest.raises(TypeError, match="needs a fws.LateralPlant"):
-        fws.characteristic_coefficients(
+        fws.affine_characteristic_polynomial(
             fws.LateralPlant(VEH, speed=5.0).linearize(), ratio=fws.zero_sideslip_ratio
         )
     with pytest.raises(ValueError, match="returned by the schedule"):

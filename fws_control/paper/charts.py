@@ -17,11 +17,11 @@ import control as ct
 import numpy as np
 
 from ..charts import StabilityChart, stability_chart
-from ..design import double_root_gains
 from ..exceptions import UncontrollableError
 from ..hints import ModelName
 from ..layout import grid_margins
 from ..plant import LateralPlant
+from ..pole_placement import double_root_gains
 from ..reprs import summary_repr
 from ..validation import check_model
 from ..vehicle import Vehicle

@@ -27,12 +27,12 @@ from typing import TYPE_CHECKING, Any, cast
 import control as ct
 import numpy as np
 
-from ..design import UncontrollableError, double_root_gains
 from ..files import atomic_write, lock_folder, remove_stale_temporaries
 from ..hints import ModelName
 from ..layout import grid_margins
 from ..linear import closed_loop
 from ..plant import LateralPlant
+from ..pole_placement import UncontrollableError, double_root_gains
 from ..turning import plot_turning_radius, turning_radius
 from ..validation import check_model
 from ..vehicle import Vehicle
@@ -269,7 +269,7 @@ def plot_root_loci(
 
 
 def _comparison_figure(model: ModelName = "kinematic", quick: bool = False):
-    from ..comparison import compare_linear_nonlinear
+    from ..linear_vs_nonlinear import compare_linear_nonlinear
 
     plant = LateralPlant(PAPER_VEHICLE, speed=5.0, curvature=0.1, model=model)
     g = double_root_gains(plant, ratio=-1.0, pole=-1.0)

@@ -36,11 +36,11 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..deprecation import legacy_keyword, reject_unknown
-from ..design import UncontrollableError, double_root_gains
 from ..gains import SteeringGains
 from ..hints import ModelName, RealArrayLike
 from ..paths import Arc, Straight
 from ..plant import LateralPlant
+from ..pole_placement import UncontrollableError, double_root_gains
 from ..reprs import summary_repr
 from ..simulation import STATUS_UNCONTROLLABLE, SimulationResult, simulate_batch
 from ..simulation.engine import time_grid

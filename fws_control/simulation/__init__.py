@@ -1,19 +1,33 @@
 r"""Closed-loop simulation of the 4WS path-tracking controller.
 
-The subpackage is layered in one direction (each module imports only those
-above it)::
+The subpackage holds one stage of the closed loop per module, and each
+module imports only those listed above it::
 
-    engine     the numerical engine: vectorised path-frame right-hand side,
-       │       integration of many runs with per-run stops, output signals
-       ▼
+    outcomes   the statuses a run ends with, the stop margin, the names of
+               the signals and of the peak signals
+    options    each option of a run checked once: solver, tolerances, model,
+               initial state, gains, steering lag, output times and memory
+    dense      the solver's dense output of every step: the delay's history
+               and the continuous solution
+    loop       ClosedLoop: the vectorised right-hand side of n runs (path
+               frame, the law or a controller, actuator, dynamic body)
+    signals    the output signals from the path-frame states
+    peaks      the exact peaks of the continuous solution
+    engine     the numpy engine's driver: many runs in one solver, a run
+               leaving the stack where it stops (re-exports the names above)
     result     SimulationResult: one type for one run or many (a run axis)
-       │
-       ▼
-    runners    simulate (one run) and simulate_batch (many, chunks, Dask)
+    arguments  a call's plant, speed profile, gain schedule and runs,
+               resolved and validated once
+    chunks     one chunk of runs on the numpy engine (module-level for Dask)
+    cluster    the chunks of a batch on a Dask cluster
+    compiled   the compiled per-run engine (numba), with compilation: its
+               cache and first use
+    runners    simulate (one run) and simulate_batch (many, chunks, Dask),
+               and the choice of the engine
 
     reference  closed_loop_system, projection_system: the same loop as a
-               python-control interconnection (uses the engine's argument
-               checks only), the tests' reference for the engine
+               python-control interconnection (uses the option checks only),
+               the tests' reference for the engine
 
 A run stops, and is marked in its result rather than raising, when the model
 becomes singular (``status`` :data:`STATUS_SINGULAR_STEERING`,
@@ -23,7 +37,7 @@ becomes singular (``status`` :data:`STATUS_SINGULAR_STEERING`,
 
 from typing import TYPE_CHECKING, Any
 
-from .engine import (
+from .outcomes import (
     SIGNALS,
     STATUS_END_OF_PATH,
     STATUS_FAILED,

@@ -20,17 +20,17 @@ import control as ct
 import numpy as np
 
 from .. import equations
-from ..baselines import LateralController, saturate
 from ..controllers import path_tracking_controller, steering_actuator
 from ..deprecation import legacy_keyword, reject_unknown
 from ..dynamics import dynamic_global_model
 from ..gains import SteeringGains
 from ..hints import RealArrayLike, TyreName
-from ..models import global_frame_model
+from ..kinematic_models import global_frame_model
+from ..lateral_controller import LateralController, saturate
 from ..paths import Path
 from ..validation import check_delay, check_nonzero, check_scalar, check_type
 from ..vehicle import Vehicle
-from .engine import check_model, resolve_time_constant, split_initial_state
+from .options import check_model, resolve_time_constant, split_initial_state
 
 __all__ = [
     "closed_loop_system",
@@ -108,7 +108,7 @@ def closed_loop_system(
     :func:`projection_system`, :func:`~fws_control.path_tracking_controller`
     with a delay, a :func:`control.pade` block per steering channel, and, if
     there is an actuator (see
-    :func:`~fws_control.simulation.engine.resolve_time_constant`),
+    :func:`~fws_control.simulation.options.resolve_time_constant`),
     :func:`~fws_control.steering_actuator` (states ``delta_f, delta_r``
     appended last).
 
@@ -440,7 +440,7 @@ def simulate_reference(
         Order of the Pade approximation of the delay.
     rtol, atol : float, optional
         Solver tolerances, in the ranges of
-        :func:`~fws_control.simulation.engine.check_tolerances`.
+        :func:`~fws_control.simulation.options.check_tolerances`.
     model, tyre : str, optional
         Vehicle and tyre model, as in :func:`closed_loop_system`.
 
@@ -468,7 +468,7 @@ def simulate_reference(
         kwargs, "actuator_time_constant", "steering_lag", steering_lag
     )
     reject_unknown("simulate_reference", kwargs)
-    from .engine import check_tolerances, time_grid
+    from .options import check_tolerances, time_grid
 
     rtol, atol = check_tolerances(rtol, atol)
 

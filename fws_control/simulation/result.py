@@ -48,8 +48,8 @@ from ..metrics import HORIZON_METRICS
 from ..paths import Path
 from ..reprs import brief, html_table, import_pandas
 from ..vehicle import Vehicle
-from .engine import (
-    MODELS,
+from .options import MODELS
+from .outcomes import (
     PEAK_SIGNALS,
     SIGNALS,
     STATUS_OK,
@@ -123,7 +123,7 @@ class Peaks:
     With ``exact=True`` (every result of the runners, either engine) they
     are the maxima of the continuous solution over each run's integrated
     interval ``[0, t_stop]``, located on the solver's dense output (see
-    :func:`~fws_control.simulation.engine.exact_peaks` and
+    :func:`~fws_control.simulation.peaks.exact_peaks` and
     :func:`~fws_control.simulation.compiled.compiled_peaks`): they do not
     depend on the output grid. ``exact=False`` (a result built from samples
     only) marks the maxima of the output samples. A
@@ -226,7 +226,7 @@ class SimulationResult:
         The reference path; :meth:`plot` draws it.
     run_peak, run_peak_time : ndarray, optional
         Per run and signal of
-        :data:`~fws_control.simulation.engine.PEAK_SIGNALS`, shape
+        :data:`~fws_control.simulation.outcomes.PEAK_SIGNALS`, shape
         ``(runs, len(PEAK_SIGNALS))``: the exact peaks ``max |signal|`` of
         the continuous solution and their times (see :attr:`peaks`). None
         (both): :attr:`peaks` falls back to the samples, marked
@@ -237,7 +237,7 @@ class SimulationResult:
         if unknown.
     model : str, optional
         The vehicle model simulated, ``"kinematic"`` (default) or
-        ``"dynamic"`` (:data:`~fws_control.simulation.engine.MODELS`).
+        ``"dynamic"`` (:data:`~fws_control.simulation.options.MODELS`).
     tyre : str, optional
         Its tyre model, ``"linear"`` (default) or ``"magic"``.
     engine : str, optional

@@ -1,9 +1,12 @@
 r"""The public runners: :func:`simulate` (one run) and :func:`simulate_batch`.
 
-Both validate the arguments, project the initial poses onto the path, let
-the engine (:mod:`~fws_control.simulation.engine`) integrate the closed loop
-and return a :class:`~fws_control.simulation.result.SimulationResult`;
-:func:`simulate` is a batch of one run, squeezed.
+Both resolve and validate the arguments
+(:mod:`~fws_control.simulation.arguments`), let an engine integrate the
+closed loop chunk by chunk (:mod:`~fws_control.simulation.chunks` on the
+numpy engine, :mod:`~fws_control.simulation.engine`; on a Dask cluster
+:mod:`~fws_control.simulation.cluster`) and return a
+:class:`~fws_control.simulation.result.SimulationResult`; :func:`simulate`
+is a batch of one run, squeezed.
 
 :func:`simulate_batch` stacks the path-frame states of the runs of a chunk
 into one state vector and integrates them with one solver. Gains, ratios,
@@ -31,20 +34,16 @@ import dataclasses
 import functools
 import math
 import sys
-import time
-import warnings
 from typing import Any
 
 import numpy as np
-from scipy.integrate import DOP853, RK23, RK45
 
-from ..baselines import LateralController
 from ..controllers import check_feedforward
-from ..deprecation import legacy_keyword, reject_unknown, warn_deprecated
 from ..dynamics import require_dynamics
 from ..exceptions import ClusterLostError
 from ..gains import SteeringGains
-from ..metrics import HORIZON_METRICS, tracking_metrics
+from ..lateral_controller import LateralController
+from ..metrics import HORIZON_METRICS
 from ..paths import Path
 from ..plant import LateralPlant
 from ..speed_profile import SpeedProfile
@@ -52,35 +51,28 @@ from ..validation import (
     MAX_SPEED,
     check_bool,
     check_delay,
-    check_nonzero,
-    check_scalar,
-    check_type,
 )
 from ..vehicle import Vehicle
-from .engine import (
-    LSODA_MAX_RUNS,
-    PEAK_SIGNALS,
-    SAFE_STEP,
-    SIGNALS,
-    STATUS_FAILED,
-    check_method,
-    check_model,
-    check_output_budget,
-    check_sampling,
-    check_tolerances,
-    choose_method,
-    compute_outputs,
-    exact_peaks,
-    initial_path_state,
-    integrate,
-    is_sampled,
-    output_samples,
-    resolve_time_constant,
-    run_gains,
-    scheduled_gains,
-    split_initial_state,
-    time_grid,
+from .arguments import (
+    check_chunk_size,
+    check_out,
+    check_profile_run,
+    check_signals,
+    prepare_runs,
+    resolve_plant,
+    speed_option,
+    with_profile,
 )
+from .chunks import chunk_controller, reduce_chunk, run_isolated, run_kept
+from .cluster import run_on_dask
+from .loop import scheduled_gains
+from .options import (
+    LSODA_MAX_RUNS,
+    SAFE_STEP,
+    initial_path_state,
+    run_gains,
+)
+from .outcomes import PEAK_SIGNALS, SIGNALS
 from .result import SimulationResult
 
 __all__ = ["simulate", "simulate_batch", "DEFAULT_CHUNK_SIZE"]
@@ -94,130 +86,6 @@ def _stderr_is_tty() -> bool:
         return sys.stderr.isatty()
     except (AttributeError, ValueError):
         return False
-
-
-#: Samples (runs x output times) whose signals are computed at once: the
-#: temporaries of :func:`~fws_control.simulation.engine.compute_outputs`
-#: (about forty-five arrays of this size, 12 MB) stay bounded, whatever the
-#: size of the output.
-_OUTPUT_BLOCK = 1 << 15
-_PSI = SIGNALS.index("psi")
-
-
-def _outputs_in_blocks(vehicle, path, g, *, states, initial_heading, **kw):
-    """:func:`compute_outputs` over blocks of output times, into one array.
-
-    ``psi`` is unwrapped in time within a block; each block starts on the
-    branch of the previous block's last value (consecutive samples differ
-    by less than pi), so the result equals one call over all times.
-    """
-    n, T = states.shape[1], states.shape[2]
-    step = max(1, _OUTPUT_BLOCK // max(n, 1))
-    if step >= T:
-        return compute_outputs(
-            vehicle, path, g, states=states, initial_heading=initial_heading, **kw
-        )
-    out = np.empty((n, len(SIGNALS), T))
-    heading = np.asarray(initial_heading, dtype=float)
-    times = kw.pop("times", None)
-    for k0 in range(0, T, step):
-        part = out[:, :, k0 : k0 + step]
-        part[...] = compute_outputs(
-            vehicle, path, g, states=states[:, :, k0 : k0 + step],
-            initial_heading=heading,
-            times=None if times is None else times[k0 : k0 + step], **kw,
-        )  # fmt: skip
-        heading = part[:, _PSI, -1]
-    return out
-
-
-def _run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl):
-    """Simulate one chunk; module-level so that Dask can pickle it.
-
-    Returns ``(signals (n, len(SIGNALS), T), status, message, t_stop,
-    peaks (n, len(PEAK_SIGNALS)), peak_times)``: the peaks are those of the
-    continuous solution (:func:`~fws_control.simulation.engine.exact_peaks`).
-    """
-    g = SteeringGains(k1, k2, a) if ctrl is None else ctrl
-    # x0: pose and (v_y, r) of the dynamic model (NaN: the default)
-    z0 = initial_path_state(path, x0[:, :3])
-    body = x0[:, 3:] if opts["model"] == "dynamic" else None
-    states, status, message, t_stop = integrate(
-        vehicle,
-        path,
-        g,
-        speed=speed,
-        feedforward=feedforward,
-        path_state=z0,
-        t_eval=t,
-        time_constant=tau,
-        solution=(solution := []),
-        body_state=body,
-        **opts,
-    )
-    signals = _outputs_in_blocks(
-        vehicle,
-        path,
-        g,
-        speed=speed,
-        feedforward=feedforward,
-        time_constant=tau,
-        states=states,
-        initial_heading=x0[:, 2],
-        delay=opts["delay"],
-        model=opts["model"],
-        tyre=opts["tyre"],
-        profile=opts.get("profile"),
-        schedule=opts.get("schedule"),
-        times=t,
-    )
-    del states  # (the outputs hold everything the peaks need)
-    peaks, peak_times = exact_peaks(
-        vehicle,
-        path,
-        g,
-        speed=speed,
-        feedforward=feedforward,
-        time_constant=tau,
-        solution=solution[0],
-        t_eval=t,
-        signals=signals,
-        t_stop=t_stop,
-        model=opts["model"],
-        tyre=opts["tyre"],
-        profile=opts.get("profile"),
-        schedule=opts.get("schedule"),
-    )
-    return signals, status, message, t_stop, peaks, peak_times
-
-
-def _run_isolated(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl):
-    """:func:`_run_chunk`, where a solver failure takes only its own run out.
-
-    The runs of a chunk share one solver, so one run whose solver fails
-    (e.g. a speed of 1e300 m/s) fails every run still active in the chunk.
-    Those runs are split in halves and integrated again, recursively, until
-    a run that fails alone is found: only it keeps the status ``"failed"``
-    (and its message); every other run keeps its own result. The cost is at
-    most about twice the chunk's (one half of each split finishes normally).
-    Module-level so that Dask can pickle it: on a cluster the retries run on
-    the worker.
-    """
-    out = _run_chunk(
-        vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl
-    )  # fmt: skip
-    failed = np.flatnonzero(out[1] == STATUS_FAILED)
-    if speed.size == 1 or failed.size == 0:
-        return out
-    for idx in np.array_split(failed, 2):
-        sub_ctrl = ctrl.subset(idx) if ctrl is not None and ctrl.runs() else ctrl
-        sub = _run_isolated(
-            vehicle, path, k1[idx], k2[idx], a[idx], speed[idx], feedforward,
-            x0[idx], t, tau, opts, sub_ctrl,
-        )  # fmt: skip
-        for whole, part in zip(out, sub, strict=True):
-            whole[idx] = part
-    return out
 
 
 # Engines of simulate_batch (documented in its docstring).
@@ -293,7 +161,7 @@ def _choose_engine(path, gains, *, delay, method, model, feedforward):
 def _run_compiled(
     vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl, out=None
 ):
-    """:func:`_run_chunk` on the compiled engine (each run alone).
+    """:func:`run_chunk` on the compiled engine (each run alone).
 
     Same arguments and results, the peaks those of each run's own dense
     output (:func:`~fws_control.simulation.compiled.compiled_peaks`);
@@ -385,158 +253,6 @@ def _run_compiled_stages(
     return signals, status, message, t_stop, peaks, peak_times
 
 
-#: The choice of ``signals="metrics"``: no time series, only per-run values.
-_METRICS_ONLY = "metrics"
-
-
-def _check_signals(signals: Any) -> tuple[str, ...]:
-    """The names of the kept signals, in the order of :data:`SIGNALS`."""
-    if signals is None:
-        return SIGNALS
-    if isinstance(signals, str):
-        if signals == _METRICS_ONLY:
-            return ()
-        raise ValueError(
-            f"signals must be None (all), 'metrics' (no time series) or a "
-            f"sequence of names of {SIGNALS}, got the str {signals!r}"
-            + (
-                f" (for one signal: signals=({signals!r},))"
-                if signals in SIGNALS
-                else ""
-            )
-        )
-    try:
-        names = list(signals)
-    except TypeError:
-        raise TypeError(
-            "signals must be None, 'metrics' or a sequence of signal names, got "
-            f"{type(signals).__name__} {signals!r}"
-        ) from None
-    if not names:
-        raise ValueError(
-            "signals must name at least one signal, got an empty sequence; use "
-            "signals='metrics' to keep no time series (only per-run metrics)"
-        )
-    for name in names:
-        if not isinstance(name, str):
-            raise TypeError(
-                f"signals must hold signal names (str), got {name!r} of type "
-                f"{type(name).__name__} in {signals!r}; valid names: {SIGNALS}"
-            )
-        if name not in SIGNALS:
-            raise ValueError(
-                f"signals: unknown signal {name!r}; valid names: {SIGNALS} "
-                "(or signals=None for all, 'metrics' for none)"
-            )
-    if len(set(names)) != len(names):
-        raise ValueError(f"signals must not repeat a name, got {signals!r}")
-    return tuple(k for k in SIGNALS if k in names)
-
-
-def _check_out(out: Any, shape: tuple[int, int, int]) -> None:
-    """Refuse an `out` that cannot receive the kept signals in place."""
-    if shape[1] == 0:
-        raise ValueError(
-            "out must be None with signals='metrics' (no time series to write), "
-            f"got {type(out).__name__}"
-        )
-    # other subclasses of ndarray carry state of their own that the chunks'
-    # writes would not update (a masked array's mask)
-    if type(out) is not np.ndarray and not isinstance(out, np.memmap):
-        raise TypeError(
-            f"out must be a numpy.ndarray (e.g. numpy.empty({shape})) or a "
-            f"numpy.memmap, got {type(out).__name__}"
-        )
-    if out.dtype != np.float64 or out.shape != shape:
-        raise ValueError(
-            f"out must be a float64 array (native byte order) of shape {shape} "
-            f"(runs, kept signals, output times), got {out.dtype} of shape "
-            f"{out.shape}"
-        )
-    if not out.flags.c_contiguous:
-        raise ValueError(
-            f"out must be C-contiguous (the chunks write whole rows), got an "
-            f"array with strides {out.strides}"
-        )
-    if not out.flags.writeable:
-        raise ValueError("out must be writeable, got a read-only array")
-
-
-def _reduce_chunk(out, rows, horizon, exact, args):
-    """A chunk's outputs with only the kept signals and the per-run values.
-
-    `out` is what :func:`_run_chunk` returns; `rows` the indices of the
-    kept signals in :data:`SIGNALS`. Everything that needs the dropped
-    signals is computed here, from the chunk's full signals, before they
-    are freed: the number of samples up to each run's stop, the horizon
-    metrics of :func:`~fws_control.tracking_metrics` if `horizon` (``e``
-    or ``theta`` dropped), and the sample peaks if the engine gave no exact
-    ones (not `exact`). Returns ``(kept signals, status, message, t_stop,
-    peaks, peak_times, samples, metrics or None)``.
-    """
-    signals, status, message, t_stop, peak, peak_time = out
-    t = args[8]
-    samples = np.count_nonzero(np.isfinite(signals[:, SIGNALS.index("s"), :]), axis=1)
-    metrics = None
-    if horizon or not exact:
-        chunk = SimulationResult(
-            t=t,
-            signals=signals,
-            run_status=np.asarray(status).astype(str),
-            run_message=tuple(str(m) for m in message),
-            run_t_stop=t_stop,
-            run_speed=args[5],
-            run_k1=args[2],
-            run_k2=args[3],
-            run_ratio=args[4],
-            run_initial_state=args[7][:, :3],
-            run_peak=peak if exact else None,
-            run_peak_time=peak_time if exact else None,
-        )
-        if not exact:  # the maxima of the samples, while they exist (once)
-            p = chunk.peaks
-            peak = np.stack([p[name].value for name in PEAK_SIGNALS], axis=1)
-            peak_time = np.stack([p[name].time for name in PEAK_SIGNALS], axis=1)
-            chunk = dataclasses.replace(
-                chunk, run_peak=peak, run_peak_time=peak_time, peaks_exact=False
-            )
-        if horizon:
-            m = tracking_metrics(chunk)
-            metrics = np.stack([getattr(m, k) for k in HORIZON_METRICS], axis=1)
-        del chunk
-    kept = signals[:, rows, :]  # a copy of the kept rows only
-    return kept, status, message, t_stop, peak, peak_time, samples, metrics
-
-
-def _run_kept(run, rows, horizon, exact, *args):
-    """``run(*args)`` reduced by :func:`_reduce_chunk` where it ran.
-
-    Module-level so that Dask can pickle it: on a cluster the full signals
-    of a chunk stay on its worker, only the kept ones travel.
-    """
-    return _reduce_chunk(run(*args), rows, horizon, exact, args)
-
-
-def _lost_chunk(n: int, t_size: int, note: str):
-    """The outputs of :func:`_run_chunk` for runs whose Dask task was lost."""
-    nan = np.full((n, len(PEAK_SIGNALS)), np.nan)
-    return (
-        np.full((n, len(SIGNALS), t_size), np.nan),
-        np.full(n, STATUS_FAILED, dtype=object),
-        np.full(n, note, dtype=object),
-        np.full(n, np.nan),
-        nan,
-        nan.copy(),
-    )
-
-
-def _chunk_controller(ctrl, lo: int, hi: int):
-    """The controller of runs ``lo:hi`` (per-run parameters indexed)."""
-    if ctrl is None or not ctrl.runs():
-        return ctrl
-    return ctrl.subset(np.arange(lo, hi))
-
-
 class _NoBar:
     """The progress bar's interface when no bar is shown."""
 
@@ -545,269 +261,6 @@ class _NoBar:
 
     def close(self) -> None:
         pass
-
-
-# Seconds simulate_batch waits on a Dask cluster that has no worker
-# before it gives up the pending chunks (marked "failed", then
-# ClusterLostError, see _run_on_dask):
-# long enough for a cluster that scales up from zero to start one.
-_LOST_CLUSTER_WAIT = 60.0
-
-# Seconds between two checks of the cluster's workers while chunks are pending.
-_POLL_INTERVAL = 1.0
-
-
-def _has_workers(client) -> bool:
-    """Whether the Dask cluster behind `client` has a worker (True if unknown)."""
-    info = getattr(client, "scheduler_info", None)
-    if info is None:
-        return True
-    try:
-        return bool(info().get("workers", True))
-    except Exception:  # the scheduler went away: the wait will say so
-        return True
-
-
-def _run_on_dask(client, bounds, args, keep, t_size, bar, run) -> str | None:
-    """Run the chunks on a Dask cluster; keep every chunk that finishes.
-
-    A client that cannot take the tasks (closed) raises at once, before any
-    work. A task the cluster loses afterwards (cancelled, worker or
-    scheduler gone) does not discard the chunks that finished: its runs are
-    marked ``"failed"`` with NaN data and a message naming Dask's error, and
-    a :class:`RuntimeWarning` says how many runs were lost. A cluster left
-    without workers (all killed, no nanny to restart them) would keep the
-    tasks pending forever: once it has had no worker for
-    ``_LOST_CLUSTER_WAIT`` (60) seconds, the pending tasks are cancelled,
-    their runs marked failed in the same way, and the message returned:
-    the caller builds the result of the finished chunks and raises
-    :class:`~fws_control.ClusterLostError` with it. An exception raised by
-    the simulation itself (e.g. an ambiguous initial projection)
-    propagates, as it would locally.
-    """
-    try:
-        from dask.distributed import wait
-    except ImportError as exc:  # pragma: no cover - optional extra
-        raise ImportError(
-            "client= needs dask.distributed; install the extra "
-            "`pip install fws-control[distributed]`"
-        ) from exc
-    if getattr(client, "status", "running") in ("closed", "closing"):
-        raise RuntimeError(
-            f"client={client!r} is closed: no chunk was submitted; start a "
-            "new dask.distributed.Client or pass client=None to run here"
-        )
-    futures = {}
-    try:
-        for j, (lo, hi) in enumerate(bounds):
-            fut = client.submit(run, *args(lo, hi), pure=False)
-            futures[fut] = j
-    except Exception as exc:
-        for fut in futures:
-            fut.cancel()
-        raise RuntimeError(
-            f"the Dask client could not take the chunks ({type(exc).__name__}: "
-            f"{exc}); no chunk was kept"
-        ) from exc
-    pending = dict(futures)
-    lost = []
-    task_error = None
-    cluster_lost = None  # the message once the cluster has no worker left
-    idle_since = None  # since when the cluster has had no worker
-    try:
-        while pending and task_error is None:
-            # (a cancelled future counts as done: dask's wait raises on it)
-            done = [f for f in pending if f.done() or f.cancelled()]
-            if not done:
-                try:
-                    done, _ = wait(
-                        list(pending),
-                        timeout=_POLL_INTERVAL,
-                        return_when="FIRST_COMPLETED",
-                    )
-                except TimeoutError:
-                    done = ()
-                except Exception:
-                    done = [f for f in pending if f.cancelled()]
-                    if not done:
-                        raise  # the cluster went away (below)
-            for fut in done:
-                j = pending.pop(fut)
-                try:
-                    chunk = fut.result()
-                except Exception as exc:
-                    if fut.status == "error":  # the simulation itself raised
-                        task_error = exc
-                        break
-                    lost.append((j, exc))
-                    continue
-                keep(j, chunk)
-                bar.update(1)
-            if done or task_error is not None:
-                idle_since = None
-                continue
-            if _has_workers(client):
-                idle_since = None
-            elif idle_since is None:
-                idle_since = time.monotonic()
-            elif time.monotonic() - idle_since > _LOST_CLUSTER_WAIT:
-                exc = TimeoutError(
-                    f"the Dask cluster has had no worker for {_LOST_CLUSTER_WAIT:g} "
-                    "s: its workers are gone"
-                )
-                cluster_lost = str(exc)
-                for fut, j in pending.items():
-                    fut.cancel()
-                    lost.append((j, exc))
-                pending.clear()
-    except Exception as exc:  # the cluster went away while we waited
-        lost.extend((j, exc) for j in pending.values())
-        pending.clear()
-    if task_error is not None:
-        for fut in pending:
-            fut.cancel()
-        raise task_error  # as it would be raised here
-    for j, exc in lost:
-        lo, hi = bounds[j]
-        note = (
-            f"not simulated: the Dask task of runs {lo}..{hi - 1} was lost "
-            f"({type(exc).__name__}: {exc}); the other chunks were kept"
-        )
-        keep(j, _lost_chunk(hi - lo, t_size, note))
-    if cluster_lost is not None:
-        runs = sum(bounds[j][1] - bounds[j][0] for j, _ in lost)
-        return (
-            f"simulate_batch: {cluster_lost}; {runs} pending runs were not "
-            "simulated (marked 'failed', NaN data); the finished chunks are "
-            "kept in this error's `result`"
-        )
-    if lost:
-        runs = sum(bounds[j][1] - bounds[j][0] for j, _ in lost)
-        warnings.warn(
-            f"simulate_batch: {runs} runs of {len(lost)} lost Dask tasks are "
-            "marked 'failed' (NaN data); the finished chunks were kept",
-            RuntimeWarning,
-            stacklevel=3,
-        )
-    return None
-
-
-#: Most solver steps a delay may force over the run (duration / delay).
-_MAX_DELAY_STEPS = 1.0e4
-
-
-def _prepare(
-    vehicle,
-    path,
-    gains,
-    speed,
-    initial_state,
-    duration,
-    dt,
-    t_eval,
-    tau,
-    opts,
-    kept=None,
-):
-    """Validate the arguments shared by both runners; broadcast the runs."""
-    check_type("vehicle", vehicle, Vehicle)
-    # every run records lateral_accel and v_y (and the peak of lateral_accel)
-    vehicle.cg_distance(
-        needed_by="a simulation (its signals lateral_accel and v_y are at G)"
-    )
-    check_type("path", path, Path, "a fws_control Path (e.g. fws.Straight())")
-    ctrl = gains if isinstance(gains, LateralController) else None
-    if ctrl is None:
-        g = run_gains(gains, name="gains")
-        fields = (g.k1, g.k2, g.ratio)
-    else:
-        # a controller carries its own parameters: no gains to record (NaN)
-        fields = (np.full(ctrl.runs() or 1, np.nan),) * 3
-    n_gains = fields[0].size
-    # scalars named here: the engine's float() of an array would not name them
-    for name, value in (("duration", duration), ("dt", dt)):
-        if value is not None and np.ndim(value) != 0:
-            raise ValueError(
-                f"{name} must be a scalar [s], got an array of shape {np.shape(value)}"
-            )
-    if tau is not None:
-        tau = check_scalar("steering_lag", tau)
-    speed_arr = np.atleast_1d(np.asarray(check_nonzero("speed", speed), dtype=float))
-    if speed_arr.ndim != 1:
-        raise ValueError(f"speed must be a scalar or 1-D, got shape {speed_arr.shape}")
-    opts["model"], opts["tyre"] = check_model(vehicle, opts["model"], opts["tyre"])
-    if opts["model"] == "dynamic" and np.any(speed_arr <= 0.0):
-        # the slip angles atan2(., u) and the 1/u of the tyre model assume
-        # forward motion
-        raise ValueError(
-            "speed must be > 0 for model='dynamic' (forward longitudinal speed "
-            f"u of the single-track model), got {speed!r}"
-        )
-    x0 = split_initial_state(initial_state, model=opts["model"])
-    sizes = {n_gains, speed_arr.size, x0.shape[0]} - {1}
-    if len(sizes) > 1:
-        raise ValueError(
-            "gains, speed and initial_state must have one entry or the same "
-            f"number of runs, got {n_gains}, {speed_arr.size} and {x0.shape[0]}"
-        )
-    n = sizes.pop() if sizes else 1
-    k1, k2, a, V = (np.broadcast_to(v, (n,)).copy() for v in (*fields, speed_arr))
-    x0 = np.broadcast_to(x0, (n, 5)).copy()
-    # (before building the grid: dt = 1e-9 must not allocate 112 GiB first)
-    samples = output_samples(duration, dt=dt, t_eval=t_eval)
-    check_output_budget(
-        n,
-        samples,
-        duration=duration,
-        dt=dt,
-        t_eval=t_eval,
-        signals=len(SIGNALS) if kept is None else kept,
-    )
-    t = time_grid(duration, dt=dt, t_eval=t_eval)
-    span = float(t[-1] - t[0])
-    if ctrl is not None and is_sampled(ctrl):
-        check_sampling(ctrl, span)
-    if 0.0 < opts["delay"] < span / _MAX_DELAY_STEPS:
-        # the method of steps takes steps no longer than the delay: a delay of
-        # 1e-300 s would never finish
-        raise ValueError(
-            f"delay must be 0 or >= duration/{_MAX_DELAY_STEPS:g} = "
-            f"{span / _MAX_DELAY_STEPS:.3g} s (the solver's steps are bounded by "
-            f"the delay), got {opts['delay']!r}"
-        )
-    tau = resolve_time_constant(vehicle, tau)
-    opts["rtol"], opts["atol"] = check_tolerances(opts["rtol"], opts["atol"])
-    if isinstance(opts["method"], str) and opts["method"] == "auto":
-        # (the duration: see the long-run rule there; the same for every
-        # run of a batch, so that a run's accuracy does not depend on it)
-        opts["method"] = choose_method(
-            tau, opts["rtol"], duration=span, delay=opts["delay"]
-        )
-    else:
-        _warn_if_stiff(check_method(opts["method"]), tau, float(t[-1]))
-    return k1, k2, a, V, x0, t, tau, ctrl
-
-
-#: Steps an explicit method may be forced to take by the actuator's
-#: stability bound (about 6.4 T for DOP853) before a warning.
-_STIFF_STEPS = 5000
-
-
-def _warn_if_stiff(solver, tau, duration) -> None:
-    """Warn when an explicitly chosen explicit method meets a stiff actuator."""
-    if tau is None or not issubclass(solver, (DOP853, RK23, RK45)):
-        return
-    steps = duration / (6.4 * tau)
-    if steps > _STIFF_STEPS:
-        warnings.warn(
-            f"method={solver.__name__!r} with steering_lag={tau!r} over "
-            f"duration={duration!r}: the actuator makes the loop stiff, so this "
-            f"explicit method needs about {steps:.2g} steps (its step is bounded "
-            "near 6.4 times the time constant); method='auto' or 'Radau' steps "
-            "by accuracy instead",
-            RuntimeWarning,
-            stacklevel=4,
-        )
 
 
 def _simulate_run(
@@ -920,7 +373,7 @@ def _simulate_batch(
     if not isinstance(engine, str) or engine not in _ENGINES:
         raise ValueError(f"engine must be one of {_ENGINES}, got {engine!r}")
     if profile is not None:
-        _check_profile_run(
+        check_profile_run(
             profile, model=model, delay=delay, feedforward=feedforward,
             gains=gains, engine=engine,
         )  # fmt: skip
@@ -933,8 +386,8 @@ def _simulate_batch(
         "model": model,
         "tyre": tyre,
     }
-    kept = _check_signals(signals)
-    k1, k2, a, V, x0, t, tau, ctrl = _prepare(
+    kept = check_signals(signals)
+    k1, k2, a, V, x0, t, tau, ctrl = prepare_runs(
         vehicle,
         path,
         gains,
@@ -967,7 +420,7 @@ def _simulate_batch(
         # the speed constant): "auto" chooses it, "compiled" was refused above
         engine = "numpy"
     if out is not None:
-        _check_out(out, (n, len(kept), t.size))
+        check_out(out, (n, len(kept), t.size))
     # False, True (eq. 26) or "dynamic" (dynamics.dynamic_feedforward)
     feedforward = check_feedforward(feedforward, speed=V)
     if feedforward == "dynamic":
@@ -1033,36 +486,16 @@ def _simulate_batch(
             # in two mixed chunks (within its tolerance, not bitwise alone;
             # chunk_size=1 is).
             chunk_size = LSODA_MAX_RUNS
-    if (
-        isinstance(chunk_size, bool)
-        or not isinstance(chunk_size, (int, np.integer, float))
-        or not math.isfinite(chunk_size)
-        or int(chunk_size) != chunk_size
-        or chunk_size < 1
-    ):
-        raise ValueError(f"chunk_size must be an integer >= 1, got {chunk_size!r}")
-    chunk_size = int(chunk_size)
-    if kept != SIGNALS or out is not None:
-        # the working set: one chunk's full signals (the kept ones are counted
-        # in _prepare, unless they go to out)
-        try:
-            check_output_budget(
-                min(chunk_size, n), t.size, duration=duration, dt=dt, t_eval=t_eval
-            )
-        except ValueError as exc:
-            where = f"keeps {len(kept)} of them"
-            if out is not None:
-                where = "writes them into out"
-            raise ValueError(
-                f"chunk_size={chunk_size}: a chunk computes all {len(SIGNALS)} "
-                f"signals before it {where}, and {exc}; or a smaller chunk_size"
-            ) from None
+    chunk_size = check_chunk_size(
+        chunk_size, runs=n, kept=kept, out=out, duration=duration, dt=dt,
+        t_eval=t_eval, samples=t.size,
+    )  # fmt: skip
     bounds = [(i, min(i + chunk_size, n)) for i in range(0, n, chunk_size)]
     if progress is None:
         progress = _stderr_is_tty()
     progress = check_bool("progress", progress)
 
-    run = _run_isolated if engine == "numpy" else _run_compiled
+    run = run_isolated if engine == "numpy" else _run_compiled
     # both engines give the exact peaks of the continuous solution (the
     # compiled one on each run's own dense output)
     exact = True
@@ -1070,7 +503,7 @@ def _simulate_batch(
     if reduce:
         rows = [SIGNALS.index(k) for k in kept]
         horizon = not {"e", "theta"} <= set(kept)
-        run = functools.partial(_run_kept, run, rows, horizon, exact)
+        run = functools.partial(run_kept, run, rows, horizon, exact)
 
     def args(lo, hi):
         return (
@@ -1085,7 +518,7 @@ def _simulate_batch(
             t,
             tau,
             opts,
-            _chunk_controller(ctrl, lo, hi),
+            chunk_controller(ctrl, lo, hi),
         )
 
     if progress:
@@ -1117,7 +550,7 @@ def _simulate_batch(
         nonlocal data
         lo, hi = bounds[j]
         if reduce and len(chunk) == 6:  # a lost Dask task: reduced here
-            chunk = _reduce_chunk(chunk, rows, horizon, exact, args(lo, hi))
+            chunk = reduce_chunk(chunk, rows, horizon, exact, args(lo, hi))
         if single:
             data = chunk[0]
         elif not written:
@@ -1143,7 +576,7 @@ def _simulate_batch(
                     keep(j, run(*args(lo, hi)))
                 bar.update(1)
         else:
-            cluster_lost = _run_on_dask(client, bounds, args, keep, t.size, bar, run)
+            cluster_lost = run_on_dask(client, bounds, args, keep, t.size, bar, run)
     finally:
         bar.close()
 
@@ -1180,175 +613,6 @@ def _simulate_batch(
     if cluster_lost is not None:
         raise ClusterLostError(cluster_lost, result=result)
     return result
-
-
-#: The keywords of the deprecated Vehicle form of simulate/simulate_batch
-#: that the plant now holds.
-_PLANT_KEYWORDS = ("speed", "model", "tyre", "steering_lag", "actuator_time_constant")
-
-
-def _profile_start(profile: SpeedProfile) -> float:
-    """Where a profile is read for the direction and the nominal gains."""
-    if profile.of == "time" or profile.points is None:
-        return 0.0
-    return float(profile.points[0])
-
-
-def _check_profile_run(profile, *, model, delay, feedforward, gains, engine) -> None:
-    """Refuse the cases a varying speed is not simulated in (ValueError)."""
-    if engine == "compiled":
-        raise ValueError(
-            "engine='compiled' cannot run this simulation: the speed varies "
-            f"along the run (speed={profile!r}) and the compiled engine holds it "
-            "constant; use engine='numpy' (or 'auto', which chooses it)"
-        )
-    if np.ndim(delay) == 0 and float(delay) > 0.0:
-        raise ValueError(
-            f"delay must be 0 with a varying speed (speed={profile!r}), got "
-            f"{delay!r}: the delayed measurements would need the speed of their "
-            "own time"
-        )
-    if isinstance(feedforward, str) and feedforward == "dynamic":
-        raise ValueError(
-            "feedforward='dynamic' is not simulated with a varying speed "
-            f"(speed={profile!r}); use feedforward=True (eq. 26, independent "
-            "of the speed) or False"
-        )
-    if isinstance(gains, LateralController):
-        raise ValueError(
-            f"controller: {type(gains).__name__} is not simulated with a varying "
-            f"speed (speed={profile!r}); use SteeringGains or a gain schedule"
-        )
-    if model == "dynamic" and profile.speeds is not None:
-        low = np.flatnonzero(profile.speeds <= 0.0)
-        if low.size:
-            i = int(low[0])
-            raise ValueError(
-                f"speed: the SpeedProfile's speeds must lie in (0, inf) m/s for "
-                f"model='dynamic' (forward longitudinal speed u), got "
-                f"{float(profile.speeds[i])!r} at index {i}"
-            )
-
-
-def _speed_option(plant: Any, speed: Any, kwargs: dict) -> SpeedProfile | None:
-    """The varying speed of a plant-first call, or None.
-
-    For the deprecated Vehicle form, `speed` is its constant speed and goes
-    back to `kwargs`. A constant profile gives None (the plant's speed is
-    replaced by the caller).
-    """
-    if speed is None:
-        return None
-    if not isinstance(plant, LateralPlant):
-        kwargs["speed"] = speed
-        return None
-    if isinstance(speed, SpeedProfile):
-        return speed
-    raise TypeError(
-        f"speed={speed!r} ({type(speed).__name__}) with a LateralPlant: a number "
-        "as speed= applies only to the deprecated Vehicle form (the plant holds "
-        "its constant speed: dataclasses.replace(plant, speed=...)); speed= "
-        "must be None or a fws.SpeedProfile (e.g. fws.SpeedProfile.from_time(t, "
-        "v)) for a speed that varies"
-    )
-
-
-def _is_schedule(controller: Any) -> bool:
-    """A gain schedule: ``at(speed)`` or a plain function of the speed."""
-    if isinstance(controller, (SteeringGains, LateralController)):
-        return False
-    return callable(getattr(controller, "at", None)) or callable(controller)
-
-
-def _scheduled(controller: Any, speed: Any) -> Any:
-    """The gains of a gain schedule at the run's speed; others unchanged.
-
-    A gain schedule is an object with a method ``at(speed)`` that returns
-    :class:`~fws_control.SteeringGains` (e.g.
-    :class:`~fws_control.GainSchedule`); the runs hold their speed, so the
-    schedule is read once per run. Its range errors name the speed.
-    """
-    if isinstance(controller, (SteeringGains, LateralController)):
-        return controller
-    at = getattr(controller, "at", None)
-    if not callable(at):
-        return controller
-    gains = at(np.asarray(speed, dtype=float))
-    if not isinstance(gains, SteeringGains):
-        raise TypeError(
-            f"controller.at(speed) must return a SteeringGains (a gain "
-            f"schedule), got {type(gains).__name__} from {controller!r}"
-        )
-    return gains
-
-
-def _resolve_plant(function: str, plant: Any, controller: Any, kwargs: dict):
-    """``(vehicle, controller, speed, model, tyre, lag)`` of a call.
-
-    `plant` is a :class:`LateralPlant`, or (deprecated, with a
-    FutureWarning) a :class:`Vehicle` with the keywords of
-    :data:`_PLANT_KEYWORDS` in `kwargs`. The deprecated ``gains=`` names
-    the controller. `kwargs` is emptied; an unknown keyword raises.
-    """
-    controller = legacy_keyword(kwargs, "gains", _CONTROLLER[function], controller)
-    if controller is None:
-        raise TypeError(
-            f"{function}() missing the argument {_CONTROLLER[function]!r} (a "
-            "SteeringGains or a lateral controller)"
-        )
-    if isinstance(plant, LateralPlant):
-        given = [k for k in _PLANT_KEYWORDS if k in kwargs]
-        if given:
-            raise TypeError(
-                f"{function}(): {', '.join(k + '=' for k in given)} applies only "
-                "to the deprecated Vehicle form; the LateralPlant already holds "
-                "its speed, model, tyre and steering lag (e.g. "
-                "dataclasses.replace(plant, steering_lag=0.1))"
-            )
-        reject_unknown(function, kwargs)
-        lag = plant.steering_lag
-        if lag is not None:
-            front, rear = lag
-            if front != rear:
-                raise ValueError(
-                    f"plant.steering_lag must hold one time constant for both "
-                    f"axles in the simulation (front == rear > 0 s), got "
-                    f"{lag!r}: the simulated actuator has one time constant"
-                )
-            lag = front
-        # "kinematic" and "paper" are two linearisations of one nonlinear
-        # kinematic model, which is what is simulated
-        model = "dynamic" if plant.model == "dynamic" else "kinematic"
-        return plant.vehicle, controller, plant.speed, model, plant.tyre, lag
-    if isinstance(plant, Vehicle):
-        if "speed" not in kwargs:
-            raise TypeError(
-                f"{function}(): plant must be a fws.LateralPlant (vehicle, speed, "
-                f"model, tyre, steering lag), got a Vehicle without speed=; pass "
-                f"fws.LateralPlant(vehicle, speed=...)"
-            )
-        warn_deprecated(
-            f"{function}(vehicle, path, gains, speed=...)",
-            f"{function}(plant, path, {_CONTROLLER[function]}) and pass a "
-            "fws.LateralPlant(vehicle, speed=..., model=..., tyre=..., "
-            "steering_lag=...) as the plant",
-        )
-        speed = kwargs.pop("speed")
-        model = kwargs.pop("model", "kinematic")
-        tyre = kwargs.pop("tyre", "linear")
-        lag = legacy_keyword(
-            kwargs, "actuator_time_constant", "steering_lag",
-            kwargs.pop("steering_lag", None),
-        )  # fmt: skip
-        reject_unknown(function, kwargs)
-        return plant, controller, speed, model, tyre, lag
-    raise TypeError(
-        f"{function}(): plant must be a fws.LateralPlant (the simulated system: "
-        f"vehicle, speed, model, tyre, steering lag), got {type(plant).__name__}"
-    )
-
-
-_CONTROLLER = {"simulate": "controller", "simulate_batch": "controllers"}
 
 
 def simulate(
@@ -1437,7 +701,7 @@ def simulate(
         one interval): pass `t_eval` for exact times. It sets the output
         only, not the accuracy (`rtol`, `atol`); the signals of one call may
         not exceed
-        :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES` (2 GiB).
+        :data:`~fws_control.simulation.options.MAX_OUTPUT_BYTES` (2 GiB).
     t_eval : array_like, optional
         Output times instead of `dt`; increasing, from 0 to at most
         `duration`.
@@ -1459,14 +723,14 @@ def simulate(
         DOP853, or Radau when a fast actuator makes the loop stiff, or LSODA
         for a run long enough that the actuator's stability bound would cost
         DOP853 more than 10 steps (rule and measurements in
-        :func:`~fws_control.simulation.engine.choose_method`); the result's
+        :func:`~fws_control.simulation.options.choose_method`); the result's
         ``method`` says which. An explicit method chosen for a stiff loop
         gives a :class:`RuntimeWarning`.
     rtol, atol : float, optional
         Relative and absolute tolerances of the solver: rtol in
         ``[100 eps, 0.1]`` (scipy's own floor to a 10 % error per step),
         atol in ``[1e-20, 0.1]`` [m, rad]; see
-        :func:`~fws_control.simulation.engine.check_tolerances`.
+        :func:`~fws_control.simulation.options.check_tolerances`.
     engine : {"auto", "numpy", "compiled"}, optional
         ``"compiled"``: the numba ports of DOP853 and Radau of
         :mod:`fws_control.simulation.compiled` (extra ``fast``), each run
@@ -1493,7 +757,7 @@ def simulate(
         ``"auto"`` (default): the compiled engine where numba is installed
         and it runs the case (with ``method="auto"`` and an actuator: DOP853
         held to 3.2 T or Radau, as above; the numpy engine's own choice is
-        :func:`~fws_control.simulation.engine.choose_method`); the numpy
+        :func:`~fws_control.simulation.options.choose_method`); the numpy
         engine otherwise. The result's
         ``engine`` says which ran, and is bitwise the result of asking for
         that engine explicitly.
@@ -1542,7 +806,7 @@ def simulate(
         :func:`simulate_batch`), a plant whose front and rear lags differ, a
         non-positive duration, an unknown method or feedforward, tolerances
         out of range, or an output larger than
-        :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES`; for
+        :data:`~fws_control.simulation.options.MAX_OUTPUT_BYTES`; for
         ``feedforward="dynamic"`` a vehicle without the dynamic data or a
         negative speed; for an unknown `engine`, or ``engine="compiled"``
         for a case it does not run (the message says why).
@@ -1563,11 +827,11 @@ def simulate(
     >>> len(res), res.e.shape
     (1, (1501,))
     """
-    profile = _speed_option(plant, speed, kwargs)
-    vehicle, controller, speed, model, tyre, lag = _resolve_plant(
+    profile = speed_option(plant, speed, kwargs)
+    vehicle, controller, speed, model, tyre, lag = resolve_plant(
         "simulate", plant, controller, kwargs
     )
-    profile, speed, controller, schedule = _with_profile(profile, speed, controller)
+    profile, speed, controller, schedule = with_profile(profile, speed, controller)
     if isinstance(plant, LateralPlant) and np.ndim(speed) != 0:
         raise ValueError(
             "plant.speed must be one speed (a scalar, nonzero, at most "
@@ -1596,34 +860,6 @@ def simulate(
         profile=profile,
         schedule=schedule,
     )
-
-
-def _with_profile(profile, speed, controller):
-    """``(profile, speed, controller, schedule)`` of a call.
-
-    A constant profile replaces the plant's speed (the run is then the
-    constant-speed run, on either engine). With a varying profile a gain
-    schedule is kept as the `schedule`, read at the current speed during
-    the run, and `speed` becomes the direction of travel; otherwise a
-    schedule is read once at the plant's speed (:func:`_scheduled`).
-    """
-    if profile is not None and np.ndim(speed) != 0:
-        raise ValueError(
-            "plant.speed must be one number with speed= a SpeedProfile (the "
-            "profile gives every run's speed; the plant's is its linearisation "
-            f"point), got an array of shape {np.shape(speed)}"
-        )
-    if profile is not None and profile.is_constant:
-        speed, profile = float(profile.speeds[0]), None
-    if profile is None:
-        return None, speed, _scheduled(controller, speed), None
-    schedule = None
-    if _is_schedule(controller):
-        # the gains at the profile's start count the runs (the record is
-        # the schedule's at each run's own start)
-        schedule = controller
-        controller = scheduled_gains(schedule, profile(_profile_start(profile)))
-    return profile, profile.initial_sign or 1.0, controller, schedule
 
 
 def simulate_batch(
@@ -1706,7 +942,7 @@ def simulate_batch(
     chunk_size : int, optional
         Runs per chunk (one solver; one Dask task); default
         :data:`DEFAULT_CHUNK_SIZE`, or
-        :data:`~fws_control.simulation.engine.LSODA_MAX_RUNS` (16) when the
+        :data:`~fws_control.simulation.options.LSODA_MAX_RUNS` (16) when the
         numpy engine integrates with LSODA (``method="LSODA"``, or what
         ``method="auto"`` picks for a stiff actuator over a long run).
         Smaller chunks decouple the step sizes of runs with very different
@@ -1732,7 +968,7 @@ def simulate_batch(
         computes its signals, writes the kept ones into the preallocated
         result and is freed, so the peak memory is the returned data and one
         chunk's working set, and the budget
-        :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES` counts the
+        :data:`~fws_control.simulation.options.MAX_OUTPUT_BYTES` counts the
         kept signals only (and one chunk's full signals). Whatever is kept,
         the result holds per run the status, ``t_stop``, the peaks
         (:attr:`~fws_control.SimulationResult.peaks`, computed before the
@@ -1758,7 +994,7 @@ def simulate_batch(
         memory map of a ``.npy`` file
         (:func:`numpy.lib.format.open_memmap`) streams a sweep larger than
         memory to disk. The output budget
-        :data:`~fws_control.simulation.engine.MAX_OUTPUT_BYTES` then counts
+        :data:`~fws_control.simulation.options.MAX_OUTPUT_BYTES` then counts
         one chunk's working set only. If the call raises, `out` may hold
         some runs' signals. Not with ``signals="metrics"``. A result whose
         `out` is written again (by another sweep) shows the new signals
@@ -1853,11 +1089,11 @@ def simulate_batch(
     >>> saved.shape, bool(np.all(saved[:, 0] == res.e))
     ((4, 1, 1001), True)
     """
-    profile = _speed_option(plant, speed, kwargs)
-    vehicle, controllers, speed, model, tyre, lag = _resolve_plant(
+    profile = speed_option(plant, speed, kwargs)
+    vehicle, controllers, speed, model, tyre, lag = resolve_plant(
         "simulate_batch", plant, controllers, kwargs
     )
-    profile, speed, controllers, schedule = _with_profile(profile, speed, controllers)
+    profile, speed, controllers, schedule = with_profile(profile, speed, controllers)
     return _simulate_batch(
         vehicle,
         path,
