@@ -638,7 +638,8 @@ class PurePursuit(LateralController):
         """
         ld = np.asarray(self.lookahead, dtype=float)
         if self.lookahead_time is not None:
-            ld = equations.lookahead_distance(ld, np.asarray(self.lookahead_time), speed)
+            t_la = np.asarray(self.lookahead_time)
+            ld = equations.lookahead_distance(ld, t_la, speed)
         return np.broadcast_to(ld, np.shape(speed)) if np.ndim(speed) else ld
 
     def compiled_law(self) -> tuple[str, tuple] | None:  # noqa: D102

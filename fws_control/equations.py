@@ -370,8 +370,10 @@ def lookahead_distance(lookahead, lookahead_time, speed):
     Examples
     --------
     >>> from fws_control.equations import lookahead_distance
-    >>> float(lookahead_distance(5.0, 0.6, 20.0)), float(lookahead_distance(5.0, 0.0, 20.0))
-    (12.0, 5.0)
+    >>> float(lookahead_distance(5.0, 0.6, 20.0))
+    12.0
+    >>> float(lookahead_distance(5.0, 0.0, 20.0))
+    5.0
     """
     return np.maximum(lookahead, lookahead_time * np.abs(speed))
 
