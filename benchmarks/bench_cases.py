@@ -13,14 +13,18 @@ method, rtol 1e-10, atol 1e-12:
 4. the paper's law on the dynamic single-track model with the saturating
    ("magic") tyre;
 5. Stanley (gain 2, ratios as 1.);
-6. pure pursuit (look-ahead 0.6 s, at least 5 m).
+6. pure pursuit (look-ahead 0.6 s, at least 5 m);
+7. Stanley as 5. with ``engine="numpy"``.
 
 Each line gives the engine that ran the case, the CPU per run (best of
 ``--repeat`` >= 3 rounds, the cases timed in turn every round so that a
 drift of the machine's speed does not enter the ratios) and the ratio to
 case 1. Cases on the numpy engine cost seconds per run: they run
-``--numpy-runs`` runs (default 2), the compiled ones ``--runs`` (default
-100). The machine load is printed before and after.
+``--numpy-runs`` runs (default 2), the baselines on the compiled engine
+``--baseline-runs`` (default 10: their signals and exact peaks are the
+numpy engine's formulas on the compiled dense output), the other compiled
+ones ``--runs`` (default 100). The machine load is printed before and
+after.
 
 Run: ``python benchmarks/bench_cases.py [--runs 100] [--numpy-runs 2]``
 (several minutes: the numpy cases dominate).
@@ -43,7 +47,7 @@ DYNAMIC = fws.Vehicle(
 )  # fmt: skip
 
 
-def cases(n_compiled: int, n_numpy: int) -> dict:
+def cases(n_compiled: int, n_numpy: int, n_baseline: int = 10) -> dict:
     """name -> (number of runs, function running the batch, its engine)."""
     course = fws.double_lane_change(vehicle_width=1.8)
     path = course.path
@@ -68,7 +72,7 @@ def cases(n_compiled: int, n_numpy: int) -> dict:
     kin = fws.LateralPlant(veh, speed=SPEED)
     lag = fws.LateralPlant(veh, speed=SPEED, steering_lag=REALISTIC_STEERING_LAG)
     dyn = fws.LateralPlant(DYNAMIC, speed=SPEED, model="dynamic", tyre="magic")
-    ratios = np.linspace(-0.5, 0.5, n_numpy)
+    ratios = np.linspace(-0.5, 0.5, n_baseline)
     table = {
         "paper law": (kin, laws(n_compiled, veh), {}),
         "+ delay 0.24 s": (kin, laws(n_compiled, veh), {"delay": REALISTIC_DELAY}),
@@ -77,6 +81,10 @@ def cases(n_compiled: int, n_numpy: int) -> dict:
         "Stanley": (kin, fws.Stanley(gain=2.0, ratio=ratios), {}),
         "pure pursuit": (
             kin, fws.PurePursuit(lookahead=5.0, lookahead_time=0.6, ratio=ratios), {}
+        ),
+        "Stanley, numpy": (
+            kin, fws.Stanley(gain=2.0, ratio=np.linspace(-0.5, 0.5, n_numpy)),
+            {"engine": "numpy"},
         ),
     }  # fmt: skip
     out = {}
@@ -91,10 +99,11 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=100)
     ap.add_argument("--numpy-runs", type=int, default=2)
+    ap.add_argument("--baseline-runs", type=int, default=10)
     ap.add_argument("--repeat", type=int, default=3)
     args = ap.parse_args()
     print(machine_line())
-    table = cases(args.runs, args.numpy_runs)
+    table = cases(args.runs, args.numpy_runs, args.baseline_runs)
     best = best_of_interleaved(
         {name: run for name, (_, run, _) in table.items()}, repeat=args.repeat
     )

@@ -155,6 +155,12 @@ class StateFeedback(LateralController):
     def runs(self) -> int | None:  # noqa: D102
         return None
 
+    def compiled_law(self) -> tuple[str, tuple] | None:  # noqa: D102
+        K = self.K
+        ff = 1.0 if self.feedforward else 0.0
+        params = (K[0, 0], K[0, 1], K[1, 0], K[1, 1], ff)
+        return self._declared(StateFeedback, "state_feedback", params)
+
     def steering(
         self,
         vehicle: Vehicle,
@@ -370,8 +376,14 @@ class PurePursuit(LateralController):
         """
         ld = np.asarray(self.lookahead, dtype=float)
         if self.lookahead_time is not None:
-            ld = np.maximum(ld, np.asarray(self.lookahead_time) * np.abs(speed))
+            t_la = np.asarray(self.lookahead_time)
+            ld = equations.lookahead_distance(ld, t_la, speed)
         return np.broadcast_to(ld, np.shape(speed)) if np.ndim(speed) else ld
+
+    def compiled_law(self) -> tuple[str, tuple] | None:  # noqa: D102
+        t_la = 0.0 if self.lookahead_time is None else self.lookahead_time
+        params = (self.lookahead, t_la, self.ratio)
+        return self._declared(PurePursuit, "pure_pursuit", params)
 
     def steering(
         self,
@@ -388,8 +400,7 @@ class PurePursuit(LateralController):
         e = np.asarray(e, dtype=float)
         theta = np.asarray(theta, dtype=float)
         ld = self.distance(np.asarray(speed, dtype=float))
-        ahead = np.sqrt(np.maximum(ld**2 - e**2, 0.0))
-        sp = s + np.sign(speed) * ahead
+        sp = s + np.sign(speed) * equations.lookahead_offset(ld, e)
         length = float(getattr(path, "length", math.inf))
         if math.isfinite(length) and not path.closed:
             sp = np.clip(sp, 0.0, length)
@@ -397,11 +408,10 @@ class PurePursuit(LateralController):
         px, py = path.position(sp)
         cx, cy = path.position(s)
         h = np.asarray(path.heading(s), dtype=float)
-        rx = np.asarray(cx) - e * np.sin(h)
-        ry = np.asarray(cy) + e * np.cos(h)
-        psi = theta + h
-        alpha = np.arctan2(np.asarray(py) - ry, np.asarray(px) - rx) - psi
-        df = np.arctan2(2.0 * vehicle.wheelbase * np.sin(alpha), ld)
+        rx, ry = equations.rear_axle_point(np.asarray(cx), np.asarray(cy), h, e)
+        df = equations.pure_pursuit_angle(
+            vehicle.wheelbase, ld, rx, ry, theta + h, np.asarray(px), np.asarray(py)
+        )
         return df, np.asarray(self.ratio) * df
 
 
@@ -449,6 +459,10 @@ class Stanley(LateralController):
         object.__setattr__(self, "softening", soft)
         object.__setattr__(self, "ratio", _per_run("ratio", self.ratio))
 
+    def compiled_law(self) -> tuple[str, tuple] | None:  # noqa: D102
+        params = (self.gain, self.softening, self.ratio)
+        return self._declared(Stanley, "stanley", params)
+
     def steering(
         self,
         vehicle: Vehicle,
@@ -468,17 +482,20 @@ class Stanley(LateralController):
         s_c = np.clip(s, 0.0, length) if open_path else s
         cx, cy = path.position(s_c)
         h = np.asarray(path.heading(s_c), dtype=float)
-        psi = theta + h
         f = vehicle.wheelbase
-        fx = np.asarray(cx) - e * np.sin(h) + f * np.cos(psi)
-        fy = np.asarray(cy) + e * np.cos(h) + f * np.sin(psi)
+        fx, fy, psi = equations.front_axle_point(
+            np.asarray(cx), np.asarray(cy), h, e, theta, f
+        )
+        # the projection's Newton iteration starts a wheelbase ahead
         guess = s_c + f * np.cos(theta)
         if open_path:
             guess = np.clip(guess, 0.0, length)
         proj = path.project(fx, fy, s_guess=guess)
-        theta_f = np.angle(np.exp(1j * (psi - np.asarray(proj.heading))))
-        v = np.abs(np.asarray(speed, dtype=float))
-        df = -theta_f - np.arctan(np.asarray(self.gain) * proj.e / (self.softening + v))
+        theta_f = equations.wrap_angle(psi - np.asarray(proj.heading))
+        df = equations.stanley_angle(
+            theta_f, proj.e, np.asarray(self.gain), self.softening,
+            np.asarray(speed, dtype=float),
+        )  # fmt: skip
         return df, np.asarray(self.ratio) * df
 
 
@@ -526,6 +543,10 @@ class RearWheelFeedback(LateralController):
         )
         object.__setattr__(self, "ratio", _per_run("ratio", self.ratio))
 
+    def compiled_law(self) -> tuple[str, tuple] | None:  # noqa: D102
+        params = (self.k_e, self.k_theta, self.ratio)
+        return self._declared(RearWheelFeedback, "rear_wheel_feedback", params)
+
     def steering(
         self,
         vehicle: Vehicle,
@@ -537,17 +558,12 @@ class RearWheelFeedback(LateralController):
         curvature: RealArrayLike,
         speed: RealArrayLike,
     ) -> tuple[Real, Real]:  # noqa: D102
-        e = np.asarray(e, dtype=float)
-        theta = np.asarray(theta, dtype=float)
-        kap = np.asarray(curvature, dtype=float)
-        V = np.asarray(speed, dtype=float)
-        sinc = np.sinc(theta / np.pi)  # sin(theta)/theta, 1 at theta = 0
-        omega = (
-            V * kap * np.cos(theta) / (1.0 - kap * e)
-            - np.asarray(self.k_theta) * np.abs(V) * theta
-            - np.asarray(self.k_e) * V * e * sinc
-        )
-        df = np.arctan(vehicle.wheelbase * omega / V)
+        df = equations.rear_wheel_feedback_angle(
+            np.asarray(speed, dtype=float), vehicle.wheelbase,
+            np.asarray(curvature, dtype=float), np.asarray(e, dtype=float),
+            np.asarray(theta, dtype=float), np.asarray(self.k_e),
+            np.asarray(self.k_theta),
+        )  # fmt: skip
         return df, np.asarray(self.ratio) * df
 
 

@@ -47,6 +47,14 @@ __all__ = [
     "feedback_command",
     "steering_law",
     "steering_law_rate",
+    "rear_axle_point",
+    "front_axle_point",
+    "wrap_angle",
+    "lookahead_distance",
+    "lookahead_offset",
+    "pure_pursuit_angle",
+    "stanley_angle",
+    "rear_wheel_feedback_angle",
     "no_slip_body_state",
     "slip_angles",
     "linear_tyre_force",
@@ -350,6 +358,145 @@ def steering_law_rate(
     """
     rate_f, rate_r = feedback_command(e_rate, theta_rate, k1, k2, ratio)
     return rate_f + feedforward_angle_rate(wheelbase, curvature, curvature_rate), rate_r
+
+
+# --------------------------------------------------------------------------
+# The baseline laws (fws_control.baselines)
+
+
+def rear_axle_point(x, y, heading, e):
+    r"""Global position of R from its path point C and lateral error.
+
+    .. math:: x_R = x_C - e\sin\psi_C,\qquad y_R = y_C + e\cos\psi_C
+
+    for the path point :math:`(x_C, y_C)` at ``s`` and its heading
+    :math:`\psi_C`. Returns ``(x_R, y_R)``.
+
+    Examples
+    --------
+    >>> from fws_control.equations import rear_axle_point
+    >>> [float(v) for v in rear_axle_point(1.0, 0.0, 0.0, 2.0)]
+    [1.0, 2.0]
+    """
+    return x - e * np.sin(heading), y + e * np.cos(heading)
+
+
+def front_axle_point(x, y, heading, e, theta, wheelbase):
+    r"""Global position of the front axle centre F and the vehicle heading.
+
+    F lies a wheelbase ahead of R (:func:`rear_axle_point`) along the
+    heading :math:`\psi = \theta + \psi_C`. Returns ``(x_F, y_F, psi)``.
+
+    Examples
+    --------
+    >>> from fws_control.equations import front_axle_point
+    >>> [float(v) for v in front_axle_point(0.0, 0.0, 0.0, 1.0, 0.0, 2.7)]
+    [2.7, 1.0, 0.0]
+    """
+    xr, yr = rear_axle_point(x, y, heading, e)
+    psi = theta + heading
+    return xr + wheelbase * np.cos(psi), yr + wheelbase * np.sin(psi), psi
+
+
+def wrap_angle(angle):
+    r"""`angle` wrapped to :math:`(-\pi, \pi]`: ``atan2(sin, cos)``.
+
+    Examples
+    --------
+    >>> import math
+    >>> from fws_control.equations import wrap_angle
+    >>> round(float(wrap_angle(1.5 * math.pi)), 12)
+    -1.570796326795
+    """
+    return np.arctan2(np.sin(angle), np.cos(angle))
+
+
+def lookahead_distance(lookahead, lookahead_time, speed):
+    r"""Look-ahead distance of pure pursuit :math:`L_d = \max(L, t_{la}|V|)`.
+
+    A look-ahead time of 0 gives the fixed distance `lookahead`.
+
+    Examples
+    --------
+    >>> from fws_control.equations import lookahead_distance
+    >>> float(lookahead_distance(5.0, 0.6, 20.0))
+    12.0
+    >>> float(lookahead_distance(5.0, 0.0, 20.0))
+    5.0
+    """
+    return np.maximum(lookahead, lookahead_time * np.abs(speed))
+
+
+def lookahead_offset(lookahead, e):
+    r"""Arc length from ``s`` to the look-ahead point, :math:`\sqrt{L_d^2 - e^2}`
+    (0 where :math:`|e| > L_d`): on a straight path the point at distance
+    :math:`L_d` from R.
+
+    Examples
+    --------
+    >>> from fws_control.equations import lookahead_offset
+    >>> float(lookahead_offset(5.0, 3.0)), float(lookahead_offset(5.0, 6.0))
+    (4.0, 0.0)
+    """
+    return np.sqrt(np.maximum(lookahead * lookahead - e * e, 0.0))
+
+
+def pure_pursuit_angle(wheelbase, lookahead, x_r, y_r, psi, x_p, y_p):
+    r"""Pure pursuit's front angle (Coulter 1992).
+
+    .. math:: \alpha = \operatorname{atan2}(y_P - y_R, x_P - x_R) - \psi,
+              \qquad \delta_f = \arctan\frac{2 f\sin\alpha}{L_d}
+
+    for the rear axle R at heading :math:`\psi` and the look-ahead point P.
+
+    Examples
+    --------
+    >>> from fws_control.equations import pure_pursuit_angle
+    >>> round(float(pure_pursuit_angle(2.7, 5.0, 0.0, 1.0, 0.0, 4.899, 0.0)), 4)
+    -0.2127
+    """
+    alpha = np.arctan2(y_p - y_r, x_p - x_r) - psi
+    return np.arctan2(2.0 * wheelbase * np.sin(alpha), lookahead)
+
+
+def stanley_angle(theta_f, e_f, gain, softening, speed):
+    r"""Stanley's front angle (Thrun et al. 2006).
+
+    .. math:: \delta_f = -\theta_f - \arctan\frac{k\,e_f}{k_s + |V|}
+
+    for the heading error :math:`\theta_f` and lateral error :math:`e_f` of
+    the front axle centre relative to its own nearest path point.
+
+    Examples
+    --------
+    >>> from fws_control.equations import stanley_angle
+    >>> round(float(stanley_angle(0.0, 1.0, 1.0, 0.0, 5.0)), 6)   # -atan(1/5)
+    -0.197396
+    """
+    return -theta_f - np.arctan(gain * e_f / (softening + np.abs(speed)))
+
+
+def rear_wheel_feedback_angle(speed, wheelbase, curvature, e, theta, k_e, k_theta):
+    r"""Rear-wheel feedback's front angle (Samson 1995).
+
+    .. math::
+        \omega = \frac{V\kappa\cos\theta}{1-\kappa e} - K_\theta |V|\theta
+                 - K_e V e\,\frac{\sin\theta}{\theta},\qquad
+        \delta_f = \arctan\frac{f\,\omega}{V}
+
+    Examples
+    --------
+    >>> from fws_control.equations import rear_wheel_feedback_angle
+    >>> round(float(rear_wheel_feedback_angle(5.0, 2.7, 0.0, 0.0, 0.1, 0.1, 0.5)), 6)
+    -0.134189
+    """
+    sinc = np.sinc(theta / np.pi)  # sin(theta)/theta, 1 at theta = 0
+    omega = (
+        speed * curvature * np.cos(theta) / (1.0 - curvature * e)
+        - k_theta * np.abs(speed) * theta
+        - k_e * speed * e * sinc
+    )
+    return np.arctan(wheelbase * omega / speed)
 
 
 # --------------------------------------------------------------------------

@@ -106,12 +106,13 @@ def test_rows_equal_a_direct_simulate(dynamic20, label):
     # the documented start (first gate's entry) and duration (1.1 x the
     # x-span over V, plus 0.5 s)
     duration = 1.1 * (gates[-1].x_end - gates[0].x_start) / 20.0 + 0.5
-    # compare runs the paper's law as a state-feedback controller, on the
-    # numpy engine; simulate would take the compiled one for SteeringGains
-    # (the two agree to the solver's tolerance, not bit for bit)
+    # compare runs the paper's law as a state-feedback controller and the
+    # baselines through simulate's default engine ("auto": the compiled
+    # engine runs their compiled laws); the direct run takes the same
     direct = fws.simulate(plant, COURSE.path, ctrls[label],
                           initial_state=(gates[0].x_start, 0.0, 0.0),
-                          duration=duration, dt=0.01, engine="numpy")  # fmt: skip
+                          duration=duration, dt=0.01)  # fmt: skip
+    assert direct.engine == cmp.results[cmp.labels.index(label)].engine
     i = cmp.labels.index(label)
     r = cmp.results[i]
     assert cmp.duration == pytest.approx(duration, rel=1e-15)

@@ -73,6 +73,12 @@ SIGNATURES = {
     "dynamic_path_kinematics": r"\(\w+ \* cos_t - v_r \* sin_t\) / \(1\.0 - \w+ \* e\)",
     # and its global-frame velocity of R
     "dynamic_global_kinematics": r"\w+ \* (sin|cos)_p [+-] v_r \* (cos|sin)_p",
+    # pure pursuit's angle of the look-ahead point: atan2(dy, dx) - psi
+    "pure_pursuit_angle": r"arctan2\(\w+ - \w+, \w+ - \w+\) - \w+",
+    # Stanley: atan(k e_f / (k_s + |V|))
+    "stanley_angle": r"arctan\([\w.\[\]()]+ \* [\w.]+ / \([\w.]+ \+ abs\(",
+    # rear-wheel feedback: V kappa cos(theta) / (1 - kappa e)
+    "rear_wheel_feedback_angle": r"\w+ \* \w+ \* cos\(\w+\) / \(1\.0 - \w+ \* e\)",
 }
 
 _WHEELBASE = {"wheelbase", "f", "_Q_WHEELBASE"}
@@ -387,6 +393,73 @@ def test_magic_tyre_against_its_formula(alpha, stiffness, peak):
     _close(equations.linear_tyre_force(alpha, stiffness), stiffness * alpha, stiffness)
 
 
+@settings(max_examples=40, deadline=None)
+@given(
+    st.floats(-30.0, 30.0), st.floats(-30.0, 30.0), st.floats(-4.0, 4.0), units,
+    units, lengths, st.floats(1.0, 15.0), st.floats(-30.0, 30.0),
+    st.floats(-30.0, 30.0),
+)  # fmt: skip
+def test_baseline_geometry_and_laws_against_their_formulas(
+    xc, yc, hc, ev, thv, fv, ld, xp, yp
+):
+    # R and F from the rotation of the path frame and the body frame
+    rot = np.array([[math.cos(hc), -math.sin(hc)], [math.sin(hc), math.cos(hc)]])
+    r_pt = np.array([xc, yc]) + rot @ np.array([0.0, ev])
+    got = equations.rear_axle_point(xc, yc, hc, ev)
+    assert np.allclose(got, r_pt, rtol=0.0, atol=1e-12 * (1 + abs(xc) + abs(yc)))
+    psi = thv + hc
+    f_pt = r_pt + fv * np.array([math.cos(psi), math.sin(psi)])
+    xf, yf, psi_got = equations.front_axle_point(xc, yc, hc, ev, thv, fv)
+    assert np.allclose([xf, yf], f_pt, rtol=0.0, atol=1e-11 * (1 + abs(xc) + abs(yc)))
+    assert psi_got == psi
+    # wrap: the representative in (-pi, pi] differing by a multiple of 2 pi
+    for a in (psi, 7.0 * psi, -3.0 * psi):
+        w = float(equations.wrap_angle(a))
+        assert -math.pi < w <= math.pi
+        turns = (a - w) / (2 * math.pi)
+        assert abs(turns - round(turns)) < 1e-9
+    # pure pursuit (Coulter 1992): the look-ahead point in the vehicle
+    # frame (x ahead, y left); the arc through R and P has curvature
+    # 2 y / L^2 with L^2 = x^2 + y^2, and delta_f = atan(f * curvature) for
+    # the distance L_d used in place of L
+    local = rot_inv = np.array([[math.cos(psi), math.sin(psi)],
+                                [-math.sin(psi), math.cos(psi)]]) @ (
+        np.array([xp, yp]) - r_pt)  # fmt: skip
+    del rot_inv
+    dist = math.hypot(*local)
+    if dist > 1e-6:
+        sin_alpha = local[1] / dist
+        want = math.atan(2.0 * fv * sin_alpha / ld)
+        got = equations.pure_pursuit_angle(fv, ld, r_pt[0], r_pt[1], psi, xp, yp)
+        assert abs(float(got) - want) <= 1e-9 * (1 + fv / ld)
+    assert float(equations.lookahead_offset(ld, ev)) == pytest.approx(
+        math.sqrt(max(ld**2 - ev**2, 0.0)), abs=1e-12 * ld
+    )
+    assert float(equations.lookahead_distance(ld, 0.3, -xp)) == max(ld, 0.3 * abs(xp))
+
+
+@settings(max_examples=40, deadline=None)
+@given(speeds, lengths, st.floats(-0.2, 0.2), units, units, st.floats(0.01, 2.0),
+       st.floats(0.01, 2.0))  # fmt: skip
+def test_stanley_and_rear_wheel_feedback_against_their_formulas(
+    Vv, fv, kv, ev, thv, kev, ktv
+):
+    want = -thv - math.atan(kev * ev / (0.1 + abs(Vv)))
+    assert float(equations.stanley_angle(thv, ev, kev, 0.1, Vv)) == pytest.approx(
+        want, abs=1e-14
+    )
+    if abs(Vv) < 1e-3:
+        return
+    sinc = math.sin(thv) / thv if thv != 0.0 else 1.0
+    omega = (
+        Vv * kv * math.cos(thv) / (1 - kv * ev)
+        - ktv * abs(Vv) * thv
+        - kev * Vv * ev * sinc
+    )
+    got = equations.rear_wheel_feedback_angle(Vv, fv, kv, ev, thv, kev, ktv)
+    assert float(got) == pytest.approx(math.atan(fv * omega / Vv), abs=1e-13)
+
+
 # --------------------------------------------------------------------------
 # (c) the compiled equations are the numpy ones, bit for bit
 
@@ -425,6 +498,20 @@ def _random_arguments(name: str, n: int, rng) -> list[np.ndarray]:
         "yaw_inertia": u(500.0, 5000.0, n),
         "force_f": u(-1e4, 1e4, n),
         "force_r": u(-1e4, 1e4, n),
+        "x": u(-50.0, 50.0, n),
+        "y": u(-50.0, 50.0, n),
+        "heading": u(-4.0, 4.0, n),
+        "angle": u(-10.0, 10.0, n),
+        "lookahead": u(0.5, 20.0, n),
+        "lookahead_time": u(0.0, 2.0, n),
+        "x_r": u(-50.0, 50.0, n),
+        "y_r": u(-50.0, 50.0, n),
+        "x_p": u(-50.0, 50.0, n),
+        "y_p": u(-50.0, 50.0, n),
+        "theta_f": u(-3.0, 3.0, n),
+        "e_f": u(-3.0, 3.0, n),
+        "gain": u(0.1, 5.0, n),
+        "softening": u(0.0, 1.0, n),
     }
     fn = getattr(equations, name)
     names = fn.__code__.co_varnames[: fn.__code__.co_argcount]
@@ -438,7 +525,8 @@ def _functions() -> list[str]:
 def test_every_equation_has_random_arguments():
     rng = np.random.default_rng(0)
     for name in _functions():
-        assert len(_random_arguments(name, 3, rng)) >= 2
+        fn = getattr(equations, name)
+        assert len(_random_arguments(name, 3, rng)) == fn.__code__.co_argcount >= 1
 
 
 @pytest.mark.parametrize("name", _functions())

@@ -81,11 +81,16 @@ the same functions of :mod:`fws_control.equations` as
 :func:`~fws_control.dynamics.dynamic_path_derivatives` (DOP853, no delay;
 ``tests/test_compiled_dynamic.py``).
 
+A :class:`~fws_control.LateralController` that declares a compiled law
+(the baselines: :mod:`~fws_control.simulation.compiled_laws`) runs in the
+same right-hand side with DOP853 and without a delay
+(``tests/test_compiled_baselines.py``).
+
 Not supported here (the numpy engine remains the general path;
 ``simulate(..., engine="compiled")`` raises for these, and the default
-``engine="auto"`` runs them on the numpy engine):
-:class:`~fws_control.LateralController` baselines, a delay with Radau or
-with the dynamic model, the dynamic model with Radau, and other solvers
+``engine="auto"`` runs them on the numpy engine): controllers without a
+compiled law, a controller's law with Radau or a delay, a delay with Radau
+or with the dynamic model, the dynamic model with Radau, and other solvers
 than DOP853 and Radau.
 A stiff actuator (small time constant) is detected with Hairer's test
 (``stiff`` in the statistics of DOP853, whose step is then limited by
@@ -121,6 +126,16 @@ from ..paths import Arc, Clothoid, Path, PathChain, Straight
 from ..validation import check_positive
 from ..vehicle import Vehicle
 from .compilation import compile_seconds, first_use, jit
+from .compiled_laws import (
+    P_LAW,
+    Q_CURVATURE_ROWS,
+    Q_LAW,
+    initial_command,
+    kernel_arrays,
+    law_code,
+    law_parameters,
+    make_law_command,
+)
 from .engine import (
     PEAK_SIGNALS,
     SIGNALS,
@@ -340,7 +355,9 @@ _Q_DELAY = 18  # input delay [s] (0: none)
 # forces (0: the linear tyre)
 _Q_DYNAMIC, _Q_MASS, _Q_INERTIA, _Q_L_F, _Q_L_R = 19, 20, 21, 22, 23
 _Q_C_F, _Q_C_R, _Q_PEAK_F, _Q_PEAK_R = 24, 25, 26, 27
-_NQ = 28
+# slots 28-35: a controller's compiled law and the curvature table's rows
+# (compiled_laws); 36-43: speed profiles and gain schedules
+_NQ = 44
 # Layout of the per run parameter vector.
 _P_SPEED, _P_K1, _P_K2, _P_RATIO = 0, 1, 2, 3
 # modes of the four clips (front/rear angle, front/rear rate): -1, 0 or +1
@@ -348,7 +365,9 @@ _P_MODE = 4
 # the held mode (-1 or +1) each clip was released from at the restart of
 # the current step, 0 otherwise (see _events)
 _P_RELEASED = 8
-_NP = 12
+# slots 12-17: a controller's law parameters (compiled_laws); 18-21: speed
+# profiles and gain schedules
+_NP = 22
 # With an input delay the driver extends a run's p by its past (the method
 # of steps), so that every function given p -- the right-hand side, the
 # events, the steps -- can look up the delayed state without another
@@ -464,8 +483,10 @@ def _curvature(s, q, breaks, coefs):
     else:
         # open paths: clipped, as the numpy engine does for trial stages
         s = min(max(s, q[_Q_S_LO]), q[_Q_S_HI])
-    k = np.searchsorted(breaks, s, side="right") - 1
-    k = min(max(k, 0), coefs.shape[0] - 1)
+    # (other tables follow the curvature's rows in breaks and coefs)
+    rows = int(q[Q_CURVATURE_ROWS])
+    k = np.searchsorted(breaks[: rows + 1], s, side="right") - 1
+    k = min(max(k, 0), rows - 1)
     d = s - breaks[k]
     return coefs[k, 0] + d * (coefs[k, 1] + d * (coefs[k, 2] + d * coefs[k, 3]))
 
@@ -573,8 +594,13 @@ def _dynamic_derivatives(V, kappa, e, th, vy, r, df, dr, q):
     return s_dot, e_dot, th_dot, vy_dot, r_dot
 
 
+_law_command = make_law_command(_EQUATIONS, _wrap_lap, _jit)
+
+
 @_jit_inline
-def _raw_command(e, theta, kappa, p, q):
+def _raw_command(s, e, theta, kappa, p, q, breaks, coefs):
+    if q[Q_LAW] != 0.0:  # a controller's compiled law (compiled_laws)
+        return _law_command(s, e, theta, kappa, p, q, breaks, coefs)
     cf, cr = _feedback_command(e, theta, p[_P_K1], p[_P_K2], p[_P_RATIO])
     if q[_Q_FF] != 0.0:
         cf = cf + _feedforward_angle(kappa, q)
@@ -582,14 +608,14 @@ def _raw_command(e, theta, kappa, p, q):
 
 
 @_jit_inline
-def _command(e, theta, kappa, p, q):
+def _command(s, e, theta, kappa, p, q, breaks, coefs):
     """The paper's law, as controllers.steering_command (same operations).
 
     With switching (``q[13] = 1``) a clipped channel is held at its limit
     by its mode (``p[4:6]``) rather than by min/max, so that the right-hand
     side is smooth between the located switches.
     """
-    cf, cr = _raw_command(e, theta, kappa, p, q)
+    cf, cr = _raw_command(s, e, theta, kappa, p, q, breaks, coefs)
     mf, mr = q[_Q_MAX_F], q[_Q_MAX_R]
     if q[_Q_SWITCH] != 0.0:
         if p[_P_MODE] != 0.0:
@@ -606,13 +632,13 @@ def _command(e, theta, kappa, p, q):
 def _clip_values(y, p, q, breaks, coefs, out):
     """Unclipped front/rear commands and actuator rates, and their limits."""
     kappa = _curvature(y[0], q, breaks, coefs)
-    raw_f, raw_r = _raw_command(y[1], y[2], kappa, p, q)
+    raw_f, raw_r = _raw_command(y[0], y[1], y[2], kappa, p, q, breaks, coefs)
     out[0], out[1] = raw_f, raw_r
     out[4], out[5] = q[_Q_MAX_F], q[_Q_MAX_R]
     out[6], out[7] = q[_Q_RATE_F], q[_Q_RATE_R]
     tau = q[_Q_TAU]
     if tau > 0.0:
-        cf, cr = _command(y[1], y[2], kappa, p, q)
+        cf, cr = _command(y[0], y[1], y[2], kappa, p, q, breaks, coefs)
         out[2] = (cf - y[3]) / tau
         out[3] = (cr - y[4]) / tau
     else:
@@ -649,9 +675,10 @@ def closed_loop_rhs(t, y, p, q, breaks, coefs, out):
     if q[_Q_DELAY] > 0.0:
         # the law acts on the measurements of t - delay
         s_m, e_m, th_m = _measured_state(t, y, p, q)
-        cf, cr = _command(e_m, th_m, _curvature(s_m, q, breaks, coefs), p, q)
+        kappa_m = _curvature(s_m, q, breaks, coefs)
+        cf, cr = _command(s_m, e_m, th_m, kappa_m, p, q, breaks, coefs)
     else:
-        cf, cr = _command(e, th, kappa, p, q)
+        cf, cr = _command(s, e, th, kappa, p, q, breaks, coefs)
     tau = q[_Q_TAU]
     if tau > 0.0:
         df, dr = y[3], y[4]
@@ -710,7 +737,7 @@ def closed_loop_jac(t, y, p, q, breaks, coefs, out):
     kappa, slope = _curvature_and_rate(s, q, breaks, coefs)
     if q[_Q_PERIOD] <= 0.0 and (s < q[_Q_S_LO] or s > q[_Q_S_HI]):
         slope = 0.0  # the open path's curvature is held outside its domain
-    cf, cr = _raw_command(e, th, kappa, p, q)
+    cf, cr = _raw_command(s, e, th, kappa, p, q, breaks, coefs)
     wheelbase = q[_Q_WHEELBASE]
     # d(cf, cr)/d(s, e, theta)
     cf_s = 0.0
@@ -734,10 +761,10 @@ def closed_loop_jac(t, y, p, q, breaks, coefs, out):
     df_x = np.zeros(3)
     dr_x = np.zeros(3)
     if tau > 0.0:
-        cf_c, cr_c = _command(e, th, kappa, p, q)
+        cf_c, cr_c = _command(s, e, th, kappa, p, q, breaks, coefs)
         df, dr = y[3], y[4]
     else:
-        cf_c, cr_c = _command(e, th, kappa, p, q)
+        cf_c, cr_c = _command(s, e, th, kappa, p, q, breaks, coefs)
         df, dr = cf_c, cr_c
         df_x[0], df_x[1], df_x[2] = cf_s, cf_e, cf_th
         dr_x[0], dr_x[1], dr_x[2] = cr_s, cr_e, cr_th
@@ -802,9 +829,10 @@ def _stop_events(y, p, q, breaks, coefs, g):
         # the applied angle: the law on the measurements of t - delay, for
         # the time the caller set in p[_P_NOW]
         s_m, e_m, th_m = _measured_state(p[_P_NOW], y, p, q)
-        df = _command(e_m, th_m, _curvature(s_m, q, breaks, coefs), p, q)[0]
+        kappa_m = _curvature(s_m, q, breaks, coefs)
+        df = _command(s_m, e_m, th_m, kappa_m, p, q, breaks, coefs)[0]
     else:
-        df = _command(e, y[2], kappa, p, q)[0]
+        df = _command(s, e, y[2], kappa, p, q, breaks, coefs)[0]
     g[0] = (0.5 * math.pi - q[_Q_STEER_MARGIN]) - abs(df)
     g[1] = (1.0 - kappa * e) - q[_Q_CURV_MARGIN]
     L = q[_Q_OPEN_LENGTH]
@@ -1650,8 +1678,9 @@ def _curvature_and_rate(s, q, breaks, coefs):
             s = 0.0
     else:
         s = min(max(s, q[_Q_S_LO]), q[_Q_S_HI])
-    k = np.searchsorted(breaks, s, side="right") - 1
-    k = min(max(k, 0), coefs.shape[0] - 1)
+    rows = int(q[Q_CURVATURE_ROWS])
+    k = np.searchsorted(breaks[: rows + 1], s, side="right") - 1
+    k = min(max(k, 0), rows - 1)
     d = s - breaks[k]
     kappa = coefs[k, 0] + d * (coefs[k, 1] + d * (coefs[k, 2] + d * coefs[k, 3]))
     return kappa, coefs[k, 1] + d * (2.0 * coefs[k, 2] + d * 3.0 * coefs[k, 3])
@@ -2977,7 +3006,7 @@ def shared_parameters(
     Returns
     -------
     ndarray
-        Shape ``(28,)``.
+        Shape ``(44,)``.
 
     Examples
     --------
@@ -3045,7 +3074,8 @@ def shared_parameters(
     # known (accepted) only if h <= delay
     q[_Q_MAX_STEP] = float(min(max_step, delay)) if delay > 0.0 else float(max_step)
     q[_Q_DELAY] = float(delay)
-    q[_Q_DYNAMIC:] = 0.0
+    q[_Q_DYNAMIC:] = 0.0  # (with the law slots: the paper's law)
+    q[Q_CURVATURE_ROWS] = table.coefs.shape[0]
     if model == "dynamic":
         require_dynamics(vehicle, tyre=tyre)
         q[_Q_DYNAMIC] = 1.0
@@ -3115,8 +3145,8 @@ def compiled_support(
     path : Path
         Reference path (any path with a finite length, or Straight/Arc).
     gains : SteeringGains or LateralController
-        Only :class:`~fws_control.SteeringGains` (the paper's law) is
-        compiled.
+        :class:`~fws_control.SteeringGains` (the paper's law) or a
+        controller that declares a compiled law (DOP853, no delay).
     delay : float, optional
         Input delay [s]: compiled with DOP853 (the method of steps).
     method : str or scipy.integrate.OdeSolver, optional
@@ -3143,8 +3173,17 @@ def compiled_support(
     """
     if numba is None:
         return "numba is not installed (pip install fws-control[fast])"
-    if not isinstance(gains, SteeringGains):
-        return "only the paper's law (SteeringGains) is compiled, not controllers"
+    code = law_code(gains)
+    if code < 0:
+        return (
+            f"{type(gains).__name__} declares no compiled law "
+            "(LateralController.compiled_law)"
+        )
+    if code > 0 and (compiled_method(method) != "DOP853" or delay != 0.0):
+        return (
+            "a controller's compiled law runs with method='DOP853' and without "
+            f"an input delay only, got method={method!r}, delay={delay!r}"
+        )
     if compiled_method(method) is None:
         return f"only method={METHODS} is compiled, got {method!r}"
     if delay != 0.0 and compiled_method(method) != "DOP853":
@@ -3198,8 +3237,10 @@ def integrate_compiled(
     path : Path or CurvatureTable
         The reference path (its :func:`curvature_table` is built), or a
         table built once for many calls.
-    gains : SteeringGains
-        Per run ``k1, k2, ratio`` (arrays of shape ``(n,)`` or scalars).
+    gains : SteeringGains or LateralController
+        Per run ``k1, k2, ratio`` (arrays of shape ``(n,)`` or scalars), or a
+        controller with a compiled law (then `path` must be the path, whose
+        position and heading the law may read).
     speed : ndarray
         Per run speed [m/s], shape ``(n,)``; its size is the number of runs.
     feedforward : bool
@@ -3319,6 +3360,14 @@ def integrate_compiled(
     )
     speed = np.ascontiguousarray(speed, dtype=float).ravel()
     n = speed.size
+    code = law_code(gains)
+    if code < 0:
+        raise ValueError(
+            f"gains must be SteeringGains or a controller with a compiled law, "
+            f"got {type(gains).__name__}"
+        )
+    q[Q_LAW] = code
+    breaks, coefs = kernel_arrays(path, table, code, q)
     P = _run_parameters(gains, speed)
     z0 = np.asarray(path_state, dtype=float)
     if z0.shape != (n, 3):
@@ -3329,7 +3378,9 @@ def integrate_compiled(
     m = (3 if time_constant is None else 5) + (2 if dyn else 0)
     Y0 = np.empty((n, m))
     Y0[:, :3] = z0
-    if time_constant is not None or dyn:
+    if (time_constant is not None or dyn) and code > 0:
+        cmd = initial_command(vehicle, path, gains, z0, table(z0[:, 0]), speed)
+    elif time_constant is not None or dyn:
         kappa = table(z0[:, 0])
         cmd = steering_command(
             vehicle,
@@ -3374,8 +3425,8 @@ def integrate_compiled(
     solve = _solve_batch_radau if q[_Q_METHOD] == _RADAU else _solve_batch
     with compiling(METHODS[int(q[_Q_METHOD])]):
         rec = solve(
-            Y0, P, q, table.breaks, table.coefs, t_eval, rtol, atol, out, codes,
-            t_stop, stats, rec, offsets, keep,
+            Y0, P, q, breaks, coefs, t_eval, rtol, atol, out, codes, t_stop, stats,
+            rec, offsets, keep,
         )  # fmt: skip
     if keep:
         solution.append(
@@ -3401,6 +3452,9 @@ def _run_parameters(gains: SteeringGains, speed: np.ndarray) -> np.ndarray:
     n = speed.size
     P = np.zeros((n, _NP))  # clip modes 0
     P[:, _P_SPEED] = speed
+    if not isinstance(gains, SteeringGains):  # a controller's compiled law
+        P[:, P_LAW : P_LAW + 6] = law_parameters(gains, n)
+        return P
     for col, v in ((_P_K1, gains.k1), (_P_K2, gains.k2), (_P_RATIO, gains.ratio)):
         P[:, col] = np.broadcast_to(np.asarray(v, dtype=float).ravel(), (n,))
     return P
@@ -3482,6 +3536,11 @@ def compiled_outputs(
     """
     if numba is None:
         raise ImportError("compiled_outputs needs numba: pip install fws-control[fast]")
+    if law_code(gains) != 0:
+        raise ValueError(
+            "compiled_outputs computes the paper's law (SteeringGains); a "
+            "controller's: compiled_laws.controller_outputs"
+        )
     table = curvature_table(path) if table is None else table
     delay = 0.0 if solution is None else solution.delay
     q = shared_parameters(
@@ -3669,6 +3728,11 @@ def compiled_peaks(
     """
     if numba is None:
         raise ImportError("compiled_peaks needs numba: pip install fws-control[fast]")
+    if law_code(gains) != 0:
+        raise ValueError(
+            "compiled_peaks computes the paper's law (SteeringGains); a "
+            "controller's: compiled_laws.controller_outputs"
+        )
     table = path if isinstance(path, CurvatureTable) else curvature_table(path)
     q = shared_parameters(
         vehicle, table, feedforward=feedforward, time_constant=time_constant,

@@ -175,12 +175,12 @@ def _run_compiled(
     # of the three stages this call compiles (nothing when they are cached)
     with compiling(compiled_method(opts["method"]), "signals", "peaks"):
         return _run_compiled_stages(
-            vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, out
+            vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl, out
         )
 
 
 def _run_compiled_stages(
-    vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, out
+    vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl, out
 ):
     # _run_compiled's integration, signals and exact peaks
     from .compiled import (
@@ -191,7 +191,8 @@ def _run_compiled_stages(
         integrate_compiled,
     )
 
-    g = SteeringGains(k1, k2, a)
+    # a controller's compiled law (compiled_laws), else the paper's law
+    g = SteeringGains(k1, k2, a) if ctrl is None else ctrl
     # once per call (simulate_batch builds it), for the integration, the
     # outputs and the peaks
     table = opts.get("curvature_table")
@@ -203,7 +204,7 @@ def _run_compiled_stages(
     _, first, inverse = np.unique(rows, return_index=True, return_inverse=True)
     states, status, message, t_stop, _ = integrate_compiled(
         vehicle,
-        table,
+        table if ctrl is None else path,  # (a law may need the path's position)
         g,
         speed=speed,
         feedforward=feedforward,
@@ -220,6 +221,20 @@ def _run_compiled_stages(
         tyre=opts["tyre"],
         body_state=x0[:, 3:] if opts["model"] == "dynamic" else None,
     )
+    if ctrl is not None:
+        # the numpy engine's signals and peaks of the compiled solution
+        from .compiled_laws import controller_outputs
+
+        signals, peaks, peak_times = controller_outputs(
+            vehicle, path, ctrl, speed=speed, feedforward=feedforward,
+            time_constant=tau, states=states, initial_heading=x0[:, 2],
+            solution=solution[0], t_eval=t, t_stop=t_stop, model=opts["model"],
+            tyre=opts["tyre"],
+        )  # fmt: skip
+        if out is not None:
+            out[...] = signals
+            signals = out
+        return signals, status, message, t_stop, peaks, peak_times
     signals = compiled_outputs(
         vehicle,
         path,
@@ -452,6 +467,7 @@ def _simulate_batch(
         # only; with a delay its steps are at most the delay too)
         if (
             stiff_auto
+            and ctrl is None  # (a controller's law: DOP853 only)
             and duration_run > _RADAU_FROM_STEPS * _CAPPED_STEP * tau
             and not opts["delay"] > 0.0
             and opts["model"] == "kinematic"
@@ -736,7 +752,12 @@ def simulate(
         :mod:`fws_control.simulation.compiled` (extra ``fast``), each run
         with its own steps and stop, at compiled speed. It runs the paper's
         law (:class:`~fws_control.SteeringGains`) on the kinematic model
-        (and on the dynamic model with DOP853 and no delay)
+        (and on the dynamic model with DOP853 and no delay), and a
+        controller that declares a compiled law
+        (:meth:`~fws_control.LateralController.compiled_law`: the
+        baselines, with DOP853 and no delay; their signals and peaks by the
+        numpy engine's formulas on each run's dense output, see
+        :mod:`~fws_control.simulation.compiled_laws`),
         with ``method="DOP853"``, ``"Radau"`` or ``"auto"``
         (which then means DOP853; with an actuator of time constant T, its
         steps held to 3.2 T, half its stability bound, where its error
