@@ -121,6 +121,14 @@ from ..paths import Arc, Clothoid, Path, PathChain, Straight
 from ..validation import check_positive
 from ..vehicle import Vehicle
 from .compilation import compile_seconds, first_use, jit
+from .compiled_speed import (
+    P_SPEED_TIME,
+    Q_CURVATURE_BREAKS,
+    Q_PROFILE,
+    compiled_speed_reason,
+    speed_and_gains,
+    speed_tables,
+)
 from .engine import (
     PEAK_SIGNALS,
     SIGNALS,
@@ -340,7 +348,8 @@ _Q_DELAY = 18  # input delay [s] (0: none)
 # forces (0: the linear tyre)
 _Q_DYNAMIC, _Q_MASS, _Q_INERTIA, _Q_L_F, _Q_L_R = 19, 20, 21, 22, 23
 _Q_C_F, _Q_C_R, _Q_PEAK_F, _Q_PEAK_R = 24, 25, 26, 27
-_NQ = 28
+# q[36:44]: a varying speed and a gain schedule (compiled_speed)
+_NQ = 44
 # Layout of the per run parameter vector.
 _P_SPEED, _P_K1, _P_K2, _P_RATIO = 0, 1, 2, 3
 # modes of the four clips (front/rear angle, front/rear rate): -1, 0 or +1
@@ -348,7 +357,8 @@ _P_MODE = 4
 # the held mode (-1 or +1) each clip was released from at the restart of
 # the current step, 0 otherwise (see _events)
 _P_RELEASED = 8
-_NP = 12
+# p[18:22]: a varying speed (compiled_speed.P_SPEED_TIME)
+_NP = 22
 # With an input delay the driver extends a run's p by its past (the method
 # of steps), so that every function given p -- the right-hand side, the
 # events, the steps -- can look up the delayed state without another
@@ -464,8 +474,13 @@ def _curvature(s, q, breaks, coefs):
     else:
         # open paths: clipped, as the numpy engine does for trial stages
         s = min(max(s, q[_Q_S_LO]), q[_Q_S_HI])
-    k = np.searchsorted(breaks, s, side="right") - 1
-    k = min(max(k, 0), coefs.shape[0] - 1)
+    if q[Q_CURVATURE_BREAKS] > 0.0:  # other tables follow the curvature's
+        n = int(q[Q_CURVATURE_BREAKS]) - 1
+        k = np.searchsorted(breaks[: n + 1], s, side="right") - 1
+    else:
+        n = coefs.shape[0]
+        k = np.searchsorted(breaks, s, side="right") - 1
+    k = min(max(k, 0), n - 1)
     d = s - breaks[k]
     return coefs[k, 0] + d * (coefs[k, 1] + d * (coefs[k, 2] + d * coefs[k, 3]))
 
@@ -574,6 +589,16 @@ def _dynamic_derivatives(V, kappa, e, th, vy, r, df, dr, q):
 
 
 @_jit_inline
+def _follow_speed(t, s, p, q, breaks, coefs):
+    # a varying speed (compiled_speed): the run's speed, and a schedule's
+    # gains, at time t and arc length s, into p
+    V, k1, k2, a, scheduled = speed_and_gains(t, s, q, breaks, coefs)
+    p[_P_SPEED] = V
+    if scheduled:
+        p[_P_K1], p[_P_K2], p[_P_RATIO] = k1, k2, a
+
+
+@_jit_inline
 def _raw_command(e, theta, kappa, p, q):
     cf, cr = _feedback_command(e, theta, p[_P_K1], p[_P_K2], p[_P_RATIO])
     if q[_Q_FF] != 0.0:
@@ -605,6 +630,8 @@ def _command(e, theta, kappa, p, q):
 @_jit
 def _clip_values(y, p, q, breaks, coefs, out):
     """Unclipped front/rear commands and actuator rates, and their limits."""
+    if q[Q_PROFILE] != 0.0:
+        _follow_speed(p[P_SPEED_TIME], y[0], p, q, breaks, coefs)
     kappa = _curvature(y[0], q, breaks, coefs)
     raw_f, raw_r = _raw_command(y[1], y[2], kappa, p, q)
     out[0], out[1] = raw_f, raw_r
@@ -645,6 +672,8 @@ def closed_loop_rhs(t, y, p, q, breaks, coefs, out):
     [5.0, 0.0, -0.185805]
     """
     s, e, th = y[0], y[1], y[2]
+    if q[Q_PROFILE] != 0.0:
+        _follow_speed(t, s, p, q, breaks, coefs)
     kappa = _curvature(s, q, breaks, coefs)
     if q[_Q_DELAY] > 0.0:
         # the law acts on the measurements of t - delay
@@ -789,12 +818,16 @@ def _set_now(t, p, q):
     # applied angle depends on it; see _P_NOW)
     if q[_Q_DELAY] > 0.0:
         p[_P_NOW] = t
+    if q[Q_PROFILE] != 0.0:
+        p[P_SPEED_TIME] = t
 
 
 @_jit
 def _stop_events(y, p, q, breaks, coefs, g):
     """The stop events 0-3 of :func:`_events` (into ``g[:4]``)."""
     s, e = y[0], y[1]
+    if q[Q_PROFILE] != 0.0:
+        _follow_speed(p[P_SPEED_TIME], s, p, q, breaks, coefs)
     kappa = _curvature(s, q, breaks, coefs)
     if q[_Q_TAU] > 0.0:
         df = y[3]
@@ -1518,6 +1551,7 @@ def _drivers(method):
                 for i in range(m):
                     y[i] = ytmp[i]
                 t = t_hit
+                _set_now(t, p, q)
                 site = j_hit - _N_STOPS
                 track = p.size >= _NP
                 v = np.empty(8)
@@ -1650,8 +1684,13 @@ def _curvature_and_rate(s, q, breaks, coefs):
             s = 0.0
     else:
         s = min(max(s, q[_Q_S_LO]), q[_Q_S_HI])
-    k = np.searchsorted(breaks, s, side="right") - 1
-    k = min(max(k, 0), coefs.shape[0] - 1)
+    if q[Q_CURVATURE_BREAKS] > 0.0:  # other tables follow the curvature's
+        n = int(q[Q_CURVATURE_BREAKS]) - 1
+        k = np.searchsorted(breaks[: n + 1], s, side="right") - 1
+    else:
+        n = coefs.shape[0]
+        k = np.searchsorted(breaks, s, side="right") - 1
+    k = min(max(k, 0), n - 1)
     d = s - breaks[k]
     kappa = coefs[k, 0] + d * (coefs[k, 1] + d * (coefs[k, 2] + d * coefs[k, 3]))
     return kappa, coefs[k, 1] + d * (2.0 * coefs[k, 2] + d * 3.0 * coefs[k, 3])
@@ -2977,7 +3016,7 @@ def shared_parameters(
     Returns
     -------
     ndarray
-        Shape ``(28,)``.
+        Shape ``(44,)``.
 
     Examples
     --------
@@ -3183,6 +3222,8 @@ def integrate_compiled(
     model: str = "kinematic",
     tyre: str = "linear",
     body_state: np.ndarray | None = None,
+    profile: Any = None,
+    schedule: Any = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate ``n`` runs, each with its own steps and events.
 
@@ -3260,6 +3301,13 @@ def integrate_compiled(
         Initial ``(v_y, r)`` per run of the dynamic model, shape ``(n, 2)``;
         where NaN (or None): the no-slip motion at the initial steering, as
         :func:`~fws_control.simulation.engine.integrate`.
+    profile : SpeedProfile, optional
+        A speed that varies along the run, a table of the time or the arc
+        length (:mod:`~fws_control.simulation.compiled_speed`); each run's
+        `speed` is then the profile's at its start. DOP853 only.
+    schedule : GainSchedule, optional
+        With a `profile`: gains read at the current speed instead of
+        `gains` (each run's start gains are the schedule's at its start).
 
     Returns
     -------
@@ -3319,11 +3367,25 @@ def integrate_compiled(
     )
     speed = np.ascontiguousarray(speed, dtype=float).ravel()
     n = speed.size
-    P = _run_parameters(gains, speed)
     z0 = np.asarray(path_state, dtype=float)
     if z0.shape != (n, 3):
         raise ValueError(f"path_state must have shape ({n}, 3), got {z0.shape}")
     t_eval = np.ascontiguousarray(t_eval, dtype=float)
+    breaks, coefs = table.breaks, table.coefs
+    if profile is not None and not profile.is_constant:
+        reason = compiled_speed_reason(profile, schedule, method=method)
+        if reason is not None:
+            raise ValueError(f"profile: {reason}")
+        breaks, coefs = speed_tables(breaks, coefs, profile, schedule, q)
+        # each run's speed (and scheduled gains) at its start
+        x0 = t_eval[:1] if profile.of == "time" else z0[:, 0]
+        speed = np.ascontiguousarray(
+            np.broadcast_to(profile(x0), (n,)), dtype=float
+        )
+        if schedule is not None:
+            gains = schedule.at(speed)
+    P = _run_parameters(gains, speed)
+    P[:, P_SPEED_TIME] = t_eval[0]
     T = t_eval.size
     dyn = model == "dynamic"
     m = (3 if time_constant is None else 5) + (2 if dyn else 0)
@@ -3374,8 +3436,8 @@ def integrate_compiled(
     solve = _solve_batch_radau if q[_Q_METHOD] == _RADAU else _solve_batch
     with compiling(METHODS[int(q[_Q_METHOD])]):
         rec = solve(
-            Y0, P, q, table.breaks, table.coefs, t_eval, rtol, atol, out, codes,
-            t_stop, stats, rec, offsets, keep,
+            Y0, P, q, breaks, coefs, t_eval, rtol, atol, out, codes, t_stop, stats,
+            rec, offsets, keep,
         )  # fmt: skip
     if keep:
         solution.append(
