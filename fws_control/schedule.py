@@ -46,8 +46,8 @@ import control as ct
 import numpy as np
 
 from .delay_design import most_stable_gains
-from .equations import unscaled_gains
 from .design import double_root_gains
+from .equations import unscaled_gains
 from .gains import SteeringGains
 from .plant import LateralPlant
 from .reprs import summary_repr

@@ -81,6 +81,12 @@ the same functions of :mod:`fws_control.equations` as
 :func:`~fws_control.dynamics.dynamic_path_derivatives` (DOP853, no delay;
 ``tests/test_compiled_dynamic.py``).
 
+A speed that varies along the run (a :class:`~fws_control.SpeedProfile`
+table of the time or the arc length) and a
+:class:`~fws_control.GainSchedule` read at the current speed are compiled
+with DOP853 (:mod:`~fws_control.simulation.compiled_speed`: the tables
+follow the curvature table's rows in ``breaks`` and ``coefs``).
+
 Not supported here (the numpy engine remains the general path;
 ``simulate(..., engine="compiled")`` raises for these, and the default
 ``engine="auto"`` runs them on the numpy engine):
@@ -3379,9 +3385,7 @@ def integrate_compiled(
         breaks, coefs = speed_tables(breaks, coefs, profile, schedule, q)
         # each run's speed (and scheduled gains) at its start
         x0 = t_eval[:1] if profile.of == "time" else z0[:, 0]
-        speed = np.ascontiguousarray(
-            np.broadcast_to(profile(x0), (n,)), dtype=float
-        )
+        speed = np.ascontiguousarray(np.broadcast_to(profile(x0), (n,)), dtype=float)
         if schedule is not None:
             gains = schedule.at(speed)
     P = _run_parameters(gains, speed)

@@ -442,7 +442,8 @@ def _varying_speed_outputs(
         peaks[i], peak_times[i] = (
             v[0]
             for v in exact_peaks(
-                vehicle, path, SteeringGains(k1[i : i + 1], k2[i : i + 1], a[i : i + 1]),
+                vehicle, path,
+                SteeringGains(k1[i : i + 1], k2[i : i + 1], a[i : i + 1]),
                 solution=dense, t_eval=t, signals=signals[i : i + 1],
                 t_stop=t_stop[i : i + 1], **one,
             )
@@ -1579,8 +1580,12 @@ def simulate(
         A speed that varies along the run (:class:`~fws_control.SpeedProfile`:
         a table of the time or of the arc length, a braking manoeuvre, a
         function), instead of the plant's constant speed, which is then its
-        linearisation point only. The run goes on the numpy engine
-        (``engine="auto"`` records ``"numpy"``; ``"compiled"`` raises), the
+        linearisation point only. A table (of the time or the arc length)
+        runs on the compiled engine (DOP853), with a gain schedule only a
+        :class:`~fws_control.GainSchedule` whose grid holds the profile's
+        speeds; a function profile or schedule runs on the numpy engine
+        (``engine="auto"`` chooses it, with a RuntimeWarning for a schedule
+        function; ``"compiled"`` raises). The
         dynamic model's longitudinal speed :math:`u` follows the profile,
         and a gain schedule passed as `controller` (a
         :class:`~fws_control.GainSchedule` or a function ``speed ->
@@ -1780,7 +1785,8 @@ def simulate_batch(
         A speed that varies along the run, shared by all runs, as in
         :func:`simulate` (the plant's `speed` then must be one number: its
         linearisation point). Each run's recorded ``speed`` is the
-        profile's at its start.
+        profile's at its start. A table runs on the compiled engine under
+        ``"auto"`` (see :func:`simulate`).
     chunk_size : int, optional
         Runs per chunk (one solver; one Dask task); default
         :data:`DEFAULT_CHUNK_SIZE`, or
