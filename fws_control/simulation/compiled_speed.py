@@ -286,7 +286,8 @@ def speed_and_gains(t, s, q, breaks, coefs):
     >>> q = np.zeros(44)
     >>> br, co = speed_tables(np.array([0.0, 1.0]), np.zeros((1, 4)), prof, sch, q)
     >>> V, k1, k2, a, _ = speed_and_gains(2.0, 0.0, q, br, co)
-    >>> V, (k1, k2, a) == tuple(map(float, sch.at(16.0)))
+    >>> g = sch.at(16.0)
+    >>> V, (k1, k2, a) == (g.k1, g.k2, g.ratio)
     (16.0, True)
     """
     x = t if q[Q_PROFILE] == PROFILE_OF_TIME else s
