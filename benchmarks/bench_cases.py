@@ -15,6 +15,12 @@ method, rtol 1e-10, atol 1e-12:
 5. Stanley (gain 2, ratios as 1.);
 6. pure pursuit (look-ahead 0.6 s, at least 5 m);
 7. Stanley as 5. with ``engine="numpy"``.
+8. the braking lane change of ``docs/varying_speed.md`` (entered at 80
+   km/h, braking at 4 m/s² from the entry gate down to 30 km/h; dynamic
+   model, BMW 320i data, linear tyre; the double-root schedule with the
+   zero-sideslip ratio a(V); lateral offsets spread over [-0.5, 0.5] m,
+   12 s) on the compiled engine;
+9. the same on the numpy engine (``--numpy-runs`` runs).
 
 Each line gives the engine that ran the case, the CPU per run (best of
 ``--repeat`` >= 3 rounds, the cases timed in turn every round so that a
@@ -27,6 +33,7 @@ ones ``--runs`` (default 100). The machine load is printed before and
 after.
 
 Run: ``python benchmarks/bench_cases.py [--runs 100] [--numpy-runs 2]``
+``[--only "braking lane change"]`` (the cases whose name starts so)
 (several minutes: the numpy cases dominate).
 """
 
@@ -47,7 +54,7 @@ DYNAMIC = fws.Vehicle(
 )  # fmt: skip
 
 
-def cases(n_compiled: int, n_numpy: int, n_baseline: int = 10) -> dict:
+def cases(n_compiled: int, n_numpy: int, n_baseline: int = 10, only: str = "") -> dict:
     """name -> (number of runs, function running the batch, its engine)."""
     course = fws.double_lane_change(vehicle_width=1.8)
     path = course.path
@@ -87,12 +94,43 @@ def cases(n_compiled: int, n_numpy: int, n_baseline: int = 10) -> dict:
             {"engine": "numpy"},
         ),
     }  # fmt: skip
+    runs = {
+        name: batch(plant, ctrl, n_compiled, **kw)
+        for name, (plant, ctrl, kw) in table.items()
+    }
+    runs["braking lane change"] = braking(course, n_compiled, "compiled")
+    runs["braking lane change, numpy"] = braking(course, n_numpy, "numpy")
     out = {}
-    for name, (plant, ctrl, kw) in table.items():
-        run = batch(plant, ctrl, n_compiled, **kw)
+    for name, run in runs.items():
+        if not name.startswith(only):
+            continue
         res = run()  # also the first (compiling) call
         out[name] = (res.signals.shape[0], run, res.engine)
     return out
+
+
+def braking(course, n: int, engine: str):
+    """The braking lane change of docs/varying_speed.md, `n` runs on `engine`."""
+    veh = fws.vehicles.BMW_320I
+    v_in = 80.0 / 3.6
+    profile = fws.SpeedProfile.braking(
+        v_in, 4.0, start=course.start_x / v_in, final=30.0 / 3.6
+    )
+    plant = fws.LateralPlant(veh, speed=v_in, model="dynamic")
+    schedule = fws.GainSchedule.double_root(
+        veh, speeds=np.linspace(1.0, 30.0, 59), pole=-1.5,
+        ratio=fws.zero_sideslip_ratio,
+    )  # fmt: skip
+    x0 = np.zeros((n, 3))
+    x0[:, 1] = np.linspace(-0.5, 0.5, n)
+
+    def run():
+        return fws.simulate_batch(
+            plant, course.path, schedule, initial_state=x0, duration=12.0,
+            dt=0.01, speed=profile, engine=engine, progress=False,
+        )  # fmt: skip
+
+    return run
 
 
 def main() -> None:
@@ -101,18 +139,20 @@ def main() -> None:
     ap.add_argument("--numpy-runs", type=int, default=2)
     ap.add_argument("--baseline-runs", type=int, default=10)
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--only", default="", help="cases whose name starts so")
     args = ap.parse_args()
     print(machine_line())
-    table = cases(args.runs, args.numpy_runs, args.baseline_runs)
+    table = cases(args.runs, args.numpy_runs, args.baseline_runs, args.only)
     best = best_of_interleaved(
         {name: run for name, (_, run, _) in table.items()}, repeat=args.repeat
     )
-    base = best["paper law"] / table["paper law"][0]
+    first = next(iter(table))
+    base = best[first] / table[first][0]
     print(f"ISO 3888-1 at {SPEED:g} m/s; CPU per run, best of {args.repeat}")
     for name, (n, _, engine) in table.items():
         per_run = best[name] / n
         print(
-            f"  {name:22s} {engine:9s} {n:4d} runs  {per_run * 1e3:10.2f} ms  "
+            f"  {name:26s} {engine:9s} {n:4d} runs  {per_run * 1e3:10.2f} ms  "
             f"{per_run / base:8.1f}x"
         )
     print(machine_line())

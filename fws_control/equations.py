@@ -45,6 +45,7 @@ __all__ = [
     "feedforward_angle_rate",
     "feedback_angle",
     "feedback_command",
+    "unscaled_gains",
     "steering_law",
     "steering_law_rate",
     "rear_axle_point",
@@ -299,6 +300,25 @@ def feedback_command(
     """
     fb = feedback_angle(e, theta, k1, k2)
     return fb, ratio * fb
+
+
+def unscaled_gains(speed: Real, k1_scaled: Real, k2_scaled: Real) -> tuple[Real, Real]:
+    r"""The gains :math:`k_1, k_2` from the speed-scaled gains of a schedule.
+
+    .. math:: k_1 = \frac{k_1 V^2}{V^2},\qquad k_2 = \frac{k_2 V}{V}
+
+    A gain schedule interpolates :math:`k_1 V^2` and :math:`k_2 V` (the
+    products that fix the kinematic straight-road loop's roots at every
+    speed, see :mod:`fws_control.schedule`) and divides back at the
+    current speed. Returns ``(k1, k2)``.
+
+    Examples
+    --------
+    >>> from fws_control.equations import unscaled_gains
+    >>> [float(v) for v in unscaled_gains(10.0, 2.0, 3.0)]
+    [0.02, 0.3]
+    """
+    return k1_scaled / speed**2, k2_scaled / speed
 
 
 def steering_law(

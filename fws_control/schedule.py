@@ -46,6 +46,7 @@ import control as ct
 import numpy as np
 
 from .delay_design import most_stable_gains
+from .equations import unscaled_gains
 from .gains import SteeringGains
 from .hints import RealArrayLike
 from .plant import LateralPlant
@@ -226,6 +227,34 @@ class GainSchedule:
             ratio=np.array([float(g.ratio) for g in designs]),
         )
 
+    @property
+    def scaled_k1(self) -> np.ndarray:
+        r""":math:`k_1 V^2` at the grid speeds [rad m/s²], the interpolated values.
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> sch = fws.GainSchedule(speeds=[10.0, 20.0], k1=[0.01, 0.004],
+        ...                        k2=[0.3, 0.2], ratio=[0.0, 0.0])
+        >>> [round(float(v), 12) for v in sch.scaled_k1]
+        [1.0, 1.6]
+        """
+        return self.k1 * self.speeds**2
+
+    @property
+    def scaled_k2(self) -> np.ndarray:
+        r""":math:`k_2 V` at the grid speeds [rad m/s], the interpolated values.
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> sch = fws.GainSchedule(speeds=[10.0, 20.0], k1=[0.01, 0.004],
+        ...                        k2=[0.3, 0.2], ratio=[0.0, 0.0])
+        >>> [round(float(v), 12) for v in sch.scaled_k2]
+        [3.0, 4.0]
+        """
+        return self.k2 * self.speeds
+
     def at(self, speed: RealArrayLike) -> SteeringGains:
         r"""The gains at `speed` (scalar or array), interpolated.
 
@@ -265,8 +294,9 @@ class GainSchedule:
                 f"(no extrapolation), got {speed!r}"
             )
         V = self.speeds
-        k1 = np.interp(v, V, self.k1 * V**2) / v**2
-        k2 = np.interp(v, V, self.k2 * V) / v
+        k1, k2 = unscaled_gains(
+            v, np.interp(v, V, self.scaled_k1), np.interp(v, V, self.scaled_k2)
+        )
         a = np.interp(v, V, self.ratio)
         if v.ndim == 0:
             return SteeringGains(float(k1), float(k2), float(a))

@@ -61,6 +61,8 @@ SIGNATURES = {
     r"(\w+ \*\* 2|\(\w+ \* \w+\) \*\* 2|(\w+) \* \3)\)",
     # eqs. (28)-(29): -k1 e - k2 theta
     "feedback_angle": r"^-[\w.\[\], ]+ \* \w+ - [\w.\[\], ]+ \* \w+$",
+    # a schedule's gains: the interpolated k1 V^2 divided by V^2
+    "unscaled_gains": r"(interp\(.*\)|k1_scaled) / \w+ \*\* 2$",
     # the no-slip motion: r = V (tan delta_f - tan delta_r) / f
     "no_slip_body_state": r"\((tan\([^()]*\)|tan_f) - (tan\([^()]*\)|tan_r)\) / ",
     # slip angles: delta - atan2(lateral speed of the axle, u)
@@ -186,6 +188,9 @@ def test_the_signatures_recognise_the_copies_they_were_written_for():
         ],
         "no_slip_body_state": [
             "def a():\n    speed * (np.tan(u0[0]) - np.tan(u0[1])) / vehicle.wheelbase",
+        ],
+        "unscaled_gains": [
+            "def a():\n    np.interp(v, V, self.k1 * V**2) / v**2",
         ],
     }
     import tempfile
@@ -376,6 +381,22 @@ def test_dynamic_model_against_sympy(Vv, fv, share, dfv, drv, thv, ev, kv, vyv, 
     assert np.allclose(slip, 0.0, atol=1e-12 / math.cos(dfv) ** 2)
 
 
+@settings(max_examples=30, deadline=None)
+@given(st.floats(1.0, 40.0), st.floats(0.1, 10.0), st.floats(0.5, 10.0))
+def test_unscaled_gains_keep_the_kinematic_roots(Vv, k1s, k2s):
+    """k1 V^2 and k2 V fix the straight-road loop s^2 + k2V/f s + k1V^2/f."""
+    import fws_control as fws
+
+    veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    k1v, k2v = equations.unscaled_gains(Vv, k1s, k2s)
+    A = fws.closed_loop(
+        fws.LateralPlant(veh, speed=Vv), fws.SteeringGains(float(k1v), float(k2v), 0.0)
+    ).A
+    got = np.sort_complex(np.linalg.eigvals(A))
+    want = np.sort_complex(np.roots([1.0, k2s / 2.7, k1s / 2.7]))
+    np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-12)
+
+
 @settings(max_examples=40, deadline=None)
 @given(st.floats(-1.5, 1.5), st.floats(1e4, 2e5), st.floats(1e3, 2e4))
 def test_magic_tyre_against_its_formula(alpha, stiffness, peak):
@@ -488,6 +509,8 @@ def _random_arguments(name: str, n: int, rng) -> list[np.ndarray]:
         "k_e": u(0.0, 2.0, n),
         "k_theta": u(0.0, 2.0, n),
         "k1": u(0.0, 2.0, n),
+        "k1_scaled": u(0.0, 20.0, n),
+        "k2_scaled": u(0.0, 20.0, n),
         "k2": u(0.0, 2.0, n),
         "ratio": u(-2.0, 2.0, n),
         "v_y": u(-5.0, 5.0, n),

@@ -20,6 +20,7 @@ from scipy.integrate import solve_ivp
 from scipy.interpolate import PchipInterpolator
 
 import fws_control as fws
+from fws_control.simulation.compiled import available as compiled_available
 
 VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35, friction=0.9)
 DYN = fws.Vehicle(
@@ -111,8 +112,21 @@ def _path(kappa):
 # Against the references (1e-8 m)
 
 
+# both engines: the compiled one takes the same tables
+ENGINES = [
+    "numpy",
+    pytest.param(
+        "compiled",
+        marks=pytest.mark.skipif(
+            not compiled_available(), reason="numba is not installed"
+        ),
+    ),
+]
+
+
+@pytest.mark.parametrize("engine", ENGINES)
 @pytest.mark.parametrize("kappa", [0.0, 0.02])
-def test_kinematic_time_profile_matches_reference(kappa):
+def test_kinematic_time_profile_matches_reference(kappa, engine):
     t_pts, v_pts = [0.0, 3.0, 6.0, 10.0], [22.0, 16.0, 9.0, 12.0]
     prof = fws.SpeedProfile.from_time(t_pts, v_pts)
     pchip = PchipInterpolator(t_pts, v_pts)
@@ -125,9 +139,9 @@ def test_kinematic_time_profile_matches_reference(kappa):
     res = fws.simulate(
         fws.LateralPlant(VEH, speed=22.0), _path(kappa), fws.SteeringGains(*gains),
         initial_state=(0.0, -1.5, 0.05), duration=10.0, t_eval=t,
-        speed=prof, rtol=1e-12, atol=1e-12, method="DOP853",
+        speed=prof, rtol=1e-12, atol=1e-12, method="DOP853", engine=engine,
     )  # fmt: skip
-    assert res.status == "ok" and res.engine == "numpy"
+    assert res.status == "ok" and res.engine == engine
     assert np.max(np.abs(res.x - ref.y[0])) < 1e-8
     assert np.max(np.abs(res.y - ref.y[1])) < 1e-8
     e_ref = [_arc_errors(*ref.y[:, k], kappa)[1] for k in range(t.size)]
@@ -176,7 +190,8 @@ def test_kinematic_lateral_accel_with_varying_speed():
     assert np.max(np.abs(V_dot * body(tt)[0] / (15.0 - 4.0 * np.tanh(tt - 2.0)))) > 1e-3
 
 
-def test_kinematic_distance_profile_matches_reference():
+@pytest.mark.parametrize("engine", ENGINES)
+def test_kinematic_distance_profile_matches_reference(engine):
     s_pts, v_pts = [0.0, 40.0, 90.0, 150.0], [8.0, 14.0, 14.0, 20.0]
     prof = fws.SpeedProfile.from_distance(s_pts, v_pts)
     pchip = PchipInterpolator(s_pts, v_pts)
@@ -191,9 +206,9 @@ def test_kinematic_distance_profile_matches_reference():
     res = fws.simulate(
         fws.LateralPlant(VEH, speed=8.0), _path(kappa), fws.SteeringGains(*gains),
         initial_state=(0.0, 0.8, 0.0), duration=8.0, t_eval=t, speed=prof,
-        rtol=1e-12, atol=1e-12, method="DOP853",
+        rtol=1e-12, atol=1e-12, method="DOP853", engine=engine,
     )  # fmt: skip
-    assert res.status == "ok"
+    assert res.status == "ok" and res.engine == engine
     assert np.max(np.hypot(res.x - ref.y[0], res.y - ref.y[1])) < 1e-8
     s_ref = np.array([_arc_errors(*ref.y[:, k], kappa)[0] for k in range(t.size)])
     np.testing.assert_allclose(res.longitudinal_speed, pchip(s_ref), rtol=1e-10)
@@ -207,8 +222,9 @@ def test_kinematic_distance_profile_matches_reference():
     )
 
 
+@pytest.mark.parametrize("engine", ENGINES)
 @pytest.mark.parametrize("kind", ["time", "distance"])
-def test_dynamic_profile_matches_reference(kind):
+def test_dynamic_profile_matches_reference(kind, engine):
     kappa = 0.02
     gains = (0.005, 0.15, 0.2)
     if kind == "time":
@@ -228,9 +244,9 @@ def test_dynamic_profile_matches_reference(kind):
     res = fws.simulate(
         plant, _path(kappa), fws.SteeringGains(*gains),
         initial_state=(0.0, 0.5, 0.0), duration=8.0, t_eval=t, speed=prof,
-        rtol=1e-12, atol=1e-12, method="DOP853",
+        rtol=1e-12, atol=1e-12, method="DOP853", engine=engine,
     )  # fmt: skip
-    assert res.status == "ok" and res.model == "dynamic"
+    assert res.status == "ok" and res.model == "dynamic" and res.engine == engine
     assert np.max(np.hypot(res.x - ref.y[0], res.y - ref.y[1])) < 1e-8
     np.testing.assert_allclose(res.v_y, ref.y[3], atol=1e-9)
     np.testing.assert_allclose(res.yaw_rate, ref.y[4], atol=1e-9)
@@ -305,9 +321,9 @@ def test_engine_choice_with_varying_speed():
     prof = fws.SpeedProfile.from_time([0.0, 2.0], [10.0, 12.0])
     kw = dict(initial_state=(0.0, 1.0, 0.0), duration=2.0, speed=prof)
     g = fws.SteeringGains(0.01, 0.2, 0.0)
-    assert fws.simulate(plant, fws.Straight(), g, **kw).engine == "numpy"
-    with pytest.raises(ValueError, match="engine='compiled'.*speed varies"):
-        fws.simulate(plant, fws.Straight(), g, engine="compiled", **kw)
+    # a table compiles (tests/test_compiled_speed.py): "auto" chooses it
+    expected = "compiled" if compiled_available() else "numpy"
+    assert fws.simulate(plant, fws.Straight(), g, **kw).engine == expected
     with pytest.raises(ValueError, match="delay must be 0 with a varying speed"):
         fws.simulate(plant, fws.Straight(), g, delay=0.1, **kw)
     with pytest.raises(ValueError, match="feedforward='dynamic'"):
@@ -460,7 +476,8 @@ def _table_gains(speeds, k1, k2, a):
     return gains_of
 
 
-def test_gain_schedule_during_the_run_matches_reference():
+@pytest.mark.parametrize("engine", ENGINES)
+def test_gain_schedule_during_the_run_matches_reference(engine):
     """A braking run with gains and a(V) of the zero-sideslip double root."""
     sch = fws.GainSchedule.double_root(
         DYN, speeds=np.linspace(6.0, 24.0, 10), pole=-1.2,
@@ -479,9 +496,9 @@ def test_gain_schedule_during_the_run_matches_reference():
     res = fws.simulate(
         fws.LateralPlant(DYN, speed=22.0), _path(kappa), sch,
         initial_state=(0.0, -1.0, 0.0), duration=5.0, t_eval=t, speed=prof,
-        rtol=1e-12, atol=1e-12, method="DOP853",
+        rtol=1e-12, atol=1e-12, method="DOP853", engine=engine,
     )  # fmt: skip
-    assert res.status == "ok"
+    assert res.status == "ok" and res.engine == engine
     assert np.max(np.hypot(res.x - ref.y[0], res.y - ref.y[1])) < 1e-8
     # the applied ratio follows a(V(t)) (away from e = theta = 0, where
     # delta_r / (delta_f - feedforward) is 0/0)
@@ -532,11 +549,13 @@ def test_user_function_schedule_with_rear_limit():
         ]
 
     ref = solve_ivp(rhs, (0.0, 6.0), [0.0, 1.5, 0.0], t_eval=t, **TOL)
-    res = fws.simulate(
-        fws.LateralPlant(veh, speed=6.0), fws.Straight(), rule,
-        initial_state=(0.0, 1.5, 0.0), duration=6.0, t_eval=t, speed=prof,
-        rtol=1e-12, atol=1e-12, method="DOP853",
-    )  # fmt: skip
+    with pytest.warns(RuntimeWarning, match="not compiled and runs on the numpy"):
+        res = fws.simulate(
+            fws.LateralPlant(veh, speed=6.0), fws.Straight(), rule,
+            initial_state=(0.0, 1.5, 0.0), duration=6.0, t_eval=t, speed=prof,
+            rtol=1e-12, atol=1e-12, method="DOP853",
+        )  # fmt: skip
+    assert res.engine == "numpy"
     assert np.max(np.abs(res.y - ref.y[1])) < 1e-8
     assert np.max(np.abs(res.delta_r)) == pytest.approx(0.01, abs=1e-15)
     # the ratio a(V) = 0.9 - 0.05 V changes sign at 18 m/s

@@ -267,12 +267,6 @@ def _profile_start(profile: SpeedProfile) -> float:
 
 def check_profile_run(profile, *, model, delay, feedforward, gains, engine) -> None:
     """Refuse the cases a varying speed is not simulated in (ValueError)."""
-    if engine == "compiled":
-        raise ValueError(
-            "engine='compiled' cannot run this simulation: the speed varies "
-            f"along the run (speed={profile!r}) and the compiled engine holds it "
-            "constant; use engine='numpy' (or 'auto', which chooses it)"
-        )
     if np.ndim(delay) == 0 and float(delay) > 0.0:
         raise ValueError(
             f"delay must be 0 with a varying speed (speed={profile!r}), got "

@@ -86,6 +86,12 @@ A :class:`~fws_control.LateralController` that declares a compiled law
 same right-hand side with DOP853 and without a delay
 (``tests/test_compiled_baselines.py``).
 
+A speed that varies along the run (a :class:`~fws_control.SpeedProfile`
+table of the time or the arc length) and a
+:class:`~fws_control.GainSchedule` read at the current speed are compiled
+with DOP853 (:mod:`~fws_control.simulation.compiled_speed`: the tables
+follow the curvature table's rows in ``breaks`` and ``coefs``).
+
 Not supported here (the numpy engine remains the general path;
 ``simulate(..., engine="compiled")`` raises for these, and the default
 ``engine="auto"`` runs them on the numpy engine): controllers without a
@@ -135,6 +141,13 @@ from .compiled_laws import (
     law_code,
     law_parameters,
     make_law_command,
+)
+from .compiled_speed import (
+    P_SPEED_TIME,
+    Q_PROFILE,
+    compiled_speed_reason,
+    speed_and_gains,
+    speed_tables,
 )
 from .engine import (
     PEAK_SIGNALS,
@@ -598,6 +611,16 @@ _law_command = make_law_command(_EQUATIONS, _wrap_lap, _jit)
 
 
 @_jit_inline
+def _follow_speed(t, s, p, q, breaks, coefs):
+    # a varying speed (compiled_speed): the run's speed, and a schedule's
+    # gains, at time t and arc length s, into p
+    V, k1, k2, a, scheduled = speed_and_gains(t, s, q, breaks, coefs)
+    p[_P_SPEED] = V
+    if scheduled:
+        p[_P_K1], p[_P_K2], p[_P_RATIO] = k1, k2, a
+
+
+@_jit_inline
 def _raw_command(s, e, theta, kappa, p, q, breaks, coefs):
     if q[Q_LAW] != 0.0:  # a controller's compiled law (compiled_laws)
         return _law_command(s, e, theta, kappa, p, q, breaks, coefs)
@@ -631,6 +654,8 @@ def _command(s, e, theta, kappa, p, q, breaks, coefs):
 @_jit
 def _clip_values(y, p, q, breaks, coefs, out):
     """Unclipped front/rear commands and actuator rates, and their limits."""
+    if q[Q_PROFILE] != 0.0:
+        _follow_speed(p[P_SPEED_TIME], y[0], p, q, breaks, coefs)
     kappa = _curvature(y[0], q, breaks, coefs)
     raw_f, raw_r = _raw_command(y[0], y[1], y[2], kappa, p, q, breaks, coefs)
     out[0], out[1] = raw_f, raw_r
@@ -671,6 +696,8 @@ def closed_loop_rhs(t, y, p, q, breaks, coefs, out):
     [5.0, 0.0, -0.185805]
     """
     s, e, th = y[0], y[1], y[2]
+    if q[Q_PROFILE] != 0.0:
+        _follow_speed(t, s, p, q, breaks, coefs)
     kappa = _curvature(s, q, breaks, coefs)
     if q[_Q_DELAY] > 0.0:
         # the law acts on the measurements of t - delay
@@ -816,12 +843,16 @@ def _set_now(t, p, q):
     # applied angle depends on it; see _P_NOW)
     if q[_Q_DELAY] > 0.0:
         p[_P_NOW] = t
+    if q[Q_PROFILE] != 0.0:
+        p[P_SPEED_TIME] = t
 
 
 @_jit
 def _stop_events(y, p, q, breaks, coefs, g):
     """The stop events 0-3 of :func:`_events` (into ``g[:4]``)."""
     s, e = y[0], y[1]
+    if q[Q_PROFILE] != 0.0:
+        _follow_speed(p[P_SPEED_TIME], s, p, q, breaks, coefs)
     kappa = _curvature(s, q, breaks, coefs)
     if q[_Q_TAU] > 0.0:
         df = y[3]
@@ -1546,6 +1577,7 @@ def _drivers(method):
                 for i in range(m):
                     y[i] = ytmp[i]
                 t = t_hit
+                _set_now(t, p, q)
                 site = j_hit - _N_STOPS
                 track = p.size >= _NP
                 v = np.empty(8)
@@ -3222,6 +3254,8 @@ def integrate_compiled(
     model: str = "kinematic",
     tyre: str = "linear",
     body_state: np.ndarray | None = None,
+    profile: Any = None,
+    schedule: Any = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate ``n`` runs, each with its own steps and events.
 
@@ -3301,6 +3335,13 @@ def integrate_compiled(
         Initial ``(v_y, r)`` per run of the dynamic model, shape ``(n, 2)``;
         where NaN (or None): the no-slip motion at the initial steering, as
         :func:`~fws_control.simulation.engine.integrate`.
+    profile : SpeedProfile, optional
+        A speed that varies along the run, a table of the time or the arc
+        length (:mod:`~fws_control.simulation.compiled_speed`); each run's
+        `speed` is then the profile's at its start. DOP853 only.
+    schedule : GainSchedule, optional
+        With a `profile`: gains read at the current speed instead of
+        `gains` (each run's start gains are the schedule's at its start).
 
     Returns
     -------
@@ -3368,11 +3409,22 @@ def integrate_compiled(
         )
     q[Q_LAW] = code
     breaks, coefs = kernel_arrays(path, table, code, q)
-    P = _run_parameters(gains, speed)
     z0 = np.asarray(path_state, dtype=float)
     if z0.shape != (n, 3):
         raise ValueError(f"path_state must have shape ({n}, 3), got {z0.shape}")
     t_eval = np.ascontiguousarray(t_eval, dtype=float)
+    if profile is not None and not profile.is_constant:
+        reason = compiled_speed_reason(profile, schedule, method=method)
+        if reason is not None:
+            raise ValueError(f"profile: {reason}")
+        breaks, coefs = speed_tables(breaks, coefs, profile, schedule, q)
+        # each run's speed (and scheduled gains) at its start
+        x0 = t_eval[:1] if profile.of == "time" else z0[:, 0]
+        speed = np.ascontiguousarray(np.broadcast_to(profile(x0), (n,)), dtype=float)
+        if schedule is not None:
+            gains = schedule.at(speed)
+    P = _run_parameters(gains, speed)
+    P[:, P_SPEED_TIME] = t_eval[0]
     T = t_eval.size
     dyn = model == "dynamic"
     m = (3 if time_constant is None else 5) + (2 if dyn else 0)

@@ -34,6 +34,7 @@ import dataclasses
 import functools
 import math
 import sys
+import warnings
 from typing import Any
 
 import numpy as np
@@ -63,7 +64,13 @@ from .arguments import (
     speed_option,
     with_profile,
 )
-from .chunks import chunk_controller, reduce_chunk, run_isolated, run_kept
+from .chunks import (
+    chunk_controller,
+    outputs_in_blocks,
+    reduce_chunk,
+    run_isolated,
+    run_kept,
+)
 from .cluster import run_on_dask
 from .loop import scheduled_gains
 from .options import (
@@ -73,6 +80,7 @@ from .options import (
     run_gains,
 )
 from .outcomes import PEAK_SIGNALS, SIGNALS
+from .peaks import exact_peaks
 from .result import SimulationResult
 
 __all__ = ["simulate", "simulate_batch", "DEFAULT_CHUNK_SIZE"]
@@ -109,22 +117,30 @@ _CAPPED_STEP = SAFE_STEP
 _RADAU_FROM_STEPS = 2500
 
 
-def _compiled_reason(path, gains, *, delay, method, model, feedforward):
+def _compiled_reason(
+    path, gains, *, delay, method, model, feedforward, profile=None, schedule=None
+):
     """Why ``engine="compiled"`` cannot run this case, or None if it can."""
     # imported here: numba's import is paid only by those who use it
     from .compiled import compiled_support
+    from .compiled_speed import compiled_speed_reason
 
     reason = compiled_support(path, gains, delay=delay, method=method, model=model)
     if reason is None and feedforward == "dynamic":
         reason = "feedforward='dynamic' is not compiled"
+    if reason is None:
+        reason = compiled_speed_reason(profile, schedule, method=method)
     return reason
 
 
-def _check_compiled(path, gains, *, delay, method, model, feedforward) -> None:
+def _check_compiled(
+    path, gains, *, delay, method, model, feedforward, profile=None, schedule=None
+) -> None:
     """Raise ValueError if ``engine="compiled"`` cannot run this case."""
     reason = _compiled_reason(
-        path, gains, delay=delay, method=method, model=model, feedforward=feedforward
-    )
+        path, gains, delay=delay, method=method, model=model, feedforward=feedforward,
+        profile=profile, schedule=schedule,
+    )  # fmt: skip
     if reason is not None:
         raise ValueError(
             f"engine='compiled' cannot run this simulation: {reason}; use "
@@ -132,7 +148,9 @@ def _check_compiled(path, gains, *, delay, method, model, feedforward) -> None:
         )
 
 
-def _choose_engine(path, gains, *, delay, method, model, feedforward):
+def _choose_engine(
+    path, gains, *, delay, method, model, feedforward, profile=None, schedule=None
+):
     """The engine ``engine="auto"`` runs, and the compiled engine's table.
 
     Returns ``("compiled", table)`` where the compiled engine can run the
@@ -140,15 +158,17 @@ def _choose_engine(path, gains, *, delay, method, model, feedforward):
     for a stiff run under ``method="auto"``, which the compiled engine then
     runs as capped DOP853 or Radau, see ``_RADAU_FROM_STEPS``; LSODA and
     BDF: numpy). A path whose curvature table misses its tolerance goes to
-    numpy too.
+    numpy too. A varying speed (`profile`, `schedule`) goes to numpy where
+    it is evaluated in Python (a function profile or schedule).
     """
     try:
         import numba  # noqa: F401  (the optional extra "fast")
     except ImportError:
         return "numpy", None
     if _compiled_reason(
-        path, gains, delay=delay, method=method, model=model, feedforward=feedforward
-    ):
+        path, gains, delay=delay, method=method, model=model, feedforward=feedforward,
+        profile=profile, schedule=schedule,
+    ):  # fmt: skip
         return "numpy", None
     from .compiled import curvature_table
 
@@ -193,6 +213,7 @@ def _run_compiled_stages(
 
     # a controller's compiled law (compiled_laws), else the paper's law
     g = SteeringGains(k1, k2, a) if ctrl is None else ctrl
+    profile = opts.get("profile")
     # once per call (simulate_batch builds it), for the integration, the
     # outputs and the peaks
     table = opts.get("curvature_table")
@@ -220,6 +241,8 @@ def _run_compiled_stages(
         model=opts["model"],
         tyre=opts["tyre"],
         body_state=x0[:, 3:] if opts["model"] == "dynamic" else None,
+        profile=profile,
+        schedule=opts.get("schedule"),
     )
     if ctrl is not None:
         # the numpy engine's signals and peaks of the compiled solution
@@ -235,6 +258,11 @@ def _run_compiled_stages(
             out[...] = signals
             signals = out
         return signals, status, message, t_stop, peaks, peak_times
+    if profile is not None:
+        return _varying_speed_outputs(
+            vehicle, path, g, speed, feedforward, x0, t, tau, opts, out, states,
+            status, message, t_stop, solution[0],
+        )  # fmt: skip
     signals = compiled_outputs(
         vehicle,
         path,
@@ -265,6 +293,52 @@ def _run_compiled_stages(
         model=opts["model"],
         tyre=opts["tyre"],
     )
+    return signals, status, message, t_stop, peaks, peak_times
+
+
+def _varying_speed_outputs(
+    vehicle, path, g, speed, feedforward, x0, t, tau, opts, out, states, status,
+    message, t_stop, solution,
+):  # fmt: skip
+    """Signals and exact peaks of compiled varying-speed runs.
+
+    The numpy engine's :func:`compute_outputs` and :func:`exact_peaks` on
+    each run's compiled dense output (``CompiledDense``): the longitudinal
+    signals and the scheduled command's rate are the numpy engine's.
+    """
+    from .compiled_speed import CompiledDense
+
+    kw = dict(
+        speed=speed, feedforward=feedforward, time_constant=tau,
+        model=opts["model"], tyre=opts["tyre"], profile=opts["profile"],
+        schedule=opts.get("schedule"),
+    )  # fmt: skip
+    signals = outputs_in_blocks(
+        vehicle, path, g, states=states, initial_heading=x0[:, 2],
+        delay=0.0, times=t, **kw,
+    )  # fmt: skip
+    if out is not None:
+        out[...] = signals
+        signals = out
+    n = speed.size
+    k1, k2, a = (np.broadcast_to(np.ravel(v), (n,)) for v in (g.k1, g.k2, g.ratio))
+    peaks = np.empty((n, len(PEAK_SIGNALS)))
+    peak_times = np.empty((n, len(PEAK_SIGNALS)))
+    for i in range(n):
+        rows = slice(solution.offsets[i], solution.offsets[i + 1])
+        dense = CompiledDense(
+            solution.records[rows], solution.initial_state[i], float(t[0])
+        )
+        one = {**kw, "speed": speed[i : i + 1]}
+        peaks[i], peak_times[i] = (
+            v[0]
+            for v in exact_peaks(
+                vehicle, path,
+                SteeringGains(k1[i : i + 1], k2[i : i + 1], a[i : i + 1]),
+                solution=dense, t_eval=t, signals=signals[i : i + 1],
+                t_stop=t_stop[i : i + 1], **one,
+            )
+        )  # fmt: skip
     return signals, status, message, t_stop, peaks, peak_times
 
 
@@ -431,9 +505,8 @@ def _simulate_batch(
                 for v in (g0.k1, g0.k2, g0.ratio)
             )
         opts["profile"], opts["schedule"] = profile, schedule
-        # a varying speed runs on the numpy engine (the compiled engine holds
-        # the speed constant): "auto" chooses it, "compiled" was refused above
-        engine = "numpy"
+        if engine == "auto" and schedule is not None:
+            _say_if_schedule_not_compiled(schedule)
     if out is not None:
         check_out(out, (n, len(kept), t.size))
     # False, True (eq. 26) or "dynamic" (dynamics.dynamic_feedforward)
@@ -460,6 +533,8 @@ def _simulate_batch(
             method="DOP853" if stiff_auto else opts["method"],
             model=opts["model"],
             feedforward=feedforward,
+            profile=profile,
+            schedule=schedule,
         )
     if engine == "compiled" and auto_method:
         duration_run = float(t[-1] - t[0])
@@ -471,6 +546,7 @@ def _simulate_batch(
             and duration_run > _RADAU_FROM_STEPS * _CAPPED_STEP * tau
             and not opts["delay"] > 0.0
             and opts["model"] == "kinematic"
+            and profile is None
         ):
             opts["method"] = "Radau"
         else:
@@ -485,6 +561,8 @@ def _simulate_batch(
             method=opts["method"],
             model=opts["model"],
             feedforward=feedforward,
+            profile=profile,
+            schedule=schedule,
         )
         if table is None:
             from .compiled import curvature_table
@@ -629,6 +707,21 @@ def _simulate_batch(
     if cluster_lost is not None:
         raise ClusterLostError(cluster_lost, result=result)
     return result
+
+
+def _say_if_schedule_not_compiled(schedule) -> None:
+    """Warn that a gain schedule given as a function runs on the numpy engine."""
+    from ..schedule import GainSchedule
+
+    if isinstance(schedule, GainSchedule):
+        return
+    warnings.warn(
+        f"the gain schedule {schedule!r} is a Python function, evaluated at "
+        "every step: this varying-speed run is not compiled and runs on the "
+        "numpy engine (a GainSchedule table is compiled)",
+        RuntimeWarning,
+        stacklevel=5,
+    )
 
 
 def simulate(
@@ -786,8 +879,12 @@ def simulate(
         A speed that varies along the run (:class:`~fws_control.SpeedProfile`:
         a table of the time or of the arc length, a braking manoeuvre, a
         function), instead of the plant's constant speed, which is then its
-        linearisation point only. The run goes on the numpy engine
-        (``engine="auto"`` records ``"numpy"``; ``"compiled"`` raises), the
+        linearisation point only. A table (of the time or the arc length)
+        runs on the compiled engine (DOP853), with a gain schedule only a
+        :class:`~fws_control.GainSchedule` whose grid holds the profile's
+        speeds; a function profile or schedule runs on the numpy engine
+        (``engine="auto"`` chooses it, with a RuntimeWarning for a schedule
+        function; ``"compiled"`` raises). The
         dynamic model's longitudinal speed :math:`u` follows the profile,
         and a gain schedule passed as `controller` (a
         :class:`~fws_control.GainSchedule` or a function ``speed ->
@@ -959,7 +1056,8 @@ def simulate_batch(
         A speed that varies along the run, shared by all runs, as in
         :func:`simulate` (the plant's `speed` then must be one number: its
         linearisation point). Each run's recorded ``speed`` is the
-        profile's at its start.
+        profile's at its start. A table runs on the compiled engine under
+        ``"auto"`` (see :func:`simulate`).
     chunk_size : int, optional
         Runs per chunk (one solver; one Dask task); default
         :data:`DEFAULT_CHUNK_SIZE`, or
