@@ -78,7 +78,7 @@ def scenarios():
     return {
         "braking lane change": (lane.path, braking, (0.0, 0.0, 0.0), 12.0),
         "accelerating curve exit": (exit_curve, accelerating, (0.0, 0.0, 0.0), 9.0),
-        "parking-lot exit": (parking, pulling_out, (0.0, 0.0, 0.0), 14.0),
+        "parking-lot exit": (parking, pulling_out, (0.0, 0.0, 0.0), 18.0),
     }
 
 

@@ -160,10 +160,9 @@ def test_phase_switch_is_compiled():
     ex = _example()
     path, profile, x0, duration = ex.scenarios()["parking-lot exit"]
     sch = ex.controllers(3.0)["scheduled + a(V)"]
-    # (the scenario's 14 s end at 12.4 m/s: 25 s pass the switch at 17.5 m/s)
     res = fws.simulate(
         fws.LateralPlant(ex.VEH, speed=3.0, model="dynamic"), path, sch,
-        initial_state=x0, duration=25.0, speed=profile, engine="compiled",
+        initial_state=x0, duration=duration, speed=profile, engine="compiled",
     )  # fmt: skip
     V = res.longitudinal_speed
     # the applied ratio is a(V) of the current speed (away from 0/0)
