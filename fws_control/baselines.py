@@ -155,7 +155,7 @@ class StateFeedback(LateralController):
     def runs(self) -> int | None:  # noqa: D102
         return None
 
-    def compiled_law(self) -> tuple[str, tuple] | None:  # noqa: D102
+    def compiled_law(self) -> tuple[str, tuple[Any, ...]] | None:  # noqa: D102
         K = self.K
         ff = 1.0 if self.feedforward else 0.0
         params = (K[0, 0], K[0, 1], K[1, 0], K[1, 1], ff)
@@ -377,10 +377,12 @@ class PurePursuit(LateralController):
         ld = np.asarray(self.lookahead, dtype=float)
         if self.lookahead_time is not None:
             t_la = np.asarray(self.lookahead_time)
-            ld = equations.lookahead_distance(ld, t_la, speed)
+            ld = np.asarray(
+                equations.lookahead_distance(ld, t_la, np.asarray(speed, dtype=float))
+            )
         return np.broadcast_to(ld, np.shape(speed)) if np.ndim(speed) else ld
 
-    def compiled_law(self) -> tuple[str, tuple] | None:  # noqa: D102
+    def compiled_law(self) -> tuple[str, tuple[Any, ...]] | None:  # noqa: D102
         t_la = 0.0 if self.lookahead_time is None else self.lookahead_time
         params = (self.lookahead, t_la, self.ratio)
         return self._declared(PurePursuit, "pure_pursuit", params)
@@ -459,7 +461,7 @@ class Stanley(LateralController):
         object.__setattr__(self, "softening", soft)
         object.__setattr__(self, "ratio", _per_run("ratio", self.ratio))
 
-    def compiled_law(self) -> tuple[str, tuple] | None:  # noqa: D102
+    def compiled_law(self) -> tuple[str, tuple[Any, ...]] | None:  # noqa: D102
         params = (self.gain, self.softening, self.ratio)
         return self._declared(Stanley, "stanley", params)
 
@@ -543,7 +545,7 @@ class RearWheelFeedback(LateralController):
         )
         object.__setattr__(self, "ratio", _per_run("ratio", self.ratio))
 
-    def compiled_law(self) -> tuple[str, tuple] | None:  # noqa: D102
+    def compiled_law(self) -> tuple[str, tuple[Any, ...]] | None:  # noqa: D102
         params = (self.k_e, self.k_theta, self.ratio)
         return self._declared(RearWheelFeedback, "rear_wheel_feedback", params)
 

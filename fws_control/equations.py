@@ -384,7 +384,7 @@ def steering_law_rate(
 # The baseline laws (fws_control.baselines)
 
 
-def rear_axle_point(x, y, heading, e):
+def rear_axle_point(x: Real, y: Real, heading: Real, e: Real) -> tuple[Real, Real]:
     r"""Global position of R from its path point C and lateral error.
 
     .. math:: x_R = x_C - e\sin\psi_C,\qquad y_R = y_C + e\cos\psi_C
@@ -401,7 +401,9 @@ def rear_axle_point(x, y, heading, e):
     return x - e * np.sin(heading), y + e * np.cos(heading)
 
 
-def front_axle_point(x, y, heading, e, theta, wheelbase):
+def front_axle_point(
+    x: Real, y: Real, heading: Real, e: Real, theta: Real, wheelbase: Real
+) -> tuple[Real, Real, Real]:
     r"""Global position of the front axle centre F and the vehicle heading.
 
     F lies a wheelbase ahead of R (:func:`rear_axle_point`) along the
@@ -418,7 +420,7 @@ def front_axle_point(x, y, heading, e, theta, wheelbase):
     return xr + wheelbase * np.cos(psi), yr + wheelbase * np.sin(psi), psi
 
 
-def wrap_angle(angle):
+def wrap_angle(angle: Real) -> Real:
     r"""`angle` wrapped to :math:`(-\pi, \pi]`: ``atan2(sin, cos)``.
 
     Examples
@@ -431,7 +433,7 @@ def wrap_angle(angle):
     return np.arctan2(np.sin(angle), np.cos(angle))
 
 
-def lookahead_distance(lookahead, lookahead_time, speed):
+def lookahead_distance(lookahead: Real, lookahead_time: Real, speed: Real) -> Real:
     r"""Look-ahead distance of pure pursuit :math:`L_d = \max(L, t_{la}|V|)`.
 
     A look-ahead time of 0 gives the fixed distance `lookahead`.
@@ -447,7 +449,7 @@ def lookahead_distance(lookahead, lookahead_time, speed):
     return np.maximum(lookahead, lookahead_time * np.abs(speed))
 
 
-def lookahead_offset(lookahead, e):
+def lookahead_offset(lookahead: Real, e: Real) -> Real:
     r"""Arc length from ``s`` to the look-ahead point, :math:`\sqrt{L_d^2 - e^2}`
     (0 where :math:`|e| > L_d`): on a straight path the point at distance
     :math:`L_d` from R.
@@ -461,7 +463,15 @@ def lookahead_offset(lookahead, e):
     return np.sqrt(np.maximum(lookahead * lookahead - e * e, 0.0))
 
 
-def pure_pursuit_angle(wheelbase, lookahead, x_r, y_r, psi, x_p, y_p):
+def pure_pursuit_angle(
+    wheelbase: Real,
+    lookahead: Real,
+    x_r: Real,
+    y_r: Real,
+    psi: Real,
+    x_p: Real,
+    y_p: Real,
+) -> Real:
     r"""Pure pursuit's front angle (Coulter 1992).
 
     .. math:: \alpha = \operatorname{atan2}(y_P - y_R, x_P - x_R) - \psi,
@@ -479,7 +489,9 @@ def pure_pursuit_angle(wheelbase, lookahead, x_r, y_r, psi, x_p, y_p):
     return np.arctan2(2.0 * wheelbase * np.sin(alpha), lookahead)
 
 
-def stanley_angle(theta_f, e_f, gain, softening, speed):
+def stanley_angle(
+    theta_f: Real, e_f: Real, gain: Real, softening: Real, speed: Real
+) -> Real:
     r"""Stanley's front angle (Thrun et al. 2006).
 
     .. math:: \delta_f = -\theta_f - \arctan\frac{k\,e_f}{k_s + |V|}
@@ -496,7 +508,15 @@ def stanley_angle(theta_f, e_f, gain, softening, speed):
     return -theta_f - np.arctan(gain * e_f / (softening + np.abs(speed)))
 
 
-def rear_wheel_feedback_angle(speed, wheelbase, curvature, e, theta, k_e, k_theta):
+def rear_wheel_feedback_angle(
+    speed: Real,
+    wheelbase: Real,
+    curvature: Real,
+    e: Real,
+    theta: Real,
+    k_e: Real,
+    k_theta: Real,
+) -> Real:
     r"""Rear-wheel feedback's front angle (Samson 1995).
 
     .. math::

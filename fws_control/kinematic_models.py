@@ -25,6 +25,7 @@ import numpy as np
 from . import equations
 from .equations import path_frame_derivatives
 from .exceptions import SingularStateError
+from .hints import RealArrayLike
 from .validation import (
     check_finite,
     check_nonzero,
@@ -55,7 +56,7 @@ PATH_STATES = ("s", "e", "theta")
 STEERING_INPUTS = ("delta_f", "delta_r")
 
 
-def check_steering(delta_f) -> None:
+def check_steering(delta_f: RealArrayLike) -> None:
     """Raise :class:`SingularStateError` where ``|delta_f| >= pi/2``.
 
     The kinematic yaw rate of eq. (10) has ``cos(delta_f)`` in the
@@ -78,7 +79,7 @@ def check_steering(delta_f) -> None:
         )
 
 
-def check_inputs(**values) -> list[np.ndarray]:
+def check_inputs(**values: RealArrayLike) -> list[np.ndarray]:
     """Each keyword as a float array of real numbers, checked by name.
 
     ``None``, bools, complex numbers, strings and foreign objects raise
@@ -112,7 +113,7 @@ def check_inputs(**values) -> list[np.ndarray]:
     return out
 
 
-def check_result(what: str, value, **inputs) -> None:
+def check_result(what: str, value: RealArrayLike, **inputs: RealArrayLike) -> None:
     """Raise ValueError naming the inputs if finite scalars overflowed.
 
     A scalar result that is not finite although every input is finite comes
@@ -145,7 +146,11 @@ def check_result(what: str, value, **inputs) -> None:
 
 
 def yaw_rate(
-    vehicle: Vehicle, delta_f, delta_r, *, speed: float | np.ndarray
+    vehicle: Vehicle,
+    delta_f: RealArrayLike,
+    delta_r: RealArrayLike,
+    *,
+    speed: RealArrayLike,
 ) -> float | np.ndarray:
     r"""Yaw rate of the kinematic 4WS model, paper eq. (10).
 
@@ -196,7 +201,9 @@ def yaw_rate(
     return float(out) if np.ndim(out) == 0 else out
 
 
-def feedforward_steering(vehicle: Vehicle, *, curvature) -> float | np.ndarray:
+def feedforward_steering(
+    vehicle: Vehicle, *, curvature: RealArrayLike
+) -> float | np.ndarray:
     r"""Front steering angle that holds R on a path of constant curvature.
 
     Paper eq. (26), :math:`\delta_f^{FF} = \arctan(\kappa_C f)`, with

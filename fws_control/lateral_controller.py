@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import fields, replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -122,6 +122,40 @@ class LateralController:
     #: or before the start) and holds each command for one sample time from
     #: ``k * sample_time + delay`` (zero-order hold), on the numpy engine.
     sample_time: float | None = None
+
+    def compiled_law(self) -> tuple[str, tuple[Any, ...]] | None:
+        """The law as the compiled engine runs it, or None (numpy engine).
+
+        A controller whose :meth:`steering` is one of the compiled laws
+        declares it here as ``(name, parameters)``: `name` one of
+        :data:`fws_control.simulation.compiled_laws.LAWS`, `parameters` a
+        tuple of at most six numbers or arrays of shape ``(n,)`` (one value
+        per run), in that law's order. The compiled law and :meth:`steering`
+        are written with the same functions of :mod:`fws_control.equations`;
+        the compiled engine reads the path's position and heading from a
+        table (:func:`~fws_control.simulation.compiled_laws.geometry_table`).
+        A subclass that overrides :meth:`steering` without declaring its own
+        compiled law gets None. Default: None.
+
+        Returns
+        -------
+        tuple or None
+
+        Examples
+        --------
+        >>> import fws_control as fws
+        >>> fws.Stanley(gain=2.0).compiled_law()
+        ('stanley', (2.0, 0.1, 0.0))
+        """
+        return None
+
+    def _declared(
+        self, cls: type[LateralController], name: str, parameters: tuple[Any, ...]
+    ) -> tuple[str, tuple[Any, ...]] | None:
+        # the compiled law of `cls`, unless a subclass changed the law
+        if type(self).steering is not cls.steering:
+            return None
+        return name, parameters
 
     def steering(
         self,

@@ -128,6 +128,7 @@ from .. import equations
 from ..controllers import steering_command
 from ..dynamics import axle_loads, require_dynamics
 from ..gains import SteeringGains
+from ..hints import RealArrayLike
 from ..paths import Arc, Clothoid, Path, PathChain, Straight
 from ..validation import check_positive
 from ..vehicle import Vehicle
@@ -2494,20 +2495,26 @@ class CurvatureTable:
     __slots__ = ("breaks", "coefs", "period", "open_length", "max_error")
 
     def __init__(
-        self, breaks, coefs, *, period=0.0, open_length=math.inf, max_error=0.0
-    ):
-        self.breaks = np.ascontiguousarray(breaks, dtype=float)
-        self.coefs = np.ascontiguousarray(coefs, dtype=float).reshape(-1, 4)
+        self,
+        breaks: RealArrayLike,
+        coefs: RealArrayLike,
+        *,
+        period: float = 0.0,
+        open_length: float = math.inf,
+        max_error: float = 0.0,
+    ) -> None:
+        self.breaks: np.ndarray = np.ascontiguousarray(breaks, dtype=float)
+        self.coefs: np.ndarray = np.ascontiguousarray(coefs, dtype=float).reshape(-1, 4)
         if self.breaks.size != self.coefs.shape[0] + 1:
             raise ValueError(
                 f"breaks must have one entry more than coefs has rows, got "
                 f"{self.breaks.size} and {self.coefs.shape[0]}"
             )
-        self.period = float(period)
-        self.open_length = float(open_length)
-        self.max_error = float(max_error)
+        self.period: float = float(period)
+        self.open_length: float = float(open_length)
+        self.max_error: float = float(max_error)
 
-    def __call__(self, s):
+    def __call__(self, s: RealArrayLike) -> np.ndarray:
         """Evaluate :math:`\\kappa(s)` (numpy, for checks)."""
         s = np.asarray(s, dtype=float)
         if self.period > 0.0:

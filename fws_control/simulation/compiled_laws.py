@@ -46,6 +46,7 @@ from typing import Any
 import numpy as np
 
 from ..baselines import saturate
+from ..hints import RealArrayLike
 from ..paths import Path, Straight
 from ..validation import check_positive
 from .engine import PEAK_SIGNALS, compute_outputs, exact_peaks
@@ -173,17 +174,19 @@ class GeometryTable:
 
     __slots__ = ("breaks", "coefs", "max_error")
 
-    def __init__(self, breaks, coefs, *, max_error=0.0):
-        self.breaks = np.ascontiguousarray(breaks, dtype=float)
-        self.coefs = np.ascontiguousarray(coefs, dtype=float).reshape(-1, 4)
+    def __init__(
+        self, breaks: RealArrayLike, coefs: RealArrayLike, *, max_error: float = 0.0
+    ) -> None:
+        self.breaks: np.ndarray = np.ascontiguousarray(breaks, dtype=float)
+        self.coefs: np.ndarray = np.ascontiguousarray(coefs, dtype=float).reshape(-1, 4)
         if self.coefs.shape[0] != 3 * (self.breaks.size - 1):
             raise ValueError(
                 f"coefs must have 3 rows per piece, got {self.coefs.shape[0]} "
                 f"for {self.breaks.size - 1} pieces"
             )
-        self.max_error = float(max_error)
+        self.max_error: float = float(max_error)
 
-    def __call__(self, s):
+    def __call__(self, s: RealArrayLike) -> tuple[np.ndarray, ...]:
         """``(x, y, psi)`` at `s` (numpy, for checks; `s` in the breaks)."""
         s = np.asarray(s, dtype=float)
         K = self.breaks.size - 1
