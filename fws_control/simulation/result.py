@@ -345,34 +345,22 @@ class SimulationResult:
 
     x: ClassVar[_Signal] = _Signal("Global x of the rear-axle centre R [m].")
     y: ClassVar[_Signal] = _Signal("Global y of the rear-axle centre R [m].")
-    psi: ClassVar[_Signal] = _Signal(
-        "Heading [rad], continuous in time, on the initial branch."
-    )
+    psi: ClassVar[_Signal] = _Signal("Heading [rad], continuous in time from psi(0).")
     s: ClassVar[_Signal] = _Signal("Arclength of the projection point on the path [m].")
     e: ClassVar[_Signal] = _Signal("Lateral error [m], positive left of the path.")
     theta: ClassVar[_Signal] = _Signal("Heading error theta = psi - psi_C [rad].")
-    delta_f: ClassVar[_Signal] = _Signal(
-        "Front steering angle applied to the vehicle [rad]."
-    )
-    delta_r: ClassVar[_Signal] = _Signal(
-        "Rear steering angle applied to the vehicle [rad]."
-    )
+    delta_f: ClassVar[_Signal] = _Signal("Front steering angle on the vehicle [rad].")
+    delta_r: ClassVar[_Signal] = _Signal("Rear steering angle on the vehicle [rad].")
     delta_f_rate: ClassVar[_Signal] = _Signal("Front steering rate [rad/s].")
     delta_r_rate: ClassVar[_Signal] = _Signal("Rear steering rate [rad/s].")
     lateral_accel: ClassVar[_Signal] = _Signal(
         "Lateral acceleration of G along the vehicle's lateral axis [m/s^2] "
         "(eq. (13) for the kinematic model, dv_y/dt + u r for the dynamic one)."
     )
-    v_y: ClassVar[_Signal] = _Signal(
-        "Lateral velocity of G in the vehicle's frame [m/s]."
-    )
+    v_y: ClassVar[_Signal] = _Signal("Lateral velocity of G, vehicle frame [m/s].")
     yaw_rate: ClassVar[_Signal] = _Signal("Yaw rate [rad/s].")
-    slip_front: ClassVar[_Signal] = _Signal(
-        "Slip angle of the front axle [rad] (0: kinematic model)."
-    )
-    slip_rear: ClassVar[_Signal] = _Signal(
-        "Slip angle of the rear axle [rad] (0: kinematic model)."
-    )
+    slip_front: ClassVar[_Signal] = _Signal("Front slip angle [rad] (0: kinematic).")
+    slip_rear: ClassVar[_Signal] = _Signal("Rear slip angle [rad] (0: kinematic).")
 
     def __post_init__(self) -> None:
         t = np.asarray(self.t, dtype=float)
@@ -520,6 +508,7 @@ class SimulationResult:
         return self._select(idx % n if n else idx, self.t.size, squeeze=False)
 
     def _select(self, idx, count: int, *, squeeze: bool) -> SimulationResult:
+        times = self.run_peak_time
         idx = np.asarray(idx, dtype=int)
         return SimulationResult(
             t=self.t[:count].copy(),
@@ -537,11 +526,7 @@ class SimulationResult:
             vehicle=self.vehicle,
             path=self.path,
             run_peak=None if self.run_peak is None else self.run_peak[idx],
-            run_peak_time=(
-                None
-                if self.run_peak is None
-                else cast(np.ndarray, self.run_peak_time)[idx]
-            ),
+            run_peak_time=None if times is None else times[idx],
             method=self.method,
             model=self.model,
             tyre=self.tyre,
