@@ -15,6 +15,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from fws_control.paper import charts as charts_module  # noqa: E402
 from fws_control.paper import make_figure, paper_figure_panels  # noqa: E402
 
 
@@ -68,11 +69,13 @@ def test_fig4_notes_break_where_matplotlib_wraps_them():
     fig = make_figure("fig4", quick=True)
     try:
         (text,) = fig.axes[7].texts
-        notes = ["notes:"]
+        notes = []
         for panel in paper_figure_panels(4, npoints=201):
             letter = panel.title.split(" ", 1)[0]
             for ch, lab in zip(panel.charts, panel.labels, strict=True):
                 notes += [f"{letter} {n}" for n in ch.notes(label=lab)]
+        # the undecided-point notes gathered into one (checked below)
+        notes = ["notes:", *charts_module._gather_undecided(notes)]
         got = text.get_text().split("\n")
         # every note, in order, and some too long for one line
         assert " ".join(got) == " ".join(notes) and len(got) > len(notes)
@@ -87,3 +90,20 @@ def test_fig4_notes_break_where_matplotlib_wraps_them():
             assert ref._get_wrapped_text().split("\n") == got
     finally:
         plt.close(fig)
+
+
+def test_undecided_notes_are_gathered_with_their_counts():
+    notes = [
+        "(a) κ = 0 1/m: 2 undecided points: a pole within rounding of the axis",
+        "(f) κ = 0 1/m: no stable gains on this grid",
+        "(g) κ = 0.01 1/m: 1 undecided points: a pole within rounding of the axis",
+    ]
+    assert charts_module._gather_undecided(notes) == [
+        "(f) κ = 0 1/m: no stable gains on this grid",
+        "undecided points (a pole within rounding of the axis): "
+        "(a) κ = 0 1/m: 2, (g) κ = 0.01 1/m: 1",
+    ]
+    # a single one, or different reasons, are left as they are
+    assert charts_module._gather_undecided(notes[:2]) == notes[:2]
+    other = [*notes[:1], notes[2].replace("rounding", "the bound")]
+    assert charts_module._gather_undecided(other) == other

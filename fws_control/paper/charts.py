@@ -9,6 +9,7 @@ include the curvatures of the simulations (0.1 and 0.01 1/m).
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -278,6 +279,24 @@ def _wrap_notes(notes, width: float, fontsize: float) -> list[str]:
 _HATCHES = ("//", "\\\\", "||", "--", "++", "..")
 
 
+_UNDECIDED = re.compile(r"^(\(\w\) .*?): (\d+) undecided points: (.*)$")
+
+
+def _gather_undecided(notes: list[str]) -> list[str]:
+    """The undecided-point notes of every panel as one note (same reason).
+
+    One line per chart and curvature ran under the legend of Figs. 3-4; the
+    counts stay, after the panel and curvature they belong to.
+    """
+    found = [(m, note) for note in notes if (m := _UNDECIDED.match(note))]
+    reasons = {m.group(3) for m, _ in found}
+    if len(found) < 2 or len(reasons) != 1:
+        return notes
+    counts = ", ".join(f"{m.group(1)}: {m.group(2)}" for m, _ in found)
+    gathered = f"undecided points ({reasons.pop()}): {counts}"
+    return [note for note in notes if not _UNDECIDED.match(note)] + [gathered]
+
+
 def _draw_panel(ax, panel: ChartPanel, legend: bool = True, notes_here: bool = True):
     """Draw one panel; return its legend handles and its notes.
 
@@ -460,6 +479,7 @@ def plot_paper_figure(
             # Text(wrap=True) would break them, but measured word by word
             # (see _wrap_notes).
             room = (1.0 - spare.get_position().x0) * fig.get_figwidth() * 72.0
+            all_notes = _gather_undecided(all_notes)
             spare.text(
                 0.0, 0.0, "\n".join(_wrap_notes(["notes:", *all_notes], room, 9)),
                 transform=spare.transAxes, ha="left", va="bottom", fontsize=9,
