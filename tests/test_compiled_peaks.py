@@ -312,7 +312,9 @@ CURVE = dict(initial_state=(0.0, -5.0, 0.0), duration=5.0)
         (None, {"delay": 0.1}, "compiled", "DOP853"),
         (None, {"delay": 0.1, "method": "Radau"}, "numpy", "Radau"),
         (None, {"method": "RK45"}, "numpy", "RK45"),
-        (fws.PurePursuit(lookahead=5.0), {}, "numpy", "DOP853"),
+        # a baseline: its compiled law with DOP853; on numpy with a delay
+        (fws.PurePursuit(lookahead=5.0), {}, "compiled", "DOP853"),
+        (fws.PurePursuit(lookahead=5.0), {"delay": 0.1}, "numpy", "DOP853"),
     ],
 )  # fmt: skip
 def test_auto_engine_rule_and_bitwise_results(gains, kwargs, engine, method):

@@ -47,14 +47,16 @@ engine's.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .. import equations
-from ..schedule import GainSchedule
 from ..speed_profile import SpeedProfile
 from .compilation import jit
+
+if TYPE_CHECKING:
+    from ..schedule import GainSchedule
 
 __all__ = [
     "Q_CURVATURE_BREAKS",
@@ -128,6 +130,10 @@ def compiled_speed_reason(
         return f"a varying speed is compiled with method='DOP853' only, got {method!r}"
     if schedule is None:
         return None
+    # imported here: schedule.py imports python-control (0.7 s), which a
+    # simulation does not need
+    from ..schedule import GainSchedule
+
     if not isinstance(schedule, GainSchedule):
         return (
             "a gain schedule given as a function is evaluated in Python, not "
