@@ -9,10 +9,7 @@ the input was fine, the environment failed.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
-if TYPE_CHECKING:
-    from .simulation.result import SimulationResult
+from typing import Any
 
 __all__ = [
     "UncontrollableError",
@@ -134,6 +131,8 @@ class ClusterLostError(RuntimeError):
     True
     """
 
-    def __init__(self, message: str, *, result: SimulationResult | None = None) -> None:
+    # Any, not SimulationResult: the exceptions module imports nothing of the
+    # package (the simulation imports it), even for type checkers
+    def __init__(self, message: str, *, result: Any = None) -> None:
         super().__init__(message)
-        self.result: SimulationResult | None = result
+        self.result: Any = result
