@@ -53,7 +53,7 @@ def test_page_table_is_complete():
                for r in rows[1:])  # fmt: skip
 
 
-def test_build_compares_the_page_with_the_example_output(tmp_path, caplog):
+def test_build_compares_the_page_with_the_example_output(tmp_path):
     conf = _conf()
     conf._SKIP_GALLERY = False
     assert conf.QUOTED_OUTPUT["varying_speed"] == (
@@ -81,10 +81,22 @@ def test_build_compares_the_page_with_the_example_output(tmp_path, caplog):
                 f"{block}\n",
                 encoding="utf-8",
             )
-        caplog.clear()
-        with caplog.at_level(logging.WARNING):
+        # Sphinx's logger does not propagate to the root logger once a build
+        # has run in this process (and its handlers may hold a closed
+        # stream), so the records are caught on the check's own logger.
+        records: list[logging.LogRecord] = []
+        handler = logging.Handler(logging.WARNING)
+        handler.emit = records.append  # type: ignore[method-assign]
+        log = logging.getLogger("sphinx.fws_control.quoted")
+        propagate = log.propagate
+        log.addHandler(handler)
+        log.propagate = False
+        try:
             conf._check_quoted_output(App, "varying_speed", [page])
-        return [r.getMessage() for r in caplog.records]
+        finally:
+            log.removeHandler(handler)
+            log.propagate = propagate
+        return [r.getMessage() for r in records]
 
     assert warnings(rows) == []
     changed = [rows[0], *rows[1:4], rows[4].replace("| 3.15 |", "| 3.16 |"), *rows[5:]]
