@@ -373,7 +373,8 @@ def resolve_plant(function: str, plant: Any, controller: Any, kwargs: dict):
         reject_unknown(function, kwargs)
         lag = plant.steering_lag
         if lag is not None:
-            front, rear = lag
+            # LateralPlant stores the pair; a float is read as both axles
+            front, rear = (lag, lag) if isinstance(lag, float) else lag
             if front != rear:
                 raise ValueError(
                     f"plant.steering_lag must hold one time constant for both "

@@ -116,7 +116,7 @@ def run_on_dask(client, bounds, args, keep, t_size, bar, run) -> str | None:
                         return_when="FIRST_COMPLETED",
                     )
                 except TimeoutError:
-                    done = ()
+                    done = []
                 except Exception:
                     done = [f for f in pending if f.cancelled()]
                     if not done:
@@ -141,14 +141,14 @@ def run_on_dask(client, bounds, args, keep, t_size, bar, run) -> str | None:
             elif idle_since is None:
                 idle_since = time.monotonic()
             elif time.monotonic() - idle_since > LOST_CLUSTER_WAIT:
-                exc = TimeoutError(
+                gone = TimeoutError(
                     f"the Dask cluster has had no worker for {LOST_CLUSTER_WAIT:g} "
                     "s: its workers are gone"
                 )
-                cluster_lost = str(exc)
+                cluster_lost = str(gone)
                 for fut, j in pending.items():
                     fut.cancel()
-                    lost.append((j, exc))
+                    lost.append((j, gone))
                 pending.clear()
     except Exception as exc:  # the cluster went away while we waited
         lost.extend((j, exc) for j in pending.values())
@@ -157,11 +157,11 @@ def run_on_dask(client, bounds, args, keep, t_size, bar, run) -> str | None:
         for fut in pending:
             fut.cancel()
         raise task_error  # as it would be raised here
-    for j, exc in lost:
+    for j, reason in lost:
         lo, hi = bounds[j]
         note = (
             f"not simulated: the Dask task of runs {lo}..{hi - 1} was lost "
-            f"({type(exc).__name__}: {exc}); the other chunks were kept"
+            f"({type(reason).__name__}: {reason}); the other chunks were kept"
         )
         keep(j, lost_chunk(hi - lo, t_size, note))
     if cluster_lost is not None:

@@ -266,8 +266,8 @@ def geometry_table(
     if isinstance(path, Straight):
         (x0, y0), psi0 = path.start, float(path.start_heading)
         c, sn = math.cos(psi0), math.sin(psi0)
-        coefs = [[x0, c, 0.0, 0.0], [y0, sn, 0.0, 0.0], [psi0, 0.0, 0.0, 0.0]]
-        return GeometryTable([0.0, L], coefs)
+        line = [[x0, c, 0.0, 0.0], [y0, sn, 0.0, 0.0], [psi0, 0.0, 0.0, 0.0]]
+        return GeometryTable([0.0, L], line)
     if not math.isfinite(L):
         raise ValueError(f"path must have a finite length for a table, got {path!r}")
     s = np.linspace(0.0, L, 65)

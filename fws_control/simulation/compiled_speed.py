@@ -120,7 +120,7 @@ def compiled_speed_reason(
     """
     if profile is None or profile.is_constant:
         return None
-    if profile.function is not None:
+    if profile.function is not None or profile.speeds is None:
         return (
             "a SpeedProfile.from_function is evaluated in Python, not compiled (a "
             "table of SpeedProfile.from_time or from_distance is)"
@@ -187,7 +187,7 @@ def speed_tables(
     >>> br.tolist(), co[2].tolist(), q[37:41].tolist()
     ([0.0, 1.0, 0.0, 5.0], [20.0, -4.0, 0.0, 0.0], [1.0, 2.0, 1.0, 1.0])
     """
-    if profile.points is None:
+    if profile.points is None or profile.speeds is None:
         raise ValueError(
             f"profile must be a table (from_time or from_distance), got {profile!r}"
         )

@@ -521,6 +521,7 @@ def integrate(
             [out, delayed_rows(engine_for, history, out, t_eval, delay)]
         )
     if solution is not None:
+        assert history is not None  # recorded whenever a solution is asked for
         solution.append(DenseSolution(history, engine_for, delay))
     return out, status, message, t_stop
 

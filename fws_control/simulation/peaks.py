@@ -173,10 +173,10 @@ def exact_peaks(
 
     # Nodes: the solver's step boundaries (they do not depend on the output
     # grid), subdivided, then the stop.
-    bounds = [t0]
+    ends = [t0]
     for start, (end, _, _) in zip(hist.starts, hist.pieces, strict=True):
-        bounds += [start, end]
-    bounds = np.unique(np.asarray(bounds, dtype=float))
+        ends += [start, end]
+    bounds = np.unique(np.asarray(ends, dtype=float))
     frac = np.arange(_NODES_PER_STEP) / _NODES_PER_STEP
     grid = (bounds[:-1, None] + frac[None, :] * np.diff(bounds)[:, None]).ravel()
     grid = np.append(grid, bounds[-1])

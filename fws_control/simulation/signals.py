@@ -166,7 +166,8 @@ def compute_outputs(
         r = np.full(df.shape, np.nan)
         r[ok] = yaw_rate(vehicle, df[ok], dr[ok], speed=V[ok])
         # G moves with R's velocity V (cos dr, sin dr) plus r x (l_r, 0)
-        v_y = equations.cg_lateral_velocity(V, vehicle.rear_to_cg, dr, r)
+        l_r = vehicle.cg_distance(needed_by="the signals at G (a_y, v_y)")
+        v_y = equations.cg_lateral_velocity(V, l_r, dr, r)
         slip_f = slip_r = np.where(ok, 0.0, np.nan)
         acc[ok] = lateral_acceleration(
             vehicle,
@@ -183,9 +184,7 @@ def compute_outputs(
             V_dot = eng.speed_rate(t_s, Y[0], Ydot[0])[ok]
             acc[ok] += V_dot * (
                 np.sin(dr[ok])
-                + vehicle.rear_to_cg
-                * np.sin(df[ok] - dr[ok])
-                / (vehicle.wheelbase * np.cos(df[ok]))
+                + l_r * np.sin(df[ok] - dr[ok]) / (vehicle.wheelbase * np.cos(df[ok]))
             )
     rf = np.where(ok, rf, np.nan)
     rr = np.where(ok, rr, np.nan)
