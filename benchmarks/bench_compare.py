@@ -15,7 +15,8 @@
 
 The machine load is printed before and after.
 
-Run: ``python benchmarks/bench_compare.py [--repeat 3]`` (a minute or two).
+Run: ``python benchmarks/bench_compare.py [--repeat 3]`` (a minute of CPU;
+minutes of wall time on a busy machine).
 """
 
 from __future__ import annotations
