@@ -12,8 +12,8 @@ OSQP's own median solve time, the machine load before and after.
 * ``arc``: constant curvature 0.05 1/m from 1 m off the path; the
   discretised model is the same at every step (computed once);
 * ``lane change``: the ISO 3888-1 double lane change, curvature varying
-  along the horizon, so every step discretises 56 models (one batched
-  matrix exponential).
+  along the horizon, so every step discretises 56 models (in closed form,
+  elementwise on the stack).
 
 Run: ``python benchmarks/bench_mpc.py``
 """

@@ -14,7 +14,8 @@ T_s)` gives the operating point :math:`e = \theta = 0`, :math:`\delta =
 :math:`A(\kappa_j), B(\kappa_j)` of :meth:`LateralPlant.matrices
 <fws_control.LateralPlant.matrices>`. Each step is discretised with the
 exact zero-order hold (the matrix exponential of
-:math:`[[A, B], [0, 0]] T_s`), so
+:math:`[[A, B], [0, 0]] T_s`, in closed form: :math:`A^2 = -(V\kappa_j)^2
+I`), so
 
 .. math::
     x_{j+1} = A_{d,j} x_j + B_{d,j} G v_j,\qquad
@@ -148,6 +149,32 @@ def zoh_discretize(
     M[..., :n, n:] = B * ts
     E = expm(M)
     return E[..., :n, :n], E[..., :n, n:]
+
+
+def _kinematic_zoh(
+    A: np.ndarray, B: np.ndarray, ts: float
+) -> tuple[np.ndarray, np.ndarray]:
+    r""":func:`zoh_discretize` of the kinematic path-frame model, in closed form.
+
+    The kinematic Jacobian :math:`A = [[0, V], [-V\kappa^2, 0]]` squares to
+    :math:`-\omega^2 I` with :math:`\omega = |V\kappa|`, so
+    :math:`e^{AT} = \cos(\omega T) I + \sin(\omega T)/\omega\,A` and
+    :math:`\int_0^T e^{A\tau}d\tau = \sin(\omega T)/\omega\,I +
+    (1 - \cos\omega T)/\omega^2\,A`, written with ``sinc`` (no 0/0 on a
+    straight). Elementwise on a stack ``(k, 2, 2)``: no matrix exponential
+    and no LAPACK call per sample (a stack of small matrix exponentials costs
+    a millisecond, and far more where BLAS threads busy-wait).
+    """
+    omega = np.sqrt(np.maximum(-A[..., 0, 1] * A[..., 1, 0], 0.0))
+    x = omega * ts
+    c = np.cos(x)
+    s1 = ts * np.sinc(x / math.pi)  # sin(w T) / w
+    s2 = 0.5 * ts * ts * np.sinc(x / (2.0 * math.pi)) ** 2  # (1 - cos w T) / w^2
+    eye = np.eye(2)
+    Ad = c[..., None, None] * eye + s1[..., None, None] * A
+    W = s1[..., None, None] * eye + s2[..., None, None] * A
+    Bd = np.einsum("...ij,...jk->...ik", W, B)
+    return Ad, Bd
 
 
 @dataclass(frozen=True, eq=False)
@@ -587,7 +614,7 @@ class MPCRun:
             self.vehicle, speed=self.speed, curvature=kappa, model="kinematic"
         )
         A, B = plant.matrices()
-        Ad, Bd = zoh_discretize(A, B, self.controller.sample_time)
+        Ad, Bd = _kinematic_zoh(A, B, self.controller.sample_time)
         ff = np.zeros((kappa.size, 2))
         ff[:, 0] = np.arctan(self.vehicle.wheelbase * kappa)
         self._kappa, self._model = kappa, (Ad, Bd, Bd @ self._G, ff)

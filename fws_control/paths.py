@@ -260,6 +260,16 @@ class Path(ABC):
     def _curvature_rate(self, s: Array) -> Array:
         """dκ/ds at arc lengths already in the domain."""
 
+    def _curvature(self, s: Array) -> Array:
+        """κ at arc lengths already in the domain: ``_frame``'s fourth value.
+
+        A path whose curvature is cheaper than its position (a closed form
+        in ``s``) overrides it with the same expression as its ``_frame``;
+        a controller or the model's right-hand side asks for the curvature
+        alone many times per step.
+        """
+        return self._frame(s)[3]
+
     @abstractmethod
     def placed(self, start: Sequence[float], start_heading: float) -> Path:
         """The same path moved rigidly so that it starts at the given pose.
@@ -380,7 +390,7 @@ class Path(ABC):
         >>> float(Clothoid(0.0, 0.1, length=10.0).curvature(5.0))
         0.05
         """
-        return self._frame(self._domain(s))[3][()]
+        return np.asarray(self._curvature(self._domain(s)))[()]
 
     def curvature_rate(self, s: ArrayLike) -> Array:
         """Derivative of the curvature with respect to arc length [1/m^2].
@@ -921,6 +931,9 @@ class Straight(Path):
         x, y, psi = _to_global(self.start, self.start_heading, s, z, z)
         return x, y, psi, z
 
+    def _curvature(self, s: Array) -> Array:
+        return np.zeros_like(s)
+
     def _curvature_rate(self, s: Array) -> Array:
         return np.zeros_like(s)
 
@@ -1081,6 +1094,9 @@ class Arc(Path):
         lx, ly = np.sin(ks) / k, 2.0 * np.sin(0.5 * ks) ** 2 / k
         x, y, psi = _to_global(self.start, self.start_heading, lx, ly, ks)
         return x, y, psi, np.full_like(s, k)
+
+    def _curvature(self, s: Array) -> Array:
+        return np.full_like(s, self.kappa)
 
     def _curvature_rate(self, s: Array) -> Array:
         return np.zeros_like(s)
@@ -1270,7 +1286,7 @@ class Clothoid(Path):
         # point, whatever the total turning (integrating from 0 for each
         # point cost O(kmax L) per point: 6 GB at 1000 rad for the search).
         width, X0, Y0 = self._panels()
-        k = np.clip(np.floor(s / width), 0, X0.size - 2).astype(np.intp)
+        k = np.minimum(np.maximum(np.floor(s / width), 0), X0.size - 2).astype(np.intp)
         a = k * width
         half = 0.5 * (s - a)
         u = (a + half)[..., None] + half[..., None] * _GL16_X
@@ -1280,6 +1296,9 @@ class Clothoid(Path):
         lpsi = self._local_heading(s)
         x, y, psi = _to_global(self.start, self.start_heading, lx, ly, lpsi)
         return x, y, psi, self.curvature_start + self.sharpness * s
+
+    def _curvature(self, s: Array) -> Array:
+        return self.curvature_start + self.sharpness * s
 
     def _curvature_rate(self, s: Array) -> Array:
         return np.full_like(s, self.sharpness)
@@ -1682,28 +1701,45 @@ class PathChain(Path):
 
     def _dispatch(self, s: Array) -> tuple[NDArray[np.intp], Array]:
         n = len(self.segments)
-        idx = np.clip(np.searchsorted(self.offsets, s, side="right") - 1, 0, n - 1)
-        lengths = np.diff(self.offsets)
-        local = np.clip(s - self.offsets[idx], 0.0, lengths[idx])
+        # np.minimum/np.maximum rather than np.clip: the same numbers, without
+        # np.clip's overhead per call (the model's right-hand side asks for one
+        # point at a time)
+        idx = np.searchsorted(self.offsets, s, side="right") - 1
+        idx = np.minimum(np.maximum(idx, 0), n - 1)
+        lengths = self.offsets[1:] - self.offsets[:-1]
+        local = np.minimum(np.maximum(s - self.offsets[idx], 0.0), lengths[idx])
         return idx, local
+
+    @staticmethod
+    def _hit(idx: NDArray[np.intp]) -> Any:
+        """The segments that `idx` hits, each once."""
+        return (int(idx),) if np.ndim(idx) == 0 else np.unique(idx)
 
     def _frame(self, s: Array) -> tuple[Array, Array, Array, Array]:
         idx, local = self._dispatch(s)
         out = [np.empty_like(s) for _ in range(4)]
-        for i, seg in enumerate(self.segments):
+        # only the segments hit: a point or a short step hits one or two of
+        # a chain's many, and each segment visited costs a few array calls
+        for i in self._hit(idx):
             m = idx == i
-            if np.any(m):
-                for o, v in zip(out, seg._frame(local[m]), strict=True):
-                    o[m] = v
+            for o, v in zip(out, self.segments[i]._frame(local[m]), strict=True):
+                o[m] = v
         return out[0], out[1], out[2], out[3]
+
+    def _curvature(self, s: Array) -> Array:
+        idx, local = self._dispatch(s)
+        out = np.empty_like(s)
+        for i in self._hit(idx):
+            m = idx == i
+            out[m] = self.segments[i]._curvature(local[m])
+        return out
 
     def _curvature_rate(self, s: Array) -> Array:
         idx, local = self._dispatch(s)
         out = np.empty_like(s)
-        for i, seg in enumerate(self.segments):
+        for i in self._hit(idx):
             m = idx == i
-            if np.any(m):
-                out[m] = seg._curvature_rate(local[m])
+            out[m] = self.segments[i]._curvature_rate(local[m])
         return out
 
     def _global(self, px: Array, py: Array) -> tuple[Array, Array, NDArray[np.bool_]]:

@@ -1,6 +1,9 @@
 """MPCController against independent references.
 
-* the exact ZOH discretisation against ``control.sample_system``;
+* the exact ZOH discretisation against ``control.sample_system``, and the
+  controller's own (closed-form) models along varying curvature too;
+* the plans with the closed-form models against those with the matrix
+  exponential's, to OSQP's tolerance;
 * unconstrained, undelayed, long horizon: the first input equals the
   discrete LQR of the same weights (``control.dlqr``);
 * the prediction over the delay equals a simulation of the linear discrete
@@ -113,6 +116,59 @@ def test_delay_prediction_equals_linear_discrete_plant():
         if k + nd <= steps:
             worst = max(worst, float(np.max(np.abs(pred - xs[k : k + nd + 1]))))
     assert worst < 1e-9, worst
+
+
+@pytest.mark.parametrize("speed", [0.5, 20.0, -8.0, 100.0])
+def test_delay_prediction_along_varying_curvature_equals_sample_system(speed):
+    """Along the lane change's clothoids every model step has its own
+    curvature: the prediction over the delay equals the linear plant of
+    each step's own ``control.sample_system`` model (ZOH of the Jacobians
+    written here), with the commands sent over the delay; from walking pace
+    to 100 m/s (``V kappa T_s`` up to 0.16 rad), forwards and backwards."""
+    ts, nd = 0.04, 12
+    lane = fws.double_lane_change()
+    mpc = fws.MPCController(sample_time=ts, horizon=5, delay=nd * ts)
+    run = mpc.start(VEH, lane.path, speed=speed)
+    x0 = np.array([0.3, -0.02])
+    # inside the first clothoid (45 to 52.6 m; curvature 0 to 0.0407 1/m)
+    run.step(s=48.0, e=x0[0], theta=x0[1])
+    step = run.last
+    kappa = step.curvature[:nd]
+    assert np.ptp(kappa) > 1e-3 * min(1.0, abs(speed))  # the steps differ
+    x, worst = x0, 0.0
+    for j in range(nd):
+        Ad, Bd = discrete(speed, kappa[j], ts)
+        ff = np.array([math.atan(F * kappa[j]), 0.0])
+        x = Ad @ x + Bd @ (step.sent[j] - ff)
+        worst = max(worst, float(np.max(np.abs(x - step.delay_states[j + 1]))))
+    assert worst < 1e-12 * max(1.0, float(np.max(np.abs(step.delay_states)))), worst
+
+
+def test_closed_form_discretisation_keeps_the_expm_plans(monkeypatch):
+    """The MPC's plans with its closed-form ZOH equal, to OSQP's tolerance,
+    the plans of the same controller whose models come from the matrix
+    exponential (:func:`zoh_discretize`), step by step along the lane change
+    (curvature varying along the horizon) with the delay compensated."""
+    import fws_control.mpc as mpc_module
+
+    lane = fws.double_lane_change()
+    mpc = fws.MPCController(sample_time=0.04, horizon=50, delay=0.08)
+
+    def plans():
+        run = mpc.start(VEH, lane.path, speed=20.0)
+        out = []
+        for k in range(40):
+            run.step(s=10.0 + 0.8 * k, e=0.3 * math.sin(0.2 * k),
+                     theta=0.02 * math.cos(0.3 * k))  # fmt: skip
+            assert run.last.status == "solved"
+            out.append(run.last.inputs.copy())
+        return np.array(out)
+
+    closed = plans()
+    monkeypatch.setattr(mpc_module, "_kinematic_zoh", zoh_discretize)
+    expm = plans()
+    assert np.max(np.abs(closed)) > 0.01  # the plans steer
+    np.testing.assert_allclose(closed, expm, rtol=0, atol=10 * mpc.tolerance)
 
 
 def test_delay_prediction_equals_delayed_simulation():

@@ -501,6 +501,50 @@ def test_chain_continuity_at_joints():
     assert float(chain.curvature(20.0 + 4.0)) == pytest.approx(0.04)
 
 
+def test_chain_curvature_is_each_segments_formula_at_every_point():
+    """The chain's curvature (computed without the positions) against each
+    segment's curvature written here from its parameters (0 on a straight,
+    the arc's, linear along a clothoid), at the joints, inside the
+    segments, for arrays and single points; the spline's is its frame's."""
+    segs = [
+        Straight(length=20.0, start=(2.0, -1.0), start_heading=0.4),
+        Clothoid(0.0, 0.1, 10.0),
+        Arc(0.1, length=20.0),
+        Clothoid(0.1, -0.05, 12.0),
+        Spline([[0.0, 0.0], [5.0, 2.0], [10.0, 0.0], [15.0, -3.0]]),
+    ]
+    chain = PathChain(segs)
+    off = chain.offsets
+
+    def formula(i, u):
+        if i == 0:
+            return 0.0
+        if i == 2:
+            return 0.1
+        if i in (1, 3):
+            k0, k1, length = ((0.0, 0.1, 10.0), (0.1, -0.05, 12.0))[i // 2]
+            return k0 + (k1 - k0) * u / length
+        # the spline's: a central difference of its heading
+        seg = chain.segments[4]
+        lo, hi = max(u - 1e-4, 0.0), min(u + 1e-4, seg.length)
+        return float(wrap(seg.heading(hi) - seg.heading(lo))) / (hi - lo)
+
+    rng = np.random.default_rng(11)
+    s = np.concatenate([rng.uniform(0.0, chain.length, 300), off])
+    k = chain.curvature(s)
+    seg = np.minimum(np.searchsorted(off, s, side="right") - 1, len(segs) - 1)
+    for j, (sj, i) in enumerate(zip(s, seg, strict=True)):
+        u = min(sj - off[i], off[i + 1] - off[i])
+        tol = 1e-5 if i == 4 else 1e-15  # (one-sided difference at its ends)
+        assert abs(k[j] - formula(int(i), u)) <= tol, (sj, i)
+        # one point at a time: the same number as in the array (the spline's
+        # vectorised evaluation may round its last bit differently)
+        assert float(chain.curvature(float(sj))) == pytest.approx(k[j], rel=1e-14)
+    # and the same number as the full evaluation of the chain's frame
+    np.testing.assert_array_equal(k, chain._frame(s)[3])
+    assert chain.curvature(np.zeros((2, 3))).shape == (2, 3)
+
+
 def test_racetrack_chain_is_closed_and_wraps():
     half = Arc(0.1, length=10.0 * math.pi)
     track = PathChain([Straight(length=50.0), half, Straight(length=50.0), half])
