@@ -1,5 +1,7 @@
 """Steady state of the paper's loop on the dynamic model; dynamic feedforward."""
 
+import functools
+
 import numpy as np
 import pytest
 import sympy as sp
@@ -38,7 +40,14 @@ def _subs_vehicle(expr):
 
 _ARGS = [SYM[n] for n in ("speed", "curvature", "e", "theta", "v_y", "yaw_rate")]
 _ARGS += [SYM["delta_f"], SYM["delta_r"]]
-_RHS = sp.lambdify(_ARGS, _subs_vehicle(S.dynamic_path_rhs()), "numpy")
+
+
+@functools.cache
+def _rhs():
+    # made by the test that needs it, not at import: sympy's simplification
+    # of the dynamic equations costs seconds of CPU, which every xdist
+    # worker paid while collecting
+    return sp.lambdify(_ARGS, _subs_vehicle(S.dynamic_path_rhs()), "numpy")
 
 
 @settings(derandomize=True, max_examples=40, deadline=None)
@@ -53,7 +62,7 @@ _RHS = sp.lambdify(_ARGS, _subs_vehicle(S.dynamic_path_rhs()), "numpy")
     dr=st.floats(-0.4, 0.4),
 )
 def test_numeric_rhs_is_the_newton_euler_derivation(u, kappa, e, theta, v_y, r, df, dr):
-    ref = np.ravel(_RHS(u, kappa, e, theta, v_y, r, df, dr)).astype(float)
+    ref = np.ravel(_rhs()(u, kappa, e, theta, v_y, r, df, dr)).astype(float)
     got = dynamics.dynamic_path_derivatives(
         VEH, kappa, e, theta, v_y, r, df, dr, speed=u
     )

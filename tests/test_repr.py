@@ -1,9 +1,11 @@
-"""Results print a one-line summary, not their arrays (issue 12, item 14).
+"""Results print a one-line summary, not their arrays.
 
 Each repr must name the class, stay short (no array of a 5 s simulation
 printed), and describe an array field by its true shape; the HTML repr is a
 small table.
 """
+
+import functools
 
 import numpy as np
 import pytest
@@ -20,65 +22,86 @@ from fws_control.paper.scenarios import (
 K = np.linspace(-1.0, 1.0, 201)
 
 
-def _objects():
-    plant = fws.LateralPlant(VEH, speed=5.0, curvature=0.1)
-    g = fws.double_root_gains(plant, ratio=-1.0, pole=-1.0)
-    chart = fws.stability_chart(plant, ratio=-1.0, k1=K, k2=K, pole=-1.0)
-    res = fws.simulate(
+@functools.cache
+def _plant():
+    return fws.LateralPlant(VEH, speed=5.0, curvature=0.1)
+
+
+@functools.cache
+def _gains():
+    return fws.double_root_gains(_plant(), ratio=-1.0, pole=-1.0)
+
+
+@functools.cache
+def _chart():
+    return fws.stability_chart(_plant(), ratio=-1.0, k1=K, k2=K, pole=-1.0)
+
+
+@functools.cache
+def _run():
+    return fws.simulate(
         fws.LateralPlant(VEH, speed=5.0),
         fws.Arc(0.1),
-        g,
+        _gains(),
         initial_state=(0, -5, 0),
         duration=5.0,
     )
-    batch = fws.simulate_batch(
+
+
+def _batch():
+    g = _gains()
+    return fws.simulate_batch(
         fws.LateralPlant(VEH, speed=5.0),
         fws.Arc(0.1), fws.SteeringGains([g.k1, g.k1], g.k2, -1.0),
         initial_state=(0, -5, 0), duration=5.0,
     )  # fmt: skip
-    return {
-        "SimulationResult": (res, "samples=501"),
-        "Peaks": (res.peaks, "exact=True"),
-        "TrackingMetrics": (fws.tracking_metrics(batch), "status=['ok', 'ok']"),
-        "StabilityChart": (chart, "stable=<array (201, 201) bool>"),
-        "StabilityBoundaries": (chart.boundaries, "lines=<tuple of 2>"),
-        "BoundaryCurve": (chart.curve, "omega=<array ("),
-        "DelayMarginChart": (
-            fws.delay_margin_chart(
-                fws.LateralPlant(VEH, speed=20.0), ratio=[-1.0, 0.5], pole=[-1.0, -2.0]
-            ),
-            "<array (2, 2) float64>",
-        ),
-        "LinearNonlinearComparison": (
-            fws.compare_linear_nonlinear(plant, g, duration=5.0),
-            "linear=<TimeResponseData>",
-        ),
-        "AffinePolynomial": (
-            fws.affine_characteristic_polynomial(plant, ratio=0.0),
-            "AffinePolynomial(",
-        ),
-        "LoopMatrices": (fws.loop_matrices(plant), "LoopMatrices("),
-        "ScenarioResponses": (
-            scenario_responses("curve_5", duration=5.0),
-            "ratios=<array (5,) float64>",
-        ),
-        "PeakSweep": (
-            fig5_peak_lateral_accel(ratios=[-1.0, 0.0], duration=2.0)["a"],
-            "peak_lateral_accel=<array (2, 2) float64>",
-        ),
-        "FeedbackOnlyResponses": (
-            feedback_only_curve("curve_5", duration=5.0),
-            "FeedbackOnlyResponses(",
-        ),
-    }
 
 
-OBJECTS = _objects()
+# Each object is made by the test that prints it, not at import: under
+# pytest-xdist every worker imports the module, and making them all there
+# (simulations, a 201 x 201 chart, the paper's sweeps) cost each worker
+# seconds of CPU before its first test.
+OBJECTS = {
+    "SimulationResult": (_run, "samples=501"),
+    "Peaks": (lambda: _run().peaks, "exact=True"),
+    "TrackingMetrics": (lambda: fws.tracking_metrics(_batch()), "status=['ok', 'ok']"),
+    "StabilityChart": (_chart, "stable=<array (201, 201) bool>"),
+    "StabilityBoundaries": (lambda: _chart().boundaries, "lines=<tuple of 2>"),
+    "BoundaryCurve": (lambda: _chart().curve, "omega=<array ("),
+    "DelayMarginChart": (
+        lambda: fws.delay_margin_chart(
+            fws.LateralPlant(VEH, speed=20.0), ratio=[-1.0, 0.5], pole=[-1.0, -2.0]
+        ),
+        "<array (2, 2) float64>",
+    ),
+    "LinearNonlinearComparison": (
+        lambda: fws.compare_linear_nonlinear(_plant(), _gains(), duration=5.0),
+        "linear=<TimeResponseData>",
+    ),
+    "AffinePolynomial": (
+        lambda: fws.affine_characteristic_polynomial(_plant(), ratio=0.0),
+        "AffinePolynomial(",
+    ),
+    "LoopMatrices": (lambda: fws.loop_matrices(_plant()), "LoopMatrices("),
+    "ScenarioResponses": (
+        lambda: scenario_responses("curve_5", duration=5.0),
+        "ratios=<array (5,) float64>",
+    ),
+    "PeakSweep": (
+        lambda: fig5_peak_lateral_accel(ratios=[-1.0, 0.0], duration=2.0)["a"],
+        "peak_lateral_accel=<array (2, 2) float64>",
+    ),
+    "FeedbackOnlyResponses": (
+        lambda: feedback_only_curve("curve_5", duration=5.0),
+        "FeedbackOnlyResponses(",
+    ),
+}
 
 
 @pytest.mark.parametrize("name", sorted(OBJECTS))
 def test_short_repr_and_small_html(name):
-    obj, expected = OBJECTS[name]
+    make, expected = OBJECTS[name]
+    obj = make()
     text = repr(obj)
     assert text.startswith(name) and "\n" not in text
     assert len(text) < 600, (name, len(text))
