@@ -269,9 +269,10 @@ class ClosedLoop:
         """
         mf, mr = self.modes[row], self.modes[row + 1]
         lf, lr = self.limits[row], self.limits[row + 1]
+        # (copysign: mode * limit, without 0 * inf where a free clip has none)
         return (
-            np.where(mf != 0.0, mf * lf, front),
-            np.where(mr != 0.0, mr * lr, rear),
+            np.where(mf != 0.0, np.copysign(lf, mf), front),
+            np.where(mr != 0.0, np.copysign(lr, mr), rear),
         )
 
     def clip_values(self, Y, t=0.0):
