@@ -56,6 +56,7 @@ __all__ = [
     "pure_pursuit_angle",
     "stanley_angle",
     "rear_wheel_feedback_angle",
+    "clip_switch_margin",
     "no_slip_body_state",
     "slip_angles",
     "linear_tyre_force",
@@ -537,6 +538,46 @@ def rear_wheel_feedback_angle(
         - k_e * speed * e * sinc
     )
     return np.arctan(wheelbase * omega / speed)
+
+
+# --------------------------------------------------------------------------
+# Steering limits as switched modes
+
+
+def clip_switch_margin(value: Real, limit: Real, mode: Real, released: Real) -> Real:
+    r"""Event function of a steering clip's switch (it switches at <= 0).
+
+    A clip of `value` (a steering angle command or an actuator rate) to
+    :math:`[-L, L]` (`limit`) is integrated as modes switched at located
+    events, so that the right-hand side is smooth between them: `mode` 0
+    (free: the value passes) or :math:`\pm 1` (held at :math:`\pm L`). Its
+    event function is
+
+    .. math::
+        g = \begin{cases}
+        m\,v - L & m = \pm 1 \text{ (held: leaves the limit when } g < 0)\\
+        L - |v| & m = 0,\ r = 0 \text{ (free: reaches either limit)}\\
+        L + r\,v & m = 0,\ r = \pm 1 \text{ (released from } r L
+        \text{: only } -r L \text{ switches it)}
+        \end{cases}
+
+    with `released` :math:`r` the held mode a free clip was released from at
+    the start of the current step (it starts there at that limit, up to the
+    rounding of the located switch, and can only move away from it; with
+    :math:`L - |v|` it would be switched back at once). Written without a
+    branch on the value (held :math:`= m^2`), so that an infinite `limit`
+    (no clip) of a free clip gives :math:`+\infty`, never NaN.
+
+    Examples
+    --------
+    >>> from fws_control.equations import clip_switch_margin
+    >>> [float(clip_switch_margin(0.3, 0.5, m, r)) for m, r in
+    ...  ((0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (0.0, -1.0))]
+    [0.2, -0.2, 0.8, 0.2]
+    """
+    held = mode * mode
+    free = (1.0 - held) * (released * value - (1.0 - released * released) * abs(value))
+    return limit * (1.0 - 2.0 * held) + held * mode * value + free
 
 
 # --------------------------------------------------------------------------

@@ -481,6 +481,34 @@ def test_stanley_and_rear_wheel_feedback_against_their_formulas(
     assert float(got) == pytest.approx(math.atan(fv * omega / Vv), abs=1e-13)
 
 
+@settings(max_examples=60, deadline=None)
+@given(
+    st.floats(-3.0, 3.0),
+    st.one_of(st.floats(0.01, 2.0), st.just(math.inf)),
+    st.sampled_from([-1.0, 0.0, 1.0]),
+    st.sampled_from([-1.0, 0.0, 1.0]),
+)
+def test_clip_switch_margin_against_its_cases(value, limit, mode, released):
+    # the event function of a clip's switch, case by case: held at a limit
+    # it switches when the value comes back inside; free, at either limit;
+    # released from a limit, at the opposite one only
+    if mode != 0.0:
+        if math.isinf(limit):
+            return  # no clip: never held
+        want = mode * value - limit
+    elif released == 0.0:
+        want = limit - abs(value)
+    else:
+        want = limit + released * value
+    got = equations.clip_switch_margin(value, limit, mode, released)
+    assert got == want  # the same operations: exactly
+    # the sign says whether the mode is right for the value
+    if mode != 0.0:
+        assert (got > 0.0) == (mode * value > limit)
+    elif released == 0.0:
+        assert (got > 0.0) == (abs(value) < limit)
+
+
 # --------------------------------------------------------------------------
 # (c) the compiled equations are the numpy ones, bit for bit
 
@@ -535,6 +563,10 @@ def _random_arguments(name: str, n: int, rng) -> list[np.ndarray]:
         "e_f": u(-3.0, 3.0, n),
         "gain": u(0.1, 5.0, n),
         "softening": u(0.0, 1.0, n),
+        "value": u(-3.0, 3.0, n),
+        "limit": u(0.05, 2.0, n),
+        "mode": rng.integers(-1, 2, n).astype(float),
+        "released": rng.integers(-1, 2, n).astype(float),
     }
     fn = getattr(equations, name)
     names = fn.__code__.co_varnames[: fn.__code__.co_argcount]

@@ -446,6 +446,7 @@ _linear_tyre_force = _EQUATIONS["linear_tyre_force"]
 _magic_tyre_force = _EQUATIONS["magic_tyre_force"]
 _body_derivatives = _EQUATIONS["body_derivatives"]
 _dynamic_path_kinematics = _EQUATIONS["dynamic_path_kinematics"]
+_clip_switch_margin = _EQUATIONS["clip_switch_margin"]
 
 
 # --------------------------------------------------------------------------
@@ -898,15 +899,8 @@ def _events(y, p, q, breaks, coefs, g):
     _clip_values(y, p, q, breaks, coefs, v)
     released = p.size >= _NP
     for j in range(4):
-        mode = p[_P_MODE + j]
-        if mode == 0.0:
-            side = p[_P_RELEASED + j] if released else 0.0
-            if side == 0.0:
-                g[_N_STOPS + j] = v[4 + j] - abs(v[j])
-            else:
-                g[_N_STOPS + j] = v[4 + j] + side * v[j]
-        else:
-            g[_N_STOPS + j] = mode * v[j] - v[4 + j]
+        side = p[_P_RELEASED + j] if released else 0.0
+        g[_N_STOPS + j] = _clip_switch_margin(v[j], v[4 + j], p[_P_MODE + j], side)
 
 
 # --------------------------------------------------------------------------

@@ -143,10 +143,12 @@ _COLLAPSE_MARGIN = 1e-3
 
 @dataclass
 class _Segment:
-    outcome: str  # "done", "event" or "failed"
+    outcome: str  # "done", "event", "failed" or "switch"
     t_last: float
     y_last: np.ndarray
     message: str = ""
+    # with "switch": the clip (row of ClosedLoop.modes) and the column
+    switch: tuple[int, int] = (-1, -1)
 
 
 #: Points of each accepted step (fractions of it) where the stop margins are
@@ -159,6 +161,13 @@ _MARGIN_NODES = (0.25, 0.5, 0.75, 1.0)
 #: maximum step forces): beyond it the runs still active are marked failed
 #: instead of running on (a speed of 1e20 m/s asks for ~1e20 steps).
 MAX_STEPS = 20_000
+
+#: Most located switches of the steering clips in one integration segment
+#: (all its runs; a guard against chattering, as the compiled engine's).
+MAX_SWITCHES = 100_000
+
+#: brentq's tolerances on an event, as :func:`scipy.integrate.solve_ivp`'s.
+_EVENT_TOL = 4 * np.finfo(float).eps
 
 
 def _locate_stop(event, dense, lo: float, hi: float) -> float:
@@ -211,7 +220,11 @@ def _solve_segment(
     copy of them builds up here. With a `record` (:class:`History`), the
     dense output of every accepted step is added to it with the global
     indices `runs` of the stacked runs (the delay's history, and the
-    continuous solution for exact peaks).
+    continuous solution for exact peaks). With the clips as modes
+    (``eng.modes``), where one switches (:meth:`ClosedLoop.switch_margins`,
+    located as :func:`~scipy.integrate.solve_ivp` locates an event) the step
+    is cut and the solver restarts there in the new mode, as the compiled
+    engine does, so that no step integrates across a kink of a clip.
     """
     extra = {}
     if eng.delay > 0.0:
@@ -220,19 +233,47 @@ def _solve_segment(
         extra["max_step"] = eng.delay
     if issubclass(solver_cls, (Radau, BDF)):
         extra["jac_sparsity"] = _jacobian_sparsity(eng.m, y0.size // eng.m)
-    rhs = _DetachableRhs(eng.rhs)
-    solver = solver_cls(rhs, t0, y0, t_end, rtol=rtol, atol=atol, **extra)
-    try:
-        return _step_segment(eng, solver, t0, t_end, t_eval, store, record, runs)
-    finally:
-        # scipy's solver and its wrappers of the right-hand side are a
-        # reference cycle: cut the engine out of it, so that the engine and
-        # the history it holds (every step's dense output of the chunk) are
-        # freed when the caller drops them, not at the next collection of
-        # the cyclic garbage collector (which a batch's memory bound must not
-        # depend on: with the collector paused, a 2000-run batch peaked at
-        # 45 instead of 34 MB, tests/test_signals_kept.py)
-        rhs.fun = None
+    switches = 0
+    k0 = 0  # first output time of the current restart
+
+    def shifted(k, y):
+        store(k0 + k, y)
+
+    while True:
+        rhs = _DetachableRhs(eng.rhs)
+        solver = solver_cls(rhs, t0, y0, t_end, rtol=rtol, atol=atol, **extra)
+        try:
+            seg = _step_segment(
+                eng, solver, t0, t_end, t_eval[k0:], shifted, record, runs
+            )
+        finally:
+            # scipy's solver and its wrappers of the right-hand side are a
+            # reference cycle: cut the engine out of it, so that the engine
+            # and the history it holds (every step's dense output of the
+            # chunk) are freed when the caller drops them, not at the next
+            # collection of the cyclic garbage collector (which a batch's
+            # memory bound must not depend on: with the collector paused, a
+            # 2000-run batch peaked at 45 instead of 34 MB,
+            # tests/test_signals_kept.py)
+            rhs.fun = None
+        if seg.outcome != "switch":
+            return seg
+        # a clip switches: restart the solver there in the new mode (the
+        # rest of the step, integrated in the old one, is discarded)
+        switches += 1
+        if switches > MAX_SWITCHES:
+            return _Segment(
+                "failed",
+                seg.t_last,
+                seg.y_last,
+                f"more than {MAX_SWITCHES} switches of the steering clips "
+                f"(MAX_SWITCHES) from t={t0:.6g} s: a clip chatters",
+            )
+        eng.switch(seg.y_last.reshape(eng.m, -1), seg.t_last, *seg.switch)
+        t0, y0 = seg.t_last, seg.y_last
+        k0 = int(np.searchsorted(t_eval, t0, side="right"))
+        if t0 >= t_end:
+            return _Segment("done", t0, y0)
 
 
 class _DetachableRhs:
@@ -253,15 +294,19 @@ def _step_segment(eng, solver, t0, t_end, t_eval, store, record, runs) -> _Segme
     steps = 0
     # (the steps a delay's max_step forces come on top of the budget)
     budget = MAX_STEPS + (int((t_end - t0) / eng.delay) if eng.delay > 0.0 else 0)
+    switching = eng.modes is not None
+    if switching:
+        g_old = eng.switch_margins(solver.y.reshape(eng.m, -1), t0)
     while True:
         msg = solver.step()
         steps += 1
         if solver.status != "failed" and steps > budget:
             # a tight rtol with an atol far below it costs the steps at the
-            # clips' kinks of the steering limits (inside the steps here):
-            # measured on a rate-limited arc (23 m/s, 6 s) with DOP853, rtol
-            # 1e-13: 257-329 steps for atol 1e-15 to 1e-19, 6712 for 1e-20;
-            # atol 1e-20: 262, 203 and 159 steps for rtol 1e-12, 1e-11, 1e-10
+            # clips' kinks of the steering limits (inside the steps where the
+            # clips are min/max): measured on a rate-limited arc (23 m/s, 6 s)
+            # with DOP853, rtol 1e-13: 257-329 steps for atol 1e-15 to
+            # 1e-19, 6712 for 1e-20; atol 1e-20: 262, 203 and 159 steps for
+            # rtol 1e-12, 1e-11, 1e-10
             rtol = float(np.max(solver.rtol))
             atol = float(np.max(solver.atol))
             msg = (
@@ -287,15 +332,69 @@ def _step_segment(eng, solver, t0, t_end, t_eval, store, record, runs) -> _Segme
                 t_hit = _locate_stop(eng.event, dense, prev, tt)
                 break
             prev = tt
+        switch = None
+        if switching:
+            g_new = eng.switch_margins(solver.y.reshape(eng.m, -1), t_new)
+            switch = _locate_switch(eng, dense, t_old, t_new, g_old, g_new)
+            if switch is not None and (t_hit is None or switch[0] < t_hit):
+                t_hit = switch[0]
+                if record is not None:
+                    # the step's interpolant holds up to the switch only
+                    record.pieces[-1] = (t_hit, dense, runs)
+            else:
+                switch = None
         upto = t_new if t_hit is None else t_hit
         k_end = int(np.searchsorted(t_eval, upto, side="right"))
         if k_end > k:
             store(k, dense(t_eval[k:k_end]))
             k = k_end
+        if switch is not None:
+            y_hit = solver.y.copy() if t_hit == t_new else dense(t_hit)
+            return _Segment("switch", float(t_hit), y_hit, switch=switch[1:])
         if t_hit is not None:
             return _Segment("event", float(t_hit), dense(t_hit))
         if solver.status == "finished":
             return _Segment("done", float(t_new), solver.y.copy())
+        if switching:
+            if np.any(eng.released):
+                # a step after a release: the clips watch both limits again
+                eng.released[:] = 0.0
+                g_old = eng.switch_margins(solver.y.reshape(eng.m, -1), t_new)
+            else:
+                g_old = g_new
+
+
+def _locate_switch(eng, dense, t_old, t_new, g_old, g_new):
+    """First switch of a clip in the step: ``(time, clip, column)`` or None.
+
+    A clip's mode is wrong at the step's end where its margin is < 0 (or 0
+    from > 0): it switched in the step, at the root of its margin on the
+    dense output (brentq, as :func:`~scipy.integrate.solve_ivp` locates an
+    event), or it was on the wrong side at the restart already (a margin
+    not > 0 at `t_old`: the switch is there).
+    """
+    hit = (g_new < 0.0) | ((g_new == 0.0) & (g_old > 0.0))
+    if not np.any(hit):
+        return None
+    best = None
+    for clip, col in zip(*np.nonzero(hit), strict=True):
+        if not g_old[clip, col] > 0.0:
+            root = t_old
+        else:
+
+            def g(tt, clip=clip, col=col):
+                y = dense(tt).reshape(eng.m, -1)
+                return float(eng.switch_margins(y, tt)[clip, col])
+
+            # (the interpolant's end equals the step's end to rounding only)
+            root = (
+                t_new
+                if g(t_new) > 0.0
+                else brentq(g, t_old, t_new, xtol=_EVENT_TOL, rtol=_EVENT_TOL)
+            )
+        if best is None or root < best[0]:
+            best = (float(root), int(clip), int(col))
+    return best
 
 
 def integrate(
@@ -318,6 +417,7 @@ def integrate(
     body_state: np.ndarray | None = None,
     profile: Any = None,
     schedule: Any = None,
+    switching: bool | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate ``n`` runs together; a stopped run leaves the stacked state.
 
@@ -379,6 +479,13 @@ def integrate(
     schedule : optional
         Gains of the paper's law read at the current speed
         (:func:`scheduled_gains`) instead of the fixed `gains`.
+    switching : bool, optional
+        True: the steering-angle and steering-rate clips are modes switched
+        at located events, where the solver restarts (as in the compiled
+        engine), so that no step integrates across a clip's kink; False:
+        min/max in the right-hand side. Default: True on a vehicle with a
+        limit, without a delay (whose clips are min/max, as in the compiled
+        engine). A sampled controller's clips are min/max.
 
     Returns
     -------
@@ -433,8 +540,17 @@ def integrate(
     t_stop = np.full(n, t_eval[-1])
 
     history = None
+    if switching is None:
+        switching = delay == 0.0 and _has_limits(vehicle, tau)
+    elif switching and delay > 0.0:
+        raise ValueError(
+            f"switching=True is not available with a delay (delay={delay!r}): the "
+            "clips of a delayed command are min/max in the right-hand side"
+        )
+    # the clips' modes of every run (ClosedLoop.modes), kept across segments
+    modes = np.zeros((4, n)) if switching else None
 
-    def engine_for(idx):
+    def engine_for(idx, switched=False):
         return ClosedLoop(
             vehicle,
             path,
@@ -451,17 +567,26 @@ def integrate(
             tyre,
             profile=profile,
             schedule=schedule,
+            modes=modes[:, idx] if switched and modes is not None else None,
         )
 
     active = np.arange(n)
-    eng = engine_for(active)
-    Y = np.empty((m, n))
+    eng = engine_for(active, switched=True)
+    Y = np.zeros((m, n))
     Y[:3] = z0.T
+    if switching:
+        # an angle beyond its limit starts held (first: the actuator's rate
+        # depends on the held command)
+        eng.start_modes(Y, float(t_eval[0]), (0, 1))
     if tau is not None or dyn:
         cmd = np.stack(eng.command(Y, eng.curvature(Y[0]), float(t_eval[0])))
     if tau is not None:
         # The actuator starts at the command: no initial transient of its own.
         Y[3:5] = cmd
+        if switching:
+            eng.start_modes(Y, float(t_eval[0]), (2, 3))
+    if switching:
+        modes[:] = eng.modes
     if dyn:
         V0 = speed if profile is None else eng.speed_at(float(t_eval[0]), Y[0])
         _initial_body_state(vehicle, Y, cmd, V0, body_state)
@@ -483,7 +608,7 @@ def integrate(
     breaks = [t0 + k * delay for k in (1, 2, 3)] if delay > 0.0 else []
     breaks = [b for b in breaks if b < t_end] + [t_end]
     while active.size and t0 < t_end:
-        eng = engine_for(active)
+        eng = engine_for(active, switched=True)
         first = int(np.searchsorted(t_eval, t0, side="right"))
         seg_end = next(b for b in breaks if b > t0)
 
@@ -506,6 +631,8 @@ def integrate(
             record=history,
             runs=active,
         )
+        if switching:
+            modes[:, active] = eng.modes
         if seg.outcome == "done":
             if seg_end >= t_end:
                 break
@@ -701,6 +828,13 @@ def _stop_runs(eng, seg, active, status, message, t_stop):
             note if jj == j else _STOP_MESSAGES[kind_jj]
         )
     return ~np.isin(np.arange(active.size), stops)
+
+
+def _has_limits(vehicle, tau) -> bool:
+    """True if `vehicle` clips a steering angle, or a rate with an actuator."""
+    rates = (vehicle.max_steer_rate_front, vehicle.max_steer_rate_rear)
+    angles = (vehicle.max_steer_front, vehicle.max_steer_rear)
+    return any(v is not None for v in angles + (rates if tau is not None else ()))
 
 
 def _initial_body_state(vehicle, Y, cmd, speed, body_state) -> None:

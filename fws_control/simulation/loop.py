@@ -12,6 +12,7 @@ states at which a run stops. A varying speed (a
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any
 
@@ -111,7 +112,7 @@ class ClosedLoop:
     def __init__(
         self, vehicle, path, gains, speed, feedforward, tau, delay=0.0, history=None,
         runs=None, model="kinematic", tyre="linear", hold=None, profile=None,
-        schedule=None,
+        schedule=None, modes=None,
     ):  # fmt: skip
         # hold: first of the two rows of a sampled controller's held command
         # (None: a static law, evaluated at every stage)
@@ -142,6 +143,33 @@ class ClosedLoop:
         self.open_length = (
             length if (math.isfinite(length) and not path.closed) else None
         )
+        # The clips as switched modes (None: min/max in the right-hand side):
+        # rows front/rear angle, front/rear rate, one column per run, -1, 0
+        # or +1 (held at the lower limit, free, held at the upper one); and
+        # the held mode each clip was released from at the solver's restart
+        # (0 once a step has been accepted since). Between the located
+        # switches (switch_margins) the right-hand side is then smooth.
+        self.modes = None
+        self.released = None
+        if modes is not None:
+            self.modes = np.array(modes, dtype=float).reshape(4, -1)
+            self.released = np.zeros_like(self.modes)
+            # the raw (unclipped) law and actuator: the vehicle without limits
+            self._free = dataclasses.replace(
+                vehicle,
+                max_steer_front=None,
+                max_steer_rear=None,
+                max_steer_rate_front=None,
+                max_steer_rate_rear=None,
+            )
+            # the limits of the four clips (inf: none)
+            limits = (
+                vehicle.max_steer_front,
+                vehicle.max_steer_rear,
+                vehicle.max_steer_rate_front if tau is not None else None,
+                vehicle.max_steer_rate_rear if tau is not None else None,
+            )
+            self.limits = np.array([math.inf if v is None else v for v in limits])
 
     def clip(self, s):
         # Trial stages of the solver may step slightly past the end of an open
@@ -195,6 +223,8 @@ class ClosedLoop:
             # initial one: the current Y)
             Yd = self.history.state(t - self.delay, self.runs)
             Y, kappa = Yd, self.curvature(Yd[0])
+        if self.modes is not None:
+            return self._held(*self._raw_command(Y, kappa, V), 0)
         if not isinstance(self.gains, SteeringGains):  # a LateralController
             df, dr = self.gains.steering(
                 self.vehicle,
@@ -206,8 +236,12 @@ class ClosedLoop:
                 speed=V,
             )
             return saturate(self.vehicle, df, dr)
+        return self._law(self.vehicle, Y, kappa, V)
+
+    def _law(self, vehicle, Y, kappa, V):
+        """The paper's law (eqs. 24-29) clipped to `vehicle`'s angle limits."""
         return steering_command(
-            self.vehicle,
+            vehicle,
             self.gains_at(V),
             Y[1],
             Y[2],
@@ -217,6 +251,82 @@ class ClosedLoop:
             speed=V,
             tyre=self.tyre,
         )
+
+    def _raw_command(self, Y, kappa, V):
+        """The law's command before the angle clips (switching modes only)."""
+        if not isinstance(self.gains, SteeringGains):
+            return self.gains.steering(
+                self.vehicle, self.path, s=self.clip(Y[0]), e=Y[1], theta=Y[2],
+                curvature=kappa, speed=V,
+            )  # fmt: skip
+        return self._law(self._free, Y, kappa, V)
+
+    def _held(self, front, rear, row):
+        """Channels `front`, `rear` with the held ones at their limits.
+
+        Clips ``row``, ``row + 1`` of :attr:`modes` (0: the angles, 2: the
+        actuator's rates): a held channel is ``mode * limit``.
+        """
+        mf, mr = self.modes[row], self.modes[row + 1]
+        lf, lr = self.limits[row], self.limits[row + 1]
+        # (copysign: mode * limit, without 0 * inf where a free clip has none)
+        return (
+            np.where(mf != 0.0, np.copysign(lf, mf), front),
+            np.where(mr != 0.0, np.copysign(lr, mr), rear),
+        )
+
+    def clip_values(self, Y, t=0.0):
+        """The four clipped quantities before their clips, shape ``(4, n)``.
+
+        Rows: the law's front and rear angle commands, the actuator's front
+        and rear rates (from the command with the held angle clips; zero
+        without an actuator). Switching modes only.
+        """
+        kappa = self.curvature(Y[0])
+        V = self.speed_at(t, Y[0])
+        raw = np.zeros((4, Y.shape[1]))
+        raw[0], raw[1] = self._raw_command(Y, kappa, V)
+        if self.tau is not None:
+            cmd = self._held(raw[0], raw[1], 0)
+            raw[2], raw[3] = actuator_rate(
+                self._free, cmd, (Y[3], Y[4]), time_constant=self.tau
+            )
+        return raw
+
+    def switch_margins(self, Y, t=0.0):
+        """Event functions of the clips' switches, shape ``(4, n)``.
+
+        :func:`~fws_control.equations.clip_switch_margin` of each clip (rows
+        as :attr:`modes`): a clip switches where its margin reaches <= 0.
+        """
+        return equations.clip_switch_margin(
+            self.clip_values(Y, t), self.limits[:, None], self.modes, self.released
+        )
+
+    def start_modes(self, Y, t, rows):
+        """Hold the clips `rows` that are beyond their limits in state `Y`."""
+        raw = self.clip_values(Y, t)
+        for j in rows:
+            beyond = np.abs(raw[j]) > self.limits[j]
+            self.modes[j] = np.where(beyond, np.sign(raw[j]), 0.0)
+
+    def switch(self, Y, t, clip, run):
+        """Switch clip `clip` of column `run` at state `Y` (a located event).
+
+        A held clip is released (and remembers the limit it left, for the
+        next step); a free one is held at the limit its value crossed. A
+        clip released before and now inside its limits watches both limits
+        again.
+        """
+        raw = self.clip_values(Y, t)
+        inside = np.abs(raw) < self.limits[:, None]
+        self.released[(self.released != 0.0) & inside] = 0.0
+        if self.modes[clip, run] != 0.0:
+            self.released[clip, run] = self.modes[clip, run]
+            self.modes[clip, run] = 0.0
+        else:
+            self.modes[clip, run] = 1.0 if raw[clip, run] > 0.0 else -1.0
+            self.released[clip, run] = 0.0
 
     def command_rate(self, Y, Ydot, kappa, t=0.0):
         """Time derivative of the command for (delayed) states and their rates."""
@@ -308,7 +418,15 @@ class ClosedLoop:
             Ydot = np.stack([s_dot, e_dot, th_dot, *held, *body])
         else:
             cmd = self.command(Y, kappa, t, V)
-            rf, rr = actuator_rate(self.vehicle, cmd, (df, dr), time_constant=self.tau)
+            if self.modes is None:
+                rf, rr = actuator_rate(
+                    self.vehicle, cmd, (df, dr), time_constant=self.tau
+                )
+            else:
+                rf, rr = self._held(
+                    *actuator_rate(self._free, cmd, (df, dr), time_constant=self.tau),
+                    2,
+                )
             Ydot = np.stack([s_dot, e_dot, th_dot, rf, rr, *held, *body])
         return Ydot, kappa, df, dr
 
