@@ -110,12 +110,11 @@ RTOL_RANGE = (100 * float(np.finfo(float).eps), 0.1)
 #: below the rounding error of any state of the loop (an absolute tolerance
 #: of 1e-300 overflows scipy's error norm of a state at 0: the solver then
 #: fails at t = 0), to 0.1 m or rad for the reason of the upper bound of
-#: ``rtol``. With steering limits the numpy engine integrates across the
-#: clips' kinks inside its steps, and the tightest corner of the ranges
-#: costs many steps there: on a rate-limited arc (23 m/s, 6 s) DOP853 took
-#: 6712 steps at rtol 1e-13, atol 1e-20, but at most 329 with atol >= 1e-19
-#: or rtol >= 1e-12; a run beyond MAX_STEPS ends "failed" with a message
-#: naming the tolerances.
+#: ``rtol``. With steering limits and a delay both engines clip with
+#: min/max inside their steps (without a delay they locate the switches as
+#: events), and the tightest corner of the ranges costs many steps at the
+#: clips' kinks; a run beyond MAX_STEPS ends "failed" with a message naming
+#: the tolerances.
 ATOL_RANGE = (1e-20, 0.1)
 
 
