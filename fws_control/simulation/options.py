@@ -471,7 +471,14 @@ def split_initial_state(initial_state: Any, *, model: str) -> np.ndarray:
     >>> split_initial_state((0.0, 2.0, 0.0, 0.1, 0.0), model="dynamic").shape
     (1, 5)
     """
-    arr = np.asarray(check_finite("initial_state", initial_state), dtype=float)
+    if (
+        type(initial_state) is np.ndarray
+        and initial_state.dtype == np.float64
+        and np.isfinite(initial_state).all()
+    ):
+        arr = initial_state  # (what check_finite returns for it)
+    else:
+        arr = np.asarray(check_finite("initial_state", initial_state), dtype=float)
     sizes = (3, 5) if model == "dynamic" else (3,)
     if arr.ndim == 0 or arr.shape[-1] not in sizes or arr.ndim > 2:
         shapes = (

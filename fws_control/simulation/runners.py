@@ -248,15 +248,19 @@ def _run_compiled_stages(
         table = curvature_table(path)  # (raises: the path has no table)
     # each distinct initial pose projected once (a sweep often shares one);
     # distinct by bit pattern, so the numbers are those of every run's own
-    rows = np.ascontiguousarray(x0[:, :3]).view(np.dtype((np.void, 24))).ravel()
-    _, first, inverse = np.unique(rows, return_index=True, return_inverse=True)
+    if len(x0) == 1:
+        path_state = initial_path_state(path, x0[:, :3])
+    else:
+        rows = np.ascontiguousarray(x0[:, :3]).view(np.dtype((np.void, 24))).ravel()
+        _, first, inverse = np.unique(rows, return_index=True, return_inverse=True)
+        path_state = initial_path_state(path, x0[first, :3])[inverse.ravel()]
     states, status, message, t_stop, _ = integrate_compiled(
         vehicle,
         table if ctrl is None else path,  # (a law may need the path's position)
         g,
         speed=speed,
         feedforward=feedforward,
-        path_state=initial_path_state(path, x0[first, :3])[inverse.ravel()],
+        path_state=path_state,
         t_eval=t,
         time_constant=tau,
         rtol=opts["rtol"],
@@ -498,7 +502,10 @@ def _simulate_batch(
         "method": method,
         "rtol": rtol,
         "atol": atol,
-        "delay": check_delay(delay),
+        # (a float >= 0 as it is; anything else checked)
+        "delay": delay
+        if type(delay) is float and 0.0 <= delay < math.inf
+        else check_delay(delay),
         "model": model,
         "tyre": tyre,
     }
