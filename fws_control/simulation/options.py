@@ -103,10 +103,11 @@ def path_key(path: Path) -> tuple | None:
         return None
     values = tuple(fields.values())
     for value in values:
-        kind = type(value)
-        if kind not in _PLAIN and not (
-            kind is tuple and all(type(v) in _PLAIN for v in value)
-        ):
+        if type(value) is tuple:
+            for item in value:
+                if type(item) not in _PLAIN:
+                    return None
+        elif type(value) not in _PLAIN:
             return None
     return (type(path), repr(values))
 

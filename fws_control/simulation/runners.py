@@ -502,10 +502,7 @@ def _simulate_batch(
         "method": method,
         "rtol": rtol,
         "atol": atol,
-        # (a float >= 0 as it is; anything else checked)
-        "delay": delay
-        if type(delay) is float and 0.0 <= delay < math.inf
-        else check_delay(delay),
+        "delay": _delay(delay),
         "model": model,
         "tyre": tyre,
     }
@@ -757,6 +754,13 @@ def _simulate_batch(
     if cluster_lost is not None:
         raise ClusterLostError(cluster_lost, result=result)
     return result
+
+
+def _delay(delay: Any) -> float:
+    """`delay` checked: a float >= 0 as it is, anything else by check_delay."""
+    if type(delay) is float and 0.0 <= delay < math.inf:
+        return delay
+    return check_delay(delay)
 
 
 def _say_if_schedule_not_compiled(schedule) -> None:
