@@ -161,8 +161,7 @@ def prepare_runs(
     check_type("path", path, Path, "a fws_control Path (e.g. fws.Straight())")
     ctrl = gains if isinstance(gains, LateralController) else None
     if ctrl is None:
-        g = run_gains(gains, name="gains")
-        fields = (g.k1, g.k2, g.ratio)
+        fields = _gain_fields(gains)
     else:
         # a controller carries its own parameters: no gains to record (NaN)
         fields = (np.full(ctrl.runs() or 1, np.nan),) * 3
@@ -175,7 +174,13 @@ def prepare_runs(
             )
     if tau is not None:
         tau = check_scalar("steering_lag", tau)
-    speed_arr = np.atleast_1d(np.asarray(check_nonzero("speed", speed), dtype=float))
+    if isinstance(speed, float) and math.isfinite(speed) and speed != 0.0:
+        # (a plant's speed: a float, checked without the array round trip)
+        speed_arr = np.array([speed], dtype=float)
+    else:
+        speed_arr = np.atleast_1d(
+            np.asarray(check_nonzero("speed", speed), dtype=float)
+        )
     if speed_arr.ndim != 1:
         raise ValueError(f"speed must be a scalar or 1-D, got shape {speed_arr.shape}")
     opts["model"], opts["tyre"] = check_model(vehicle, opts["model"], opts["tyre"])
@@ -194,8 +199,11 @@ def prepare_runs(
             f"number of runs, got {n_gains}, {speed_arr.size} and {x0.shape[0]}"
         )
     n = sizes.pop() if sizes else 1
-    k1, k2, a, V = (np.broadcast_to(v, (n,)).copy() for v in (*fields, speed_arr))
-    x0 = np.broadcast_to(x0, (n, 5)).copy()
+    k1, k2, a, V = (
+        v.copy() if v.shape == (n,) else np.broadcast_to(v, (n,)).copy()
+        for v in (*fields, speed_arr)
+    )
+    x0 = x0.copy() if x0.shape == (n, 5) else np.broadcast_to(x0, (n, 5)).copy()
     # (before building the grid: dt = 1e-9 must not allocate 112 GiB first)
     samples = output_samples(duration, dt=dt, t_eval=t_eval)
     check_output_budget(
@@ -229,6 +237,19 @@ def prepare_runs(
     else:
         _warn_if_stiff(check_method(opts["method"]), tau, float(t[-1]))
     return k1, k2, a, V, x0, t, tau, ctrl
+
+
+def _gain_fields(gains: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(k1, k2, ratio)`` of the runs as 1-D float arrays (run_gains')."""
+    if isinstance(gains, SteeringGains) and not any(
+        np.ma.isMaskedArray(v) for v in (gains.k1, gains.k2, gains.ratio)
+    ):
+        # SteeringGains holds finite floats (or float arrays) already: only
+        # broadcast, as run_gains does, without building and checking a copy
+        k1, k2, a = np.broadcast_arrays(gains.k1, gains.k2, gains.ratio)
+        return k1.ravel().copy(), k2.ravel().copy(), a.ravel().copy()
+    g = run_gains(gains, name="gains")
+    return g.k1, g.k2, g.ratio
 
 
 #: Steps an explicit method may be forced to take by the actuator's

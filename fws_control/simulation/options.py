@@ -55,9 +55,79 @@ __all__ = [
     "check_output_budget",
     "time_grid",
     "initial_path_state",
+    "path_key",
     "MAX_SAMPLES",
     "check_sampling",
 ]
+
+
+#: Entries each cache of this module keeps (the oldest goes first).
+_CACHE_SIZE = 32
+#: Output grids by ``(duration, samples)``, read-only (time_grid copies them).
+_GRIDS: dict = {}
+#: Initial path states by ``(path_key(path), shape, bytes of the poses)``
+#: (initial_path_state), for calls of at most _CACHED_POSES poses.
+_PROJECTIONS: dict = {}
+_CACHED_POSES = 8
+#: Field values a path's key is made of (with tuples of them).
+_PLAIN = (float, int, bool, str, type(None))
+
+
+def path_key(path: Path) -> tuple | None:
+    """A hashable key that equals another path's only if both are the same path.
+
+    The path's type and the reprs of its fields (exact for floats, -0.0
+    included), for the runners' caches of what depends on the path alone
+    (its initial projections, the compiled engine's curvature table):
+    paths are frozen, so equal keys give equal results, bit for bit.
+
+    Returns
+    -------
+    tuple or None
+        None for a path holding anything but numbers, strings and tuples
+        of them (arrays, other paths): such a path is not cached.
+
+    Examples
+    --------
+    >>> import fws_control as fws
+    >>> from fws_control.simulation.options import path_key
+    >>> path_key(fws.Arc(0.1)) == path_key(fws.Arc(curvature=0.1))
+    True
+    >>> path_key(fws.Arc(0.1, start_heading=0.0)) == path_key(
+    ...     fws.Arc(0.1, start_heading=-0.0))
+    False
+    """
+    try:
+        fields = vars(path)
+    except TypeError:
+        return None
+    values = tuple(fields.values())
+    for value in values:
+        if type(value) is tuple:
+            for item in value:
+                if type(item) not in _PLAIN:
+                    return None
+        elif type(value) not in _PLAIN:
+            return None
+    return (type(path), repr(values))
+
+
+def _remember(cache: dict, key: Any, value: Any) -> None:
+    """Store `value` under `key`, dropping the oldest entry beyond _CACHE_SIZE."""
+    if len(cache) >= _CACHE_SIZE:
+        cache.pop(next(iter(cache)))
+    cache[key] = value
+
+
+def _positive_float(name: str, value: Any) -> float:
+    """`value` as a float if it is finite and > 0, else check_positive's error.
+
+    A Python float (or numpy float64) is checked without the array round
+    trip of check_positive: the durations and steps of every call are.
+    """
+    if isinstance(value, float) and 0.0 < value < math.inf:
+        return float(value)
+    return float(check_positive(name, value))
 
 
 #: The scipy solvers accepted by name as ``method``.
@@ -401,7 +471,14 @@ def split_initial_state(initial_state: Any, *, model: str) -> np.ndarray:
     >>> split_initial_state((0.0, 2.0, 0.0, 0.1, 0.0), model="dynamic").shape
     (1, 5)
     """
-    arr = np.asarray(check_finite("initial_state", initial_state), dtype=float)
+    if (
+        type(initial_state) is np.ndarray
+        and initial_state.dtype == np.float64
+        and np.isfinite(initial_state).all()
+    ):
+        arr = initial_state  # (what check_finite returns for it)
+    else:
+        arr = np.asarray(check_finite("initial_state", initial_state), dtype=float)
     sizes = (3, 5) if model == "dynamic" else (3,)
     if arr.ndim == 0 or arr.shape[-1] not in sizes or arr.ndim > 2:
         shapes = (
@@ -541,8 +618,8 @@ def output_samples(duration: float, *, dt: float = 0.01, t_eval: Any = None) -> 
     """
     if t_eval is not None:
         return float(np.size(t_eval))
-    duration = float(check_positive("duration", duration))
-    dt = float(check_positive("dt", dt))
+    duration = _positive_float("duration", duration)
+    dt = _positive_float("dt", dt)
     with np.errstate(over="ignore"):
         ratio = duration / dt
     return max(float(round(ratio)) if math.isfinite(ratio) else math.inf, 1.0) + 1.0
@@ -632,12 +709,19 @@ def time_grid(duration: float, *, dt: float = 0.01, t_eval: Any = None) -> np.nd
     >>> time_grid(1.0, dt=0.25).tolist()
     [0.0, 0.25, 0.5, 0.75, 1.0]
     """
-    duration = float(check_positive("duration", duration))
+    duration = _positive_float("duration", duration)
     if t_eval is None:
-        dt = float(check_positive("dt", dt))
+        dt = _positive_float("dt", dt)
         samples = output_samples(duration, dt=dt)
         check_output_budget(1, samples, duration=duration, dt=dt)
-        return np.linspace(0.0, duration, int(samples))
+        key = (duration, int(samples))
+        grid = _GRIDS.get(key)
+        if grid is None:
+            grid = np.linspace(0.0, duration, int(samples))
+            grid.flags.writeable = False
+            _remember(_GRIDS, key, grid)
+        # a copy: the caller owns (and may change) the grid it is given
+        return grid.copy()
     # a copy: the result's t must not change with the caller's array (nor
     # with a simulate_batch(out=...) that shares its memory)
     t = np.array(check_finite("t_eval", t_eval), dtype=float).ravel()
@@ -668,11 +752,24 @@ def initial_path_state(path: Path, initial_state: np.ndarray) -> np.ndarray:
     >>> initial_path_state(Arc(curvature=0.1), np.array([[0.0, -5.0, 0.0]]))
     array([[ 0., -5.,  0.]])
     """
+    # A few poses are remembered, keyed on the path's value (paths are
+    # frozen) and the poses' bit patterns: a loop of simulate calls projects
+    # the same pose onto the same path run after run, and one projection
+    # costs about as much as integrating the paper's 15 s run.
+    key = path_key(path) if len(initial_state) <= _CACHED_POSES else None
+    if key is not None:
+        poses = np.ascontiguousarray(initial_state, dtype=float)
+        key = (key, poses.shape, poses.tobytes())
+        hit = _PROJECTIONS.get(key)
+        if hit is not None:
+            return hit.copy()
     out = np.empty_like(initial_state, dtype=float)
     for i, (x0, y0, psi0) in enumerate(initial_state):
         p = path.project(float(x0), float(y0), strict=True)
         theta0 = math.remainder(float(psi0) - float(p.heading), 2 * math.pi)
         out[i] = (float(p.s), float(p.e), theta0)
+    if key is not None:
+        _remember(_PROJECTIONS, key, out.copy())
     return out
 
 

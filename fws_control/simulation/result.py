@@ -366,8 +366,9 @@ class SimulationResult:
         t = np.asarray(self.t, dtype=float)
         sig = np.asarray(self.signals, dtype=float)
         names = tuple(self.signal_names)
-        if any(not isinstance(k, str) for k in names) or names != tuple(
-            k for k in SIGNALS if k in names
+        if names != SIGNALS and (
+            any(not isinstance(k, str) for k in names)
+            or names != tuple(k for k in SIGNALS if k in names)
         ):
             raise ValueError(
                 f"signal_names must be distinct names of SIGNALS in its order "

@@ -30,7 +30,6 @@ output.
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import math
 import sys
@@ -77,6 +76,7 @@ from .options import (
     LSODA_MAX_RUNS,
     SAFE_STEP,
     initial_path_state,
+    path_key,
     run_gains,
 )
 from .outcomes import PEAK_SIGNALS, SIGNALS
@@ -170,12 +170,37 @@ def _choose_engine(
         profile=profile, schedule=schedule,
     ):  # fmt: skip
         return "numpy", None
+    table = _path_table(path)
+    return ("numpy", None) if table is None else ("compiled", table)
+
+
+#: Curvature tables by :func:`~fws_control.simulation.options.path_key`,
+#: None where the path has none within its tolerance.
+_TABLES: dict = {}
+#: Paths whose tables are remembered (the oldest goes first).
+_TABLES_SIZE = 16
+
+
+def _path_table(path):
+    """The compiled engine's curvature table of `path`, or None if it has none.
+
+    Remembered per path (paths are frozen; see ``path_key``): a table
+    depends on the path only, and a loop of runs on one path builds it once.
+    """
+    key = path_key(path)
+    if key is not None and key in _TABLES:
+        return _TABLES[key]
     from .compiled import curvature_table
 
     try:
-        return "compiled", curvature_table(path)
+        table = curvature_table(path)
     except ValueError:
-        return "numpy", None
+        table = None
+    if key is not None:
+        if len(_TABLES) >= _TABLES_SIZE:
+            _TABLES.pop(next(iter(_TABLES)))
+        _TABLES[key] = table
+    return table
 
 
 def _run_compiled(
@@ -218,18 +243,24 @@ def _run_compiled_stages(
     # outputs and the peaks
     table = opts.get("curvature_table")
     if table is None:
-        table = curvature_table(path)
+        table = _path_table(path)
+    if table is None:
+        table = curvature_table(path)  # (raises: the path has no table)
     # each distinct initial pose projected once (a sweep often shares one);
     # distinct by bit pattern, so the numbers are those of every run's own
-    rows = np.ascontiguousarray(x0[:, :3]).view(np.dtype((np.void, 24))).ravel()
-    _, first, inverse = np.unique(rows, return_index=True, return_inverse=True)
+    if len(x0) == 1:
+        path_state = initial_path_state(path, x0[:, :3])
+    else:
+        rows = np.ascontiguousarray(x0[:, :3]).view(np.dtype((np.void, 24))).ravel()
+        _, first, inverse = np.unique(rows, return_index=True, return_inverse=True)
+        path_state = initial_path_state(path, x0[first, :3])[inverse.ravel()]
     states, status, message, t_stop, _ = integrate_compiled(
         vehicle,
         table if ctrl is None else path,  # (a law may need the path's position)
         g,
         speed=speed,
         feedforward=feedforward,
-        path_state=initial_path_state(path, x0[first, :3])[inverse.ravel()],
+        path_state=path_state,
         t_eval=t,
         time_constant=tau,
         rtol=opts["rtol"],
@@ -376,11 +407,13 @@ def _simulate_run(
 ) -> SimulationResult:
     """:func:`simulate` on the resolved plant (its vehicle, speed, model,
     tyre and lag as separate arguments)."""
-    n_gains = (
-        (gains.runs() or 1)
-        if isinstance(gains, LateralController)
-        else run_gains(gains, name="gains").k1.size
-    )
+    if isinstance(gains, LateralController):
+        n_gains = gains.runs() or 1
+    elif isinstance(gains, SteeringGains):
+        # (validated once, by prepare_runs; here only counted)
+        n_gains = np.broadcast(gains.k1, gains.k2, gains.ratio).size
+    else:
+        n_gains = run_gains(gains, name="gains").k1.size
     if n_gains != 1:
         raise ValueError(
             f"controller must be scalar for simulate (got {n_gains} designs); use "
@@ -396,7 +429,7 @@ def _simulate_run(
             "initial_state must be (x_R, y_R, psi) for simulate, got shape "
             f"{np.shape(initial_state)}; use simulate_batch for several runs"
         )
-    batch = _simulate_batch(
+    return _simulate_batch(
         vehicle,
         path,
         gains,
@@ -418,12 +451,7 @@ def _simulate_run(
         progress=False,
         profile=profile,
         schedule=schedule,
-    )
-    # batch[0] without copying the signals: the squeezed run's grid ends at
-    # its last sample (a view of the batch's arrays).
-    count = int(batch.run_samples[0])
-    return dataclasses.replace(
-        batch, t=batch.t[:count], signals=batch.signals[:, :, :count], squeeze=True
+        squeeze=True,
     )
 
 
@@ -453,12 +481,15 @@ def _simulate_batch(
     out: np.ndarray | None = None,
     profile: SpeedProfile | None = None,
     schedule: Any = None,
+    squeeze: bool = False,
 ) -> SimulationResult:
     """:func:`simulate_batch` on the resolved plant (its vehicle, speed,
     model, tyre and lag as separate arguments). With a varying speed
     `profile`, `speed` is only its direction (+1 or -1) and the recorded
     speed of each run is the profile's at its start; with a `schedule` the
-    recorded gains are the schedule's at that speed."""
+    recorded gains are the schedule's at that speed. ``squeeze=True``
+    (:func:`simulate`, one run): the result is the run squeezed, its grid
+    ending at its last sample (views of the batch's arrays)."""
     if not isinstance(engine, str) or engine not in _ENGINES:
         raise ValueError(f"engine must be one of {_ENGINES}, got {engine!r}")
     if profile is not None:
@@ -471,7 +502,7 @@ def _simulate_batch(
         "method": method,
         "rtol": rtol,
         "atol": atol,
-        "delay": check_delay(delay),
+        "delay": _delay(delay),
         "model": model,
         "tyre": tyre,
     }
@@ -520,17 +551,21 @@ def _simulate_batch(
     else:
         feedforward = bool(feedforward)
     table = None
+    # (one record of the gains for the engine's checks below)
+    law = SteeringGains(k1, k2, a) if ctrl is None else ctrl
+    chosen_for = None
     # With an actuator, "auto" on the compiled engine is DOP853 with its steps
     # held to half its stability bound (see _CAPPED_STEP), or Radau beyond
     # _RADAU_FROM_STEPS such steps, also where the numpy engine would take
     # LSODA or Radau: the compiled engine runs every stiff case.
     stiff_auto = auto_method and tau is not None
     if engine == "auto":
+        chosen_for = "DOP853" if stiff_auto else opts["method"]
         engine, table = _choose_engine(
             path,
-            SteeringGains(k1, k2, a) if ctrl is None else ctrl,
+            law,
             delay=opts["delay"],
-            method="DOP853" if stiff_auto else opts["method"],
+            method=chosen_for,
             model=opts["model"],
             feedforward=feedforward,
             profile=profile,
@@ -554,20 +589,24 @@ def _simulate_batch(
             if tau is not None:
                 opts["max_step"] = _CAPPED_STEP * tau
     if engine == "compiled":
-        _check_compiled(
-            path,
-            SteeringGains(k1, k2, a) if ctrl is None else ctrl,
-            delay=opts["delay"],
-            method=opts["method"],
-            model=opts["model"],
-            feedforward=feedforward,
-            profile=profile,
-            schedule=schedule,
-        )
+        if chosen_for is None or opts["method"] != chosen_for:
+            # (not yet checked for this method by _choose_engine)
+            _check_compiled(
+                path,
+                law,
+                delay=opts["delay"],
+                method=opts["method"],
+                model=opts["model"],
+                feedforward=feedforward,
+                profile=profile,
+                schedule=schedule,
+            )
+        if table is None:
+            table = _path_table(path)
         if table is None:
             from .compiled import curvature_table
 
-            table = curvature_table(path)
+            table = curvature_table(path)  # (raises: the path has no table)
         opts["curvature_table"] = table  # built once, for every chunk
     if chunk_size is None:
         chunk_size = DEFAULT_CHUNK_SIZE
@@ -674,6 +713,14 @@ def _simulate_batch(
     finally:
         bar.close()
 
+    if squeeze:
+        # the one run's grid ends at its last sample (views, no copy)
+        if samples is None:
+            samples = np.count_nonzero(
+                np.isfinite(data[:, kept.index("s"), :]), axis=1
+            ).astype(np.int64)
+        count = int(samples[0])
+        t, data = t[:count], data[:, :, :count]
     result = SimulationResult(
         t=t,
         signals=data,
@@ -689,7 +736,7 @@ def _simulate_batch(
         run_ratio=a,
         run_initial_state=x0[:, :3],
         feedforward=feedforward,
-        squeeze=False,
+        squeeze=squeeze,
         vehicle=vehicle,
         path=path,
         method=opts["method"]
@@ -707,6 +754,13 @@ def _simulate_batch(
     if cluster_lost is not None:
         raise ClusterLostError(cluster_lost, result=result)
     return result
+
+
+def _delay(delay: Any) -> float:
+    """`delay` checked: a float >= 0 as it is, anything else by check_delay."""
+    if type(delay) is float and 0.0 <= delay < math.inf:
+        return delay
+    return check_delay(delay)
 
 
 def _say_if_schedule_not_compiled(schedule) -> None:
