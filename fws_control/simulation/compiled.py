@@ -307,7 +307,7 @@ def _stage_kernels(q: np.ndarray) -> Any:
 
 def _stage_seconds(stage: str) -> float:
     # the estimate of a stage for the features of the thread's call
-    features = getattr(_call, "features", frozenset())
+    features: frozenset[str] = getattr(_call, "features", frozenset())
     top = kernels(features)
     kernel = {
         "DOP853": top.solve_batch,
