@@ -83,8 +83,8 @@ print(json.dumps({"total": after, "simulate": after - before, "stages": stages,
 # the top kernels' names (their stage in compiled.STAGES)
 _STAGE_OF = {
     "solve_batch": "DOP853 or Radau driver",
-    "_signals_batch": "signals",
-    "_peaks_batch": "peaks",
+    "signals_batch": "signals",
+    "peaks_batch": "peaks",
 }
 
 

@@ -171,14 +171,14 @@ def test_engine_radau_stops_where_scipys_event_does():
 )
 def test_radau_dense_output_in_dop853_form_is_scipys_polynomial(q, x):
     # scipy's RadauDenseOutput: y_old + Q @ (x, x^2, x^3); the engine
-    # writes Q as DOP853's coefficients F and evaluates _dense_eval
-    from fws_control.simulation import compiled
+    # writes Q as DOP853's coefficients F and evaluates dense_eval
+    from fws_control.simulation import compiled_dop853, compiled_radau
 
     Q = np.array(q).reshape(5, 3)
     y_old = np.linspace(-1.0, 1.0, 5)
     F = np.empty((7, 5))
-    compiled._radau_dense(Q, F)
+    compiled_radau.radau_dense(Q, F)
     out = np.empty(5)
-    compiled._dense_eval(2.0 + 0.5 * x, 2.0, 2.5, y_old, F, out)
+    compiled_dop853.dense_eval(2.0 + 0.5 * x, 2.0, 2.5, y_old, F, out)
     want = y_old + Q @ np.array([x, x**2, x**3])
     np.testing.assert_allclose(out, want, rtol=1e-12, atol=1e-9)

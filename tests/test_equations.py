@@ -593,7 +593,9 @@ def test_compiled_equation_equals_numpy_bit_for_bit(name):
     import numba
 
     # the compiled engine's own version
-    fn = compiled._EQUATIONS[name]
+    from fws_control.simulation.compiled_layout import EQUATIONS
+
+    fn = EQUATIONS[name]
     assert isinstance(fn, numba.core.dispatcher.Dispatcher)
     n = 10_000
     args = _random_arguments(name, n, np.random.default_rng(26))

@@ -60,11 +60,11 @@ def _subfolder(source_dir: Path) -> str:
 _SMALL = """
 import math, numba
 numba.njit(lambda x: x + 1.0)(1.0)            # a user's function: no notice
-from fws_control.simulation import compiled
+from fws_control.simulation import compiled_loop
 from fws_control.simulation.compilation import first_use
 with first_use(lambda: 3.0):
-    assert compiled._wrap_lap(7.5, 2.0) == 7.5 % 2.0
-stats = compiled._wrap_lap.stats
+    assert compiled_loop.wrap_lap(7.5, 2.0) == 7.5 % 2.0
+stats = compiled_loop.wrap_lap.stats
 print(sum(stats.cache_hits.values()), sum(stats.cache_misses.values()))
 """
 
@@ -83,7 +83,7 @@ def test_notice_on_a_compilation_only_and_once(tmp_path):
     assert "FWS_CONTROL_QUIET=1" in lines[0]
     seconds = float(lines[1].split("compiled in ")[1].split(" s of CPU")[0])
     assert 0.0 < seconds < 60.0
-    assert list(folder.glob("compiled._wrap_lap-*.nbi"))
+    assert list(folder.glob("compiled_loop.wrap_lap-*.nbi"))
 
     # a second process loads the kernel: numba counts a hit, nothing printed
     warm = _python(_SMALL, _env(NUMBA_CACHE_DIR=str(cache)), tmp_path)
@@ -99,16 +99,16 @@ def test_notice_on_a_compilation_only_and_once(tmp_path):
     assert quiet.returncode == 0, quiet.stderr[-2000:]
     assert quiet.stdout.split() == ["0", "1"]
     assert quiet.stderr == ""
-    assert list((other / folder.name).glob("compiled._wrap_lap-*.nbi"))
+    assert list((other / folder.name).glob("compiled_loop.wrap_lap-*.nbi"))
 
 
 def test_cache_folder_outside_the_package(tmp_path):
     home = tmp_path / "home"
     home.mkdir()
     code = """
-    from fws_control.simulation import compiled
+    from fws_control.simulation import compiled_loop
     from fws_control.simulation.compilation import cache_dir
-    compiled._wrap_lap(0.5, 2.0)
+    compiled_loop.wrap_lap(0.5, 2.0)
     print(cache_dir())
     """
     sub = _subfolder(PACKAGE / "simulation")
@@ -133,7 +133,7 @@ def test_cache_folder_outside_the_package(tmp_path):
         run = _python(code, _env(**updates), tmp_path)
         assert run.returncode == 0, run.stderr[-2000:]
         assert run.stdout.strip() == str(expected)
-        assert list(expected.glob("compiled._wrap_lap-*.nbi")), expected
+        assert list(expected.glob("compiled_loop.wrap_lap-*.nbi")), expected
     # numba wrote nothing into the package (its default: __pycache__ there)
     after = {p for p in PACKAGE.rglob("*") if p.suffix in (".nbi", ".nbc")}
     assert not after - before
@@ -174,18 +174,26 @@ _STAGES = """
 import json
 import numpy as np
 import fws_control as fws
-from fws_control.simulation import compiled
+from fws_control.simulation import compiled, compiled_drivers, compiled_variants
 
 # the two methods' drivers (a kernel they call is compiled with them, or
-# loaded inside them from the cache), the signals and the peaks
-KERNELS = ("_run_impl", "_solve_batch", "_run_impl_radau", "_solve_batch_radau",
-           "_signals_batch", "_peaks_batch")
+# loaded inside them from the cache), the signals and the peaks: those of
+# a call without a delay, the dynamic model, a controller's law or a
+# varying speed, and those of a call with all of them
+plain = compiled_variants.kernels([])
+full = compiled_variants.kernels(compiled_variants.FEATURES)
+KERNELS = {}
+for name in ("solve_batch", "solve_batch_radau", "signals_batch", "peaks_batch"):
+    KERNELS[name] = getattr(plain, name)
+    KERNELS["full " + name] = getattr(full, name)
+KERNELS["run_impl"] = plain.solve_batch.py_func.__globals__["_run_impl"]
+KERNELS["full run_impl"] = compiled_drivers._run_impl
 
 def touched():
-    names = [n for n in KERNELS
-             if sum(getattr(compiled, n).stats.cache_hits.values())
-             + sum(getattr(compiled, n).stats.cache_misses.values())
-             + len(getattr(compiled, n).signatures)]
+    names = [n for n, k in KERNELS.items()
+             if sum(k.stats.cache_hits.values())
+             + sum(k.stats.cache_misses.values())
+             + len(k.signatures)]
     return names
 
 veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
@@ -205,10 +213,10 @@ print(json.dumps({"status": str(res.status), "alone": alone, "all": touched()}))
 _INSTALLED = """
 import json
 import fws_control as fws
-from fws_control.simulation import compiled
+from fws_control.simulation import compiled_loop
 from fws_control.simulation.compilation import cache_dir, first_use
 with first_use(lambda: 1.0):
-    assert compiled._wrap_lap(7.5, 2.0) == 7.5 % 2.0
+    assert compiled_loop.wrap_lap(7.5, 2.0) == 7.5 % 2.0
 print(json.dumps({"file": fws.__file__, "cache": cache_dir()}))
 """
 
@@ -221,8 +229,9 @@ def test_a_dop853_integration_needs_none_of_the_other_stages(tmp_path):
     assert run.returncode == 0, run.stderr[-3000:]
     out = json.loads(run.stdout.strip().splitlines()[-1])
     assert out["status"] == "ok"
-    assert out["alone"] == ["_solve_batch"]
-    assert out["all"] == ["_solve_batch", "_signals_batch", "_peaks_batch"]
+    # the paper's loop: its specialised kernels only, never the full ones
+    assert out["alone"] == ["solve_batch"]
+    assert out["all"] == ["solve_batch", "signals_batch", "peaks_batch"]
 
 
 def _wheel(folder: Path) -> Path:
@@ -337,6 +346,8 @@ def test_a_kernel_is_stamped_with_the_equations_it_inlines():
     stamp = dict(
         (name, (mtime, size)) for name, mtime, size in locator.get_source_stamp()
     )
-    for path in (PACKAGE / "equations.py", PACKAGE / "simulation" / "compiled.py"):
+    kernels = sorted((PACKAGE / "simulation").glob("compiled*.py"))
+    assert len(kernels) >= 10  # the engine's modules, the variants too
+    for path in (PACKAGE / "equations.py", *kernels):
         st = path.stat()
         assert stamp[path.name] == (st.st_mtime, st.st_size)

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fws_control.simulation import compilation, compiled
+from fws_control.simulation import compilation
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -45,8 +45,8 @@ def test_no_cache_folder_compiles_uncached_with_one_warning(monkeypatch):
     with pytest.raises(RuntimeError, match="no locator available"):
         compilation._KernelCache(hypot3)
     with pytest.warns(RuntimeWarning, match="no writable cache folder") as seen:
-        first = compiled._jit(hypot3)
-        second = compiled._jit(lambda x: 2.0 * x)
+        first = compilation.jit(hypot3)
+        second = compilation.jit(lambda x: 2.0 * x)
     assert len(seen) == 1  # one warning, not one per kernel
     assert compilation.cache_dir() is None
     assert first(2.0, 3.0, 6.0) == 7.0 and second(1.5) == 3.0
@@ -81,10 +81,10 @@ def _read_only(path: Path) -> None:
 # writable: their values (against Python's %), the cache folder (none) and
 # the signatures numba compiled printed.
 _KERNELS = """
-from fws_control.simulation import compilation, compiled
-wrap = compiled._wrap_lap
+from fws_control.simulation import compilation, compiled_loop
+wrap = compiled_loop.wrap_lap
 print(wrap(7.5, 10.0) == 7.5 % 10.0, wrap(-2.5, 2.0) == -2.5 % 2.0)
-print(compilation.cache_dir() or "none", len(compiled._wrap_lap.signatures))
+print(compilation.cache_dir() or "none", len(compiled_loop.wrap_lap.signatures))
 """
 
 

@@ -194,7 +194,7 @@ def jit(fn: Callable, *, inline: str = "never") -> Callable:
             warnings.warn(
                 f"numba finds no writable cache folder ({exc}; tried "
                 f"{_cache_root()}); the compiled engine is compiled in every "
-                "process (about 20 s of CPU). Set NUMBA_CACHE_DIR to a "
+                "process (up to a minute of CPU). Set NUMBA_CACHE_DIR to a "
                 "writable folder to keep the compilation.",
                 RuntimeWarning,
                 stacklevel=3,

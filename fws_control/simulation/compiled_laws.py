@@ -362,7 +362,7 @@ def initial_command(vehicle, path, controller, z0, kappa, speed):
 def make_law_command(eqs: dict, wrap_lap, jit):
     """The compiled law ``(s, e, theta, kappa, p, q, breaks, coefs) -> (cf, cr)``.
 
-    Built from the compiled equations `eqs` (``compiled._EQUATIONS``), the
+    Built from the compiled equations `eqs` (``compiled_layout.EQUATIONS``), the
     lap wrap of closed paths and the engine's decorator, for the law whose
     code is ``q[Q_LAW]`` (1-4); unclipped angles. Called, not inlined: a
     copy of the projection in every kernel multiplied the compilation time.
