@@ -576,7 +576,9 @@ def clip_switch_margin(value: Real, limit: Real, mode: Real, released: Real) -> 
     [0.2, -0.2, 0.8, 0.2]
     """
     held = mode * mode
-    free = (1.0 - held) * (released * value - (1.0 - released * released) * abs(value))
+    free = (1.0 - held) * (
+        released * value - (1.0 - released * released) * np.abs(value)
+    )
     return limit * (1.0 - 2.0 * held) + held * mode * value + free
 
 

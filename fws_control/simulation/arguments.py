@@ -248,8 +248,8 @@ def _gain_fields(gains: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         # broadcast, as run_gains does, without building and checking a copy
         k1, k2, a = np.broadcast_arrays(gains.k1, gains.k2, gains.ratio)
         return k1.ravel().copy(), k2.ravel().copy(), a.ravel().copy()
-    g = run_gains(gains, name="gains")
-    return g.k1, g.k2, g.ratio
+    g = run_gains(gains, name="gains")  # 1-D float arrays
+    return np.asarray(g.k1), np.asarray(g.k2), np.asarray(g.ratio)
 
 
 #: Steps an explicit method may be forced to take by the actuator's
@@ -438,7 +438,9 @@ def resolve_plant(function: str, plant: Any, controller: Any, kwargs: dict):
 _CONTROLLER = {"simulate": "controller", "simulate_batch": "controllers"}
 
 
-def with_profile(profile, speed, controller):
+def with_profile(
+    profile: SpeedProfile | None, speed: Any, controller: Any
+) -> tuple[SpeedProfile | None, Any, Any, Any]:
     """``(profile, speed, controller, schedule)`` of a call.
 
     A constant profile replaces the plant's speed (the run is then the
@@ -454,7 +456,7 @@ def with_profile(profile, speed, controller):
             f"point), got an array of shape {np.shape(speed)}"
         )
     if profile is not None and profile.is_constant:
-        speed, profile = float(profile.speeds[0]), None
+        speed, profile = float(np.asarray(profile.speeds)[0]), None
     if profile is None:
         return None, speed, _scheduled(controller, speed), None
     schedule = None

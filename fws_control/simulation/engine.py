@@ -348,9 +348,10 @@ def _step_segment(eng, solver, t0, t_end, t_eval, store, record, runs) -> _Segme
         if k_end > k:
             store(k, dense(t_eval[k:k_end]))
             k = k_end
-        if switch is not None:
-            y_hit = solver.y.copy() if t_hit == t_new else dense(t_hit)
-            return _Segment("switch", float(t_hit), y_hit, switch=switch[1:])
+        if switch is not None:  # (then t_hit is the switch's time)
+            t_sw = float(switch[0])
+            y_hit = solver.y.copy() if t_sw == t_new else dense(t_sw)
+            return _Segment("switch", t_sw, y_hit, switch=switch[1:])
         if t_hit is not None:
             return _Segment("event", float(t_hit), dense(t_hit))
         if solver.status == "finished":
@@ -585,7 +586,7 @@ def integrate(
         Y[3:5] = cmd
         if switching:
             eng.start_modes(Y, float(t_eval[0]), (2, 3))
-    if switching:
+    if modes is not None:
         modes[:] = eng.modes
     if dyn:
         V0 = speed if profile is None else eng.speed_at(float(t_eval[0]), Y[0])
@@ -631,7 +632,7 @@ def integrate(
             record=history,
             runs=active,
         )
-        if switching:
+        if modes is not None:
             modes[:, active] = eng.modes
         if seg.outcome == "done":
             if seg_end >= t_end:

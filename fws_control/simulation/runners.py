@@ -204,7 +204,7 @@ def _path_table(path):
 
 
 def _run_compiled(
-    vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl, out=None
+    vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl, *, out=None
 ):
     """:func:`run_chunk` on the compiled engine (each run alone).
 
@@ -498,7 +498,7 @@ def _simulate_batch(
             gains=gains, engine=engine,
         )  # fmt: skip
     auto_method = isinstance(method, str) and method == "auto"
-    opts = {
+    opts: dict[str, Any] = {
         "method": method,
         "rtol": rtol,
         "atol": atol,
@@ -638,7 +638,7 @@ def _simulate_batch(
         horizon = not {"e", "theta"} <= set(kept)
         run = functools.partial(run_kept, run, rows, horizon, exact)
 
-    def args(lo, hi):
+    def args(lo: int, hi: int) -> tuple:
         return (
             vehicle,
             path,
@@ -667,6 +667,7 @@ def _simulate_batch(
     # copy of the signals builds up: the peak memory is the result and one
     # chunk's working set.
     single = len(bounds) == 1 and out is None
+    data: Any  # the batch's array (or out=), None while a single chunk comes
     if out is not None:
         data = out
     else:
@@ -1000,22 +1001,25 @@ def simulate(
     (1, (1501,))
     """
     profile = speed_option(plant, speed, kwargs)
-    vehicle, controller, speed, model, tyre, lag = resolve_plant(
+    vehicle, controller, plant_speed, model, tyre, lag = resolve_plant(
         "simulate", plant, controller, kwargs
     )
-    profile, speed, controller, schedule = with_profile(profile, speed, controller)
-    if isinstance(plant, LateralPlant) and np.ndim(speed) != 0:
+    profile, run_speed, controller, schedule = with_profile(
+        profile, plant_speed, controller
+    )
+    if isinstance(plant, LateralPlant) and np.ndim(run_speed) != 0:
         raise ValueError(
             "plant.speed must be one speed (a scalar, nonzero, at most "
             f"{MAX_SPEED:g} m/s) for simulate, got an array of shape "
-            f"{np.shape(speed)}: {np.array2string(np.asarray(speed), threshold=6)}; "
+            f"{np.shape(run_speed)}: "
+            f"{np.array2string(np.asarray(run_speed), threshold=6)}; "
             "use simulate_batch for several runs"
         )
     return _simulate_run(
         vehicle,
         path,
         controller,
-        speed=speed,
+        speed=run_speed,
         initial_state=initial_state,
         duration=duration,
         feedforward=feedforward,
