@@ -24,6 +24,10 @@ from .compiled_events import event_values, set_now
 from .compiled_layout import EPS, N_EVENTS, NPOW, NS, NSE, Q_MAX_STEP, jit_inline
 from .compiled_loop import closed_loop_rhs
 
+# The names here are shared by the compiled_* modules; the public API of
+# the compiled engine is simulation.compiled (which re-exports them).
+__all__: list[str] = []
+
 # --------------------------------------------------------------------------
 # DOP853 tableau (scipy's), as module constants frozen into the kernels
 

@@ -43,6 +43,10 @@ from .compiled_layout import (
 from .compiled_loop import add_to_history, clip_values, closed_loop_rhs, with_history
 from .compiled_radau import NRS, radau_dense, radau_start, radau_step
 
+# The names here are shared by the compiled_* modules; the public API of
+# the compiled engine is simulation.compiled (which re-exports them).
+__all__: list[str] = []
+
 
 @jit
 def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):

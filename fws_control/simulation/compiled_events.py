@@ -43,6 +43,10 @@ from .compiled_speed import (
     Q_PROFILE,
 )
 
+# The names here are shared by the compiled_* modules; the public API of
+# the compiled engine is simulation.compiled (which re-exports them).
+__all__: list[str] = []
+
 
 @jit_inline
 def set_now(t, p, q):

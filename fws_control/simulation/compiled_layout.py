@@ -27,6 +27,10 @@ from .engine import (
     SIGNALS,
 )
 
+# The names here are shared by the compiled_* modules; the public API of
+# the compiled engine is simulation.compiled (which re-exports them).
+__all__: list[str] = []
+
 
 def jit_inline(fn):
     # As jit, and numba inlines the kernel into every compiled caller (at

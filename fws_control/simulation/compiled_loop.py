@@ -77,6 +77,10 @@ from .compiled_speed import (
     speed_and_gains,
 )
 
+# The names here are shared by the compiled_* modules; the public API of
+# the compiled engine is simulation.compiled (which re-exports them).
+__all__: list[str] = []
+
 # --------------------------------------------------------------------------
 # The closed loop
 

@@ -40,6 +40,10 @@ from .engine import (
     SIGNALS,
 )
 
+# The names here are shared by the compiled_* modules; the public API of
+# the compiled engine is simulation.compiled (which re-exports them).
+__all__: list[str] = []
+
 # --------------------------------------------------------------------------
 # Exact peaks on each run's own dense output (engine.exact_peaks, compiled)
 

@@ -18,6 +18,10 @@ from .compiled_dop853 import MAX_FACTOR, MIN_FACTOR
 from .compiled_layout import EPS
 from .compiled_loop import closed_loop_jac, closed_loop_rhs
 
+# The names here are shared by the compiled_* modules; the public API of
+# the compiled engine is simulation.compiled (which re-exports them).
+__all__: list[str] = []
+
 # --------------------------------------------------------------------------
 # Radau IIA (order 5), a port of scipy.integrate.Radau (no events yet)
 

@@ -54,6 +54,10 @@ from .compiled_loop import (
     wrap_lap,
 )
 
+# The names here are shared by the compiled_* modules; the public API of
+# the compiled engine is simulation.compiled (which re-exports them).
+__all__: list[str] = []
+
 
 @jit_inline
 def point_signals(s, e, th, df_s, dr_s, V, k1, k2, a, q, breaks, coefs, d_cg):
