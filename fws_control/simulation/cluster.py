@@ -8,12 +8,19 @@ runs ``"failed"``, and a cluster left without workers for
 
 from __future__ import annotations
 
+import asyncio
+import concurrent.futures
 import time
 import warnings
 
 import numpy as np
 
 from .outcomes import PEAK_SIGNALS, SIGNALS, STATUS_FAILED
+
+#: What Dask's ``wait`` raises when the poll interval passes: Python 3.10's
+#: asyncio and concurrent.futures timeouts are not yet the builtin
+#: TimeoutError (they are from 3.11 on).
+_WAIT_TIMEOUTS = (TimeoutError, asyncio.TimeoutError, concurrent.futures.TimeoutError)
 
 __all__ = [
     "LOST_CLUSTER_WAIT",
@@ -115,7 +122,7 @@ def run_on_dask(client, bounds, args, keep, t_size, bar, run) -> str | None:
                         timeout=POLL_INTERVAL,
                         return_when="FIRST_COMPLETED",
                     )
-                except TimeoutError:
+                except _WAIT_TIMEOUTS:
                     done = []
                 except Exception:
                     done = [f for f in pending if f.cancelled()]
