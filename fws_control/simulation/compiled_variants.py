@@ -35,15 +35,16 @@ from typing import Any
 
 import numpy as np
 
-from . import (
-    compiled_dop853,
-    compiled_drivers,
-    compiled_events,
-    compiled_loop,
-    compiled_peaks,
-    compiled_radau,
-    compiled_signals,
-)
+# the modules themselves (not through the package, which imports the
+# runners and so this module)
+import fws_control.simulation.compiled_dop853 as compiled_dop853
+import fws_control.simulation.compiled_drivers as compiled_drivers
+import fws_control.simulation.compiled_events as compiled_events
+import fws_control.simulation.compiled_loop as compiled_loop
+import fws_control.simulation.compiled_peaks as compiled_peaks
+import fws_control.simulation.compiled_radau as compiled_radau
+import fws_control.simulation.compiled_signals as compiled_signals
+
 from .compilation import jit
 from .compiled_laws import Q_LAW
 from .compiled_layout import Q_DELAY, Q_DYNAMIC
