@@ -45,6 +45,7 @@ The first compilation in a process
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import inspect
 import os
 import sys
@@ -131,10 +132,49 @@ if numba is not None:
     class _KernelCacheImpl(_caching.CompileResultCacheImpl):
         _locator_classes = [_KernelLocator]
 
+    class _KernelCacheFile(_caching.IndexDataCacheFile):
+        # numba's index and data files, with the data file of an entry named
+        # after its key. numba names a new entry's file after the first
+        # number free in the index it has just read, and writes the index
+        # before the data: two processes that save different overloads of
+        # one function at once (the DOP853 and the Radau driver, compiled
+        # side by side before the test workers start) both take the same
+        # number, and the index can then point the Radau key at the DOP853
+        # code (a Radau call that returned DOP853's steps). A name from the
+        # key cannot serve two keys, and the data is written before the
+        # index refers to it; a race then only loses an index entry, which
+        # costs a compilation.
+        def __init__(self, cache_path, filename_base, source_stamp):
+            super().__init__(cache_path, filename_base, source_stamp)
+            self._filename_base = filename_base
+
+        def data_name(self, key: Any) -> str:
+            # the key: the signature, the target machine, the hashes of
+            # the bytecode and of the closure's values (numba types print
+            # their identity)
+            digest = hashlib.sha256(repr(key).encode()).hexdigest()[:20]
+            return f"{self._filename_base}.{digest}.nbc"
+
+        def save(self, key, data):
+            name = self.data_name(key)
+            self._save_data(name, data)
+            overloads = self._load_index()
+            if overloads.get(key) != name:
+                overloads[key] = name
+                self._save_index(overloads)
+
     class _KernelCache(_caching.FunctionCache):
         # numba's FunctionCache (what njit(cache=True) installs), located
-        # by _KernelLocator alone
+        # by _KernelLocator alone, its files kept by _KernelCacheFile
         _impl_class = _KernelCacheImpl
+
+        def __init__(self, py_func):
+            super().__init__(py_func)
+            self._cache_file = _KernelCacheFile(
+                cache_path=self._cache_path,
+                filename_base=self._impl.filename_base,
+                source_stamp=self._cache_file._source_stamp,
+            )
 
 
 def jit(fn: Callable, *, inline: str = "never") -> Callable:

@@ -300,10 +300,7 @@ def _stage_kernels(q: np.ndarray) -> Any:
     # paper's kinematic loop, the default), else the kernels of every
     # feature. Each variant is a compilation of the whole engine of its own:
     # the calls with a feature share one, as the test suite does.
-    # A Radau call runs the full kernels: the specialised copies gave Radau
-    # other steps than scipy's in some processes (tests/test_compiled_radau.py).
-    full = bool(features_of(q)) or q[Q_METHOD] == RADAU
-    features: frozenset[str] = frozenset(FEATURES if full else ())
+    features: frozenset[str] = frozenset(FEATURES if features_of(q) else ())
     _call.features = features
     return kernels(_call.features)
 

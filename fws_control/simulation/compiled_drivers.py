@@ -510,7 +510,7 @@ def _drivers(method):
                 for j in range(N_EVENTS):
                     g_old[j] = g_new[j]
 
-    return jit(run_impl)
+    return jit(_named_for(run_impl, method))
 
 
 def _batch(method):
@@ -550,7 +550,15 @@ def _batch(method):
                     out[i, :, k] = np.nan
         return rec
 
-    return jit(solve_batch)
+    return jit(_named_for(solve_batch, method))
+
+
+def _named_for(fn, method):
+    # a qualified name per method: numba keeps a function's cache entries
+    # in files named after it, and the two methods' closures would
+    # otherwise share them
+    fn.__qualname__ = f"{fn.__qualname__}_{'radau' if method == RADAU else 'dop853'}"
+    return fn
 
 
 _run_impl = _drivers(0)
