@@ -27,10 +27,10 @@ engine's DOP853, with the number of runs beyond ``TOL``.
 the switches of the clips as events and restart their methods there;
 integrated across the clips' kinks instead (min/max in the right-hand side,
 ``engine.integrate(..., switching=False)``), DOP853's error estimate is not
-that of a smooth solution, and the numpy engine was 4.2e-5 m off a tight
-reference on scenario 690 (``--only 690`` prints it). 1e-5 m is 1/50 of the
-5e-4 m the compiled engine was off when it integrated across a switch of
-the clips.
+that of a smooth solution, and the numpy engine was 3.5e-6 m off a tight
+reference on scenario 690 (``--only 690`` prints it), 30 times its error
+with the switches located. 1e-5 m is 1/50 of the 5e-4 m the compiled
+engine was off when it integrated across a switch of the clips.
 
 Run: ``python benchmarks/bench_limit_agreement.py [--count 1000] [--jobs 2]
 [--only INDEX ...]`` (about 3 s of CPU per scenario, most of it the numpy

@@ -19,8 +19,9 @@ defaults (``rtol = 1e-10``, ``atol = 1e-12``) and the reference: the
 engine's local tolerance is ~1e-10 relative on states of ~1-50, so 1e-6
 leaves a factor of ~100 for the error growth over the run and the roots
 of the switches. Integrated across the kinks (``switching=False``, min/max
-in the right-hand side) the engine was 4.2e-5 m off a tight reference on
-scenario 690 of ``benchmarks/bench_limit_agreement.py``.
+in the right-hand side) the engine was 3.5e-6 m off a tight reference on
+scenario 690 of ``benchmarks/bench_limit_agreement.py``, 30 times the error
+with the switches located (docs/reliability.md).
 """
 
 from __future__ import annotations
