@@ -49,7 +49,9 @@ from ..baselines import saturate
 from ..hints import RealArrayLike
 from ..paths import Path, Straight
 from ..validation import check_positive
-from .engine import PEAK_SIGNALS, compute_outputs, exact_peaks
+from .dense import CompiledDense
+from .engine import compute_outputs
+from .peaks import exact_peaks_per_run
 
 __all__ = [
     "LAWS",
@@ -468,47 +470,6 @@ def make_law_command(eqs: dict, wrap_lap, jit):
     return law_command
 
 
-class _Dense:
-    """One run of a :class:`~fws_control.simulation.compiled.CompiledSolution`
-    seen as the numpy engine's dense solution, for
-    :func:`~fws_control.simulation.engine.exact_peaks`: its steps and its
-    states at given times."""
-
-    delay = 0.0
-
-    def __init__(self, solution, i: int, t0: float):
-        lo, hi = int(solution.offsets[i]), int(solution.offsets[i + 1])
-        self.rec = solution.records[lo:hi]
-        self.y0 = np.asarray(solution.initial_state[i], dtype=float)
-        self.m = self.y0.size
-        history = type("History", (), {})()
-        history.t0 = t0
-        history.starts = self.rec[:, 0].tolist()
-        history.pieces = [
-            (float(t), None, None) for t in self.rec[:, 0] + self.rec[:, 1]
-        ]
-        self.history = history
-
-    def states(self, runs, times):
-        """States ``(m, len(times))`` at `times` (`runs`: all 0)."""
-        times = np.asarray(times, dtype=float)
-        m = self.m
-        if self.rec.shape[0] == 0:
-            return np.repeat(self.y0[:, None], times.size, axis=1)
-        k = np.searchsorted(self.rec[:, 0], times, side="right") - 1
-        k = np.clip(k, 0, self.rec.shape[0] - 1)
-        row = self.rec[k]
-        x = (times - row[:, 0]) / row[:, 1]
-        # DOP853's dense output, as scipy's Dop853DenseOutput evaluates it
-        y = np.zeros((times.size, m))
-        for j in range(7):
-            c = 6 - j
-            y += row[:, 2 + m + c * m : 2 + m + (c + 1) * m]
-            y *= (x if j % 2 == 0 else 1 - x)[:, None]
-        y += row[:, 2 : 2 + m]
-        return y.T
-
-
 def controller_outputs(
     vehicle, path, controller, *, speed, feedforward, time_constant, states,
     initial_heading, solution, t_eval, t_stop, model, tyre,
@@ -517,7 +478,8 @@ def controller_outputs(
 
     :func:`~fws_control.simulation.engine.compute_outputs` at the output
     times and :func:`~fws_control.simulation.engine.exact_peaks` on each
-    run's own dense output (one run at a time: its own steps), the numpy
+    run's own dense output (:class:`~fws_control.simulation.dense.CompiledDense`:
+    every run on its own steps, all runs at once), the numpy
     engine's signals of the same states. Returns ``(signals, peaks,
     peak_times)``.
     """
@@ -527,15 +489,17 @@ def controller_outputs(
         vehicle, path, controller, speed=speed, states=states,
         initial_heading=initial_heading, times=t_eval, **kw,
     )  # fmt: skip
-    n = speed.size
-    peaks = np.empty((n, len(PEAK_SIGNALS)))
-    times = np.empty((n, len(PEAK_SIGNALS)))
+    # every run on its own steps, a block of runs at once
+    dense = CompiledDense(
+        solution.records, solution.offsets, solution.initial_state, float(t_eval[0])
+    )
     per_run = controller.runs() is not None
-    for i in range(n):
-        ctrl = controller.subset(np.array([i])) if per_run else controller
-        peaks[i : i + 1], times[i : i + 1] = exact_peaks(
-            vehicle, path, ctrl, speed=speed[i : i + 1],
-            solution=_Dense(solution, i, float(t_eval[0])), t_eval=t_eval,
-            signals=signals[i : i + 1], t_stop=t_stop[i : i + 1], **kw,
-        )  # fmt: skip
+
+    def subset(lo: int, hi: int) -> Any:
+        return controller.subset(np.arange(lo, hi)) if per_run else controller
+
+    peaks, times = exact_peaks_per_run(
+        vehicle, path, subset, speed=speed, solution=dense, t_eval=t_eval,
+        signals=signals, t_stop=t_stop, **kw,
+    )  # fmt: skip
     return signals, peaks, times

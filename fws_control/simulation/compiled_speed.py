@@ -39,10 +39,10 @@ Python (:func:`compiled_speed_reason` says so, ``engine="auto"`` runs them
 on the numpy engine). A profile whose speeds leave the schedule's grid is
 refused for the same reason (the numpy engine raises where the run meets
 such a speed). The integration is compiled; the output signals and exact
-peaks of a varying-speed run are computed on its compiled dense output by
-the numpy engine's own functions (:class:`CompiledDense`), so the
-longitudinal signals and the scheduled command's rate are the numpy
-engine's.
+peaks of a varying-speed run are computed on its compiled dense output
+(:class:`~fws_control.simulation.dense.CompiledDense`) by the numpy
+engine's own functions, so the longitudinal signals and the scheduled
+command's rate are the numpy engine's.
 """
 
 from __future__ import annotations
@@ -72,7 +72,6 @@ __all__ = [
     "compiled_speed_reason",
     "speed_tables",
     "speed_and_gains",
-    "CompiledDense",
 ]
 
 #: Slots of the shared parameter vector ``q`` (see the module notes).
@@ -308,77 +307,3 @@ def speed_and_gains(t, s, q, breaks, coefs):
         _interp(V, breaks, coefs, row, pieces, 1),
     )
     return V, k1, k2, _interp(V, breaks, coefs, row, pieces, 2), True
-
-
-class CompiledDense:
-    """The compiled engine's dense output of one run, as the numpy engine's.
-
-    Duck-types :class:`~fws_control.simulation.engine.DenseSolution` for
-    :func:`~fws_control.simulation.engine.exact_peaks`: ``history`` (the
-    run's steps: ``t0``, ``starts``, ``pieces``), ``delay`` (0) and
-    :meth:`states`, which evaluates DOP853's interpolant of the step that
-    holds each time (the initial state up to the start).
-
-    Parameters
-    ----------
-    records : ndarray
-        The run's rows of :attr:`CompiledSolution.records
-        <fws_control.simulation.compiled.CompiledSolution.records>`.
-    initial_state : ndarray
-        The run's initial state, shape ``(m,)``.
-    t0 : float
-        The start time [s].
-
-    Examples
-    --------
-    >>> import numpy as np, fws_control as fws
-    >>> from fws_control.simulation.compiled import integrate_compiled
-    >>> from fws_control.simulation.compiled_speed import CompiledDense
-    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-    >>> sol = []
-    >>> states, *_ = integrate_compiled(
-    ...     veh, fws.Straight(), fws.SteeringGains(0.1, 0.5, 0.0),
-    ...     speed=np.array([5.0]), feedforward=False,
-    ...     path_state=np.array([[0.0, 1.0, 0.0]]),
-    ...     t_eval=np.linspace(0.0, 1.0, 11), time_constant=None, solution=sol)
-    >>> rec = sol[0].records
-    >>> dense = CompiledDense(rec, sol[0].initial_state[0], 0.0)
-    >>> bool(np.allclose(dense.states(np.zeros(11, int), np.linspace(0, 1, 11)),
-    ...                  states[:, 0, :], rtol=0, atol=1e-15))
-    True
-    """
-
-    delay = 0.0
-
-    def __init__(self, records: np.ndarray, initial_state: np.ndarray, t0: float):
-        self.records = np.asarray(records, dtype=float)
-        self.y0 = np.asarray(initial_state, dtype=float)
-        self.history = self  # (exact_peaks reads the steps from `history`)
-        self.t0 = float(t0)
-        self.starts = self.records[:, 0].tolist()
-        ends = self.records[:, 0] + self.records[:, 1]
-        self.pieces = [(float(e), None, None) for e in ends]
-
-    def states(self, runs: np.ndarray, times: np.ndarray) -> np.ndarray:
-        """States ``(m, len(times))`` at `times` (`runs`: all this run, 0)."""
-        times = np.asarray(times, dtype=float)
-        m = self.y0.size
-        out = np.empty((m, times.size))
-        out[:] = self.y0[:, None]
-        rec = self.records
-        after = np.flatnonzero(times > self.t0)
-        if after.size == 0 or rec.shape[0] == 0:
-            return out
-        tt = times[after]
-        k = np.clip(np.searchsorted(rec[:, 0], tt, side="right") - 1, 0, None)
-        row = rec[k]
-        x = (tt - row[:, 0]) / row[:, 1]
-        npow = (rec.shape[1] - 2) // m - 1
-        F = row[:, 2 + m :].reshape(-1, npow, m)
-        # Dop853DenseOutput's evaluation, as the kernels' _dense_eval
-        v = np.zeros((tt.size, m))
-        for j in range(npow):
-            v += F[:, npow - 1 - j, :]
-            v *= (x if j % 2 == 0 else 1.0 - x)[:, None]
-        out[:, after] = (v + row[:, 2 : 2 + m]).T
-        return out

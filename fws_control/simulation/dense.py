@@ -5,7 +5,9 @@ with the runs integrated in it, and evaluates run ``runs[j]`` at time
 ``times[j]``. It is the past that an input delay reads (the method of
 steps) and the continuous solution on which the exact peaks are located
 (:class:`DenseSolution`); :func:`delayed_rows` gives the delayed path state
-and its derivative at the output times.
+and its derivative at the output times. :class:`CompiledDense` is the same
+interface on the compiled engine's solution, where every run took steps of
+its own.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import numpy as np
 __all__ = [
     "History",
     "DenseSolution",
+    "CompiledDense",
     "delayed_rows",
 ]
 
@@ -296,6 +299,15 @@ class DenseSolution:
     engine_for: Any
     delay: float
 
+    def step_bounds(self) -> np.ndarray:
+        """The start, the ends of the accepted steps and their starts, ascending.
+
+        Shape ``(1, B)``: the stacked runs share their steps.
+        """
+        hist = self.history
+        ends = [hist.t0, *hist.starts, *(end for end, _, _ in hist.pieces)]
+        return np.unique(np.asarray(ends, dtype=float))[None, :]
+
     def states(self, runs: np.ndarray, times: np.ndarray) -> np.ndarray:
         """States of run ``runs[j]`` at ``times[j]``, rows as
         :func:`~fws_control.simulation.engine.integrate`.
@@ -311,3 +323,133 @@ class DenseSolution:
             self.history, self.engine_for, self.delay, runs, times
         )
         return np.concatenate([Y, rows])
+
+
+class CompiledDense:
+    """The compiled engine's dense output, with :class:`DenseSolution`'s interface.
+
+    Every run of the compiled engine takes steps of its own: run ``i`` owns
+    the rows ``offsets[i]:offsets[i + 1]`` of `records` (one per accepted
+    step, as :class:`~fws_control.simulation.compiled.CompiledSolution`
+    holds them: ``t_old, h``, the state at ``t_old`` and DOP853's ``7 m``
+    interpolant coefficients). :meth:`states` evaluates the interpolant of
+    the step that holds each time (the initial state up to the start),
+    :meth:`step_bounds` gives each run's steps, so that
+    :func:`~fws_control.simulation.peaks.exact_peaks` locates the peaks of
+    all runs at once on their own steps. No input delay (``delay`` 0).
+
+    Parameters
+    ----------
+    records : ndarray
+        Shape ``(R, 2 + 8 m)``.
+    offsets : ndarray
+        Shape ``(n + 1,)``, ascending, ``offsets[-1] <= R``.
+    initial_state : ndarray
+        The runs' initial states, shape ``(n, m)``.
+    t0 : float
+        The start time [s].
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> from fws_control.simulation.compiled import integrate_compiled
+    >>> from fws_control.simulation.dense import CompiledDense
+    >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    >>> sol, t = [], np.linspace(0.0, 1.0, 11)
+    >>> states, *_ = integrate_compiled(
+    ...     veh, fws.Straight(), fws.SteeringGains(0.1, 0.5, 0.0),
+    ...     speed=np.array([5.0, 5.0]), feedforward=False,
+    ...     path_state=np.array([[0.0, 1.0, 0.0], [0.0, -2.0, 0.0]]),
+    ...     t_eval=t, time_constant=None, solution=sol)
+    >>> dense = CompiledDense(sol[0].records, sol[0].offsets,
+    ...                       sol[0].initial_state, 0.0)
+    >>> runs = np.repeat([0, 1], 11)
+    >>> bool(np.allclose(dense.states(runs, np.tile(t, 2)),
+    ...                  states.reshape(3, 22), rtol=0, atol=1e-15))
+    True
+    """
+
+    delay = 0.0
+
+    def __init__(
+        self,
+        records: np.ndarray,
+        offsets: np.ndarray,
+        initial_state: np.ndarray,
+        t0: float,
+    ):
+        self.records = np.asarray(records, dtype=float)
+        self.offsets = np.asarray(offsets, dtype=np.int64)
+        self.y0 = np.asarray(initial_state, dtype=float)
+        self.t0 = float(t0)
+        n = self.offsets.size - 1
+        if self.y0.ndim != 2 or self.y0.shape[0] != n:
+            raise ValueError(
+                f"initial_state must have shape ({n}, m), got {self.y0.shape}"
+            )
+        # each row's run, for a search by (run, time) in one call: numpy
+        # orders complex numbers by their real, then their imaginary part,
+        # and the rows are sorted by run, then by time
+        run_of_row = np.repeat(np.arange(n), np.diff(self.offsets))
+        self._keys = run_of_row + 1j * self.records[: self.offsets[-1], 0]
+
+    def split(self, max_steps: int) -> list[tuple[int, int, CompiledDense]]:
+        """Consecutive runs ``lo:hi`` with at most `max_steps` steps in all.
+
+        Each block holds at least one run; returns ``(lo, hi, dense of the
+        block)`` in order. Bounds the memory of a computation over every
+        step of every run (the exact peaks evaluate a few points per step).
+        """
+        n = self.offsets.size - 1
+        blocks: list[tuple[int, int, CompiledDense]] = []
+        lo = 0
+        while lo < n:
+            # the last run whose steps, counted from run lo, fit the budget
+            hi = int(
+                np.searchsorted(self.offsets, self.offsets[lo] + max_steps, "right")
+            )
+            hi = min(max(hi - 1, lo + 1), n)
+            rows = slice(int(self.offsets[lo]), int(self.offsets[hi]))
+            blocks.append((lo, hi, CompiledDense(
+                self.records[rows], self.offsets[lo : hi + 1] - self.offsets[lo],
+                self.y0[lo:hi], self.t0,
+            )))  # fmt: skip
+            lo = hi
+        return blocks
+
+    def step_bounds(self) -> np.ndarray:
+        """Each run's start and step ends, ascending, NaN-padded: ``(n, B)``."""
+        n = self.offsets.size - 1
+        counts = np.diff(self.offsets)
+        bounds = np.full((n, 2 * int(counts.max(initial=0)) + 1), np.nan)
+        bounds[:, 0] = self.t0
+        for i in range(n):
+            rec = self.records[self.offsets[i] : self.offsets[i + 1]]
+            b = np.unique(np.concatenate([[self.t0], rec[:, 0], rec[:, 0] + rec[:, 1]]))
+            bounds[i, : b.size] = b
+        return bounds
+
+    def states(self, runs: np.ndarray, times: np.ndarray) -> np.ndarray:
+        """States ``(m, len(times))`` of run ``runs[j]`` at ``times[j]``."""
+        runs = np.asarray(runs, dtype=np.int64)
+        times = np.asarray(times, dtype=float)
+        m = self.y0.shape[1]
+        out = self.y0[runs].T.copy()
+        after = np.flatnonzero((times > self.t0) & (np.diff(self.offsets)[runs] > 0))
+        if after.size == 0:
+            return out
+        r, tt = runs[after], times[after]
+        k = np.searchsorted(self._keys, r + 1j * tt, side="right") - 1
+        # (a time before the run's first step's start: that step)
+        k = np.maximum(k, self.offsets[r])
+        row = self.records[k]
+        x = (tt - row[:, 0]) / row[:, 1]
+        npow = (self.records.shape[1] - 2) // m - 1
+        F = row[:, 2 + m :].reshape(-1, npow, m)
+        # scipy's Dop853DenseOutput evaluation, as the kernels' _dense_eval
+        v = np.zeros((tt.size, m))
+        for j in range(npow):
+            v += F[:, npow - 1 - j, :]
+            v *= (x if j % 2 == 0 else 1.0 - x)[:, None]
+        out[:, after] = (v + row[:, 2 : 2 + m]).T
+        return out

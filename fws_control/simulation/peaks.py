@@ -9,6 +9,7 @@ samples: it does not depend on the output grid.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -16,12 +17,14 @@ import numpy as np
 from ..gains import SteeringGains
 from ..paths import Path
 from ..vehicle import Vehicle
-from .dense import DenseSolution
+from .dense import CompiledDense, DenseSolution
 from .outcomes import PEAK_SIGNALS, SIGNALS
 from .signals import compute_outputs
 
 __all__ = [
     "exact_peaks",
+    "exact_peaks_per_run",
+    "BLOCK_STEPS",
 ]
 
 _PEAK_ROWS = [SIGNALS.index(name) for name in PEAK_SIGNALS]
@@ -32,6 +35,11 @@ _NODES_PER_STEP = 8
 _PEAK_CANDIDATES = 3
 _GOLDEN_ITERATIONS = 80
 _GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
+
+#: Steps of compiled runs whose exact peaks are located at once
+#: (:func:`exact_peaks_per_run`): with 8 nodes a step, one block's
+#: evaluations hold about 32 768 points of every signal.
+BLOCK_STEPS = 4096
 
 
 def _sample_peaks(signals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -66,7 +74,7 @@ def exact_peaks(
     speed: np.ndarray,
     feedforward: bool,
     time_constant: float | None,
-    solution: DenseSolution,
+    solution: DenseSolution | CompiledDense,
     t_eval: np.ndarray,
     signals: np.ndarray,
     t_stop: np.ndarray,
@@ -94,8 +102,9 @@ def exact_peaks(
     ----------
     vehicle, path, gains, speed, feedforward, time_constant
         As given to :func:`~fws_control.simulation.engine.integrate`.
-    solution : DenseSolution
-        From ``integrate(..., solution=[])``.
+    solution : DenseSolution or CompiledDense
+        From ``integrate(..., solution=[])``, or the compiled engine's
+        solution (each run's peaks then on its own steps).
     t_eval : ndarray
         The output times of :func:`~fws_control.simulation.engine.integrate`.
     signals : ndarray
@@ -137,8 +146,6 @@ def exact_peaks(
     """
     n = speed.size
     S = len(PEAK_SIGNALS)
-    hist = solution.history
-    t0 = float(hist.t0)
     t_stop = np.asarray(t_stop, dtype=float)
     all_runs = np.arange(n)
 
@@ -172,18 +179,19 @@ def exact_peaks(
         return np.where(valid[:, None, :], vals, -np.inf)
 
     # Nodes: the solver's step boundaries (they do not depend on the output
-    # grid), subdivided, then the stop.
-    ends = [t0]
-    for start, (end, _, _) in zip(hist.starts, hist.pieces, strict=True):
-        ends += [start, end]
-    bounds = np.unique(np.asarray(ends, dtype=float))
+    # grid), subdivided, then the stop. One row shared by all runs, or a
+    # row per run (NaN-padded) where each run took its own steps.
+    bounds = solution.step_bounds()
     frac = np.arange(_NODES_PER_STEP) / _NODES_PER_STEP
-    grid = (bounds[:-1, None] + frac[None, :] * np.diff(bounds)[:, None]).ravel()
-    grid = np.append(grid, bounds[-1])
-    inside = grid[None, :] < t_stop[:, None]
+    grid = bounds[:, :-1, None] + frac * np.diff(bounds, axis=1)[..., None]
+    last = bounds[np.arange(bounds.shape[0]), np.sum(np.isfinite(bounds), axis=1) - 1]
+    # (sorted: a padded row's NaN go to its end)
+    grid = np.sort(np.concatenate([grid.reshape(bounds.shape[0], -1),
+                                   last[:, None]], axis=1), axis=1)  # fmt: skip
+    inside = grid < t_stop[:, None]
     count = np.count_nonzero(inside, axis=1)
-    times = np.full((n, grid.size + 1), np.nan)
-    times[:, :-1] = np.where(inside, grid[None, :], np.nan)
+    times = np.full((n, grid.shape[1] + 1), np.nan)
+    times[:, :-1] = np.where(inside, grid, np.nan)
     times[all_runs, count] = t_stop
     node_v = evaluate(times)  # (n, S, K)
     K = times.shape[1]
@@ -257,3 +265,52 @@ def exact_peaks(
             np.where(left_side, fc, fx),
         )
     return best_v, best_t
+
+
+def exact_peaks_per_run(
+    vehicle: Vehicle,
+    path: Path,
+    subset: Callable[[int, int], Any],
+    *,
+    speed: np.ndarray,
+    solution: CompiledDense,
+    t_eval: np.ndarray,
+    signals: np.ndarray,
+    t_stop: np.ndarray,
+    **options: Any,
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`exact_peaks` of runs that each took their own steps.
+
+    The runs go in blocks of consecutive runs of at most
+    :data:`BLOCK_STEPS` steps in all (:meth:`CompiledDense.split
+    <fws_control.simulation.dense.CompiledDense.split>`), each block's
+    peaks located at once, each run on its own steps.
+
+    Parameters
+    ----------
+    vehicle, path
+        As given to :func:`exact_peaks`.
+    subset : callable
+        ``subset(lo, hi)``: the gains or controller of runs ``lo:hi``.
+    speed, t_eval, signals, t_stop
+        As given to :func:`exact_peaks`, for all runs.
+    solution : CompiledDense
+        The runs' dense output.
+    **options
+        The other keywords of :func:`exact_peaks` (``feedforward``,
+        ``time_constant``, ``model``, ``tyre``, ``profile``, ``schedule``).
+
+    Returns
+    -------
+    values, times : ndarray
+        As :func:`exact_peaks`.
+    """
+    n = speed.size
+    values = np.empty((n, len(PEAK_SIGNALS)))
+    times = np.empty((n, len(PEAK_SIGNALS)))
+    for lo, hi, part in solution.split(BLOCK_STEPS):
+        values[lo:hi], times[lo:hi] = exact_peaks(
+            vehicle, path, subset(lo, hi), speed=speed[lo:hi], solution=part,
+            t_eval=t_eval, signals=signals[lo:hi], t_stop=t_stop[lo:hi], **options,
+        )  # fmt: skip
+    return values, times

@@ -71,6 +71,7 @@ from .chunks import (
     run_kept,
 )
 from .cluster import run_on_dask
+from .dense import CompiledDense
 from .loop import scheduled_gains
 from .options import (
     LSODA_MAX_RUNS,
@@ -80,7 +81,7 @@ from .options import (
     run_gains,
 )
 from .outcomes import PEAK_SIGNALS, SIGNALS
-from .peaks import exact_peaks
+from .peaks import exact_peaks_per_run
 from .result import SimulationResult
 
 __all__ = ["simulate", "simulate_batch", "DEFAULT_CHUNK_SIZE"]
@@ -334,11 +335,9 @@ def _varying_speed_outputs(
     """Signals and exact peaks of compiled varying-speed runs.
 
     The numpy engine's :func:`compute_outputs` and :func:`exact_peaks` on
-    each run's compiled dense output (``CompiledDense``): the longitudinal
+    the runs' compiled dense output (:class:`~.dense.CompiledDense`): the longitudinal
     signals and the scheduled command's rate are the numpy engine's.
     """
-    from .compiled_speed import CompiledDense
-
     kw = dict(
         speed=speed, feedforward=feedforward, time_constant=tau,
         model=opts["model"], tyre=opts["tyre"], profile=opts["profile"],
@@ -351,25 +350,18 @@ def _varying_speed_outputs(
     if out is not None:
         out[...] = signals
         signals = out
+    # every run on its own steps, a block of runs at once
+    dense = CompiledDense(
+        solution.records, solution.offsets, solution.initial_state, float(t[0])
+    )
     n = speed.size
     k1, k2, a = (np.broadcast_to(np.ravel(v), (n,)) for v in (g.k1, g.k2, g.ratio))
-    peaks = np.empty((n, len(PEAK_SIGNALS)))
-    peak_times = np.empty((n, len(PEAK_SIGNALS)))
-    for i in range(n):
-        rows = slice(solution.offsets[i], solution.offsets[i + 1])
-        dense = CompiledDense(
-            solution.records[rows], solution.initial_state[i], float(t[0])
-        )
-        one = {**kw, "speed": speed[i : i + 1]}
-        peaks[i], peak_times[i] = (
-            v[0]
-            for v in exact_peaks(
-                vehicle, path,
-                SteeringGains(k1[i : i + 1], k2[i : i + 1], a[i : i + 1]),
-                solution=dense, t_eval=t, signals=signals[i : i + 1],
-                t_stop=t_stop[i : i + 1], **one,
-            )
-        )  # fmt: skip
+    del kw["speed"]
+    peaks, peak_times = exact_peaks_per_run(
+        vehicle, path, lambda lo, hi: SteeringGains(k1[lo:hi], k2[lo:hi], a[lo:hi]),
+        speed=speed, solution=dense, t_eval=t, signals=signals, t_stop=t_stop,
+        **kw,
+    )  # fmt: skip
     return signals, status, message, t_stop, peaks, peak_times
 
 
