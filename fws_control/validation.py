@@ -113,6 +113,8 @@ def check_real(name: str, value: Any) -> np.ndarray:
         ...
     TypeError: x must be a real number, not a bool, got True
     """
+    if type(value) is np.ndarray and value.dtype == np.float64:
+        return value
     if isinstance(value, (str, bytes)) or value is None:
         raise ValueError(f"{name} must be a finite number, got {_short(value)}")
     if isinstance(value, (bool, np.bool_)):
@@ -151,8 +153,14 @@ def check_finite(name: str, value: Any) -> np.ndarray | float:
     Real numbers only (see :func:`check_real`): ``bool`` and complex values
     raise :class:`TypeError`.
     """
+    # (the common case first: a Python float; other types, numpy scalars
+    # and subclasses included, take check_real's path)
+    if type(value) is float:
+        if math.isfinite(value):
+            return float(value)
+        raise ValueError(f"{name} must be finite, got {_short(value)}")
     arr = check_real(name, value)
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         raise ValueError(f"{name} must be finite, got {_short(value)}")
     return float(arr) if arr.ndim == 0 else arr
 

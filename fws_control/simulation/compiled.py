@@ -1086,8 +1086,10 @@ def _run_parameters(gains: SteeringGains, speed: np.ndarray) -> np.ndarray:
     if not isinstance(gains, SteeringGains):  # a controller's compiled law
         P[:, P_LAW : P_LAW + 6] = law_parameters(gains, n)
         return P
-    for col, v in ((P_K1, gains.k1), (P_K2, gains.k2), (P_RATIO, gains.ratio)):
-        P[:, col] = np.broadcast_to(np.asarray(v, dtype=float).ravel(), (n,))
+    # (a gain of one value or one per run; an assignment broadcasts it)
+    P[:, P_K1] = np.ravel(gains.k1)
+    P[:, P_K2] = np.ravel(gains.k2)
+    P[:, P_RATIO] = np.ravel(gains.ratio)
     return P
 
 
