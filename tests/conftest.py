@@ -134,21 +134,13 @@ def pytest_terminal_summary(terminalreporter, config):
 # Under pytest-xdist every worker is a fresh process: with an empty numba
 # cache (a fresh clone) each worker compiled the whole engine itself, the
 # same kernels twice over, tens of seconds of CPU each. The controller
-# compiles them first, in two processes at once (DOP853 and Radau, each
-# with the signals and peaks its runs use), which write numba's cache; the
-# workers then load the kernels from it (fws_control's cache folder is
-# per-checkout, see fws_control.simulation.compilation). Off with
-# FWS_TEST_PRECOMPILE=0; a failure here fails no test (the tests then
-# compile what they need, as before).
-_PRECOMPILE = """
-import fws_control as fws
-veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
-plant = fws.LateralPlant(veh, speed=5.0)
-gains = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
-res = fws.simulate(plant, fws.Arc(0.1), gains, initial_state=(0.0, -5.0, 0.0),
-                   duration=2.0, engine="compiled", method={method!r})
-assert res.peaks is not None
-"""
+# compiles every kernel set first (fws_control.simulation.precompile, as
+# `fws-control compile` does; two worker processes at once), into numba's
+# cache; the workers then load the kernels from it (fws_control's cache
+# folder is per-checkout, see fws_control.simulation.compilation). Cached
+# already (CI runs `fws-control compile` before pytest), this takes a few
+# seconds. Off with FWS_TEST_PRECOMPILE=0; a failure here fails no test
+# (the tests then compile what they need, as before).
 
 
 def _precompile_wanted(config) -> bool:
@@ -169,36 +161,19 @@ def pytest_sessionstart(session):
     config = session.config
     if not _precompile_wanted(config):
         return
-    import subprocess
-    import sys
     import time
 
-    env = dict(os.environ, FWS_CONTROL_QUIET="1")
+    from fws_control.simulation.precompile import precompile
+
     start = time.perf_counter()
-    procs = [
-        subprocess.Popen(
-            [sys.executable, "-c", _PRECOMPILE.format(method=method)],
-            cwd=str(config.rootpath),
-            env=env,
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.PIPE,
-            text=True,
-        )
-        for method in ("DOP853", "Radau")
-    ]
-    failed = []
-    for proc in procs:
-        try:
-            _, err = proc.communicate(timeout=900)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            _, err = proc.communicate()
-        if proc.returncode:
-            failed.append((err or "").strip().splitlines()[-1:])
+    try:
+        precompile(jobs=2)
+        what = "done"
+    except Exception as exc:  # the tests compile what they need instead
+        what = f"failed: {type(exc).__name__}: {exc}"
     reporter = config.pluginmanager.get_plugin("terminalreporter")
     if reporter is not None:
         took = time.perf_counter() - start
-        what = f"failed: {failed}" if failed else "done"
         reporter.write_line(
             f"fws_control: compiled engine compiled before the workers start "
             f"({took:.0f} s, {what})"

@@ -1,0 +1,77 @@
+"""fws_control.simulation.precompile and ``fws-control compile``.
+
+Reference: numba's own cache counters (``dispatcher.stats``: a cache miss
+is a compilation, a hit a load from the cache). After :func:`precompile`,
+a fresh process that runs each kernel set's call must compile nothing.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+from fws_control.simulation.precompile import KERNEL_SETS, CompiledSet, precompile
+
+pytest.importorskip("numba", reason="the extra 'fast' (numba)")
+
+# every top kernel of both variants (the specialised and the full kernels):
+# their compilations and cache loads in this process, as numba counts them
+_COUNT = """
+from fws_control.simulation import precompile, compiled_variants as v
+for name in precompile.KERNEL_SETS:
+    precompile._run_set(name)
+misses = hits = 0
+for features in ((), v.FEATURES):
+    top = v.kernels(features)
+    for kernel in vars(top).values():
+        misses += sum(kernel.stats.cache_misses.values())
+        hits += sum(kernel.stats.cache_hits.values())
+print(misses, hits)
+"""
+
+
+def test_after_precompile_a_fresh_process_compiles_nothing():
+    done = precompile(jobs=2)
+    assert [d.name for d in done] == list(KERNEL_SETS)
+    assert all(isinstance(d, CompiledSet) and d.cpu_seconds > 0.0 for d in done)
+    out = subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(_COUNT)],
+        capture_output=True, text=True, timeout=900, check=True,
+    )  # fmt: skip
+    misses, hits = (int(v) for v in out.stdout.split())
+    assert misses == 0, out.stderr[-2000:]
+    # the three sets load five top kernels from the cache at least
+    assert hits >= 5
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"sets": ("paper-rk45",)}, "sets must hold names of"),
+        ({"jobs": 0}, "jobs must be an integer >= 1, got 0"),
+        ({"jobs": True}, "jobs must be an integer >= 1, got True"),
+        ({"jobs": 1.5}, "jobs must be an integer >= 1, got 1.5"),
+    ],
+)
+def test_bad_input_names_the_argument(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        precompile(**kwargs)
+
+
+def test_command_reports_each_set():
+    out = subprocess.run(
+        [sys.executable, "-m", "fws_control", "compile", "--jobs", "1"],
+        capture_output=True, text=True, timeout=900, check=True,
+    )  # fmt: skip
+    lines = out.stdout.splitlines()
+    assert lines[0].startswith("compiling into ")
+    assert [line.split()[0] for line in lines[1:4]] == list(KERNEL_SETS)
+    assert lines[-1].endswith("(1 worker)")
+    bad = subprocess.run(
+        [sys.executable, "-m", "fws_control", "compile", "--jobs", "0"],
+        capture_output=True, text=True, timeout=900, check=False,
+    )  # fmt: skip
+    assert bad.returncode == 2 and "--jobs" in bad.stderr
