@@ -38,7 +38,8 @@ _GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 
 #: Steps of compiled runs whose exact peaks are located at once
 #: (:func:`exact_peaks_per_run`): with 8 nodes a step, one block's
-#: evaluations hold about 32 768 points of every signal.
+#: evaluations hold about 32 768 points of every signal where its runs
+#: take similar numbers of steps (each run is padded to the longest).
 BLOCK_STEPS = 4096
 
 
