@@ -420,13 +420,20 @@ class CompiledDense:
     def step_bounds(self) -> np.ndarray:
         """Each run's start and step ends, ascending, NaN-padded: ``(n, B)``."""
         n = self.offsets.size - 1
-        counts = np.diff(self.offsets)
-        bounds = np.full((n, 2 * int(counts.max(initial=0)) + 1), np.nan)
-        bounds[:, 0] = self.t0
-        for i in range(n):
-            rec = self.records[self.offsets[i] : self.offsets[i + 1]]
-            b = np.unique(np.concatenate([[self.t0], rec[:, 0], rec[:, 0] + rec[:, 1]]))
-            bounds[i, : b.size] = b
+        rec = self.records[: self.offsets[-1]]
+        run_of_row = np.repeat(np.arange(n), np.diff(self.offsets))
+        # every run's start, step starts and step ends, sorted by run, then
+        # by time, each value once per run
+        runs = np.concatenate([np.arange(n), run_of_row, run_of_row])
+        vals = np.concatenate([np.full(n, self.t0), rec[:, 0], rec[:, 0] + rec[:, 1]])
+        order = np.lexsort((vals, runs))
+        runs, vals = runs[order], vals[order]
+        new = np.ones(vals.size, dtype=bool)
+        new[1:] = (runs[1:] != runs[:-1]) | (vals[1:] != vals[:-1])
+        runs, vals = runs[new], vals[new]
+        col = np.arange(vals.size) - np.searchsorted(runs, runs)
+        bounds = np.full((n, int(col.max(initial=0)) + 1), np.nan)
+        bounds[runs, col] = vals
         return bounds
 
     def states(self, runs: np.ndarray, times: np.ndarray) -> np.ndarray:

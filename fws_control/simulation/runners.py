@@ -339,12 +339,11 @@ def _varying_speed_outputs(
     signals and the scheduled command's rate are the numpy engine's.
     """
     kw = dict(
-        speed=speed, feedforward=feedforward, time_constant=tau,
-        model=opts["model"], tyre=opts["tyre"], profile=opts["profile"],
-        schedule=opts.get("schedule"),
+        feedforward=feedforward, time_constant=tau, model=opts["model"],
+        tyre=opts["tyre"], profile=opts["profile"], schedule=opts.get("schedule"),
     )  # fmt: skip
     signals = outputs_in_blocks(
-        vehicle, path, g, states=states, initial_heading=x0[:, 2],
+        vehicle, path, g, speed=speed, states=states, initial_heading=x0[:, 2],
         delay=0.0, times=t, **kw,
     )  # fmt: skip
     if out is not None:
@@ -356,7 +355,6 @@ def _varying_speed_outputs(
     )
     n = speed.size
     k1, k2, a = (np.broadcast_to(np.ravel(v), (n,)) for v in (g.k1, g.k2, g.ratio))
-    del kw["speed"]
     peaks, peak_times = exact_peaks_per_run(
         vehicle, path, lambda lo, hi: SteeringGains(k1[lo:hi], k2[lo:hi], a[lo:hi]),
         speed=speed, solution=dense, t_eval=t, signals=signals, t_stop=t_stop,
