@@ -123,36 +123,60 @@ def test_schedule_gains_against_interp(n, ratio_slope, data):
 # (b) the scenarios of docs/varying_speed.md on both engines
 
 
+# Each run ends shortly after its scenario's last event (the example runs
+# 12, 9 and 18 s): the lane change's last curved piece ends at 10.0 s
+# (braking ends at 4.85 s); the curve exit's clothoid ends at 7.25 s, the
+# speed rising on its PCHIP piece throughout; the parking-lot exit's a(V)
+# changes sign at 15.0 s and its speed reaches the table's held end value
+# (22 m/s) at 15.6 s.
+DURATIONS = {
+    "braking lane change": 10.5,
+    "accelerating curve exit": 7.5,
+    "parking-lot exit": 16.0,
+}
+
+
+# "scheduled" (ratio 0) goes through the same schedule tables as
+# "scheduled + a(V)" (the gains k1 V^2, k2 V and the ratio column, here
+# zeros): it is checked on one scenario, the other two controllers on all.
 @pytest.mark.parametrize(
-    "scenario", ["braking lane change", "accelerating curve exit", "parking-lot exit"]
+    ("scenario", "label"),
+    [
+        ("braking lane change", "fixed"),
+        ("braking lane change", "scheduled + a(V)"),
+        ("accelerating curve exit", "fixed"),
+        ("accelerating curve exit", "scheduled"),
+        ("accelerating curve exit", "scheduled + a(V)"),
+        ("parking-lot exit", "fixed"),
+        ("parking-lot exit", "scheduled + a(V)"),
+    ],
 )
-def test_scenarios_agree_with_the_numpy_engine(scenario):
+def test_scenarios_agree_with_the_numpy_engine(scenario, label):
     ex = _example()
-    path, profile, x0, duration = ex.scenarios()[scenario]
+    path, profile, x0, full = ex.scenarios()[scenario]
+    assert DURATIONS[scenario] < full
     v_start = float(profile(0.0))
     plant = fws.LateralPlant(ex.VEH, speed=v_start, model="dynamic")
-    kw = dict(initial_state=x0, duration=duration, speed=profile, dt=0.05)
-    for label, ctrl in ex.controllers(v_start).items():
-        a = fws.simulate(plant, path, ctrl, engine="compiled", **kw)
-        b = fws.simulate(plant, path, ctrl, engine="numpy", **kw)
-        assert a.engine == "compiled" and b.engine == "numpy"
-        assert a.status == b.status == "ok", (label, a.message, b.message)
-        # positions to 1e-6 m over 150-250 m of path (rtol 1e-10 each)
-        err = np.max(np.hypot(a.x - b.x, a.y - b.y))
-        assert err < 1e-6, (label, err)
-        assert np.max(np.abs(a.e - b.e)) < 1e-7
-        np.testing.assert_allclose(a.longitudinal_speed, b.longitudinal_speed,
-                                   rtol=1e-9)  # fmt: skip
-        np.testing.assert_allclose(a.longitudinal_accel, b.longitudinal_accel,
-                                   rtol=1e-9, atol=1e-9)  # fmt: skip
-        np.testing.assert_allclose(
-            a.friction_usage, b.friction_usage, rtol=1e-7, atol=1e-7
-        )
-        assert np.array_equal(a.friction_exceeded, b.friction_exceeded)
-        np.testing.assert_allclose(a.delta_r_rate, b.delta_r_rate, atol=1e-7)
-        for name in ("e", "lateral_accel", "delta_r"):
-            pa, pb = getattr(a.peaks, name), getattr(b.peaks, name)
-            assert abs(pa.value - pb.value) <= 1e-7 * (1.0 + abs(pb.value)), name
+    kw = dict(initial_state=x0, duration=DURATIONS[scenario], speed=profile, dt=0.05)
+    ctrl = ex.controllers(v_start)[label]
+    a = fws.simulate(plant, path, ctrl, engine="compiled", **kw)
+    b = fws.simulate(plant, path, ctrl, engine="numpy", **kw)
+    assert a.engine == "compiled" and b.engine == "numpy"
+    assert a.status == b.status == "ok", (label, a.message, b.message)
+    # positions to 1e-6 m over 80-130 m of path (rtol 1e-10 each)
+    err = np.max(np.hypot(a.x - b.x, a.y - b.y))
+    assert err < 1e-6, (label, err)
+    assert np.max(np.abs(a.e - b.e)) < 1e-7
+    np.testing.assert_allclose(a.longitudinal_speed, b.longitudinal_speed,
+                               rtol=1e-9)  # fmt: skip
+    np.testing.assert_allclose(a.longitudinal_accel, b.longitudinal_accel,
+                               rtol=1e-9, atol=1e-9)  # fmt: skip
+    np.testing.assert_allclose(a.friction_usage, b.friction_usage, rtol=1e-7, atol=1e-7)
+    assert np.array_equal(a.friction_exceeded, b.friction_exceeded)
+    np.testing.assert_allclose(a.delta_r_rate, b.delta_r_rate, atol=1e-7)
+    for name in ("e", "lateral_accel", "delta_r"):
+        pa, pb = getattr(a.peaks, name), getattr(b.peaks, name)
+        assert abs(pa.value - pb.value) <= 1e-7 * (1.0 + abs(pb.value)), name
 
 
 def test_phase_switch_is_compiled():

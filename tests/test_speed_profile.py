@@ -10,6 +10,7 @@ eqs. (24)-(29) written out. Nothing of the library's simulation is reused.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -124,18 +125,29 @@ ENGINES = [
 ]
 
 
+TIME_TABLE = ([0.0, 3.0, 6.0, 10.0], [22.0, 16.0, 9.0, 12.0])
+TIME_GAINS = (0.004, 0.12, -0.3)
+
+
+@functools.cache
+def _time_profile_reference(kappa):
+    """The reference of the test below (the same for both engines)."""
+    pchip = PchipInterpolator(*TIME_TABLE)
+    return _kinematic_reference(
+        lambda tt, s: float(pchip(min(tt, 10.0))), lambda V: TIME_GAINS, kappa,
+        [0.0, -1.5, 0.05], np.linspace(0.0, 10.0, 201),
+    )  # fmt: skip
+
+
 @pytest.mark.parametrize("engine", ENGINES)
 @pytest.mark.parametrize("kappa", [0.0, 0.02])
 def test_kinematic_time_profile_matches_reference(kappa, engine):
-    t_pts, v_pts = [0.0, 3.0, 6.0, 10.0], [22.0, 16.0, 9.0, 12.0]
+    t_pts, v_pts = TIME_TABLE
     prof = fws.SpeedProfile.from_time(t_pts, v_pts)
     pchip = PchipInterpolator(t_pts, v_pts)
-    gains = (0.004, 0.12, -0.3)
+    gains = TIME_GAINS
     t = np.linspace(0.0, 10.0, 201)
-    ref = _kinematic_reference(
-        lambda tt, s: float(pchip(min(tt, 10.0))), lambda V: gains, kappa,
-        [0.0, -1.5, 0.05], t,
-    )  # fmt: skip
+    ref = _time_profile_reference(kappa)
     res = fws.simulate(
         fws.LateralPlant(VEH, speed=22.0), _path(kappa), fws.SteeringGains(*gains),
         initial_state=(0.0, -1.5, 0.05), duration=10.0, t_eval=t,
@@ -190,19 +202,32 @@ def test_kinematic_lateral_accel_with_varying_speed():
     assert np.max(np.abs(V_dot * body(tt)[0] / (15.0 - 4.0 * np.tanh(tt - 2.0)))) > 1e-3
 
 
-@pytest.mark.parametrize("engine", ENGINES)
-def test_kinematic_distance_profile_matches_reference(engine):
-    s_pts, v_pts = [0.0, 40.0, 90.0, 150.0], [8.0, 14.0, 14.0, 20.0]
-    prof = fws.SpeedProfile.from_distance(s_pts, v_pts)
-    pchip = PchipInterpolator(s_pts, v_pts)
-    kappa = 0.01
-    gains = (0.01, 0.25, -0.2)
-    t = np.linspace(0.0, 8.0, 81)
+DISTANCE_TABLE = ([0.0, 40.0, 90.0, 150.0], [8.0, 14.0, 14.0, 20.0])
+DISTANCE_GAINS = (0.01, 0.25, -0.2)
+
+
+@functools.cache
+def _distance_profile_reference():
+    """The reference of the test below (the same for both engines)."""
+    pchip = PchipInterpolator(*DISTANCE_TABLE)
 
     def V(tt, s):
         return float(pchip(min(max(s, 0.0), 150.0)))
 
-    ref = _kinematic_reference(V, lambda v: gains, kappa, [0.0, 0.8, 0.0], t)
+    return _kinematic_reference(
+        V, lambda v: DISTANCE_GAINS, 0.01, [0.0, 0.8, 0.0], np.linspace(0.0, 8.0, 81)
+    )
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_kinematic_distance_profile_matches_reference(engine):
+    s_pts, v_pts = DISTANCE_TABLE
+    prof = fws.SpeedProfile.from_distance(s_pts, v_pts)
+    pchip = PchipInterpolator(s_pts, v_pts)
+    kappa = 0.01
+    gains = DISTANCE_GAINS
+    t = np.linspace(0.0, 8.0, 81)
+    ref = _distance_profile_reference()
     res = fws.simulate(
         fws.LateralPlant(VEH, speed=8.0), _path(kappa), fws.SteeringGains(*gains),
         initial_state=(0.0, 0.8, 0.0), duration=8.0, t_eval=t, speed=prof,
@@ -222,24 +247,37 @@ def test_kinematic_distance_profile_matches_reference(engine):
     )
 
 
-@pytest.mark.parametrize("engine", ENGINES)
-@pytest.mark.parametrize("kind", ["time", "distance"])
-def test_dynamic_profile_matches_reference(kind, engine):
-    kappa = 0.02
-    gains = (0.005, 0.15, 0.2)
-    if kind == "time":
-        pts, vals = [0.0, 4.0, 8.0], [20.0, 14.0, 17.0]
-    else:
-        pts, vals = [0.0, 60.0, 150.0], [20.0, 12.0, 16.0]
+DYNAMIC_TABLES = {
+    "time": ([0.0, 4.0, 8.0], [20.0, 14.0, 17.0]),
+    "distance": ([0.0, 60.0, 150.0], [20.0, 12.0, 16.0]),
+}
+DYNAMIC_GAINS = (0.005, 0.15, 0.2)
+
+
+@functools.cache
+def _dynamic_profile_reference(kind):
+    """The reference of the test below (the same for both engines)."""
+    pts, vals = DYNAMIC_TABLES[kind]
     pchip = PchipInterpolator(pts, vals)
-    prof = fws.SpeedProfile(kind, points=pts, speeds=vals)
-    t = np.linspace(0.0, 8.0, 81)
 
     def V(tt, s):
         x = tt if kind == "time" else s
         return float(pchip(min(max(x, pts[0]), pts[-1])))
 
-    ref = _dynamic_reference(V, gains, kappa, [0.0, 0.5, 0.0], t)
+    t = np.linspace(0.0, 8.0, 81)
+    return _dynamic_reference(V, DYNAMIC_GAINS, 0.02, [0.0, 0.5, 0.0], t)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("kind", ["time", "distance"])
+def test_dynamic_profile_matches_reference(kind, engine):
+    kappa = 0.02
+    gains = DYNAMIC_GAINS
+    pts, vals = DYNAMIC_TABLES[kind]
+    pchip = PchipInterpolator(pts, vals)
+    prof = fws.SpeedProfile(kind, points=pts, speeds=vals)
+    t = np.linspace(0.0, 8.0, 81)
+    ref = _dynamic_profile_reference(kind)
     plant = fws.LateralPlant(DYN, speed=20.0, model="dynamic")
     res = fws.simulate(
         plant, _path(kappa), fws.SteeringGains(*gains),
@@ -476,23 +514,35 @@ def _table_gains(speeds, k1, k2, a):
     return gains_of
 
 
-@pytest.mark.parametrize("engine", ENGINES)
-def test_gain_schedule_during_the_run_matches_reference(engine):
-    """A braking run with gains and a(V) of the zero-sideslip double root."""
+def _braking_schedule():
+    """The zero-sideslip double-root schedule and the braking of the test below."""
     sch = fws.GainSchedule.double_root(
         DYN, speeds=np.linspace(6.0, 24.0, 10), pole=-1.2,
         ratio=fws.zero_sideslip_ratio,
     )  # fmt: skip
+    prof = fws.SpeedProfile.braking(22.0, 4.0, start=0.5, final=8.0)
+    return sch, prof, _table_gains(sch.speeds, sch.k1, sch.k2, sch.ratio)
+
+
+@functools.cache
+def _braking_schedule_reference():
+    """The reference of the test below (the same for both engines)."""
+    _, prof, gains_of = _braking_schedule()
+    return _kinematic_reference(
+        lambda tt, s: float(prof(tt)), lambda V: tuple(map(float, gains_of(V))),
+        0.02, [0.0, -1.0, 0.0], np.linspace(0.0, 5.0, 501),
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_gain_schedule_during_the_run_matches_reference(engine):
+    """A braking run with gains and a(V) of the zero-sideslip double root."""
+    sch, prof, gains_of = _braking_schedule()
     # a(V) changes sign inside the run: the 4WS phase switches
     assert sch.ratio[0] < 0.0 < sch.ratio[-1]
-    prof = fws.SpeedProfile.braking(22.0, 4.0, start=0.5, final=8.0)
     t = np.linspace(0.0, 5.0, 501)
-    gains_of = _table_gains(sch.speeds, sch.k1, sch.k2, sch.ratio)
     kappa = 0.02
-    ref = _kinematic_reference(
-        lambda tt, s: float(prof(tt)), lambda V: tuple(map(float, gains_of(V))),
-        kappa, [0.0, -1.0, 0.0], t,
-    )  # fmt: skip
+    ref = _braking_schedule_reference()
     res = fws.simulate(
         fws.LateralPlant(DYN, speed=22.0), _path(kappa), sch,
         initial_state=(0.0, -1.0, 0.0), duration=5.0, t_eval=t, speed=prof,
