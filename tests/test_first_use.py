@@ -66,15 +66,29 @@ with first_use(lambda: 3.0):
     assert compiled_loop.wrap_lap(7.5, 2.0) == 7.5 % 2.0
 stats = compiled_loop.wrap_lap.stats
 print(sum(stats.cache_hits.values()), sum(stats.cache_misses.values()))
+from fws_control.simulation.compilation import cache_dir
+print(cache_dir())
 """
 
 
+def _package_cache_files() -> set[Path]:
+    # (a working tree may hold cache files numba wrote there by default)
+    return {p for p in PACKAGE.rglob("*") if p.suffix in (".nbi", ".nbc")}
+
+
 def test_notice_on_a_compilation_only_and_once(tmp_path):
+    # The runs here also check two of the cache folder's rules (numba's under
+    # NUMBA_CACHE_DIR, XDG's under XDG_CACHE_HOME), as
+    # test_cache_folder_outside_the_package does for HOME: each run compiles
+    # in a new interpreter, and its start costs about 3 s of CPU.
+    before = _package_cache_files()
     cache = tmp_path / "cache"
     folder = cache / _subfolder(PACKAGE / "simulation")
     cold = _python(_SMALL, _env(NUMBA_CACHE_DIR=str(cache)), tmp_path)
     assert cold.returncode == 0, cold.stderr[-2000:]
-    assert cold.stdout.split() == ["0", "1"]  # numba: one compilation, no load
+    counts, printed_dir = cold.stdout.splitlines()[-2:]
+    assert counts.split() == ["0", "1"]  # numba: one compilation, no load
+    assert printed_dir == str(folder)  # numba's rule
     lines = cold.stderr.splitlines()
     assert len(lines) == 2, cold.stderr
     assert lines[0].startswith("fws_control: compiling the simulation engine")
@@ -88,21 +102,37 @@ def test_notice_on_a_compilation_only_and_once(tmp_path):
     # a second process loads the kernel: numba counts a hit, nothing printed
     warm = _python(_SMALL, _env(NUMBA_CACHE_DIR=str(cache)), tmp_path)
     assert warm.returncode == 0, warm.stderr[-2000:]
-    assert warm.stdout.split() == ["1", "0"]
+    assert warm.stdout.splitlines()[-2].split() == ["1", "0"]
     assert warm.stderr == ""
 
-    # quiet: compiled (a miss) and cached, nothing printed
-    other = tmp_path / "quiet"
-    quiet = _python(
-        _SMALL, _env(NUMBA_CACHE_DIR=str(other), FWS_CONTROL_QUIET="1"), tmp_path
-    )
+    # quiet: compiled (a miss) and cached, nothing printed; in the user
+    # cache under XDG_CACHE_HOME (XDG's rule; the XDG folders are Linux's,
+    # elsewhere under NUMBA_CACHE_DIR)
+    home = tmp_path / "home"
+    home.mkdir()
+    if sys.platform == "linux":
+        where = {"HOME": str(home), "XDG_CACHE_HOME": str(tmp_path / "xdg")}
+        other = tmp_path / "xdg" / "fws_control" / folder.name
+    else:
+        where = {"HOME": str(home), "NUMBA_CACHE_DIR": str(tmp_path / "quiet")}
+        other = tmp_path / "quiet" / folder.name
+    quiet = _python(_SMALL, _env(FWS_CONTROL_QUIET="1", **where), tmp_path)
     assert quiet.returncode == 0, quiet.stderr[-2000:]
-    assert quiet.stdout.split() == ["0", "1"]
+    counts, printed_dir = quiet.stdout.splitlines()[-2:]
+    assert counts.split() == ["0", "1"]
+    assert printed_dir == str(other)
     assert quiet.stderr == ""
-    assert list((other / folder.name).glob("compiled_loop.wrap_lap-*.nbi"))
+    assert list(other.glob("compiled_loop.wrap_lap-*.nbi"))
+    # numba wrote nothing into the package (its default: __pycache__ there)
+    assert not _package_cache_files() - before
 
 
 def test_cache_folder_outside_the_package(tmp_path):
+    # (the NUMBA_CACHE_DIR and XDG_CACHE_HOME rules: the runs of
+    # test_notice_on_a_compilation_only_and_once)
+    if sys.platform != "linux":
+        print("the XDG folders are Linux's: NUMBA_CACHE_DIR checked above only")
+        return
     home = tmp_path / "home"
     home.mkdir()
     code = """
@@ -111,32 +141,15 @@ def test_cache_folder_outside_the_package(tmp_path):
     compiled_loop.wrap_lap(0.5, 2.0)
     print(cache_dir())
     """
-    sub = _subfolder(PACKAGE / "simulation")
-    cases = [
-        # (environment, the folder expected: XDG's rule, numba's rule)
-        ({"HOME": str(home)}, home / ".cache" / "fws_control" / sub),
-        (
-            {"HOME": str(home), "XDG_CACHE_HOME": str(tmp_path / "xdg")},
-            tmp_path / "xdg" / "fws_control" / sub,
-        ),
-        (
-            {"HOME": str(home), "NUMBA_CACHE_DIR": str(tmp_path / "nb")},
-            tmp_path / "nb" / sub,
-        ),
-    ]
-    if sys.platform != "linux":
-        print("the XDG folders are Linux's: only NUMBA_CACHE_DIR checked")
-        cases = cases[2:]
-    # (a working tree may hold cache files numba wrote there by default)
-    before = {p for p in PACKAGE.rglob("*") if p.suffix in (".nbi", ".nbc")}
-    for updates, expected in cases:
-        run = _python(code, _env(**updates), tmp_path)
-        assert run.returncode == 0, run.stderr[-2000:]
-        assert run.stdout.strip() == str(expected)
-        assert list(expected.glob("compiled_loop.wrap_lap-*.nbi")), expected
+    # XDG's rule without XDG_CACHE_HOME: ~/.cache
+    expected = home / ".cache" / "fws_control" / _subfolder(PACKAGE / "simulation")
+    before = _package_cache_files()
+    run = _python(code, _env(HOME=str(home)), tmp_path)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert run.stdout.strip() == str(expected)
+    assert list(expected.glob("compiled_loop.wrap_lap-*.nbi")), expected
     # numba wrote nothing into the package (its default: __pycache__ there)
-    after = {p for p in PACKAGE.rglob("*") if p.suffix in (".nbi", ".nbc")}
-    assert not after - before
+    assert not _package_cache_files() - before
 
 
 def test_compile_seconds_counts_what_is_still_to_compile(tmp_path, monkeypatch):

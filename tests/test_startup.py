@@ -34,7 +34,7 @@ def _fresh(code: str) -> dict:
         capture_output=True,
         text=True,
         cwd=ROOT,
-        timeout=120,
+        timeout=300,
         check=False,
     )
     assert out.returncode == 0, out.stderr
@@ -42,61 +42,106 @@ def _fresh(code: str) -> dict:
 
 
 _REPORT = (
-    "import json, sys\n"
-    f"heavy = [m for m in {HEAVY!r} if m in sys.modules]\n"
-    "loaded = sorted(m for m in sys.modules if m.startswith('fws_control'))\n"
-    "print(json.dumps({'heavy': heavy, 'loaded': loaded}))\n"
+    "def report():\n"
+    f"    heavy = [m for m in {HEAVY!r} if m in sys.modules]\n"
+    "    loaded = sorted(m for m in sys.modules if m.startswith('fws_control'))\n"
+    "    return {'heavy': heavy, 'loaded': loaded}\n"
+)
+
+GAINS_ARGS = ["gains", "--speed", "20", "--curvature", "0.01", "--ratio", "0.5"]
+
+# One fresh interpreter for every check below (each start costs about 2 s):
+# the stages run in this order and each records sys.modules before the next
+# one. Imports only add modules, so a module absent after a stage is absent
+# when that stage runs alone in a new interpreter; the stages that must not
+# import something heavy come first, the ones that import everything last.
+_STAGES = (
+    "import contextlib, io, json, sys\n" + _REPORT + "import fws_control as fws\n"
+    "out = {'fresh': '_ORIGIN' not in vars(fws)}\n"
+    "out['import'] = report()\n"
+    # --help
+    "import fws_control.cli as cli\n"
+    "buf = io.StringIO()\n"
+    "with contextlib.redirect_stdout(buf):\n"
+    "    try:\n"
+    "        cli.main(['--help'])\n"
+    "    except SystemExit as exc:\n"
+    "        assert exc.code == 0, exc.code\n"
+    "assert 'reproduce' in buf.getvalue()\n"
+    "out['help'] = report()\n"
+    # the plant checks against python-control's classes
+    "veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)\n"
+    "p = fws.as_plant(veh, speed=5.0)\n"
+    "assert fws.loop_matrices(p).order == 2\n"
+    "for bad in (fws.as_plant, fws.loop_matrices):\n"
+    "    try:\n"
+    "        bad(object())\n"
+    "    except TypeError as exc:\n"
+    "        assert 'plant must be' in str(exc), exc\n"
+    "    else:\n"
+    "        raise AssertionError('no TypeError')\n"
+    "out['plant'] = report()\n"
+    # `gains`
+    "buf = io.StringIO()\n"
+    "with contextlib.redirect_stdout(buf):\n"
+    f"    assert cli.main({GAINS_ARGS!r}) == 0\n"
+    "out['gains_text'] = buf.getvalue()\n"
+    "out['gains'] = report()\n"
+    "out['matplotlib_after_gains'] = 'matplotlib' in sys.modules\n"
+    # simulate and simulate_batch, both engines
+    "from fws_control.paths import Arc\n"
+    "g = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=-1.0,\n"
+    "                          pole=-1.0)\n"
+    "for engine in ('auto', 'numpy'):\n"
+    "    kw = dict(speed=5.0, initial_state=(0.0, -5.0, 0.0), duration=5.0,\n"
+    "              dt=0.5, engine=engine)\n"
+    "    r = fws.simulate(veh, Arc(curvature=0.1), g, **kw)\n"
+    "    b = fws.simulate_batch(veh, Arc(curvature=0.1), g, **kw)\n"
+    "    assert (b.e[0] == r.e).all()\n"
+    "    out['e_' + engine] = r.e.tolist()\n"
+    "out['simulate'] = report()\n"
+    # the backend the CLI selected (imports matplotlib)
+    "import matplotlib\n"
+    "out['backend'] = matplotlib.get_backend().lower()\n"
+    # every public name but symbolic, then symbolic (imports everything)
+    f"for n in {[n for n in fws.__all__ if n != 'symbolic']!r}:\n"
+    "    getattr(fws, n)\n"
+    "out['sympy_before'] = 'sympy' in sys.modules\n"
+    "fws.symbolic.characteristic_polynomial\n"
+    "out['sympy_after'] = 'sympy' in sys.modules\n"
+    # the star import and dir()
+    "ns = {}\n"
+    "exec('from fws_control import *', ns)\n"
+    "out['star'] = sorted(n for n in ns if n != '__builtins__')\n"
+    "out['public'] = sorted(fws.__all__)\n"
+    "out['dir'] = dir(fws)\n"
+    "print(json.dumps(out))\n"
 )
 
 
-def test_import_package_imports_no_submodule():
-    res = _fresh("import fws_control\n" + _REPORT)
-    assert res["heavy"] == []
-    assert res["loaded"] == ["fws_control"]
+@pytest.fixture(scope="module")
+def fresh():
+    """What the fresh interpreter of _STAGES recorded at each stage."""
+    return _fresh(_STAGES)
 
 
-def test_help_imports_only_the_parser():
-    code = (
-        "import contextlib, io\n"
-        "import fws_control.cli as cli\n"
-        "buf = io.StringIO()\n"
-        "with contextlib.redirect_stdout(buf):\n"
-        "    try:\n"
-        "        cli.main(['--help'])\n"
-        "    except SystemExit as exc:\n"
-        "        assert exc.code == 0, exc.code\n"
-        "assert 'reproduce' in buf.getvalue()\n" + _REPORT
-    )
-    res = _fresh("import sys\n" + code)
-    assert res["heavy"] == []
+def test_import_package_imports_no_submodule(fresh):
+    assert fresh["import"]["heavy"] == []
+    assert fresh["import"]["loaded"] == ["fws_control"]
+
+
+def test_help_imports_only_the_parser(fresh):
+    assert fresh["help"]["heavy"] == []
     # No analysis module either: each subcommand imports its own.
-    assert not {"fws_control.plant", "fws_control.simulation"} & set(res["loaded"])
+    assert not {"fws_control.plant", "fws_control.simulation"} & set(
+        fresh["help"]["loaded"]
+    )
 
 
-def test_gains_without_python_control_gives_its_poles():
+def test_gains_without_python_control_gives_its_poles(fresh):
     """``gains`` runs on numpy alone; its poles are python-control's."""
-    args = ["gains", "--speed", "20", "--curvature", "0.01", "--ratio", "0.5"]
-    code = (
-        "import contextlib, io, sys\n"
-        "import fws_control.cli as cli\n"
-        "buf = io.StringIO()\n"
-        "with contextlib.redirect_stdout(buf):\n"
-        f"    assert cli.main({args!r}) == 0\n"
-        "import json\n"
-        "print(json.dumps(buf.getvalue()))\n" + _REPORT
-    )
-    out = subprocess.run(
-        [sys.executable, "-c", code],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        timeout=120,
-        check=False,
-    )
-    assert out.returncode == 0, out.stderr
-    *_, text, report = out.stdout.strip().splitlines()
-    assert json.loads(report)["heavy"] == []
-    printed = json.loads(text)
+    assert fresh["gains"]["heavy"] == []
+    printed = fresh["gains_text"]
     # Reference: python-control's state space of the closed loop, in this
     # process, for the exact-model design in both linearisations.
     veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
@@ -112,49 +157,18 @@ def test_gains_without_python_control_gives_its_poles():
         np.testing.assert_allclose(np.sort_complex(vals), ref, atol=2e-6)
 
 
-def test_cli_selects_agg_without_importing_matplotlib():
-    code = (
-        "import contextlib, io, sys\n"
-        "import fws_control.cli as cli\n"
-        "with contextlib.redirect_stdout(io.StringIO()):\n"
-        "    cli.main(['gains'])\n"
-        "assert 'matplotlib' not in sys.modules\n"
-        "import json, matplotlib\n"
-        "print(json.dumps(matplotlib.get_backend().lower()))\n"
-    )
-    assert _fresh(code) == "agg"
+def test_cli_selects_agg_without_importing_matplotlib(fresh):
+    assert fresh["matplotlib_after_gains"] is False
+    assert fresh["backend"] == "agg"
 
 
-def test_plant_checks_without_python_control():
+def test_plant_checks_without_python_control(fresh):
     """isinstance checks against python-control classes import nothing."""
-    code = (
-        "import fws_control as fws\n"
-        "veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)\n"
-        "p = fws.as_plant(veh, speed=5.0)\n"
-        "assert fws.loop_matrices(p).order == 2\n"
-        "for bad in (fws.as_plant, fws.loop_matrices):\n"
-        "    try:\n"
-        "        bad(object())\n"
-        "    except TypeError as exc:\n"
-        "        assert 'plant must be' in str(exc), exc\n"
-        "    else:\n"
-        "        raise AssertionError('no TypeError')\n" + _REPORT
-    )
-    assert _fresh(code)["heavy"] == []
+    assert fresh["plant"]["heavy"] == []
 
 
-def test_sympy_only_with_symbolic():
-    names = [n for n in fws.__all__ if n != "symbolic"]
-    code = (
-        "import sys, fws_control as fws\n"
-        f"for n in {names!r}:\n"
-        "    getattr(fws, n)\n"
-        "before = 'sympy' in sys.modules\n"
-        "fws.symbolic.characteristic_polynomial\n"
-        "import json\n"
-        "print(json.dumps([before, 'sympy' in sys.modules]))\n"
-    )
-    assert _fresh(code) == [False, True]
+def test_sympy_only_with_symbolic(fresh):
+    assert [fresh["sympy_before"], fresh["sympy_after"]] == [False, True]
 
 
 def test_lazy_names_resolve_to_their_modules():
@@ -208,47 +222,21 @@ def test_public_names_are_the_type_checking_imports():
     assert {n for n in assigned if not n.startswith("_")} == set()
 
 
-def test_star_import_and_dir_list_every_public_name():
-    code = (
-        "import sys, fws_control\n"
-        "fresh = '_ORIGIN' not in vars(fws_control)\n"
-        "ns = {}\n"
-        "exec('from fws_control import *', ns)\n"
-        "import json\n"
-        "print(json.dumps([fresh, sorted(n for n in ns if n != '__builtins__'),\n"
-        "                  sorted(fws_control.__all__), dir(fws_control)]))\n"
-    )
-    fresh, star, public, listed = _fresh(code)
-    assert fresh  # the import itself read nothing: the table is built on first use
+def test_star_import_and_dir_list_every_public_name(fresh):
+    # the import itself read nothing: the table is built on first use
+    assert fresh["fresh"]
+    star, public, listed = fresh["star"], fresh["public"], fresh["dir"]
     assert star == public == sorted(fws.__all__)
     assert set(public) <= set(listed)
     assert listed == sorted(listed)
 
 
 @pytest.mark.parametrize("engine", ["auto", "numpy"])
-def test_simulation_without_python_control(engine):
+def test_simulation_without_python_control(fresh, engine):
     """simulate and simulate_batch import neither python-control nor
     matplotlib; the run's lateral error is python-control's reference
     interconnection's (simulate_reference, in this process) to 1e-7 m."""
-    code = (
-        "import fws_control as fws\n"
-        "from fws_control.paths import Arc\n"
-        "veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)\n"
-        "g = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=-1.0,\n"
-        "                          pole=-1.0)\n"
-        "kw = dict(speed=5.0, initial_state=(0.0, -5.0, 0.0), duration=5.0,\n"
-        f"          dt=0.5, engine={engine!r})\n"
-        "r = fws.simulate(veh, Arc(curvature=0.1), g, **kw)\n"
-        "b = fws.simulate_batch(veh, Arc(curvature=0.1), g, **kw)\n"
-        "assert (b.e[0] == r.e).all()\n"
-        "import json\n"
-        "print(json.dumps(r.e.tolist()))\n" + _REPORT
-    )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True,
-                         text=True, cwd=ROOT, timeout=300, check=False)  # fmt: skip
-    assert out.returncode == 0, out.stderr
-    *_, text, report = out.stdout.strip().splitlines()
-    heavy = json.loads(report)["heavy"]
+    heavy = fresh["simulate"]["heavy"]
     assert "control" not in heavy and "matplotlib" not in heavy, heavy
     veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     g = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
@@ -257,4 +245,4 @@ def test_simulation_without_python_control(engine):
         duration=5.0, dt=0.5,
     )  # fmt: skip
     # outputs: x, y, psi, s, e, ...
-    np.testing.assert_allclose(json.loads(text), ref.outputs[4], atol=1e-7)
+    np.testing.assert_allclose(fresh["e_" + engine], ref.outputs[4], atol=1e-7)
