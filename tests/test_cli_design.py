@@ -24,10 +24,42 @@ def _run(args, capsys):
     return subprocess.CompletedProcess(args, code, cap.out, cap.err)
 
 
-@pytest.fixture(scope="module")
-def library_design():
-    plant = fws.LateralPlant(VEH, speed=20.0, steering_lag=0.27)
-    return fws.most_stable_gains(plant, delay=0.24, ratio=0.0, grid=6)
+@pytest.fixture
+def calls(monkeypatch):
+    """The library's design calls the command makes: (args, kwargs, result).
+
+    The command's numbers are checked against the very object the library
+    returned for the arguments the command passed (asserted below), not a
+    second run of the same deterministic search: each search costs seconds.
+    """
+    import fws_control.delay_design
+    import fws_control.robust
+
+    seen = []
+
+    def spy(module, name):
+        func = getattr(module, name)
+
+        def wrapper(*args, **kwargs):
+            out = func(*args, **kwargs)
+            seen.append((args, kwargs, out))
+            return out
+
+        monkeypatch.setattr(module, name, wrapper)
+
+    spy(fws_control.delay_design, "most_stable_gains")
+    spy(fws_control.robust, "robust_gains")
+    return seen
+
+
+def _most_stable_call(calls):
+    """The one most_stable_gains call: the plant and options of the command."""
+    ((args, kwargs, design),) = calls
+    (plant,) = args
+    ref = fws.LateralPlant(VEH, speed=20.0, curvature=0.0, steering_lag=0.27)
+    assert repr(plant) == repr(ref)
+    assert kwargs == {"delay": 0.24, "ratio": 0.0, "grid": 6}
+    return design
 
 
 def test_help(capsys):
@@ -37,12 +69,12 @@ def test_help(capsys):
     assert capsys.readouterr().out.startswith("usage: fws-control design")
 
 
-def test_json_matches_most_stable_gains(capsys, library_design, tmp_path):
+def test_json_matches_most_stable_gains(capsys, calls, tmp_path):
     out = tmp_path / "design.png"
     p = _run(["design", "--speed", 20, "--grid", 6, "--json", "--out", out], capsys)
     assert p.returncode == 0, p.stderr
     data = json.loads(p.stdout)  # one JSON line, nothing else on stdout
-    d = library_design
+    d = _most_stable_call(calls)
     assert data["method"] == "most-stable"
     assert data["k1"] == float(d.gains.k1) and data["k2"] == float(d.gains.k2)
     assert data["abscissa"] == d.abscissa
@@ -53,18 +85,17 @@ def test_json_matches_most_stable_gains(capsys, library_design, tmp_path):
     assert out.read_bytes().startswith(PNG)
 
 
-def test_table_prints_the_same_numbers(capsys, library_design):
+def test_table_prints_the_same_numbers(capsys, calls):
     p = _run(["design", "--speed", 20, "--grid", 6], capsys)
     assert p.returncode == 0, p.stderr
+    d = _most_stable_call(calls)
     rows = dict(line.split(None, 1) for line in p.stdout.strip().splitlines())
-    assert float(rows["k1"]) == pytest.approx(float(library_design.gains.k1), rel=1e-5)
-    assert float(rows["abscissa"]) == pytest.approx(library_design.abscissa, rel=1e-5)
-    assert float(rows["critical_delay"]) == pytest.approx(
-        library_design.critical_delay, rel=1e-5
-    )
+    assert float(rows["k1"]) == pytest.approx(float(d.gains.k1), rel=1e-5)
+    assert float(rows["abscissa"]) == pytest.approx(d.abscissa, rel=1e-5)
+    assert float(rows["critical_delay"]) == pytest.approx(d.critical_delay, rel=1e-5)
 
 
-def test_robust_matches_robust_gains(capsys):
+def test_robust_matches_robust_gains(capsys, calls):
     # without delay the inner maximum is over eigenvalues: the command's
     # plumbing checked in seconds (with a delay the same search costs ~10x;
     # tests/test_robust.py checks the delayed search itself)
@@ -79,10 +110,12 @@ def test_robust_matches_robust_gains(capsys):
         "steering_lag": 0.27,
         "curvature": 0.0,
     }
-    r = fws.robust_gains(
-        VEH, ratio=0.0, box=box, k1=np.linspace(0.0, 0.015, 6),
-        k2=np.linspace(0.0, 0.5, 6),
-    )  # fmt: skip
+    ((call_args, kwargs, r),) = calls
+    assert call_args == (VEH,)
+    assert sorted(kwargs) == ["box", "k1", "k2", "ratio"]
+    assert kwargs["ratio"] == 0.0 and kwargs["box"] == box
+    np.testing.assert_array_equal(kwargs["k1"], np.linspace(0.0, 0.015, 6))
+    np.testing.assert_array_equal(kwargs["k2"], np.linspace(0.0, 0.5, 6))
     assert data["k1"] == float(r.gains.k1) and data["k2"] == float(r.gains.k2)
     assert data["abscissa"] == r.abscissa
     assert data["worst"] == r.worst
