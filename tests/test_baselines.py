@@ -676,32 +676,29 @@ def cones_hit_brute(m, x, y, psi, f):
     """Count cones inside the rectangle R..front axle x (-b/2, b/2), any sample.
 
     Point-in-convex-polygon by the signs of the cross products with the four
-    edges of the corner polygon.
+    edges of the corner polygon, every cone against every (finite) sample
+    (as arrays over the samples).
     """
     b = m.vehicle_width
-    hit = set()
+    x, y, psi = (np.asarray(v, dtype=float) for v in (x, y, psi))
+    ok = np.isfinite(x) & np.isfinite(y) & np.isfinite(psi)
+    x, y, psi = x[ok], y[ok], psi[ok]
+    ux, uy = np.cos(psi), np.sin(psi)
+    nx, ny = -uy, ux
+    corners = [
+        (x - b / 2 * nx, y - b / 2 * ny),
+        (x + f * ux - b / 2 * nx, y + f * uy - b / 2 * ny),
+        (x + f * ux + b / 2 * nx, y + f * uy + b / 2 * ny),
+        (x + b / 2 * nx, y + b / 2 * ny),
+    ]
+    hit = 0
     for cx, cy in _cones_from_gates(m):
-        for xi, yi, pi in zip(x, y, psi, strict=True):
-            if not (np.isfinite(xi) and np.isfinite(yi) and np.isfinite(pi)):
-                continue
-            ux, uy = math.cos(pi), math.sin(pi)
-            nx, ny = -uy, ux
-            corners = [
-                (xi - b / 2 * nx, yi - b / 2 * ny),
-                (xi + f * ux - b / 2 * nx, yi + f * uy - b / 2 * ny),
-                (xi + f * ux + b / 2 * nx, yi + f * uy + b / 2 * ny),
-                (xi + b / 2 * nx, yi + b / 2 * ny),
-            ]
-            inside = True
-            for k in range(4):
-                (ax, ay), (bx, by) = corners[k], corners[(k + 1) % 4]
-                if (bx - ax) * (cy - ay) - (by - ay) * (cx - ax) < -1e-12:
-                    inside = False
-                    break
-            if inside:
-                hit.add((cx, cy))
-                break
-    return len(hit)
+        inside = np.ones(x.shape, dtype=bool)
+        for k in range(4):
+            (ax, ay), (bx, by) = corners[k], corners[(k + 1) % 4]
+            inside &= (bx - ax) * (cy - ay) - (by - ay) * (cx - ax) >= -1e-12
+        hit += bool(inside.any())
+    return hit
 
 
 def test_cones_hit_matches_brute_force():

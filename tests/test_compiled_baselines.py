@@ -18,6 +18,7 @@ cases it refuses go to numpy with the reason.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -47,7 +48,9 @@ def _controllers():
     }
 
 
+@functools.cache
 def _lane_change():
+    # built once (half a second; paths are immutable, so the tests share it)
     return fws.double_lane_change(vehicle_width=1.8).path
 
 

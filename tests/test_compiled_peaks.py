@@ -6,6 +6,7 @@ loop, the solver bookkeeping and the peak search); the numpy engine's
 samples at the compiled peak times; the stop margin; the output samples.
 """
 
+import functools
 import math
 import subprocess
 import sys
@@ -119,9 +120,16 @@ def _run(name, engine, **extra):
     return fws.simulate(plant, path, g, **kw, engine=engine)
 
 
+@functools.cache
+def _numpy_run(name):
+    """The numpy engine's run of a case, the reference of three tests: run
+    once per process (the tests only read it)."""
+    return _run(name, "numpy")
+
+
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_exact_peaks_as_numpy_engine(name):
-    ref = _run(name, "numpy")
+    ref = _numpy_run(name)
     got = _run(name, "compiled")
     assert got.engine == "compiled" and ref.engine == "numpy"
     assert got.status == ref.status
@@ -158,7 +166,7 @@ def test_peak_between_samples_is_found(name):
     50x finer grid)."""
     got = _run(name, "compiled")
     fine = _run(name, "compiled", dt=0.01)
-    ref = _run(name, "numpy")
+    ref = _numpy_run(name)
     missed = []
     for sig in PEAK_SIGNALS:
         p = getattr(got.peaks, sig)
@@ -176,7 +184,7 @@ def test_fine_grid_samples_as_nodes_give_the_same_peaks(name):
     0.01 s, steps of 0.1-0.4 s) the samples are the step's nodes: the
     peaks are still the numpy engine's (its own nodes) and those of the
     coarse grid, where every step has its 8 nodes."""
-    ref = _run(name, "numpy")
+    ref = _numpy_run(name)
     coarse = _run(name, "compiled")
     fine = _run(name, "compiled", dt=0.01)
     tol = TOL.get(name, 1e-9)
@@ -310,11 +318,16 @@ CURVE = dict(initial_state=(0.0, -5.0, 0.0), duration=5.0)
          "Radau"),
         # a delay: the method of steps, compiled with DOP853 only
         (None, {"delay": 0.1}, "compiled", "DOP853"),
-        (None, {"delay": 0.1, "method": "Radau"}, "numpy", "Radau"),
-        (None, {"method": "RK45"}, "numpy", "RK45"),
+        # (the numpy runs below over 0.5-1 s, still five delays or more: the
+        # rule does not depend on the duration without an actuator, and
+        # numpy's delayed Radau costs seconds per simulated second)
+        (None, {"delay": 0.1, "method": "Radau", "duration": 0.5}, "numpy",
+         "Radau"),
+        (None, {"method": "RK45", "duration": 1.0}, "numpy", "RK45"),
         # a baseline: its compiled law with DOP853; on numpy with a delay
         (fws.PurePursuit(lookahead=5.0), {}, "compiled", "DOP853"),
-        (fws.PurePursuit(lookahead=5.0), {"delay": 0.1}, "numpy", "DOP853"),
+        (fws.PurePursuit(lookahead=5.0), {"delay": 0.1, "duration": 1.0},
+         "numpy", "DOP853"),
     ],
 )  # fmt: skip
 def test_auto_engine_rule_and_bitwise_results(gains, kwargs, engine, method):
@@ -336,10 +349,12 @@ def test_auto_engine_dynamic_model_and_table_failure(monkeypatch):
     res = fws.simulate(dynamic, ARC, g, **CURVE)
     assert res.engine == "compiled"  # (DOP853, no delay)
     _same(res, fws.simulate(dynamic, ARC, g, **CURVE, engine="compiled"))
-    # with a delay: numpy
-    res = fws.simulate(dynamic, ARC, g, **CURVE, delay=0.1)
+    # with a delay: numpy (over 1 s, ten delays: the rule does not depend on
+    # the duration, and numpy's delayed runs cost seconds per simulated second)
+    short = {**CURVE, "duration": 1.0}
+    res = fws.simulate(dynamic, ARC, g, **short, delay=0.1)
     assert res.engine == "numpy"
-    _same(res, fws.simulate(dynamic, ARC, g, **CURVE, delay=0.1, engine="numpy"))
+    _same(res, fws.simulate(dynamic, ARC, g, **short, delay=0.1, engine="numpy"))
     # a path whose curvature table misses its tolerance runs on numpy
     from fws_control.simulation import compiled
 

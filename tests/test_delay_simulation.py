@@ -64,11 +64,13 @@ def test_delayed_engine_agrees_with_the_pade_reference():
     step response rings before t = delay, which moves e by a few 1e-5 m
     here (measured 3.5e-5 m for a 0.2 s delay on the paper's curve). The
     largest differences are there, around t = delay (measured at 0.25 s in e
-    and 0.30 s in delta_f, the same over 6 s as over 1.5 s): 1.5 s of the
-    reference, which costs seconds per simulated second, show them.
+    and 0.30 s in delta_f, the same over 6 s as over 0.9 s): 0.9 s of the
+    reference (three delays: the run crosses t = delay and t = 2 delay, the
+    first two kinks of the method of steps), which costs seconds per
+    simulated second, show them.
     """
     g = fws.double_root_gains(VEH, speed=5.0, curvature=0.1, ratio=-1.0, pole=-1.0)
-    kw = dict(initial_state=(0.0, -1.0, 0.0), duration=1.5, dt=0.05)
+    kw = dict(initial_state=(0.0, -1.0, 0.0), duration=0.9, dt=0.05)
     path = fws.Arc(curvature=0.1)
     ref = simulate_reference(VEH, path, g, speed=5.0, delay=0.3, **kw)
     plant = fws.LateralPlant(VEH, speed=5.0)
