@@ -276,8 +276,9 @@ def _run_compiled_stages(
         profile=profile,
         schedule=opts.get("schedule"),
     )
-    if ctrl is not None:
-        # the numpy engine's signals and peaks of the compiled solution
+    if ctrl is not None and profile is not None:
+        # a controller at a varying speed: the numpy engine's signals and
+        # peaks of the compiled solution
         from .compiled_laws import controller_outputs
 
         signals, peaks, peak_times = controller_outputs(
@@ -313,7 +314,7 @@ def _run_compiled_stages(
     )
     peaks, peak_times = compiled_peaks(
         vehicle,
-        table,
+        table if ctrl is None else path,  # (a law may need the path's position)
         g,
         speed=speed,
         feedforward=feedforward,
