@@ -283,11 +283,12 @@ STAGES = (*METHODS, "signals", "peaks")
 # notice's estimate: the kernels specialised to a call without a delay, the
 # dynamic model, a controller's law or a varying speed (compiled_variants),
 # and the kernels of a call with any of these. Measured with
-# benchmarks/bench_first_use.py's paper scenario (numba 0.68, two cores
-# shared with other compilations: an idle machine takes less, by up to 2x);
-# Radau's full driver scaled from DOP853's by their earlier ratio.
+# benchmarks/bench_first_use.py (its paper scenario, and --case stanley for
+# the kernels of every feature; numba 0.68, two cores shared with other
+# compilations: an idle machine takes less, by up to 2x); Radau's full
+# driver scaled from DOP853's by their earlier ratio.
 _STAGE_SECONDS = {"DOP853": 35.0, "Radau": 30.0, "signals": 3.0, "peaks": 16.0}
-_FULL_STAGE_SECONDS = {"DOP853": 87.0, "Radau": 72.0, "signals": 5.0, "peaks": 49.0}
+_FULL_STAGE_SECONDS = {"DOP853": 89.0, "Radau": 72.0, "signals": 9.0, "peaks": 84.0}
 
 # the features of the call a thread runs, for the estimate (set by the
 # kernels' callers below before they enter their stage)
@@ -319,7 +320,7 @@ def _stage_seconds(stage: str) -> float:
     return compile_seconds(kernel, seconds[stage])
 
 
-def compiling(*stages: str) -> Any:
+def compiling(*stages: str, features: bool | None = None) -> Any:
     """Context of a call that runs the compiled `stages`, for the notice.
 
     numba compiles a stage's kernels the first time a call needs them (a
@@ -334,6 +335,12 @@ def compiling(*stages: str) -> Any:
     ----------
     *stages : str
         Names in :data:`STAGES`.
+    features : bool, optional
+        Whether the call uses a feature of
+        :data:`~fws_control.simulation.compiled_variants.FEATURES` (an
+        input delay, the dynamic model, a controller's law, a varying
+        speed), whose kernels take longer to compile; the estimate is of
+        those kernels then. Default: as the thread's last call.
 
     Returns
     -------
@@ -353,6 +360,10 @@ def compiling(*stages: str) -> Any:
     for stage in stages:
         if stage not in STAGES:
             raise ValueError(f"stages must be in {STAGES}, got {stage!r}")
+    if features is not None:
+        # (a compilation may start before the call selects its kernels: the
+        # notice's estimate then needs the call's features already)
+        _call.features = frozenset(FEATURES if features else ())
 
     def estimate():
         return sum(_stage_seconds(s) for s in stages)
