@@ -27,10 +27,8 @@ Each line gives the engine that ran the case, the CPU per run (best of
 drift of the machine's speed does not enter the ratios) and the ratio to
 case 1. Cases on the numpy engine cost seconds per run: they run
 ``--numpy-runs`` runs (default 2), the baselines on the compiled engine
-``--baseline-runs`` (default 100: their signals and exact peaks are the
-numpy engine's formulas on the compiled dense output, the peaks located
-for a block of runs at once), the other compiled ones ``--runs`` (default
-100). The machine load is printed before and
+``--baseline-runs`` (default: as many as ``--runs``), the other compiled
+ones ``--runs`` (default 100). The machine load is printed before and
 after.
 
 Run: ``python benchmarks/bench_cases.py [--runs 100] [--numpy-runs 2]``
@@ -140,12 +138,13 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=100)
     ap.add_argument("--numpy-runs", type=int, default=2)
-    ap.add_argument("--baseline-runs", type=int, default=100)
+    ap.add_argument("--baseline-runs", type=int, default=None)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--only", default="", help="cases whose name starts so")
     args = ap.parse_args()
     print(machine_line())
-    table = cases(args.runs, args.numpy_runs, args.baseline_runs, args.only)
+    n_baseline = args.runs if args.baseline_runs is None else args.baseline_runs
+    table = cases(args.runs, args.numpy_runs, n_baseline, args.only)
     best = best_of_interleaved(
         {name: run for name, (_, run, _) in table.items()}, repeat=args.repeat
     )

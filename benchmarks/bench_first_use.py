@@ -20,7 +20,12 @@ stretch on a busy machine too (shared caches and cores).
 
 Targets: cold <= 10 s, warm <= 1 s of CPU to the first result.
 
-Run: ``python benchmarks/bench_first_use.py [--cold 1]``
+``--case stanley`` runs Stanley (gain 2) instead of the paper's law, from
+0.5 m beside an arc of 1/100 m at 20 m/s for 5 s: a call that uses the
+kernels of every feature (a controller's law), whose stages give the
+estimates of ``compiled._FULL_STAGE_SECONDS``.
+
+Run: ``python benchmarks/bench_first_use.py [--cold 1] [--case stanley]``
 """
 
 from __future__ import annotations
@@ -70,7 +75,7 @@ if event is not None:
     event.register("numba:compile", Stages())
 import fws_control as fws
 veh = fws.Vehicle(wheelbase=WHEELBASE, rear_to_cg=REAR_TO_CG)
-g = fws.double_root_gains(veh, speed=SPEED, curvature=CURVATURE, ratio=-1.0, pole=-1.0)
+g = LAW
 before = cpu()
 res = fws.simulate(fws.LateralPlant(veh, speed=SPEED), fws.Arc(curvature=CURVATURE),
                    g, initial_state=INITIAL, duration=DURATION, feedforward=True)
@@ -88,7 +93,7 @@ _STAGE_OF = {
 }
 
 
-def child_code() -> str:
+def child_code(case: str = "paper") -> str:
     from fws_control.paper.data import PAPER_VEHICLE
     from fws_control.paper.scenarios import PAPER_SCENARIOS
 
@@ -101,7 +106,15 @@ def child_code() -> str:
         "INITIAL": sc.initial_state,
         "DURATION": sc.duration,
     }
-    code = _CHILD
+    law = (
+        "fws.double_root_gains(veh, speed=SPEED, curvature=CURVATURE, "
+        "ratio=-1.0, pole=-1.0)"
+    )
+    if case == "stanley":
+        values.update(SPEED=20.0, CURVATURE=0.01, INITIAL=(0.0, 0.5, 0.0),
+                      DURATION=5.0)  # fmt: skip
+        law = "fws.Stanley(gain=2.0)"
+    code = _CHILD.replace("LAW", law)
     for name, value in values.items():
         code = code.replace(name, repr(value))
     return code
@@ -124,8 +137,9 @@ def run(code: str, cache: str) -> tuple[dict, str]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cold", type=int, default=1, help="cold runs (each >= 10 s)")
+    parser.add_argument("--case", choices=("paper", "stanley"), default="paper")
     args = parser.parse_args()
-    code = child_code()
+    code = child_code(args.case)
     print(machine_line())
     with tempfile.TemporaryDirectory(prefix="fws-first-use-") as tmp:
         best_cold = None

@@ -35,14 +35,15 @@ if TYPE_CHECKING:
 
     from .paths import Path
 
-__all__ = ["LateralController", "saturate", "CONTROLLER_SIGNALS"]
+__all__ = ["LateralController", "saturate", "CONTROLLER_SIGNALS", "RATE_STEP"]
 
 #: Inputs of :meth:`LateralController.system`: the projection's outputs.
 CONTROLLER_SIGNALS = ("s", "e", "theta", "curvature")
 
-# Step of the central difference along the motion for the steering rate of
-# controllers without an analytic rate (relative error ~1e-10).
-_RATE_STEP = 1e-6
+#: Step [s] of the central difference along the motion that gives the
+#: steering rate of controllers without an analytic rate
+#: (:meth:`LateralController.steering_rate`; relative error about 1e-10).
+RATE_STEP = 1e-6
 
 
 def saturate(
@@ -221,7 +222,7 @@ class LateralController:
         -------
         (ndarray, ndarray)
         """
-        h = _RATE_STEP
+        h = RATE_STEP
         s = np.asarray(s, dtype=float)
         s_dot = np.asarray(s_dot, dtype=float)
         length = float(getattr(path, "length", math.inf))

@@ -800,14 +800,18 @@ def test_compare_table_recomputed_from_results():
         assert col("RMS", "e")[i] == pytest.approx(rms, rel=1e-12)
         assert bool(col("completed")[i]) is True
         assert col("cones")[i] == cones_hit_brute(m, r.x, r.y, r.psi, F)
-    # the peaks do not depend on the output grid (exact peaks)
+    # the peaks do not depend on the output grid (exact peaks): to 1e-12 at
+    # a smooth maximum; rear-wheel feedback's delta_f peaks at a corner (the
+    # joint of two clothoids, where its curvature term has a kink), which the
+    # compiled search locates within sqrt(eps) max(t, 1 s) = 7e-8 s, so the
+    # value within that times its slope (1.2 rad/s): 2e-7 relative at most
     fine = fws.compare(fws.LateralPlant(VEH, speed=V), m,
                        {"rwf": controllers["rear-wheel feedback"]},
                        offset=0.5, dt=0.001)  # fmt: skip
     for name in tab:
         if "RMS" in name:
             continue
-        assert fine.table[name][0] == pytest.approx(tab[name][2], rel=1e-9), name
+        assert fine.table[name][0] == pytest.approx(tab[name][2], rel=2e-7), name
     # four-wheel steering shows in the rear column, not for a = 0
     assert col("delta_r", "[deg]")[0] > 1e-3 and col("delta_r", "[deg]")[2] == 0
     # the same law as SteeringGains and as StateFeedback.from_gains: same row

@@ -181,6 +181,78 @@ def test_compiled_baseline_against_solve_ivp_reference(name):
     assert np.max(np.abs(res.s - ref[0])) <= 1e-6
 
 
+# The controllers' signals and peaks in compiled code against the numpy
+# engine's formulas (compute_outputs, exact_peaks) on the same compiled
+# states. The compiled law reads the path from its geometry table (within
+# 1e-10 m / rad of the path) where numpy reads the path itself: the angles
+# differ by about 1e-10 times the gains. The central-difference rate
+# (step 1e-6 s) divides that by nothing new: both difference their own
+# smooth law, so the table's error cancels to its slope's (about 1e-10 /s),
+# and rounding leaves eps |delta| / 1e-6 s ~ 1e-10 rad/s.
+DYN_VEH = fws.Vehicle(
+    wheelbase=2.7, rear_to_cg=1.2, mass=1500.0, yaw_inertia=2600.0,
+    cornering_front=8.0e4, cornering_rear=9.5e4, friction=0.9, max_steer_front=0.6,
+)  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("name", "model", "lag", "duration"),
+    [
+        ("stanley", "kinematic", None, 2.5),
+        ("pure_pursuit", "kinematic", None, 2.5),
+        ("rear_wheel", "kinematic", None, 2.5),
+        ("lqr", "kinematic", None, 2.5),
+        # to the end of the open course: the rate one-sided at its end
+        ("stanley", "kinematic", None, 15.0),
+        ("pure_pursuit", "dynamic", None, 2.5),
+        ("stanley", "kinematic", 0.1, 2.5),
+    ],
+)
+def test_compiled_signals_and_peaks_are_the_numpy_formulas(name, model, lag,
+                                                           duration):  # fmt: skip
+    from fws_control.simulation.compiled_laws import controller_outputs
+    from fws_control.simulation.engine import SIGNALS
+    from fws_control.simulation.signals import compute_outputs
+
+    veh = DYN_VEH if model == "dynamic" else VEH
+    ctrl = _controllers()[name]
+    path = _lane_change()
+    x0 = np.array([[0.0, 0.4, 0.05], [3.0, -0.8, 0.0]])
+    n = len(x0)
+    speed = np.full(n, SPEED)
+    t = np.arange(0.0, duration + 1e-9, 0.01)
+    sol = []
+    kw = dict(speed=speed, feedforward=True, time_constant=lag, model=model,
+              tyre="linear")  # fmt: skip
+    states, status, _, t_stop, _ = compiled.integrate_compiled(
+        veh, path, ctrl, path_state=x0, t_eval=t, solution=sol,
+        body_state=np.full((n, 2), np.nan) if model == "dynamic" else None, **kw,
+    )  # fmt: skip
+    if duration > 10.0:
+        assert set(status) == {"end_of_path"} and np.all(t_stop < duration)
+    got = compiled.compiled_outputs(
+        veh, path, ctrl, states=states, initial_heading=np.zeros(n), **kw
+    )
+    ref = compute_outputs(
+        veh, path, ctrl, states=states, initial_heading=np.zeros(n), **kw
+    )
+    assert np.array_equal(np.isnan(got), np.isnan(ref))
+    for j, sig in enumerate(SIGNALS):
+        a, b = got[:, j], ref[:, j]
+        ok = np.isfinite(b)
+        scale = 1.0 + np.max(np.abs(b[ok]), initial=0.0)
+        assert np.max(np.abs(a[ok] - b[ok]), initial=0.0) <= 1e-8 * scale, sig
+    peaks, times = compiled.compiled_peaks(
+        veh, path, ctrl, solution=sol[0], t_eval=t, signals=got, t_stop=t_stop, **kw
+    )
+    _, ref_peaks, _ = controller_outputs(
+        veh, path, ctrl, states=states, initial_heading=np.zeros(n),
+        solution=sol[0], t_eval=t, t_stop=t_stop, **kw,
+    )  # fmt: skip
+    np.testing.assert_allclose(peaks, ref_peaks, rtol=1e-8, atol=1e-10)
+    assert np.all((times >= 0.0) & (times <= t_stop[:, None]))
+
+
 # --------------------------------------------------------------------------
 # (c) routing
 

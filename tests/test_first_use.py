@@ -12,6 +12,7 @@ which ``import fws_control`` must fail.
 from __future__ import annotations
 
 import base64
+import contextlib
 import hashlib
 import json
 import os
@@ -167,6 +168,25 @@ def test_compile_seconds_counts_what_is_still_to_compile(tmp_path, monkeypatch):
     again = compilation.jit(cube)  # as in a new process: on disk only
     assert not again.overloads
     assert compilation.compile_seconds(again, 5.0) == 0.0
+
+
+def test_the_estimate_is_of_the_kernels_the_call_uses(monkeypatch):
+    # a call with a feature (here announced before any kernel is chosen, as
+    # _run_compiled does: a compilation may start before that) is estimated
+    # with the kernels of every feature, which take longer to compile
+    plans = []
+    monkeypatch.setattr(compiled, "first_use", lambda est: plans.append(est) or
+                        contextlib.nullcontext())  # fmt: skip
+    # as if nothing were cached: each stage costs its full estimate
+    monkeypatch.setattr(compiled, "compile_seconds", lambda kernel, sec: sec)
+    stages = ("DOP853", "signals", "peaks")
+    with compiled.compiling(*stages, features=True):
+        full = plans[-1]()
+    with compiled.compiling(*stages, features=False):
+        paper = plans[-1]()
+    assert full > paper > 0.0
+    with compiled.compiling(*stages):  # default: as the thread's last call
+        assert plans[-1]() == paper
 
 
 def test_compiling_names_its_stages():

@@ -283,11 +283,12 @@ STAGES = (*METHODS, "signals", "peaks")
 # notice's estimate: the kernels specialised to a call without a delay, the
 # dynamic model, a controller's law or a varying speed (compiled_variants),
 # and the kernels of a call with any of these. Measured with
-# benchmarks/bench_first_use.py's paper scenario (numba 0.68, two cores
-# shared with other compilations: an idle machine takes less, by up to 2x);
-# Radau's full driver scaled from DOP853's by their earlier ratio.
+# benchmarks/bench_first_use.py (its paper scenario, and --case stanley for
+# the kernels of every feature; numba 0.68, two cores shared with other
+# compilations: an idle machine takes less, by up to 2x); Radau's full
+# driver scaled from DOP853's by their earlier ratio.
 _STAGE_SECONDS = {"DOP853": 35.0, "Radau": 30.0, "signals": 3.0, "peaks": 16.0}
-_FULL_STAGE_SECONDS = {"DOP853": 87.0, "Radau": 72.0, "signals": 5.0, "peaks": 49.0}
+_FULL_STAGE_SECONDS = {"DOP853": 89.0, "Radau": 72.0, "signals": 9.0, "peaks": 84.0}
 
 # the features of the call a thread runs, for the estimate (set by the
 # kernels' callers below before they enter their stage)
@@ -319,7 +320,7 @@ def _stage_seconds(stage: str) -> float:
     return compile_seconds(kernel, seconds[stage])
 
 
-def compiling(*stages: str) -> Any:
+def compiling(*stages: str, features: bool | None = None) -> Any:
     """Context of a call that runs the compiled `stages`, for the notice.
 
     numba compiles a stage's kernels the first time a call needs them (a
@@ -334,6 +335,12 @@ def compiling(*stages: str) -> Any:
     ----------
     *stages : str
         Names in :data:`STAGES`.
+    features : bool, optional
+        Whether the call uses a feature of
+        :data:`~fws_control.simulation.compiled_variants.FEATURES` (an
+        input delay, the dynamic model, a controller's law, a varying
+        speed), whose kernels take longer to compile; the estimate is of
+        those kernels then. Default: as the thread's last call.
 
     Returns
     -------
@@ -353,6 +360,10 @@ def compiling(*stages: str) -> Any:
     for stage in stages:
         if stage not in STAGES:
             raise ValueError(f"stages must be in {STAGES}, got {stage!r}")
+    if features is not None:
+        # (a compilation may start before the call selects its kernels: the
+        # notice's estimate then needs the call's features already)
+        _call.features = frozenset(FEATURES if features else ())
 
     def estimate():
         return sum(_stage_seconds(s) for s in stages)
@@ -1093,6 +1104,22 @@ def _run_parameters(gains: SteeringGains, speed: np.ndarray) -> np.ndarray:
     return P
 
 
+def _law_arrays(
+    gains: Any, path: Any, table: CurvatureTable, q: np.ndarray, delay: float
+) -> tuple[np.ndarray, np.ndarray]:
+    # the law's code into q and the kernels' breaks and coefs (a geometry
+    # table after the curvature's for a law that reads the path's position)
+    code = law_code(gains)
+    if code < 0 or (code > 0 and delay > 0.0):
+        raise ValueError(
+            "gains must be SteeringGains or a controller with a compiled law "
+            f"(without an input delay), got {type(gains).__name__} with "
+            f"delay={delay!r}"
+        )
+    q[Q_LAW] = code
+    return kernel_arrays(path, table, code, q)
+
+
 def compiled_outputs(
     vehicle: Vehicle,
     path: Path,
@@ -1114,8 +1141,11 @@ def compiled_outputs(
 
     The compiled counterpart of
     :func:`~fws_control.simulation.engine.compute_outputs` for the paper's
-    law: ``s, e, theta``, the steering angles, their exact rates (chain rule
-    through the law and the curvature table's derivative, zero where an
+    law and a controller's compiled law: ``s, e, theta``, the steering
+    angles, their rates (chain rule through the law and the curvature
+    table's derivative; for the controllers without an analytic rate the
+    central difference of
+    :meth:`~fws_control.LateralController.steering_rate`; zero where an
     angle is clipped; the actuator's rates with an actuator), the lateral
     acceleration of eq. (13), ``v_y``, the yaw rate of eq. (10) and the slip
     angles (0: the kinematic model has no slip) are computed per output time
@@ -1169,17 +1199,13 @@ def compiled_outputs(
     """
     if numba is None:
         raise ImportError("compiled_outputs needs numba: pip install fws-control[fast]")
-    if law_code(gains) != 0:
-        raise ValueError(
-            "compiled_outputs computes the paper's law (SteeringGains); a "
-            "controller's: compiled_laws.controller_outputs"
-        )
     table = curvature_table(path) if table is None else table
     delay = 0.0 if solution is None else solution.delay
     q = shared_parameters(
         vehicle, table, feedforward=feedforward, time_constant=time_constant,
         delay=delay, model=model, tyre=tyre,
     )  # fmt: skip
+    breaks, coefs = _law_arrays(gains, path, table, q, delay)
     speed = np.ascontiguousarray(speed, dtype=float).ravel()
     P = _run_parameters(gains, speed)
     st = np.moveaxis(np.asarray(states, dtype=float), 0, 1)  # (n, m, T)
@@ -1201,9 +1227,7 @@ def compiled_outputs(
         pose = np.zeros(5)
     top = _stage_kernels(q)
     with compiling("signals"):
-        top.signals_batch(
-            st, P, q, table.breaks, table.coefs, _rear_to_cg(vehicle), pose, out
-        )
+        top.signals_batch(st, P, q, breaks, coefs, _rear_to_cg(vehicle), pose, out)
         if solution is not None and delay > 0.0:  # (a delay: a solution)
             if t_eval is None or t_eval.shape != (T,):
                 raise ValueError(
@@ -1316,7 +1340,9 @@ def compiled_peaks(
     all evaluations. A signal that is not finite where the state is has the
     peak ``inf`` there. The peaks depend on the output grid only within
     that tolerance (at a smooth maximum about 1e-13 relative; at a corner,
-    such as a kink of a spline's curvature table, up to about 1e-8).
+    such as a kink of a spline's curvature table or a joint of two
+    clothoids, up to the signal's slope times the time tolerance, as
+    ``tests/test_baselines.py`` checks for a steering peak at such a joint).
 
     Parameters
     ----------
@@ -1362,16 +1388,12 @@ def compiled_peaks(
     """
     if numba is None:
         raise ImportError("compiled_peaks needs numba: pip install fws-control[fast]")
-    if law_code(gains) != 0:
-        raise ValueError(
-            "compiled_peaks computes the paper's law (SteeringGains); a "
-            "controller's: compiled_laws.controller_outputs"
-        )
     table = path if isinstance(path, CurvatureTable) else curvature_table(path)
     q = shared_parameters(
         vehicle, table, feedforward=feedforward, time_constant=time_constant,
         delay=solution.delay, model=model, tyre=tyre,
     )  # fmt: skip
+    breaks, coefs = _law_arrays(gains, path, table, q, solution.delay)
     speed = np.ascontiguousarray(speed, dtype=float).ravel()
     n = speed.size
     P = _run_parameters(gains, speed)
@@ -1394,7 +1416,7 @@ def compiled_peaks(
     with compiling("peaks"):
         top.peaks_batch(
             np.ascontiguousarray(solution.records), solution.offsets, Y0, P, q,
-            table.breaks, table.coefs, _rear_to_cg(vehicle), t_eval, signals,
+            breaks, coefs, _rear_to_cg(vehicle), t_eval, signals,
             np.ascontiguousarray(t_stop, dtype=float), values, times,
         )  # fmt: skip
     return values, times

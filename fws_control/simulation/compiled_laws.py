@@ -30,12 +30,16 @@ numpy :meth:`~fws_control.paths.Path.project`'s local Newton iteration
 
 The steering angles are then clipped, held at the angle limits and passed
 through the actuator with its rate limits exactly as the paper's law is.
-Signals and peaks of a controller's runs are computed by the numpy
-engine's :func:`~fws_control.simulation.engine.compute_outputs` and
+The signals and exact peaks of a controller's runs are compiled too
+(:func:`~fws_control.simulation.compiled.compiled_outputs`,
+:func:`~fws_control.simulation.compiled.compiled_peaks`), with the numpy
+engine's formulas: the analytic rate of a state-feedback law and, for the
+others, the central difference of
+:meth:`~fws_control.LateralController.steering_rate`. At a varying speed
+they are the numpy engine's
+:func:`~fws_control.simulation.engine.compute_outputs` and
 :func:`~fws_control.simulation.engine.exact_peaks` on each run's compiled
-dense output (:func:`controller_outputs`), so they are the numpy engine's
-formulas, including the central-difference steering rate of
-:meth:`~fws_control.LateralController.steering_rate`.
+dense output (:func:`controller_outputs`).
 """
 
 from __future__ import annotations

@@ -15,8 +15,11 @@ import math
 
 import numpy as np
 
+from ..lateral_controller import RATE_STEP
 from .compilation import jit
 from .compiled_laws import (
+    LAWS,
+    P_LAW,
     Q_CURVATURE_ROWS,
     Q_LAW,
     make_law_command,
@@ -80,6 +83,8 @@ from .compiled_speed import (
 # The names here are shared by the compiled_* modules; the public API of
 # the compiled engine is simulation.compiled (which re-exports them).
 __all__: list[str] = []
+
+_STATE_FEEDBACK = LAWS.index("state_feedback")
 
 # --------------------------------------------------------------------------
 # The closed loop
@@ -241,7 +246,8 @@ def dynamic_derivatives(V, kappa, e, th, vy, r, df, dr, q):
     return s_dot, e_dot, th_dot, vy_dot, r_dot
 
 
-_law_command = make_law_command(EQUATIONS, wrap_lap, jit)
+law_command = make_law_command(EQUATIONS, wrap_lap, jit)
+feedback_angle = EQUATIONS["feedback_angle"]
 
 
 @jit_inline
@@ -255,13 +261,83 @@ def follow_speed(t, s, p, q, breaks, coefs):
 
 
 @jit_inline
-def _raw_command(s, e, theta, kappa, p, q, breaks, coefs):
+def raw_command(s, e, theta, kappa, p, q, breaks, coefs):
     if WITH_LAW and q[Q_LAW] != 0.0:  # a controller's compiled law (compiled_laws)
-        return _law_command(s, e, theta, kappa, p, q, breaks, coefs)
+        return law_command(s, e, theta, kappa, p, q, breaks, coefs)
     cf, cr = feedback_command(e, theta, p[P_K1], p[P_K2], p[P_RATIO])
     if q[Q_FF] != 0.0:
         cf = cf + feedforward_angle(kappa, q)
     return cf, cr
+
+
+@jit_inline
+def rate_needs_curvature_slope(p, q):
+    """Whether :func:`command_rate` reads ``d kappa / ds``: the feedforward
+    of the paper's law or of a state-feedback law (the other laws' rates
+    re-read the curvature at the moved arc length)."""
+    if WITH_LAW and q[Q_LAW] != 0.0:
+        return q[Q_LAW] == _STATE_FEEDBACK and p[P_LAW + 4] != 0.0
+    return q[Q_FF] != 0.0
+
+
+@jit_inline
+def command_rate(s, e, th, s_dot, e_dot, th_dot, kappa, dkappa, raw_f, raw_r,
+                 p, q, breaks, coefs):  # fmt: skip
+    """Time derivative of the command along the motion, 0 where clipped.
+
+    As the numpy engine's ``ClosedLoop.command_rate``: the chain rule for
+    the paper's law and a state-feedback law (``dkappa``: the curvature's
+    slope at `s`, where :func:`rate_needs_curvature_slope`); for the other
+    laws the central difference of
+    :meth:`~fws_control.LateralController.steering_rate` (step
+    :data:`~fws_control.lateral_controller.RATE_STEP` along the motion, the
+    curvature re-read at the moved arc length, one-sided where the other
+    point lies off an open path's ends). ``raw_f, raw_r``: the unclipped
+    command at the state.
+    """
+    code = q[Q_LAW] if WITH_LAW else 0.0
+    if code == 0.0:
+        rf, rr = feedback_command(e_dot, th_dot, p[P_K1], p[P_K2], p[P_RATIO])
+        if q[Q_FF] != 0.0:
+            rf = rf + feedforward_rate(q[Q_WHEELBASE], kappa, dkappa * s_dot)
+    elif code == _STATE_FEEDBACK:
+        a = P_LAW
+        rf = feedback_angle(e_dot, th_dot, p[a], p[a + 1])
+        rr = feedback_angle(e_dot, th_dot, p[a + 2], p[a + 3])
+        if p[a + 4] != 0.0:
+            rf = rf + feedforward_rate(q[Q_WHEELBASE], kappa, dkappa * s_dot)
+    else:
+        h = RATE_STEP
+        lo, hi = q[Q_S_LO], q[Q_S_HI]
+        open_path = not q[Q_PERIOD] > 0.0 and math.isfinite(hi)
+        if open_path:
+            s = min(max(s, lo), hi)  # the arc length the numpy law is given
+        s_p, s_m = s + h * s_dot, s - h * s_dot
+        fp_f, fp_r = law_command(
+            s_p, e + h * e_dot, th + h * th_dot, curvature_at(s_p, q, breaks, coefs),
+            p, q, breaks, coefs,
+        )  # fmt: skip
+        fm_f, fm_r = law_command(
+            s_m, e + (-h) * e_dot, th + (-h) * th_dot,
+            curvature_at(s_m, q, breaks, coefs), p, q, breaks, coefs,
+        )  # fmt: skip
+        rf = (fp_f - fm_f) / (2 * h)
+        rr = (fp_r - fm_r) / (2 * h)
+        if open_path:
+            fwd = s + h * abs(s_dot) <= hi
+            bwd = s - h * abs(s_dot) >= lo
+            ahead = s_dot >= 0.0
+            lost_p = not fwd if ahead else not bwd
+            lost_m = not bwd if ahead else not fwd
+            if lost_p:
+                rf, rr = (raw_f - fm_f) / h, (raw_r - fm_r) / h
+            elif lost_m:
+                rf, rr = (fp_f - raw_f) / h, (fp_r - raw_r) / h
+    if abs(raw_f) > q[Q_MAX_F]:
+        rf = 0.0
+    if abs(raw_r) > q[Q_MAX_R]:
+        rr = 0.0
+    return rf, rr
 
 
 @jit_inline
@@ -272,7 +348,7 @@ def clipped_command(s, e, theta, kappa, p, q, breaks, coefs):
     by its mode (``p[4:6]``) rather than by min/max, so that the right-hand
     side is smooth between the located switches.
     """
-    cf, cr = _raw_command(s, e, theta, kappa, p, q, breaks, coefs)
+    cf, cr = raw_command(s, e, theta, kappa, p, q, breaks, coefs)
     mf, mr = q[Q_MAX_F], q[Q_MAX_R]
     if q[Q_SWITCH] != 0.0:
         if p[P_MODE] != 0.0:
@@ -291,7 +367,7 @@ def clip_values(y, p, q, breaks, coefs, out):
     if WITH_PROFILE and q[Q_PROFILE] != 0.0:
         follow_speed(p[P_SPEED_TIME], y[0], p, q, breaks, coefs)
     kappa = curvature_at(y[0], q, breaks, coefs)
-    raw_f, raw_r = _raw_command(y[0], y[1], y[2], kappa, p, q, breaks, coefs)
+    raw_f, raw_r = raw_command(y[0], y[1], y[2], kappa, p, q, breaks, coefs)
     out[0], out[1] = raw_f, raw_r
     out[4], out[5] = q[Q_MAX_F], q[Q_MAX_R]
     out[6], out[7] = q[Q_RATE_F], q[Q_RATE_R]
@@ -398,7 +474,7 @@ def closed_loop_jac(t, y, p, q, breaks, coefs, out):
     kappa, slope = curvature_and_rate(s, q, breaks, coefs)
     if q[Q_PERIOD] <= 0.0 and (s < q[Q_S_LO] or s > q[Q_S_HI]):
         slope = 0.0  # the open path's curvature is held outside its domain
-    cf, cr = _raw_command(s, e, th, kappa, p, q, breaks, coefs)
+    cf, cr = raw_command(s, e, th, kappa, p, q, breaks, coefs)
     wheelbase = q[Q_WHEELBASE]
     # d(cf, cr)/d(s, e, theta)
     cf_s = 0.0

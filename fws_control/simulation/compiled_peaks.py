@@ -21,7 +21,6 @@ from .compiled_layout import (
     P_SPEED,
     Q_DELAY,
     Q_DYNAMIC,
-    Q_FF,
     Q_MAX_F,
     Q_MAX_R,
     Q_TAU,
@@ -29,7 +28,7 @@ from .compiled_layout import (
     WITH_DYNAMIC,
     jit_inline,
 )
-from .compiled_loop import curvature_at, feedforward_angle
+from .compiled_loop import curvature_at, raw_command
 from .compiled_signals import (
     delayed_point_signals,
     dynamic_point_signals,
@@ -98,7 +97,7 @@ def _state_at(tt, rec, n_pc, y0, m, ytmp):
 
 
 @jit_inline
-def _peak_values(tt, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, out):
+def _peak_values(tt, rec, n_pc, y0, m, p, q, br, co, d_cg, ytmp, out):
     """|signal| of the six peak signals at `tt` on the run's dense output."""
     _state_at(tt, rec, n_pc, y0, m, ytmp)
     df_s, dr_s = 0.0, 0.0
@@ -106,16 +105,17 @@ def _peak_values(tt, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, out)
         df_s, dr_s = ytmp[3], ytmp[4]
     if WITH_DELAY and q[Q_DELAY] > 0.0:
         df, dr, rf, rr, lat, _, _, ok = delayed_point_signals(
-            tt, df_s, dr_s, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg
-        )
+            tt, df_s, dr_s, rec, n_pc, y0, m, p[P_SPEED], p[P_K1], p[P_K2],
+            p[P_RATIO], q, br, co, d_cg,
+        )  # fmt: skip
     elif WITH_DYNAMIC and q[Q_DYNAMIC] != 0.0:
         df, dr, rf, rr, lat, _, _, ok = dynamic_point_signals(
-            ytmp[0], ytmp[1], ytmp[2], df_s, dr_s, ytmp[m - 2], ytmp[m - 1], V, k1,
-            k2, a, q, br, co,
+            ytmp[0], ytmp[1], ytmp[2], df_s, dr_s, ytmp[m - 2], ytmp[m - 1], p, q,
+            br, co,
         )  # fmt: skip
     else:
         df, dr, rf, rr, lat, _, _, ok = point_signals(
-            ytmp[0], ytmp[1], ytmp[2], df_s, dr_s, V, k1, k2, a, q, br, co, d_cg
+            ytmp[0], ytmp[1], ytmp[2], df_s, dr_s, p, q, br, co, d_cg
         )
     out[0] = abs(ytmp[1])
     out[1] = abs(df)
@@ -135,11 +135,11 @@ def _peak_values(tt, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, out)
 
 
 @jit
-def _peak_value(tt, j, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals):
+def _peak_value(tt, j, rec, n_pc, y0, m, p, q, br, co, d_cg, ytmp, vals):
     """|signal j| at `tt`: :func:`_peak_values` computing only what j needs."""
     if j > 2 or (j > 0 and not q[Q_TAU] > 0.0 and q[Q_DELAY] > 0.0):
         # (_peak_values finds the state itself)
-        _peak_values(tt, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals)
+        _peak_values(tt, rec, n_pc, y0, m, p, q, br, co, d_cg, ytmp, vals)
         return vals[j]
     _state_at(tt, rec, n_pc, y0, m, ytmp)
     if j == 0:
@@ -149,19 +149,16 @@ def _peak_value(tt, j, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, va
     else:
         # the clipped commands, with the operations of point_signals
         kappa = curvature_at(ytmp[0], q, br, co)
-        fb = -k1 * ytmp[1] - k2 * ytmp[2]
+        raw_f, raw_r = raw_command(ytmp[0], ytmp[1], ytmp[2], kappa, p, q, br, co)
         if j == 1:
-            raw = fb
-            if q[Q_FF] != 0.0:
-                raw = fb + feedforward_angle(kappa, q)
-            v = abs(min(max(raw, -q[Q_MAX_F]), q[Q_MAX_F]))
+            v = abs(min(max(raw_f, -q[Q_MAX_F]), q[Q_MAX_F]))
         else:
-            v = abs(min(max(a * fb, -q[Q_MAX_R]), q[Q_MAX_R]))
+            v = abs(min(max(raw_r, -q[Q_MAX_R]), q[Q_MAX_R]))
     return v if math.isfinite(v) else np.inf
 
 
 @jit
-def _refine_peak(lo, hi, j, best, rec, n_pc, y0, m, V, k1, k2, a, q, br, co,
+def _refine_peak(lo, hi, j, best, rec, n_pc, y0, m, p, q, br, co,
                  d_cg, ytmp, vals):  # fmt: skip
     """Brent's bounded search for the largest |signal j| in [lo, hi].
 
@@ -177,7 +174,7 @@ def _refine_peak(lo, hi, j, best, rec, n_pc, y0, m, V, k1, k2, a, q, br, co,
     rat = 0.0
     e = 0.0
     x = xf
-    fx = -_peak_value(x, j, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals)
+    fx = -_peak_value(x, j, rec, n_pc, y0, m, p, q, br, co, d_cg, ytmp, vals)
     if -fx > best[0]:
         best[0], best[1] = -fx, x
     num = 1
@@ -219,9 +216,7 @@ def _refine_peak(lo, hi, j, best, rec, n_pc, y0, m, V, k1, k2, a, q, br, co,
             rat = golden * e
         si = 1.0 if rat >= 0.0 else -1.0
         x = xf + si * max(abs(rat), tol1)
-        fu = -_peak_value(
-            x, j, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals
-        )
+        fu = -_peak_value(x, j, rec, n_pc, y0, m, p, q, br, co, d_cg, ytmp, vals)
         if -fu > best[0]:
             best[0], best[1] = -fu, x
         num += 1
@@ -251,8 +246,8 @@ def _refine_peak(lo, hi, j, best, rec, n_pc, y0, m, V, k1, k2, a, q, br, co,
 
 
 @jit
-def _falls_from_end(end, other, f_end, f_other, j, best, rec, n_pc, y0, m, V,
-                    k1, k2, a, q, br, co, d_cg, ytmp, vals):  # fmt: skip
+def _falls_from_end(end, other, f_end, f_other, j, best, rec, n_pc, y0, m, p,
+                    q, br, co, d_cg, ytmp, vals):  # fmt: skip
     """True if |signal j| falls monotonically from `end` towards `other`.
 
     Checked at _N_PROBES interior points (5x finer than the nodes; updating
@@ -265,7 +260,7 @@ def _falls_from_end(end, other, f_end, f_other, j, best, rec, n_pc, y0, m, V,
     prev = f_end
     for r in range(1, _N_PROBES + 1):
         x = end + (r / (_N_PROBES + 1)) * (other - end)
-        v = _peak_value(x, j, rec, n_pc, y0, m, V, k1, k2, a, q, br, co, d_cg,
+        v = _peak_value(x, j, rec, n_pc, y0, m, p, q, br, co, d_cg,
                         ytmp, vals)  # fmt: skip
         if v > best[0]:
             best[0], best[1] = v, x
@@ -323,7 +318,7 @@ def peaks_batch(rec, offsets, Y0, P, q, br, co, d_cg, t_eval, signals, t_stop,
     cand = np.empty(_PEAK_CAND, dtype=np.int64)
     cval = np.empty(_PEAK_CAND)
     for i in range(n):
-        V, k1, k2, a = P[i, P_SPEED], P[i, P_K1], P[i, P_K2], P[i, P_RATIO]
+        p = P[i]
         pc = rec[offsets[i] : offsets[i + 1]]
         n_pc = pc.shape[0]
         ts = t_stop[i]
@@ -387,7 +382,7 @@ def peaks_batch(rec, offsets, Y0, P, q, br, co, d_cg, t_eval, signals, t_stop,
                 for j in range(N_PEAK):
                     node_v[j, k] = _sample_value(signals, i, j, kk)
                 continue
-            _peak_values(times_n[k], pc, n_pc, Y0[i], m, V, k1, k2, a, q, br, co,
+            _peak_values(times_n[k], pc, n_pc, Y0[i], m, p, q, br, co,
                          d_cg, ytmp, vals)  # fmt: skip
             for j in range(N_PEAK):
                 node_v[j, k] = vals[j]
@@ -434,33 +429,33 @@ def peaks_batch(rec, offsets, Y0, P, q, br, co, d_cg, t_eval, signals, t_stop,
                 # the signal rises again inside the bracket
                 if k == 0 and _falls_from_end(
                     lo, hi, row[0], row[k_hi], j, best, pc, n_pc,
-                    Y0[i], m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals,
+                    Y0[i], m, p, q, br, co, d_cg, ytmp, vals,
                 ):  # fmt: skip
                     continue
                 if k == K - 1 and _falls_from_end(
                     hi, lo, row[k], row[k_lo], j, best, pc, n_pc,
-                    Y0[i], m, V, k1, k2, a, q, br, co, d_cg, ytmp, vals,
+                    Y0[i], m, p, q, br, co, d_cg, ytmp, vals,
                 ):  # fmt: skip
                     continue
-                _refine_peak(lo, hi, j, best, pc, n_pc, Y0[i], m, V, k1, k2,
-                             a, q, br, co, d_cg, ytmp, vals)  # fmt: skip
+                _refine_peak(lo, hi, j, best, pc, n_pc, Y0[i], m, p, q, br,
+                             co, d_cg, ytmp, vals)  # fmt: skip
             if ks >= 0 and np.isfinite(sv):
                 lo = t_eval[max(ks - 1, 0)]
                 hi = max(min(t_eval[min(ks + 1, T - 1)], ts), lo)
                 if not hi > lo:
                     pass
                 elif t_eval[ks] == lo and _falls_from_end(
-                    lo, hi, sv, -np.inf, j, best, pc, n_pc, Y0[i], m, V, k1, k2,
-                    a, q, br, co, d_cg, ytmp, vals,
+                    lo, hi, sv, -np.inf, j, best, pc, n_pc, Y0[i], m, p, q, br,
+                    co, d_cg, ytmp, vals,
                 ):  # fmt: skip
                     pass
                 elif t_eval[ks] == hi and _falls_from_end(
-                    hi, lo, sv, -np.inf, j, best, pc, n_pc, Y0[i], m, V, k1, k2,
-                    a, q, br, co, d_cg, ytmp, vals,
+                    hi, lo, sv, -np.inf, j, best, pc, n_pc, Y0[i], m, p, q, br,
+                    co, d_cg, ytmp, vals,
                 ):  # fmt: skip
                     pass
                 else:
-                    _refine_peak(lo, hi, j, best, pc, n_pc, Y0[i], m, V, k1, k2,
-                                 a, q, br, co, d_cg, ytmp, vals)  # fmt: skip
+                    _refine_peak(lo, hi, j, best, pc, n_pc, Y0[i], m, p, q, br,
+                                 co, d_cg, ytmp, vals)  # fmt: skip
             values[i, j] = best[0]
             times[i, j] = best[1]

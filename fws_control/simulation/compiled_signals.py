@@ -2,9 +2,10 @@
 
 The signals of :data:`~fws_control.simulation.engine.SIGNALS` of every run
 and output time, with the operations of
-:func:`~fws_control.simulation.engine.compute_outputs` (the paper's law;
-the kinematic and the dynamic model; an input delay's law on the delayed
-state), for :func:`~fws_control.simulation.compiled.compiled_outputs`.
+:func:`~fws_control.simulation.engine.compute_outputs` (the paper's law or
+a controller's compiled law; the kinematic and the dynamic model; an input
+delay's paper law on the delayed state), for
+:func:`~fws_control.simulation.compiled.compiled_outputs`.
 """
 
 from __future__ import annotations
@@ -47,10 +48,13 @@ from .compiled_layout import (
     yaw_rate,
 )
 from .compiled_loop import (
+    command_rate,
     curvature_and_rate,
     curvature_at,
     dynamic_derivatives,
     feedforward_angle,
+    rate_needs_curvature_slope,
+    raw_command,
     wrap_lap,
 )
 
@@ -60,25 +64,24 @@ __all__: list[str] = []
 
 
 @jit_inline
-def point_signals(s, e, th, df_s, dr_s, V, k1, k2, a, q, breaks, coefs, d_cg):
+def point_signals(s, e, th, df_s, dr_s, p, q, breaks, coefs, d_cg):
     """The signals of one state with the operations of compute_outputs.
 
     Returns ``(delta_f, delta_r, their rates, lateral_accel, v_y, yaw_rate,
     ok)``; ``ok`` is False where ``|delta_f| >= pi/2`` (the rates, the
     acceleration, ``v_y`` and the yaw rate are then NaN in a result).
-    ``df_s, dr_s``: the actuator states (unused without an actuator).
+    ``df_s, dr_s``: the actuator states (unused without an actuator); `p`:
+    the run's parameters (its speed and its law's gains).
     """
+    V = p[P_SPEED]
     f = q[Q_WHEELBASE]
     mf, mr = q[Q_MAX_F], q[Q_MAX_R]
     tau = q[Q_TAU]
-    ff = q[Q_FF] != 0.0
-    if ff and not tau > 0.0:  # the feedforward's rate needs d kappa / ds
+    if not tau > 0.0 and rate_needs_curvature_slope(p, q):
         kappa, dkappa = curvature_and_rate(s, q, breaks, coefs)
     else:
         kappa, dkappa = curvature_at(s, q, breaks, coefs), 0.0
-    raw_f, raw_r = feedback_command(e, th, k1, k2, a)
-    if ff:
-        raw_f = raw_f + feedforward_angle(kappa, q)
+    raw_f, raw_r = raw_command(s, e, th, kappa, p, q, breaks, coefs)
     cf = min(max(raw_f, -mf), mf)
     cr = min(max(raw_r, -mr), mr)
     if tau > 0.0:
@@ -92,13 +95,8 @@ def point_signals(s, e, th, df_s, dr_s, V, k1, k2, a, q, breaks, coefs, d_cg):
         rr = min(max((cr - dr) / tau, -q[Q_RATE_R]), q[Q_RATE_R])
     else:
         # steering_command_rate: chain rule, 0 where an angle is clipped
-        rf, rr = feedback_command(e_dot, th_dot, k1, k2, a)
-        if ff:
-            rf = rf + feedforward_rate(f, kappa, dkappa * s_dot)
-        if abs(raw_f) > mf:
-            rf = 0.0
-        if abs(raw_r) > mr:
-            rr = 0.0
+        rf, rr = command_rate(s, e, th, s_dot, e_dot, th_dot, kappa, dkappa,
+                              raw_f, raw_r, p, q, breaks, coefs)  # fmt: skip
     if not abs(df) < 0.5 * math.pi:
         return df, dr, rf, rr, np.nan, np.nan, psi_dot, False
     psi_ddot = yaw_acceleration(V, f, df, dr, rf, rr)
@@ -108,25 +106,21 @@ def point_signals(s, e, th, df_s, dr_s, V, k1, k2, a, q, breaks, coefs, d_cg):
 
 
 @jit_inline
-def dynamic_point_signals(s, e, th, df_s, dr_s, vy, r, V, k1, k2, a, q, breaks,
-                           coefs):  # fmt: skip
+def dynamic_point_signals(s, e, th, df_s, dr_s, vy, r, p, q, breaks, coefs):
     """The signals of one state of the dynamic model, as compute_outputs.
 
     Returns ``(delta_f, delta_r, their rates, lateral_accel, slip_front,
     slip_rear, ok)``: the acceleration of G along the body's lateral axis
     ``dv_y/dt + u r`` (NaN where ``|delta_f| >= pi/2``, as the rates).
     """
-    f = q[Q_WHEELBASE]
+    V = p[P_SPEED]
     mf, mr = q[Q_MAX_F], q[Q_MAX_R]
     tau = q[Q_TAU]
-    ff = q[Q_FF] != 0.0
-    if ff and not tau > 0.0:
+    if not tau > 0.0 and rate_needs_curvature_slope(p, q):
         kappa, dkappa = curvature_and_rate(s, q, breaks, coefs)
     else:
         kappa, dkappa = curvature_at(s, q, breaks, coefs), 0.0
-    raw_f, raw_r = feedback_command(e, th, k1, k2, a)
-    if ff:
-        raw_f = raw_f + feedforward_angle(kappa, q)
+    raw_f, raw_r = raw_command(s, e, th, kappa, p, q, breaks, coefs)
     cf = min(max(raw_f, -mf), mf)
     cr = min(max(raw_r, -mr), mr)
     df, dr = (df_s, dr_s) if tau > 0.0 else (cf, cr)
@@ -137,13 +131,8 @@ def dynamic_point_signals(s, e, th, df_s, dr_s, vy, r, V, k1, k2, a, q, breaks,
         rf = min(max((cf - df) / tau, -q[Q_RATE_F]), q[Q_RATE_F])
         rr = min(max((cr - dr) / tau, -q[Q_RATE_R]), q[Q_RATE_R])
     else:
-        rf, rr = feedback_command(e_dot, th_dot, k1, k2, a)
-        if ff:
-            rf = rf + feedforward_rate(f, kappa, dkappa * s_dot)
-        if abs(raw_f) > mf:
-            rf = 0.0
-        if abs(raw_r) > mr:
-            rr = 0.0
+        rf, rr = command_rate(s, e, th, s_dot, e_dot, th_dot, kappa, dkappa,
+                              raw_f, raw_r, p, q, breaks, coefs)  # fmt: skip
     alpha_f, alpha_r = slip_angles(V, q[Q_L_F], q[Q_L_R], vy, r, df, dr)
     if not abs(df) < 0.5 * math.pi:
         return df, dr, np.nan, np.nan, np.nan, alpha_f, alpha_r, False
@@ -294,8 +283,7 @@ def signals_batch(states, P, q, breaks, coefs, d_cg, pose, sig):
     c0, s0 = math.cos(psi0), math.sin(psi0)
     period = q[Q_PERIOD]
     for i in range(n):
-        V = P[i, P_SPEED]
-        k1, k2, a = P[i, P_K1], P[i, P_K2], P[i, P_RATIO]
+        p = P[i]
         for k in range(T):
             s = states[i, 0, k]
             if not np.isfinite(s):
@@ -312,7 +300,7 @@ def signals_batch(states, P, q, breaks, coefs, d_cg, pose, sig):
                 # v_y and the yaw rate are states, the slip angles signals
                 vy, psi_dot = states[i, m - 2, k], states[i, m - 1, k]
                 df, dr, rf, rr, lat, slip_f, slip_r, ok = dynamic_point_signals(
-                    s, e, th, df_s, dr_s, vy, psi_dot, V, k1, k2, a, q, breaks, coefs
+                    s, e, th, df_s, dr_s, vy, psi_dot, p, q, breaks, coefs
                 )
                 sig[i, 8, k] = rf
                 sig[i, 9, k] = rr
@@ -323,7 +311,7 @@ def signals_batch(states, P, q, breaks, coefs, d_cg, pose, sig):
                 sig[i, 14, k] = slip_r
             else:
                 df, dr, rf, rr, lat, vy, psi_dot, ok = point_signals(
-                    s, e, th, df_s, dr_s, V, k1, k2, a, q, breaks, coefs, d_cg
+                    s, e, th, df_s, dr_s, p, q, breaks, coefs, d_cg
                 )
             sig[i, 3, k] = s
             sig[i, 4, k] = e

@@ -218,8 +218,15 @@ def _run_compiled(
     from .compiled import compiled_method, compiling
 
     # the first compilation in a process is announced once, with the time
-    # of the three stages this call compiles (nothing when they are cached)
-    with compiling(compiled_method(opts["method"]), "signals", "peaks"):
+    # of the three stages this call compiles (nothing when they are cached),
+    # those of the kernels of every feature if the call uses one
+    varying = getattr(opts.get("profile"), "is_constant", True) is False
+    features = (
+        ctrl is not None or bool(opts.get("delay")) or opts.get("model") == "dynamic"
+        or varying
+    )  # fmt: skip
+    stages = (compiled_method(opts["method"]), "signals", "peaks")
+    with compiling(*stages, features=features):
         return _run_compiled_stages(
             vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ctrl, out
         )
@@ -276,8 +283,9 @@ def _run_compiled_stages(
         profile=profile,
         schedule=opts.get("schedule"),
     )
-    if ctrl is not None:
-        # the numpy engine's signals and peaks of the compiled solution
+    if ctrl is not None and profile is not None:
+        # a controller at a varying speed: the numpy engine's signals and
+        # peaks of the compiled solution
         from .compiled_laws import controller_outputs
 
         signals, peaks, peak_times = controller_outputs(
@@ -313,7 +321,7 @@ def _run_compiled_stages(
     )
     peaks, peak_times = compiled_peaks(
         vehicle,
-        table,
+        table if ctrl is None else path,  # (a law may need the path's position)
         g,
         speed=speed,
         feedforward=feedforward,
