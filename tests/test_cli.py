@@ -1,4 +1,10 @@
-"""The fws-control command line, run as `python -m fws_control` in a subprocess."""
+"""The fws-control command line, run as `python -m fws_control` in a subprocess.
+
+A subprocess where the process is what is checked (the entry point, exit
+status and stderr of a fresh interpreter, files a process writes); elsewhere
+in-process through the same main(), as importing the library dominates a
+subprocess.
+"""
 
 import csv
 import math
@@ -111,20 +117,13 @@ def test_gains_curved_shows_paper_model_error(capsys):
 
 
 def test_chart_rlocus_write_png(tmp_path, capsys):
+    # In-process: a process writing a PNG is test_simulate_png_and_csv's.
     out = tmp_path / "c.png"
-    p = run(
-        "chart",
-        "--speed",
-        20,
-        "--curvature",
-        0.01,
-        "--ratio",
-        0.5,
-        "--points",
-        101,
-        "--out",
-        out,
-    )
+    p = _in_process(
+        ["chart", "--speed", 20, "--curvature", 0.01, "--ratio", 0.5,
+         "--points", 101, "--out", out],
+        capsys,
+    )  # fmt: skip
     assert p.returncode == 0, p.stderr
     assert out.read_bytes()[:8] == PNG
     p = _in_process(
@@ -132,7 +131,7 @@ def test_chart_rlocus_write_png(tmp_path, capsys):
     )
     assert p.returncode == 0, p.stderr
     assert (tmp_path / "f2.png").read_bytes()[:8] == PNG
-    p = run("rlocus", "--out", tmp_path / "r.png")
+    p = _in_process(["rlocus", "--out", tmp_path / "r.png"], capsys)
     assert p.returncode == 0, p.stderr
     assert (tmp_path / "r.png").read_bytes()[:8] == PNG
     # L(s) of a double-root design: (-2 l0 s + l0^2 - V^2 kappa^2)/(s^2 + V^2 kappa^2)
@@ -302,18 +301,21 @@ def test_delay_margin_closed_form_and_bad_lags(capsys):
         assert fragment in err[0], err
 
 
-# Each kind of failure once through a real subprocess ...
+# Each kind of failure once through a real subprocess (reproduce: a fresh
+# process importing the whole figure stack still prints one line) ...
 BAD = [
     (["gains", "--speed", "abc"], "--speed"),  # argparse type error
     (["gains", "--speed", "0"], "speed"),  # ValueError from the library
     (["gains", "--ratio", "1", "--curvature", "0"], "uncontrollable"),
-    (["chart", "--out", "chart.txt"], ".png"),
     (["reproduce", "--only", "fig99", "--no-progress"], "fig99"),
     (["nonsense"], "invalid choice"),
 ]
 
 # ... and the other cases in-process through the same main().
 BAD_IN_PROCESS = [
+    # a ValueError of the command line itself, as "--speed 0" above is one of
+    # the library (a subprocess of chart imports matplotlib before the check)
+    (["chart", "--out", "chart.txt"], ".png"),
     (["gains", "--speed", "nan"], "--speed"),
     (["gains", "--pole", "1"], "pole"),
     (["gains", "--model", "linear"], "--model"),
@@ -350,9 +352,13 @@ def test_bad_input_in_process(args, fragment, tmp_path, monkeypatch, capsys):
     assert not list(tmp_path.glob("*.png"))
 
 
-def test_reproduce_quick_writes_every_figure(tmp_path):
+def test_reproduce_quick_writes_every_figure(tmp_path, capsys):
+    # In-process: a reproduce process is checked by test_bad_input_one_line_error
+    # here and by the interrupt and lock tests of test_cli_reliability.py.
     out = tmp_path / "figures"
-    p = run("reproduce", "--out", out, "--quick", "--no-progress", "--dpi", 40)
+    p = _in_process(
+        ["reproduce", "--out", out, "--quick", "--no-progress", "--dpi", 40], capsys
+    )
     assert p.returncode == 0, p.stderr
     expected = [f"fig{n}.png" for n in range(2, 10)] + [
         "extra_actuator.png",
