@@ -15,10 +15,6 @@ import numpy as np
 from .compilation import jit
 from .compiled_layout import (
     NPOW,
-    P_K1,
-    P_K2,
-    P_RATIO,
-    P_SPEED,
     Q_DELAY,
     Q_DYNAMIC,
     Q_MAX_F,
@@ -105,9 +101,8 @@ def _peak_values(tt, rec, n_pc, y0, m, p, q, br, co, d_cg, ytmp, out):
         df_s, dr_s = ytmp[3], ytmp[4]
     if WITH_DELAY and q[Q_DELAY] > 0.0:
         df, dr, rf, rr, lat, _, _, ok = delayed_point_signals(
-            tt, df_s, dr_s, rec, n_pc, y0, m, p[P_SPEED], p[P_K1], p[P_K2],
-            p[P_RATIO], q, br, co, d_cg,
-        )  # fmt: skip
+            tt, df_s, dr_s, rec, n_pc, y0, m, p, q, br, co, d_cg
+        )
     elif WITH_DYNAMIC and q[Q_DYNAMIC] != 0.0:
         df, dr, rf, rr, lat, _, _, ok = dynamic_point_signals(
             ytmp[0], ytmp[1], ytmp[2], df_s, dr_s, ytmp[m - 2], ytmp[m - 1], p, q,

@@ -18,13 +18,9 @@ from .compilation import jit
 from .compiled_layout import (
     NPOW,
     NSIG,
-    P_K1,
-    P_K2,
-    P_RATIO,
     P_SPEED,
     Q_DELAY,
     Q_DYNAMIC,
-    Q_FF,
     Q_L_F,
     Q_L_R,
     Q_MAX_F,
@@ -38,8 +34,6 @@ from .compiled_layout import (
     Q_WHEELBASE,
     WITH_DYNAMIC,
     cg_lateral_velocity,
-    feedback_command,
-    feedforward_rate,
     jit_inline,
     lateral_acceleration,
     path_frame_derivatives,
@@ -52,7 +46,6 @@ from .compiled_loop import (
     curvature_and_rate,
     curvature_at,
     dynamic_derivatives,
-    feedforward_angle,
     rate_needs_curvature_slope,
     raw_command,
     wrap_lap,
@@ -168,29 +161,27 @@ def _path_state_at(tt, rec, n_pc, y0, m):
 
 
 @jit_inline
-def delayed_point_signals(tt, df_s, dr_s, rec, n_pc, y0, m, V, k1, k2, a, q,
-                           breaks, coefs, d_cg):  # fmt: skip
+def delayed_point_signals(tt, df_s, dr_s, rec, n_pc, y0, m, p, q, breaks, coefs,
+                          d_cg):  # fmt: skip
     """:func:`point_signals` with an input delay, as compute_outputs with
     the delayed rows: the law acts on the state at ``tt - delay`` (`rec`,
     `y0`: the run's dense output and initial state), whose rates are its
     closed-loop derivative there (the law then on the state at ``tt - 2
     delay``), 0 before the start; ``df_s, dr_s``: the run's actuator states
-    at `tt`.
+    at `tt`; `p`: the run's parameters.
     """
+    V = p[P_SPEED]
     f = q[Q_WHEELBASE]
     mf, mr = q[Q_MAX_F], q[Q_MAX_R]
     tau = q[Q_TAU]
-    ff = q[Q_FF] != 0.0
     delay = q[Q_DELAY]
     td = tt - delay
     s_m, e_m, th_m = _path_state_at(td, rec, n_pc, y0, m)
-    if ff and not tau > 0.0:
+    if not tau > 0.0 and rate_needs_curvature_slope(p, q):
         kappa, dkappa = curvature_and_rate(s_m, q, breaks, coefs)
     else:
         kappa, dkappa = curvature_at(s_m, q, breaks, coefs), 0.0
-    raw_f, raw_r = feedback_command(e_m, th_m, k1, k2, a)
-    if ff:
-        raw_f = raw_f + feedforward_angle(kappa, q)
+    raw_f, raw_r = raw_command(s_m, e_m, th_m, kappa, p, q, breaks, coefs)
     cf = min(max(raw_f, -mf), mf)
     cr = min(max(raw_r, -mr), mr)
     if tau > 0.0:
@@ -204,21 +195,14 @@ def delayed_point_signals(tt, df_s, dr_s, rec, n_pc, y0, m, V, k1, k2, a, q,
         if n_pc > 0 and td > rec[0, 0]:
             s2, e2, th2 = _path_state_at(td - delay, rec, n_pc, y0, m)
             kappa2 = curvature_at(s2, q, breaks, coefs)
-            c2f, c2r = feedback_command(e2, th2, k1, k2, a)
-            if ff:
-                c2f = c2f + feedforward_angle(kappa2, q)
+            c2f, c2r = raw_command(s2, e2, th2, kappa2, p, q, breaks, coefs)
             c2f = min(max(c2f, -mf), mf)
             c2r = min(max(c2r, -mr), mr)
             s_dot, e_dot, th_dot = path_frame_derivatives(
                 V, f, kappa, e_m, th_m, c2f, c2r
             )
-        rf, rr = feedback_command(e_dot, th_dot, k1, k2, a)
-        if ff:
-            rf = rf + feedforward_rate(f, kappa, dkappa * s_dot)
-        if abs(raw_f) > mf:
-            rf = 0.0
-        if abs(raw_r) > mr:
-            rr = 0.0
+        rf, rr = command_rate(s_m, e_m, th_m, s_dot, e_dot, th_dot, kappa,
+                              dkappa, raw_f, raw_r, p, q, breaks, coefs)  # fmt: skip
     psi_dot = yaw_rate(V, f, df, dr)
     if not abs(df) < 0.5 * math.pi:
         return df, dr, rf, rr, np.nan, np.nan, psi_dot, False
@@ -237,8 +221,6 @@ def delayed_signals_batch(states, P, q, breaks, coefs, d_cg, rec, offsets, Y0,
     # slip angles do not depend on the law)
     n, m, T = states.shape
     for i in range(n):
-        V = P[i, P_SPEED]
-        k1, k2, a = P[i, P_K1], P[i, P_K2], P[i, P_RATIO]
         pc = rec[offsets[i] : offsets[i + 1]]
         n_pc = pc.shape[0]
         for k in range(T):
@@ -248,8 +230,8 @@ def delayed_signals_batch(states, P, q, breaks, coefs, d_cg, rec, offsets, Y0,
             if q[Q_TAU] > 0.0:
                 df_s, dr_s = states[i, 3, k], states[i, 4, k]
             df, dr, rf, rr, lat, vy, psi_dot, ok = delayed_point_signals(
-                t_eval[k], df_s, dr_s, pc, n_pc, Y0[i], m, V,
-                k1, k2, a, q, breaks, coefs, d_cg,
+                t_eval[k], df_s, dr_s, pc, n_pc, Y0[i], m, P[i], q, breaks,
+                coefs, d_cg,
             )  # fmt: skip
             sig[i, 6, k] = df
             sig[i, 7, k] = dr
