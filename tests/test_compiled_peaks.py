@@ -416,11 +416,15 @@ def test_exact_peaks_as_numpy_engine_random(ratio, pole, e0, psi0, tau, dt):
     """Random designs, initial poses, actuator lags and output steps on the
     curve: the two engines' exact peaks agree to 1e-9 (relative, and
     absolute for a peak near 0: starting on the path, e stays at the
-    solvers' own error, 4.5e-11 m on the numpy engine, 4e-13 m on the
-    compiled one), whatever the output step; 1e-8 for the lateral
-    acceleration of a violent transient (a = 0, lambda0 = -3, e0 = 0.25 m,
-    psi0 = 0.5 rad, lag 0.05 s: a 916 m/s^2 peak on which the two
-    integrations, each at rtol 1e-10, differ by 2.3e-9 relative)."""
+    solvers' own error, up to 4.5e-11 m on the numpy engine and 1.3e-10 m
+    on the compiled one, a burst at 5-6 s for a = 0.5, lambda0 = -3, which
+    that design's gains turn into steering rates of 1.6e-9 rad/s: 1e-8
+    absolute for the rates), whatever the output step; 1e-8 for the lateral
+    acceleration, the second derivative of the motion, on which the two
+    integrations, each at rtol 1e-10, differ by up to 2.3e-9 relative
+    (measured on 80 random cases of these ranges, seed 5, and on a violent
+    transient: a = 0, lambda0 = -3, e0 = 0.25 m, psi0 = 0.5 rad, lag
+    0.05 s, a 916 m/s^2 peak)."""
     g = _gains(VEH, ratio=ratio, pole=pole)
     kw = dict(initial_state=(0.0, e0, psi0), duration=8.0, dt=dt)
     plant = fws.LateralPlant(VEH, speed=5.0, steering_lag=tau)
@@ -431,5 +435,6 @@ def test_exact_peaks_as_numpy_engine_random(ratio, pole, e0, psi0, tau, dt):
         return
     for sig in PEAK_SIGNALS:
         p, r = getattr(got.peaks, sig).value, getattr(ref.peaks, sig).value
-        rel = 1e-8 if abs(r) > 100.0 else 1e-9
-        assert p == pytest.approx(r, rel=rel, abs=1e-9), sig
+        rel = 1e-8 if sig == "lateral_accel" else 1e-9
+        noise = 1e-8 if sig.endswith("_rate") else 1e-9
+        assert p == pytest.approx(r, rel=rel, abs=noise), sig

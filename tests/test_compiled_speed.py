@@ -171,7 +171,12 @@ def test_scenarios_agree_with_the_numpy_engine(scenario, label):
                                rtol=1e-9)  # fmt: skip
     np.testing.assert_allclose(a.longitudinal_accel, b.longitudinal_accel,
                                rtol=1e-9, atol=1e-9)  # fmt: skip
-    np.testing.assert_allclose(a.friction_usage, b.friction_usage, rtol=1e-7, atol=1e-7)
+    # friction usage |a| / (mu g): the engines' lateral accelerations differ
+    # most in the parking-lot exit's transient at 1.7-2.1 s, by up to 1.2e-6
+    # m/s^2 (measured on a Cascade Lake CPU: up to 1.1e-7 of usage; 4.8e-8
+    # with numpy's and OpenBLAS's SIMD loops off), the tyre forces amplifying
+    # a difference of the body's states that each rtol of 1e-10 allows
+    np.testing.assert_allclose(a.friction_usage, b.friction_usage, rtol=1e-7, atol=5e-7)
     assert np.array_equal(a.friction_exceeded, b.friction_exceeded)
     np.testing.assert_allclose(a.delta_r_rate, b.delta_r_rate, atol=1e-7)
     for name in ("e", "lateral_accel", "delta_r"):

@@ -183,7 +183,12 @@ def test_free_ratio_does_at_least_as_well(design):
     plant = fws.LateralPlant(VEH, speed=V, steering_lag=LAG)
     free = fws.most_stable_gains(plant, delay=TAU, ratio=0.0, ratio_bounds=(-0.5, 0.5))
     assert -0.5 <= free.gains.ratio <= 0.5
-    assert free.abscissa <= design.abscissa + 1e-6
+    # at least as well, to the abscissa's own accuracy: at the optimum three
+    # roots meet, each found to about eps^(1/3) (the 2e-5 of the dense
+    # Newton comparisons here). Where the nonsmooth search ends depends on
+    # the rounding of the CPU's linear algebra: measured 2.3e-6 above the
+    # fixed ratio's design on a Cascade Lake CPU, within 1e-6 on others
+    assert free.abscissa <= design.abscissa + 2e-5
     ref = dense_newton_abscissa(
         *quasi(float(free.gains.k1), float(free.gains.k2), float(free.gains.ratio)),
         TAU,
