@@ -1450,9 +1450,6 @@ def _write_csv(res, path: Path, *, gains, speed: float, curvature: float) -> Non
 
 
 def _cmd_compare(args) -> int:
-    import matplotlib.pyplot as plt
-
-    from .controller_comparison import compare, default_controllers
     from .manoeuvres import (
         constant_radius,
         double_lane_change,
@@ -1498,6 +1495,12 @@ def _cmd_compare(args) -> int:
             f"--tyre {args.tyre} applies only to --model dynamic (the kinematic "
             "model has no tyres)"
         )
+    # imported once the arguments are checked: python-control's import
+    # (about 1.5 s of CPU) is not paid for a mistyped option
+    import matplotlib.pyplot as plt
+
+    from .controller_comparison import compare, default_controllers
+
     ctrls = default_controllers(
         veh, speed=args.speed, ratio=args.ratio, pole=args.pole, delay=args.delay
     )
