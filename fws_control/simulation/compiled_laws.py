@@ -365,11 +365,12 @@ def initial_command(vehicle, path, controller, z0, kappa, speed):
     return np.broadcast_to(df, (n,)), np.broadcast_to(dr, (n,))
 
 
-def make_law_command(eqs: dict, wrap_lap, jit):
+def make_law_command(eqs: dict, wrap_lap, table_piece, jit):
     """The compiled law ``(s, e, theta, kappa, p, q, breaks, coefs) -> (cf, cr)``.
 
     Built from the compiled equations `eqs` (``compiled_layout.EQUATIONS``), the
-    lap wrap of closed paths and the engine's decorator, for the law whose
+    lap wrap of closed paths, the search of a table's piece
+    (``compiled_layout.table_piece``) and the engine's decorator, for the law whose
     code is ``q[Q_LAW]`` (1-4); unclipped angles. Called, not inlined: a
     copy of the projection in every kernel multiplied the compilation time.
     """
@@ -402,8 +403,7 @@ def make_law_command(eqs: dict, wrap_lap, jit):
         b0 = int(q[Q_GEOMETRY_BREAK])
         r0 = int(q[Q_GEOMETRY_ROW])
         n = int(q[Q_GEOMETRY_PIECES])
-        k = np.searchsorted(breaks[b0 : b0 + n + 1], s, side="right") - 1
-        k = min(max(k, 0), n - 1)
+        k = table_piece(s, breaks, b0, n) - b0
         d = s - breaks[b0 + k]
         rx, ry, rp = r0 + k, r0 + n + k, r0 + 2 * n + k
         x = coefs[rx, 0] + d * (coefs[rx, 1] + d * (coefs[rx, 2] + d * coefs[rx, 3]))

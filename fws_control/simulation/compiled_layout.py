@@ -55,6 +55,34 @@ def jit_inline(fn):
     return jit(fn, inline="always")
 
 
+@jit_inline
+def table_piece(x, breaks, row, pieces):
+    """The piece ``row + j`` of a table holding `x`: ``searchsorted(...,
+    side="right") - 1`` on ``breaks[row : row + pieces + 1]``, clipped to
+    ``[row, row + pieces - 1]``.
+
+    The tables of a run share one ``breaks`` array (the curvature's rows
+    first, then a law's geometry or a speed profile), so each search keeps
+    to its own rows. A binary search over them, not ``np.searchsorted`` on
+    a slice: the slice's array view cost 35 ns at each evaluation of the
+    right-hand side (170 instead of 135 ns on the paper's curve), a fifth
+    of it.
+    """
+    lo, hi = row, row + pieces
+    # invariant: breaks[lo] <= x < breaks[hi] (or x beyond an end)
+    if x < breaks[lo]:
+        return row
+    if x >= breaks[hi]:
+        return row + pieces - 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if breaks[mid] <= x:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
 # The sizes of scipy's DOP853 tableau that the layouts below use (the
 # tableau itself: compiled_dop853)
 NS = _dop.N_STAGES  # 12

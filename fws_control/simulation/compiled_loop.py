@@ -73,6 +73,7 @@ from .compiled_layout import (
     magic_tyre_force,
     path_frame_derivatives,
     slip_angles,
+    table_piece,
 )
 from .compiled_speed import (
     P_SPEED_TIME,
@@ -136,9 +137,7 @@ def curvature_at(s, q, breaks, coefs):
         # open paths: clipped, as the numpy engine does for trial stages
         s = min(max(s, q[Q_S_LO]), q[Q_S_HI])
     # (other tables follow the curvature's rows in breaks and coefs)
-    rows = int(q[Q_CURVATURE_ROWS])
-    k = np.searchsorted(breaks[: rows + 1], s, side="right") - 1
-    k = min(max(k, 0), rows - 1)
+    k = table_piece(s, breaks, 0, int(q[Q_CURVATURE_ROWS]))
     d = s - breaks[k]
     return coefs[k, 0] + d * (coefs[k, 1] + d * (coefs[k, 2] + d * coefs[k, 3]))
 
@@ -246,7 +245,7 @@ def dynamic_derivatives(V, kappa, e, th, vy, r, df, dr, q):
     return s_dot, e_dot, th_dot, vy_dot, r_dot
 
 
-law_command = make_law_command(EQUATIONS, wrap_lap, jit)
+law_command = make_law_command(EQUATIONS, wrap_lap, table_piece, jit)
 feedback_angle = EQUATIONS["feedback_angle"]
 
 
@@ -558,9 +557,7 @@ def curvature_and_rate(s, q, breaks, coefs):
             s = 0.0
     else:
         s = min(max(s, q[Q_S_LO]), q[Q_S_HI])
-    rows = int(q[Q_CURVATURE_ROWS])
-    k = np.searchsorted(breaks[: rows + 1], s, side="right") - 1
-    k = min(max(k, 0), rows - 1)
+    k = table_piece(s, breaks, 0, int(q[Q_CURVATURE_ROWS]))
     d = s - breaks[k]
     kappa = coefs[k, 0] + d * (coefs[k, 1] + d * (coefs[k, 2] + d * coefs[k, 3]))
     return kappa, coefs[k, 1] + d * (2.0 * coefs[k, 2] + d * 3.0 * coefs[k, 3])

@@ -54,6 +54,7 @@ import numpy as np
 from .. import equations
 from ..speed_profile import SpeedProfile
 from .compilation import jit
+from .compiled_layout import table_piece
 
 if TYPE_CHECKING:
     from ..schedule import GainSchedule
@@ -227,25 +228,6 @@ def speed_tables(
 
 
 @jit
-def _piece(x, breaks, row, pieces):
-    """The piece ``row + j`` holding `x` (``searchsorted(..., 'right') - 1``
-    on the table's breaks, within ``[row, row + pieces - 1]``)."""
-    lo, hi = row, row + pieces
-    # invariant: breaks[lo] <= x < breaks[hi] (or x beyond an end)
-    if x < breaks[lo]:
-        return row
-    if x >= breaks[hi]:
-        return row + pieces - 1
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if breaks[mid] <= x:
-            lo = mid
-        else:
-            hi = mid
-    return lo
-
-
-@jit
 def _interp(x, breaks, coefs, row, pieces, col):
     """``np.interp(x, breaks[rows], coefs[rows, col])`` with its operations."""
     last = row + pieces
@@ -253,7 +235,7 @@ def _interp(x, breaks, coefs, row, pieces, col):
         return coefs[last, col]
     if x < breaks[row]:
         return coefs[row, col]
-    j = _piece(x, breaks, row, pieces)
+    j = table_piece(x, breaks, row, pieces)
     if x == breaks[j]:
         return coefs[j, col]
     slope = (coefs[j + 1, col] - coefs[j, col]) / (breaks[j + 1] - breaks[j])
@@ -268,7 +250,7 @@ def _profile_speed(x, q, breaks, coefs):
     xc = min(max(x, lo), hi)
     if q[Q_PROFILE_LINEAR] != 0.0 and xc == hi:
         return coefs[row + pieces, 0]  # np.interp's end value
-    k = _piece(xc, breaks, row, pieces)
+    k = table_piece(xc, breaks, row, pieces)
     d = xc - breaks[k]
     return coefs[k, 0] + d * (coefs[k, 1] + d * (coefs[k, 2] + d * coefs[k, 3]))
 
