@@ -12,6 +12,7 @@ by numba, which the kernels inline.
 from __future__ import annotations
 
 import types
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -55,8 +56,7 @@ def jit_inline(fn):
     return jit(fn, inline="always")
 
 
-@jit_inline
-def table_piece(x, breaks, row, pieces):
+def _table_piece(x, breaks, row, pieces):
     """The piece ``row + j`` of a table holding `x`: ``searchsorted(...,
     side="right") - 1`` on ``breaks[row : row + pieces + 1]``, clipped to
     ``[row, row + pieces - 1]``.
@@ -81,6 +81,10 @@ def table_piece(x, breaks, row, pieces):
         else:
             hi = mid
     return lo
+
+
+# (declared: numba's dispatcher has no type of its own)
+table_piece: Callable[[float, np.ndarray, int, int], int] = jit_inline(_table_piece)
 
 
 # The sizes of scipy's DOP853 tableau that the layouts below use (the
