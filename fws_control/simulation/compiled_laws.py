@@ -365,12 +365,13 @@ def initial_command(vehicle, path, controller, z0, kappa, speed):
     return np.broadcast_to(df, (n,)), np.broadcast_to(dr, (n,))
 
 
-def make_law_command(eqs: dict, wrap_lap, table_piece, jit):
+def make_law_command(eqs: dict, table_position, table_piece, jit):
     """The compiled law ``(s, e, theta, kappa, p, q, breaks, coefs) -> (cf, cr)``.
 
-    Built from the compiled equations `eqs` (``compiled_layout.EQUATIONS``), the
-    lap wrap of closed paths, the search of a table's piece
-    (``compiled_layout.table_piece``) and the engine's decorator, for the law whose
+    Built from the compiled equations `eqs` (``compiled_layout.EQUATIONS``),
+    the arc length on the path's tables (``compiled_loop.table_position``),
+    the search of a table's piece (``compiled_layout.table_piece``) and the
+    engine's decorator, for the law whose
     code is ``q[Q_LAW]`` (1-4); unclipped angles. Called, not inlined: a
     copy of the projection in every kernel multiplied the compilation time.
     """
@@ -384,18 +385,6 @@ def make_law_command(eqs: dict, wrap_lap, table_piece, jit):
     pure_pursuit_angle = eqs["pure_pursuit_angle"]
     stanley_angle = eqs["stanley_angle"]
     rear_wheel_feedback_angle = eqs["rear_wheel_feedback_angle"]
-
-    @jit
-    def on_path(s, q):
-        # s as Path._domain takes it: wrapped on a closed path, clipped to
-        # an open one of finite length
-        period = q[_Q_PERIOD]
-        if period > 0.0:
-            s = wrap_lap(s, period)
-            if s >= period:
-                s = 0.0
-            return s
-        return min(max(s, q[_Q_S_LO]), q[_Q_S_HI])
 
     @jit
     def frame(s, q, breaks, coefs):
@@ -421,7 +410,7 @@ def make_law_command(eqs: dict, wrap_lap, table_piece, jit):
             lo, hi = q[_Q_S_LO], q[_Q_S_HI]
         s = s0
         for _ in range(_NEWTON_MAXITER):
-            fx, fy, psi, kap = frame(on_path(s, q), q, breaks, coefs)
+            fx, fy, psi, kap = frame(table_position(s, q), q, breaks, coefs)
             dx, dy = fx - px, fy - py
             c, sn = math.cos(psi), math.sin(psi)
             g = dx * c + dy * sn
@@ -435,7 +424,7 @@ def make_law_command(eqs: dict, wrap_lap, table_piece, jit):
             s = new
             if done:
                 break
-        fx, fy, psi, _ = frame(on_path(s, q), q, breaks, coefs)
+        fx, fy, psi, _ = frame(table_position(s, q), q, breaks, coefs)
         dx, dy = fx - px, fy - py
         return s, dx * math.sin(psi) - dy * math.cos(psi), psi
 
@@ -453,18 +442,18 @@ def make_law_command(eqs: dict, wrap_lap, table_piece, jit):
         if code == _REAR_WHEEL:
             cf = rear_wheel_feedback_angle(V, f, kappa, e, th, p[a], p[a + 1])
             return cf, p[a + 2] * cf
-        s_c = on_path(s, q)
+        s_c = table_position(s, q)
         cx, cy, h, _ = frame(s_c, q, breaks, coefs)
         if code == _PURE_PURSUIT:
             ld = lookahead_distance(p[a], p[a + 1], V)
-            sp = on_path(s_c + np.sign(V) * lookahead_offset(ld, e), q)
+            sp = table_position(s_c + np.sign(V) * lookahead_offset(ld, e), q)
             px, py, _, _ = frame(sp, q, breaks, coefs)
             rx, ry = rear_axle_point(cx, cy, h, e)
             cf = pure_pursuit_angle(f, ld, rx, ry, th + h, px, py)
             return cf, p[a + 2] * cf
         # Stanley: the front axle projected from a wheelbase ahead
         fx, fy, psi = front_axle_point(cx, cy, h, e, th, f)
-        guess = on_path(s_c + f * math.cos(th), q)
+        guess = table_position(s_c + f * math.cos(th), q)
         if q[_Q_PERIOD] > 0.0:
             guess = s_c + f * math.cos(th)
         _, e_f, h_f = project(fx, fy, guess, q, breaks, coefs)

@@ -12,6 +12,7 @@ model's derivatives, :func:`closed_loop_rhs` and its Jacobian
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -114,6 +115,23 @@ def wrap_lap(s, period):
     return s % period
 
 
+def _table_position(s, q):
+    # s as the path's tables take it, as Path._domain does: wrapped into
+    # [0, period) on a closed path (Python semantics, as np.mod), clipped to
+    # an open one (as the numpy engine does for trial stages)
+    period = q[Q_PERIOD]
+    if period > 0.0:
+        s = wrap_lap(s, period)
+        if s >= period:
+            s = 0.0
+        return s
+    return min(max(s, q[Q_S_LO]), q[Q_S_HI])
+
+
+# (declared: numba's dispatcher has no type of its own)
+table_position: Callable[[float, np.ndarray], float] = jit_inline(_table_position)
+
+
 @jit
 def feedforward_angle(kappa, q):
     """``atan(f kappa)``, the feedforward angle; for the first table
@@ -128,14 +146,7 @@ def feedforward_angle(kappa, q):
 
 @jit
 def curvature_at(s, q, breaks, coefs):
-    period = q[Q_PERIOD]
-    if period > 0.0:
-        s = wrap_lap(s, period)  # Python semantics, as np.mod in Path._domain
-        if s >= period:
-            s = 0.0
-    else:
-        # open paths: clipped, as the numpy engine does for trial stages
-        s = min(max(s, q[Q_S_LO]), q[Q_S_HI])
+    s = table_position(s, q)
     # (other tables follow the curvature's rows in breaks and coefs)
     k = table_piece(s, breaks, 0, int(q[Q_CURVATURE_ROWS]))
     d = s - breaks[k]
@@ -245,7 +256,7 @@ def dynamic_derivatives(V, kappa, e, th, vy, r, df, dr, q):
     return s_dot, e_dot, th_dot, vy_dot, r_dot
 
 
-law_command = make_law_command(EQUATIONS, wrap_lap, table_piece, jit)
+law_command = make_law_command(EQUATIONS, table_position, table_piece, jit)
 feedback_angle = EQUATIONS["feedback_angle"]
 
 
@@ -550,13 +561,7 @@ def closed_loop_jac(t, y, p, q, breaks, coefs, out):
 def curvature_and_rate(s, q, breaks, coefs):
     # kappa and d kappa / ds of the table from one lookup, at s clipped or
     # wrapped as in curvature_at (the same operations for kappa)
-    period = q[Q_PERIOD]
-    if period > 0.0:
-        s = wrap_lap(s, period)
-        if s >= period:
-            s = 0.0
-    else:
-        s = min(max(s, q[Q_S_LO]), q[Q_S_HI])
+    s = table_position(s, q)
     k = table_piece(s, breaks, 0, int(q[Q_CURVATURE_ROWS]))
     d = s - breaks[k]
     kappa = coefs[k, 0] + d * (coefs[k, 1] + d * (coefs[k, 2] + d * coefs[k, 3]))

@@ -25,11 +25,8 @@ from .compiled_layout import (
     Q_L_R,
     Q_MAX_F,
     Q_MAX_R,
-    Q_PERIOD,
     Q_RATE_F,
     Q_RATE_R,
-    Q_S_HI,
-    Q_S_LO,
     Q_TAU,
     Q_WHEELBASE,
     WITH_DYNAMIC,
@@ -48,7 +45,7 @@ from .compiled_loop import (
     dynamic_derivatives,
     rate_needs_curvature_slope,
     raw_command,
-    wrap_lap,
+    table_position,
 )
 
 # The names here are shared by the compiled_* modules; the public API of
@@ -263,7 +260,6 @@ def signals_batch(states, P, q, breaks, coefs, d_cg, pose, sig):
     kind = int(pose[0])
     x0, y0, psi0, kp = pose[1], pose[2], pose[3], pose[4]
     c0, s0 = math.cos(psi0), math.sin(psi0)
-    period = q[Q_PERIOD]
     for i in range(n):
         p = P[i]
         for k in range(T):
@@ -315,13 +311,7 @@ def signals_batch(states, P, q, breaks, coefs, d_cg, pose, sig):
                     sig[i, r, k] = np.nan
             if kind == 0:
                 continue
-            sp = s
-            if period > 0.0:
-                sp = wrap_lap(s, period)
-                if sp >= period:
-                    sp = 0.0
-            else:
-                sp = min(max(sp, q[Q_S_LO]), q[Q_S_HI])
+            sp = table_position(s, q)
             if kind == 1:
                 lx, ly = sp, 0.0
                 sh, ch = s0, c0  # the path's heading is psi0
