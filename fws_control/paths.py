@@ -53,12 +53,13 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.interpolate import CubicHermiteSpline, CubicSpline
-from scipy.spatial import cKDTree
+
+if TYPE_CHECKING:
+    from scipy.interpolate import CubicHermiteSpline, CubicSpline
 
 from .exceptions import AmbiguousProjectionError
 from .reprs import value_repr
@@ -679,6 +680,11 @@ class Path(ABC):
         ):
             tree = cache.get("tree") if cache else None
             if tree is None:
+                # (imported here: scipy.spatial brings scipy.sparse,
+                # scipy.linalg and scipy.optimize, about 0.5 s of CPU that a
+                # process without a dense projection never pays)
+                from scipy.spatial import cKDTree
+
                 tree = cKDTree(np.column_stack([X, Y]))
                 if cache is not None:
                     cache["tree"] = tree
@@ -1417,6 +1423,11 @@ class Spline(Path):
                 )
         else:
             pts = w
+        # (imported here: scipy.interpolate brings scipy.optimize, scipy.linalg
+        # and scipy.special, about 0.4 s of CPU that a process without a
+        # spline never pays)
+        from scipy.interpolate import CubicHermiteSpline, CubicSpline
+
         t = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(pts, axis=0).T))])
         cs = CubicSpline(t, pts, axis=0, bc_type="periodic" if closed else "natural")
 

@@ -17,7 +17,6 @@ import warnings
 from typing import Any
 
 import numpy as np
-from scipy.integrate import DOP853, RK23, RK45
 
 from ..deprecation import legacy_keyword, reject_unknown, warn_deprecated
 from ..gains import SteeringGains
@@ -33,6 +32,7 @@ from ..validation import (
 from ..vehicle import Vehicle
 from .loop import is_sampled, scheduled_gains
 from .options import (
+    SOLVER_NAMES,
     check_method,
     check_model,
     check_output_budget,
@@ -235,7 +235,10 @@ def prepare_runs(
             tau, opts["rtol"], duration=span, delay=opts["delay"]
         )
     else:
-        _warn_if_stiff(check_method(opts["method"]), tau, float(t[-1]))
+        method = opts["method"]
+        if not (isinstance(method, str) and method in SOLVER_NAMES):
+            method = check_method(method)  # a class, or raises for a bad one
+        _warn_if_stiff(method, tau, float(t[-1]))
     return k1, k2, a, V, x0, t, tau, ctrl
 
 
@@ -257,14 +260,32 @@ def _gain_fields(gains: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 _STIFF_STEPS = 5000
 
 
-def _warn_if_stiff(solver, tau, duration) -> None:
-    """Warn when an explicitly chosen explicit method meets a stiff actuator."""
-    if tau is None or not issubclass(solver, (DOP853, RK23, RK45)):
+_EXPLICIT = ("DOP853", "RK23", "RK45")
+
+
+def _warn_if_stiff(method, tau, duration) -> None:
+    """Warn when an explicitly chosen explicit method meets a stiff actuator.
+
+    `method` is one of :data:`SOLVER_NAMES` or a solver class (a name needs
+    no import of scipy.integrate).
+    """
+    if tau is None:
+        return
+    if isinstance(method, str):
+        name, explicit = method, method in _EXPLICIT
+    else:
+        import scipy.integrate
+
+        name = method.__name__
+        explicit = issubclass(
+            method, tuple(getattr(scipy.integrate, m) for m in _EXPLICIT)
+        )
+    if not explicit:
         return
     steps = duration / (6.4 * tau)
     if steps > _STIFF_STEPS:
         warnings.warn(
-            f"method={solver.__name__!r} with steering_lag={tau!r} over "
+            f"method={name!r} with steering_lag={tau!r} over "
             f"duration={duration!r}: the actuator makes the loop stiff, so this "
             f"explicit method needs about {steps:.2g} steps (its step is bounded "
             "near 6.4 times the time constant); method='auto' or 'Radau' steps "

@@ -16,7 +16,6 @@ import numpy as np
 
 from ..gains import SteeringGains
 from ..metrics import HORIZON_METRICS, tracking_metrics
-from .engine import integrate
 from .options import (
     initial_path_state,
 )
@@ -77,6 +76,10 @@ def run_chunk(vehicle, path, k1, k2, a, speed, feedforward, x0, t, tau, opts, ct
     peaks (n, len(PEAK_SIGNALS)), peak_times)``: the peaks are those of the
     continuous solution (:func:`~fws_control.simulation.peaks.exact_peaks`).
     """
+    # (imported here: the numpy engine brings scipy.integrate and
+    # scipy.optimize, which a process that runs compiled never needs)
+    from .engine import integrate
+
     g = SteeringGains(k1, k2, a) if ctrl is None else ctrl
     # x0: pose and (v_y, r) of the dynamic model (NaN: the default)
     z0 = initial_path_state(path, x0[:, :3])

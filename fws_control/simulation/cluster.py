@@ -8,8 +8,6 @@ runs ``"failed"``, and a cluster left without workers for
 
 from __future__ import annotations
 
-import asyncio
-import concurrent.futures
 import time
 import warnings
 
@@ -17,10 +15,20 @@ import numpy as np
 
 from .outcomes import PEAK_SIGNALS, SIGNALS, STATUS_FAILED
 
-#: What Dask's ``wait`` raises when the poll interval passes: Python 3.10's
-#: asyncio and concurrent.futures timeouts are not yet the builtin
-#: TimeoutError (they are from 3.11 on).
-_WAIT_TIMEOUTS = (TimeoutError, asyncio.TimeoutError, concurrent.futures.TimeoutError)
+
+def _wait_timeouts() -> tuple[type[BaseException], ...]:
+    """What Dask's ``wait`` raises when the poll interval passes.
+
+    Python 3.10's asyncio and concurrent.futures timeouts are not yet the
+    builtin TimeoutError (they are from 3.11 on). Imported here, when a batch
+    goes to a cluster: the two packages take 60 ms of CPU to import, which
+    every process that simulates would pay otherwise.
+    """
+    import asyncio
+    import concurrent.futures
+
+    return (TimeoutError, asyncio.TimeoutError, concurrent.futures.TimeoutError)
+
 
 __all__ = [
     "LOST_CLUSTER_WAIT",
@@ -111,6 +119,7 @@ def run_on_dask(client, bounds, args, keep, t_size, bar, run) -> str | None:
     task_error = None
     cluster_lost = None  # the message once the cluster has no worker left
     idle_since = None  # since when the cluster has had no worker
+    wait_timeouts = _wait_timeouts()
     try:
         while pending and task_error is None:
             # (a cancelled future counts as done: dask's wait raises on it)
@@ -122,7 +131,7 @@ def run_on_dask(client, bounds, args, keep, t_size, bar, run) -> str | None:
                         timeout=POLL_INTERVAL,
                         return_when="FIRST_COMPLETED",
                     )
-                except _WAIT_TIMEOUTS:
+                except wait_timeouts:
                     done = []
                 except Exception:
                     done = [f for f in pending if f.cancelled()]

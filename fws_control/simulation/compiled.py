@@ -117,7 +117,6 @@ from dataclasses import dataclass
 from typing import Any, cast
 
 import numpy as np
-from scipy.integrate import DOP853, Radau
 
 from .. import equations
 from ..controllers import steering_command
@@ -142,7 +141,7 @@ from .compiled_speed import (
     compiled_speed_reason,
     speed_tables,
 )
-from .engine import (
+from .outcomes import (
     STATUS_END_OF_PATH,
     STATUS_FAILED,
     STATUS_OK,
@@ -744,6 +743,9 @@ def compiled_method(method: Any) -> str | None:
     """
     if isinstance(method, str):
         return method if method in METHODS else None
+    # (a class: the caller has imported scipy.integrate already)
+    from scipy.integrate import DOP853, Radau
+
     if method is DOP853:
         return "DOP853"
     if method is Radau:

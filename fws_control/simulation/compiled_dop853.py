@@ -14,14 +14,20 @@ import math
 
 import numpy as np
 
-# The tableau of scipy's DOP853 itself, so that the port takes exactly the
-# same steps (a private scipy module: the test suite checks the port step by
-# step against scipy.integrate.DOP853, so a change there cannot go unseen).
-from scipy.integrate._ivp import dop853_coefficients as _dop
-
 from .compilation import jit
 from .compiled_events import event_values, set_now
-from .compiled_layout import EPS, N_EVENTS, NPOW, NS, NSE, Q_MAX_STEP, jit_inline
+from .compiled_layout import (
+    DOP853_TABLEAU as _dop,
+)
+from .compiled_layout import (
+    EPS,
+    N_EVENTS,
+    NPOW,
+    NS,
+    NSE,
+    Q_MAX_STEP,
+    jit_inline,
+)
 from .compiled_loop import closed_loop_rhs
 
 # The names here are shared by the compiled_* modules; the public API of

@@ -54,8 +54,8 @@ from ..hints import RealArrayLike
 from ..paths import Path, Straight
 from ..validation import check_positive
 from .dense import CompiledDense
-from .engine import compute_outputs
 from .peaks import exact_peaks_per_run
+from .signals import compute_outputs
 
 __all__ = [
     "LAWS",

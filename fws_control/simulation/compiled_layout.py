@@ -11,22 +11,19 @@ by numba, which the kernels inline.
 
 from __future__ import annotations
 
+import importlib.util
+import sys
 import types
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import numpy as np
-
-# The tableau of scipy's DOP853 itself, so that the port takes exactly the
-# same steps (a private scipy module: the test suite checks the port step by
-# step against scipy.integrate.DOP853, so a change there cannot go unseen).
-from scipy.integrate._ivp import dop853_coefficients as _dop
+import scipy
 
 from .. import equations
 from .compilation import jit
-from .engine import (
-    SIGNALS,
-)
+from .outcomes import SIGNALS
 
 # The names here are shared by the compiled_* modules; the public API of
 # the compiled engine is simulation.compiled (which re-exports them).
@@ -86,6 +83,36 @@ def _table_piece(x, breaks, row, pieces):
 # (declared: numba's dispatcher has no type of its own)
 table_piece: Callable[[float, np.ndarray, int, int], int] = jit_inline(_table_piece)
 
+
+def _load_dop853_tableau() -> types.ModuleType:
+    """scipy's own DOP853 tableau (``scipy.integrate._ivp.dop853_coefficients``).
+
+    The port takes exactly scipy's steps because it uses scipy's tableau (a
+    private scipy module: the test suite checks the port step by step against
+    :class:`scipy.integrate.DOP853`, so a change there cannot go unseen). The
+    module needs only numpy, but importing it by name runs
+    ``scipy/integrate/__init__``, which brings scipy.optimize, scipy.linalg,
+    scipy.sparse and scipy.special: half a second before the first result of
+    a process that runs compiled kernels from the cache. So it is loaded from
+    its file; if scipy has moved it, by name.
+    """
+    name = "scipy.integrate._ivp.dop853_coefficients"
+    if name in sys.modules:
+        return sys.modules[name]
+    file = Path(scipy.__file__).parent / "integrate" / "_ivp" / "dop853_coefficients.py"
+    spec = importlib.util.spec_from_file_location(
+        "fws_control._scipy_dop853_coefficients", file
+    )
+    if spec is None or spec.loader is None or not file.is_file():
+        return importlib.import_module(name)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+#: scipy's DOP853 tableau, the module (see :func:`_load_dop853_tableau`).
+DOP853_TABLEAU = _load_dop853_tableau()
+_dop = DOP853_TABLEAU
 
 # The sizes of scipy's DOP853 tableau that the layouts below use (the
 # tableau itself: compiled_dop853)

@@ -30,10 +30,7 @@ from .compiled_signals import (
     dynamic_point_signals,
     point_signals,
 )
-from .engine import (
-    PEAK_SIGNALS,
-    SIGNALS,
-)
+from .outcomes import PEAK_SIGNALS, SIGNALS
 
 # The names here are shared by the compiled_* modules; the public API of
 # the compiled engine is simulation.compiled (which re-exports them).

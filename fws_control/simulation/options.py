@@ -15,10 +15,10 @@ these before a run starts; the engines take the checked values.
 from __future__ import annotations
 
 import math
-from typing import Any
+from collections.abc import Iterator, Mapping
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, OdeSolver, Radau
 
 from ..controllers import (
     DEFAULT_ACTUATOR_TIME_CONSTANT,
@@ -33,8 +33,12 @@ from ..validation import MAX_ANGLE, check_finite, check_positive
 from ..vehicle import Vehicle
 from .outcomes import SIGNALS
 
+if TYPE_CHECKING:
+    from scipy.integrate import OdeSolver
+
 __all__ = [
     "SOLVERS",
+    "SOLVER_NAMES",
     "MODELS",
     "check_method",
     "RTOL_RANGE",
@@ -130,15 +134,40 @@ def _positive_float(name: str, value: Any) -> float:
     return float(check_positive(name, value))
 
 
-#: The scipy solvers accepted by name as ``method``.
-SOLVERS = {
-    "DOP853": DOP853,
-    "RK45": RK45,
-    "RK23": RK23,
-    "Radau": Radau,
-    "BDF": BDF,
-    "LSODA": LSODA,
-}
+#: The names of the scipy solvers accepted as ``method``.
+SOLVER_NAMES = ("DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA")
+
+
+class _ScipySolvers(Mapping[str, "type[OdeSolver]"]):
+    """scipy's solver classes by name, imported at the first lookup.
+
+    A compiled run names its method and never needs scipy's classes; importing
+    :mod:`scipy.integrate` (which brings scipy.optimize, scipy.linalg and
+    scipy.sparse) would cost a process about half a second before its first
+    result.
+    """
+
+    def __getitem__(self, name: str) -> type[OdeSolver]:
+        if name not in SOLVER_NAMES:
+            raise KeyError(name)
+        import scipy.integrate
+
+        return getattr(scipy.integrate, name)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(SOLVER_NAMES)
+
+    def __len__(self) -> int:
+        return len(SOLVER_NAMES)
+
+    def __repr__(self) -> str:
+        return f"<scipy.integrate solvers {', '.join(SOLVER_NAMES)}>"
+
+
+#: The scipy solvers accepted by name as ``method``: a mapping from each of
+#: :data:`SOLVER_NAMES` to its :class:`scipy.integrate.OdeSolver` class
+#: (scipy.integrate is imported at the first lookup).
+SOLVERS: Mapping[str, type[OdeSolver]] = _ScipySolvers()
 
 #: Vehicle models of the engine: the paper's kinematic model and the dynamic
 #: single-track model of :mod:`fws_control.dynamics` (tyre slip, states
@@ -160,8 +189,11 @@ def check_method(method: Any) -> type[OdeSolver]:
     >>> check_method("RK45").__name__
     'RK45'
     """
-    if isinstance(method, type) and issubclass(method, OdeSolver):
-        return method
+    if isinstance(method, type):
+        from scipy.integrate import OdeSolver
+
+        if issubclass(method, OdeSolver):
+            return method
     try:
         return SOLVERS[method]
     except (KeyError, TypeError):
