@@ -732,3 +732,19 @@ def test_agrees_with_numpy_engine(path, speed, x0):
     # the numpy engine's error norm is over both runs: agreement at ~100 rtol
     # (measured 1.5e-8 m on the chain with scipy 1.17)
     assert np.nanmax(np.abs(got[0] - ref[0])) <= 3e-8
+
+
+def test_the_tableau_read_from_its_file_is_scipys():
+    # compiled_layout reads scipy's DOP853 tableau from its file (importing
+    # it by name runs scipy.integrate's __init__); it must be the module
+    # scipy's own DOP853 uses, every array and size
+    from scipy.integrate._ivp import dop853_coefficients as scipys
+
+    from fws_control.simulation.compiled_layout import DOP853_TABLEAU
+
+    names = [n for n in vars(scipys) if n.isupper()]
+    assert {"A", "B", "C", "D", "E3", "E5", "N_STAGES"} <= set(names)
+    for name in names:
+        np.testing.assert_array_equal(
+            getattr(DOP853_TABLEAU, name), getattr(scipys, name), err_msg=name
+        )

@@ -12,7 +12,6 @@ by numba, which the kernels inline.
 from __future__ import annotations
 
 import importlib.util
-import sys
 import types
 from collections.abc import Callable
 from pathlib import Path
@@ -97,8 +96,6 @@ def _load_dop853_tableau() -> types.ModuleType:
     its file; if scipy has moved it, by name.
     """
     name = "scipy.integrate._ivp.dop853_coefficients"
-    if name in sys.modules:
-        return sys.modules[name]
     file = Path(scipy.__file__).parent / "integrate" / "_ivp" / "dop853_coefficients.py"
     spec = importlib.util.spec_from_file_location(
         "fws_control._scipy_dop853_coefficients", file
