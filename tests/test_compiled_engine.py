@@ -26,18 +26,26 @@ numba = pytest.importorskip(
     "is not tested"
 )  # fmt: skip
 
+from fws_control.simulation import compiled  # noqa: E402
 from fws_control.simulation.compiled import (  # noqa: E402
     DEFAULT_MARGIN,
     CurvatureTable,
-    closed_loop_rhs,
     compiled_support,
     curvature_table,
-    dense_output,
-    dop853_step,
     integrate_compiled,
-    locate_event,
     shared_parameters,
-    solve_run,
+)
+from fws_control.simulation.compiled_variants import variant  # noqa: E402
+
+# The kernels these tests call one step at a time, as the engine compiles
+# them for a call without a delay, the dynamic model, a controller's law or
+# a varying speed (none of these tests uses one): the code that runs for
+# such a call (test_kernel_cache checks it bit for bit against the full
+# kernels), and a third of the full kernels' compilation, which no
+# production call makes from Python.
+closed_loop_rhs, dense_output, dop853_step, locate_event = (
+    variant(getattr(compiled, name), ())
+    for name in ("closed_loop_rhs", "dense_output", "dop853_step", "locate_event")
 )
 
 VEH = PAPER_VEHICLE
@@ -277,6 +285,23 @@ def _step_case(name):
     return fws.Arc(curvature=0.1), _const(0.1), 0.1, veh
 
 
+def _engine_run(veh, tab, g, y0, t_eval, tau, max_step=math.inf):
+    """One run of integrate_compiled (the engine's batch driver, as the
+    shared parameters of these tests: no switch events): its accepted steps,
+    their end times and its states at `t_eval`."""
+    sol = []
+    states, status, _, t_stop, stats = integrate_compiled(
+        veh, tab, fws.SteeringGains(np.atleast_1d(g.k1), g.k2, g.ratio),
+        speed=np.array([5.0]), feedforward=True, path_state=y0[None, :3],
+        t_eval=t_eval, time_constant=tau, switching=False, max_step=max_step,
+        solution=sol, **TOL,
+    )  # fmt: skip
+    assert (status[0], t_stop[0]) == ("ok", 15.0)
+    records = sol[0].records
+    assert stats[0, 0] == len(records)  # (no cut step: no event, no switch)
+    return int(stats[0, 0]), records[:, 0] + records[:, 1], states[:, 0, :]
+
+
 @pytest.mark.parametrize("name", ["arc", "clothoid", "rate-limited-actuator"])
 def test_same_steps_dense_output_as_scipy(name):
     path, kappa, tau, veh = _step_case(name)
@@ -328,14 +353,10 @@ def test_same_steps_dense_output_as_scipy(name):
     # of a non-smooth right-hand side
     assert worst_h < (1e-3 if tau else 1e-5)
 
-    # whole run: the same number of steps, times within the noise
+    # whole run, through the engine's batch driver: the same number of
+    # steps, times within the noise
     t_eval = np.linspace(0.0, 15.0, 1501)
-    out = np.full((m, t_eval.size), np.nan)
-    trace = np.empty(len(ref_times) + 5)
-    code, t_stop, steps, *_ = solve_run(
-        y0, p, q, tab.breaks, tab.coefs, t_eval, TOL["rtol"], TOL["atol"], out, trace
-    )
-    assert (code, t_stop) == (0, 15.0)
+    steps, trace, out = _engine_run(veh, tab, g, y0, t_eval, tau)
     ref = solve_ivp(rhs, (0.0, 15.0), y0, method="DOP853", t_eval=t_eval, **TOL)
     if tau:
         # across the unlocated kinks of the rate clip the accept/reject
@@ -390,14 +411,7 @@ def test_max_step_as_scipy_and_accurate_on_a_stiff_actuator():
     tol = TOL["atol"] + TOL["rtol"] * np.max(np.abs(ref), axis=1, keepdims=True)
     units = {}
     for cap in (max_step, math.inf):
-        qq = shared_parameters(VEH, tab, feedforward=True, time_constant=tau,
-                               max_step=cap)  # fmt: skip
-        out = np.full((5, t_eval.size), np.nan)
-        code, t_stop, n_steps, *_ = solve_run(
-            y0, p, qq, tab.breaks, tab.coefs, t_eval, TOL["rtol"], TOL["atol"],
-            out, np.empty(len(times) + 5),
-        )  # fmt: skip
-        assert (code, t_stop) == (0, 15.0)
+        n_steps, _, out = _engine_run(VEH, tab, g, y0, t_eval, tau, max_step=cap)
         if cap == max_step:
             assert n_steps == len(times)
         units[cap] = float(np.max(np.abs(out - ref) / tol))

@@ -1,6 +1,7 @@
 """The compiled Radau IIA port against scipy's Radau, step by step.
 
-:func:`~fws_control.simulation.compiled.radau_run` ports
+The engine's Radau driver (its single-run form
+:func:`~fws_control.simulation.compiled.radau_run`) ports
 :class:`scipy.integrate.Radau`: given the same right-hand side, Jacobian
 (:func:`~fws_control.simulation.compiled.closed_loop_jac`, itself checked
 against finite differences in ``test_compiled_jacobian.py``) and first
@@ -28,14 +29,23 @@ numba = pytest.importorskip(
     "is not tested"
 )  # fmt: skip
 
+from fws_control.simulation import compiled  # noqa: E402
 from fws_control.simulation.compiled import (  # noqa: E402
     DEFAULT_MARGIN,
-    closed_loop_jac,
-    closed_loop_rhs,
     curvature_table,
     integrate_compiled,
-    radau_run,
     shared_parameters,
+)
+from fws_control.simulation.compiled_variants import variant  # noqa: E402
+
+# The right-hand side and Jacobian of scipy's reference runs, as the engine
+# compiles them for a call without a delay, the dynamic model, a
+# controller's law or a varying speed (none of these tests uses one; the
+# Radau driver runs only such calls): the code that runs, and a third of the
+# full kernels' compilation, which no production call makes from Python.
+closed_loop_jac, closed_loop_rhs = (
+    variant(getattr(compiled, name), ())
+    for name in ("closed_loop_jac", "closed_loop_rhs")
 )
 
 
@@ -60,6 +70,9 @@ def _fun_jac(p, q, tab):
     [(0.05, False, 1e-8, 40.0), (0.001, False, 1e-10, 15.0), (0.05, True, 1e-6, 40.0)],
 )
 def test_radau_port_takes_scipys_steps(tau, limited, rtol, duration):
+    # the engine's Radau driver (integrate_compiled, its dense solution
+    # kept: one record per accepted step) against scipy's Radau stepping on
+    # the same right-hand side and Jacobian from the same initial state
     lim = dict(max_steer_front=0.6, max_steer_rear=0.3, max_steer_rate_front=0.4,
                max_steer_rate_rear=0.2) if limited else {}  # fmt: skip
     veh = fws.Vehicle(2.7, 1.35, **lim)
@@ -68,32 +81,49 @@ def test_radau_port_takes_scipys_steps(tau, limited, rtol, duration):
     g = fws.double_root_gains(veh, speed=5.0, curvature=0.1, ratio=-0.5, pole=-1.0)
     p = np.array([5.0, g.k1, g.k2, g.ratio, 0, 0, 0, 0.0])
     atol = rtol * 1e-2
-    y0 = np.array([0.0, -5.0 if not limited else -0.5, 0.0, 0.0, 0.0])
+    sol = []
+    states, status, _, t_stop, stats = integrate_compiled(
+        veh, tab, fws.SteeringGains(np.atleast_1d(g.k1), g.k2, g.ratio),
+        speed=np.array([5.0]), feedforward=True,
+        path_state=np.array([[0.0, -0.5 if limited else -5.0, 0.0]]),
+        t_eval=np.array([0.0, duration]), time_constant=tau, rtol=rtol, atol=atol,
+        switching=False, method="Radau", solution=sol,
+    )  # fmt: skip
+    assert (status[0], t_stop[0]) == ("ok", duration)
+    records = sol[0].records
+    steps = len(records)
+    assert stats[0, 0] == steps  # (no step cut: no event, no switch)
+    y_old, F = records[:, 2:7], records[:, 7:].reshape(steps, 7, 5)
     fun, jac = _fun_jac(p, q, tab)
-    h0 = 1e-4
-    ref = Radau(fun, 0.0, y0, duration, rtol=rtol, atol=atol, jac=jac, first_step=h0)
-    ts, ys, Qs = [0.0], [y0], []
+    ref = Radau(fun, 0.0, y_old[0], duration, rtol=rtol, atol=atol, jac=jac)
+    ts, ys, dense = [0.0], [y_old[0]], []
     while ref.status == "running":
         ref.step()
         ts.append(ref.t)
         ys.append(ref.y.copy())
-        Qs.append(ref.dense_output().Q.copy())
+        dense.append(ref.dense_output())
     assert ref.status == "finished"
-    m = len(ts) + 10
-    t_out, y_out, q_out = np.empty(m), np.empty((m, 5)), np.empty((m, 5, 3))
-    steps, status = radau_run(y0, p, q, tab.breaks, tab.coefs, 0.0, duration, h0,
-                              rtol, atol, t_out, y_out, q_out)  # fmt: skip
-    assert status == 0
     assert steps == len(ts) - 1, (steps, len(ts) - 1)
     # the same steps; the step times drift apart by rounding over the 40 s
     # runs (measured 5.1e-6 relative at the last steps with scipy 1.17)
-    np.testing.assert_allclose(t_out[: steps + 1], ts, rtol=1e-5, atol=0)
+    t_new = records[:, 0] + records[:, 1]
+    np.testing.assert_allclose(np.append(records[:, 0], t_new[-1]), ts, rtol=1e-5,
+                               atol=0)  # fmt: skip
     scale = np.max(np.abs(ys), axis=0) + atol
-    np.testing.assert_allclose(y_out[: steps + 1] / scale, np.array(ys) / scale,
-                               rtol=0, atol=1e-5)  # fmt: skip
-    np.testing.assert_allclose(q_out[:steps] / scale[None, :, None],
-                               np.array(Qs) / scale[None, :, None], rtol=0,
-                               atol=1e-5)  # fmt: skip
+    np.testing.assert_allclose(np.vstack([y_old, states[:, 0, -1]]) / scale,
+                               np.array(ys) / scale, rtol=0, atol=1e-5)  # fmt: skip
+    # the same collocation polynomial on every step, at the same fractions
+    # of each one's own step
+    from fws_control.simulation import compiled_dop853
+
+    out = np.empty(5)
+    for k in range(steps):
+        for x in (0.25, 0.5, 0.75):
+            t = records[k, 0] + x * records[k, 1]
+            compiled_dop853.dense_eval(t, records[k, 0], t_new[k], y_old[k], F[k],
+                                       out)  # fmt: skip
+            want = dense[k](ts[k] + x * (ts[k + 1] - ts[k]))
+            np.testing.assert_allclose(out / scale, want / scale, rtol=0, atol=1e-5)
 
 
 def _scipy_radau_run(veh, tab, g, tau, y0, t_eval, rtol, atol, events=None):

@@ -31,7 +31,11 @@ numba = pytest.importorskip(
 )  # fmt: skip
 
 from fws_control.simulation import compilation, compiled  # noqa: E402
-from fws_control.simulation.compiled_variants import FEATURES, kernels  # noqa: E402
+from fws_control.simulation.compiled_variants import (  # noqa: E402
+    FEATURES,
+    kernels,
+    variant,
+)
 
 STAMP = (("compiled.py", 1.0, 10),)
 
@@ -147,3 +151,20 @@ def test_the_featureless_kernels_compute_what_the_full_kernels_compute(
     np.testing.assert_array_equal(stats, full[4])
     if limits:
         assert stats[:, 4].max() > 0  # a clip switched (events located)
+
+
+def test_variant_of_a_kernel_is_the_copy_its_drivers_inline():
+    # variant(k, features) is the copy of k that the variant's own drivers
+    # call (their globals hold it), k itself with every feature, and an
+    # error naming the argument for anything else
+    step = variant(compiled.dop853_step, ())
+    assert step is not compiled.dop853_step
+    drivers = kernels(()).solve_batch.py_func.__globals__
+    assert drivers["dop853_step"] is step
+    assert step.py_func.__code__ is compiled.dop853_step.py_func.__code__
+    assert variant(compiled.dop853_step, FEATURES) is compiled.dop853_step
+    assert variant(compiled.dop853_step, ["delay"]) is not step
+    with pytest.raises(ValueError, match="kernel must be a kernel"):
+        variant(np.hypot, ())
+    with pytest.raises(ValueError, match=r"features must be in .*'bogus'"):
+        variant(compiled.dop853_step, ["bogus"])

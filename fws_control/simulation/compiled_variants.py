@@ -50,7 +50,7 @@ from .compiled_laws import Q_LAW
 from .compiled_layout import Q_DELAY, Q_DYNAMIC
 from .compiled_speed import Q_PROFILE
 
-__all__ = ["FEATURES", "features_of", "kernels"]
+__all__ = ["FEATURES", "features_of", "kernels", "variant"]
 
 #: The features a variant may leave out, with the flag each one sets.
 FEATURES = ("delay", "dynamic", "law", "profile")
@@ -137,9 +137,10 @@ def _suffix(features: frozenset[str]) -> str:
 
 
 @functools.cache
-def _variant(features: frozenset[str]) -> dict[str, Any]:
+def _variant(features: frozenset[str]) -> tuple[dict[str, Any], dict[int, Any]]:
+    # (the top kernels, the copy of every kernel by the id of the original)
     if features == frozenset(FEATURES):
-        return _top({mod: vars(mod) for mod in _MODULES})
+        return _top({mod: vars(mod) for mod in _MODULES}), {}
     flags = {_FLAGS[name]: name in features for name in FEATURES}
     suffix = _suffix(features)
     # one globals dict per module, filled once every copy exists: numba
@@ -164,7 +165,7 @@ def _variant(features: frozenset[str]) -> dict[str, Any]:
                 space[name] = copies[id(value)]
     # (the closures of the drivers reach each other through their module's
     # globals, so the copies of solve_batch call the copies of run_impl)
-    return _top(spaces)
+    return _top(spaces), copies
 
 
 def _top(spaces: dict[types.ModuleType, Any]) -> dict[str, Any]:
@@ -207,8 +208,56 @@ def kernels(features: Iterable[str]) -> types.SimpleNamespace:
     >>> kernels(["delay"]).solve_batch is kernels({"delay"}).solve_batch
     True
     """
+    return types.SimpleNamespace(**_variant(_check_features(features))[0])
+
+
+def variant(kernel: Any, features: Iterable[str]) -> Any:
+    """The copy of any kernel of the engine compiled for `features` only.
+
+    :func:`kernels` gives the top kernels; this gives any other one (a step,
+    a dense output, the right-hand side) of the same variant, for calling
+    it alone: the copy inlines the same copies as the variant's drivers.
+
+    Parameters
+    ----------
+    kernel : numba dispatcher
+        A kernel of the compiled engine's modules (e.g.
+        :func:`~fws_control.simulation.compiled.dop853_step`).
+    features : iterable of str
+        Names of :data:`FEATURES` the call uses.
+
+    Returns
+    -------
+    numba dispatcher
+        The variant's copy (`kernel` itself for every feature).
+
+    Raises
+    ------
+    ValueError
+        For a name not in :data:`FEATURES`, or a `kernel` that is not one of
+        the engine's.
+
+    Examples
+    --------
+    >>> from fws_control.simulation.compiled import dop853_step
+    >>> from fws_control.simulation.compiled_variants import variant
+    >>> variant(dop853_step, []).py_func.__qualname__
+    'dop853_step__v'
+    """
+    chosen = _check_features(features)
+    if chosen == frozenset(FEATURES):
+        return kernel
+    try:
+        return _variant(chosen)[1][id(kernel)]
+    except KeyError:
+        raise ValueError(
+            f"kernel must be a kernel of the compiled engine's modules, got {kernel!r}"
+        ) from None
+
+
+def _check_features(features: Iterable[str]) -> frozenset[str]:
     chosen = frozenset(features)
     unknown = chosen - set(FEATURES)
     if unknown:
         raise ValueError(f"features must be in {FEATURES}, got {sorted(unknown)}")
-    return types.SimpleNamespace(**_variant(chosen))
+    return chosen
