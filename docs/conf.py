@@ -50,7 +50,7 @@ extensions = [
     "sphinx.ext.mathjax",
     # MathJax 3 (JS and CHTML woff fonts) copied into _static/mathjax: the
     # pages render math without a network (docs/check_math_offline.py).
-    "sphinx-mathjax-offline",
+    "mathjax_offline",  # sphinx-mathjax-offline (docs/_ext: its parallel safety)
     "sphinx.ext.viewcode",
     "numpydoc",
     "myst_parser",
@@ -460,7 +460,22 @@ def _cli_help_directive():
     return CliHelp
 
 
+def _own_source_only(app, modname, attribute):
+    """viewcode links an object to its module's source, following an
+    imported name to the module that defines it; a type alias of
+    fws_control.hints would lead to the standard library's typing (a page
+    of typing's source, made only by parallel builds). Such an object keeps
+    the module that documents it."""
+    from sphinx.ext.viewcode import _get_full_modname
+
+    full = _get_full_modname(modname, attribute)
+    if full is not None and not full.startswith("fws_control"):
+        return modname
+    return None
+
+
 def setup(app):
+    app.connect("viewcode-follow-imported", _own_source_only)
     app.connect("builder-inited", _check_api_complete)
     app.connect("source-read", _check_quoted_output)
     app.connect("env-get-outdated", _reread_quoting_pages)
