@@ -75,3 +75,9 @@ def test_command_reports_each_set():
         capture_output=True, text=True, timeout=900, check=False,
     )  # fmt: skip
     assert bad.returncode == 2 and "--jobs" in bad.stderr
+
+
+def test_results_follow_the_sets_asked_for_whatever_the_start_order():
+    # the sets start longest first; the results come in the order asked for
+    asked = ("paper-radau", "paper-dop853", "paper-radau")
+    assert [d.name for d in precompile(asked, jobs=2)] == list(asked)
