@@ -17,9 +17,7 @@ import numpy as np
 from .compilation import jit
 from .compiled_events import event_values, set_now
 from .compiled_layout import (
-    DOP853_TABLEAU as _dop,
-)
-from .compiled_layout import (
+    DOP853_TABLEAU,
     EPS,
     N_EVENTS,
     NPOW,
@@ -37,6 +35,7 @@ __all__: list[str] = []
 # --------------------------------------------------------------------------
 # DOP853 tableau (scipy's), as module constants frozen into the kernels
 
+_dop = DOP853_TABLEAU
 _A = np.ascontiguousarray(_dop.A[:NS, :NS])
 _B = np.ascontiguousarray(_dop.B)
 _C = np.ascontiguousarray(_dop.C[:NS])
