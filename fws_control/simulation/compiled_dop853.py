@@ -219,6 +219,11 @@ def dop853_step(
     >>> tab = curvature_table(fws.Straight())
     >>> q = shared_parameters(veh, tab, feedforward=False, time_constant=None)
     >>> p, y = np.array([5.0, 0.1, 0.5, 0.0]), np.array([0.0, 1.0, 0.0])
+    >>> # the copies for a call without a delay, the dynamic model, a law or a
+    >>> # varying speed, as the engine runs them (a third of the compilation)
+    >>> from fws_control.simulation.compiled_variants import variant
+    >>> closed_loop_rhs = variant(closed_loop_rhs, [])
+    >>> dop853_step = variant(dop853_step, [])
     >>> f = np.empty(3)
     >>> closed_loop_rhs(0.0, y, p, q, tab.breaks, tab.coefs, f)
     >>> K, y_new = np.empty((16, 3)), np.empty(3)
@@ -311,6 +316,11 @@ def dense_output(tt, t_old, t_new, y_old, y_new, f_new, K, p, q, breaks, coefs, 
     >>> tab = curvature_table(fws.Straight())
     >>> q = shared_parameters(veh, tab, feedforward=False, time_constant=None)
     >>> p, y = np.array([5.0, 0.1, 0.5, 0.0]), np.array([0.0, 1.0, 0.0])
+    >>> # the copies for a call without a delay, the dynamic model, a law or a
+    >>> # varying speed, as the engine runs them (a third of the compilation)
+    >>> from fws_control.simulation.compiled_variants import variant
+    >>> closed_loop_rhs, dop853_step, dense_output = (
+    ...     variant(k, []) for k in (closed_loop_rhs, dop853_step, dense_output))
     >>> f = np.empty(3)
     >>> closed_loop_rhs(0.0, y, p, q, tab.breaks, tab.coefs, f)
     >>> K, y_new = np.empty((16, 3)), np.empty(3)
@@ -347,6 +357,11 @@ def locate_event(j, t_old, t_new, y_old, y_new, f_new, K, p, q, breaks, coefs):
     >>> tab = curvature_table(fws.Straight(length=0.1))   # ends after 0.02 s
     >>> q = shared_parameters(veh, tab, feedforward=False, time_constant=None)
     >>> p, y = np.array([5.0, 0.0, 0.0, 0.0]), np.array([0.0, 0.0, 0.0])
+    >>> # the copies for a call without a delay, the dynamic model, a law or a
+    >>> # varying speed, as the engine runs them (a third of the compilation)
+    >>> from fws_control.simulation.compiled_variants import variant
+    >>> closed_loop_rhs, dop853_step, locate_event = (
+    ...     variant(k, []) for k in (closed_loop_rhs, dop853_step, locate_event))
     >>> f = np.empty(3)
     >>> closed_loop_rhs(0.0, y, p, q, tab.breaks, tab.coefs, f)
     >>> K, y_new = np.empty((16, 3)), np.empty(3)

@@ -72,6 +72,10 @@ def solve_run(y0, p, q, breaks, coefs, t_eval, rtol, atol, out, trace):
     >>> veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     >>> tab = curvature_table(fws.Straight())
     >>> q = shared_parameters(veh, tab, feedforward=False, time_constant=None)
+    >>> # the copy for a call without a delay, the dynamic model, a law or a
+    >>> # varying speed, as the engine runs it (a third of the compilation)
+    >>> from fws_control.simulation.compiled_variants import variant
+    >>> solve_run = variant(solve_run, [])
     >>> t = np.linspace(0.0, 10.0, 3)
     >>> out = np.empty((3, t.size))
     >>> code, t_stop, *_ = solve_run(np.array([0.0, 1.0, 0.0]),

@@ -409,6 +409,10 @@ def closed_loop_rhs(t, y, p, q, breaks, coefs, out):
     >>> tab = curvature_table(fws.Straight())
     >>> q = shared_parameters(veh, tab, feedforward=False, time_constant=None)
     >>> p = np.array([5.0, 0.1, 0.5, 0.0])          # V, k1, k2, ratio
+    >>> # the copy for a call without a delay, the dynamic model, a law or a
+    >>> # varying speed, as the engine runs it (a third of the compilation)
+    >>> from fws_control.simulation.compiled_variants import variant
+    >>> closed_loop_rhs = variant(closed_loop_rhs, [])
     >>> out = np.empty(3)
     >>> closed_loop_rhs(0.0, np.array([0.0, 1.0, 0.0]), p, q, tab.breaks,
     ...                 tab.coefs, out)
@@ -475,6 +479,10 @@ def closed_loop_jac(t, y, p, q, breaks, coefs, out):
     >>> tab = curvature_table(fws.Straight())
     >>> q = shared_parameters(veh, tab, feedforward=False, time_constant=0.05)
     >>> p = np.zeros(8); p[:4] = 5.0, 0.1, 0.5, 0.0   # V, k1, k2, ratio
+    >>> # the copy for a call without a delay, the dynamic model, a law or a
+    >>> # varying speed, as the engine runs it (a third of the compilation)
+    >>> from fws_control.simulation.compiled_variants import variant
+    >>> closed_loop_jac = variant(closed_loop_jac, [])
     >>> J = np.empty((5, 5))
     >>> closed_loop_jac(0.0, np.zeros(5), p, q, tab.breaks, tab.coefs, J)
     >>> J[3].round(6).tolist()           # (cf - delta_f) / T, cf = -k1 e - k2 theta

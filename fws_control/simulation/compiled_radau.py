@@ -325,6 +325,10 @@ def radau_run(y0, p, q, breaks, coefs, t0, t_bound, h0, rtol, atol, ts, ys, qs):
     >>> tab = curvature_table(fws.Straight())
     >>> q = shared_parameters(veh, tab, feedforward=False, time_constant=0.05)
     >>> p = np.zeros(8); p[:4] = 5.0, 0.1, 0.5, 0.0
+    >>> # the copy for a call without a delay, the dynamic model, a law or a
+    >>> # varying speed, as the engine runs it (a third of the compilation)
+    >>> from fws_control.simulation.compiled_variants import variant
+    >>> radau_run = variant(radau_run, [])
     >>> m = 5000
     >>> ts, ys, qs = np.empty(m), np.empty((m, 5)), np.empty((m, 5, 3))
     >>> n, status = radau_run(np.array([0, 1.0, 0, 0, 0]), p, q, tab.breaks,
