@@ -296,11 +296,23 @@ def LQRController(  # noqa: N802 - a constructor in the issue's naming
 
 
 def _lqr(A, B, Q, R, ratio):
-    """control.lqr, its numerical failures named by the arguments."""
-    import control as ct
+    """The LQR gain ``K = R^-1 B^T P``, its failures named by the arguments.
 
+    ``P`` is the stabilising solution of the continuous algebraic Riccati
+    equation (:func:`scipy.linalg.solve_continuous_are`): what
+    :func:`control.lqr` computes without slycot, without python-control's
+    import (0.6 s of CPU, which ``fws-control compare`` would pay for its two
+    LQR rows; ``tests/test_baselines.py`` checks the gains against
+    :func:`control.lqr`).
+    """
+    from scipy.linalg import solve_continuous_are
+
+    for name, M in (("Q", Q), ("R", R)):
+        if np.any(np.abs(M - M.T) > np.finfo(float).eps * max(1.0, np.max(np.abs(M)))):
+            raise ValueError(f"{name} must be symmetric, got {M.tolist()!r}")
     try:
-        K, _, _ = ct.lqr(A, B, Q, R)
+        P = solve_continuous_are(A, B, Q, R)
+        K = np.linalg.solve(R, B.T @ P)
     except (np.linalg.LinAlgError, ValueError) as exc:
         # e.g. R = 1e300: the Hamiltonian pencil has eigenvalues on the axis
         raise ValueError(

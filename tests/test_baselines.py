@@ -1159,6 +1159,14 @@ _P13 = fws.LateralPlant(PAPER_VEHICLE, speed=5.0, curvature=0.1)
             ValueError,
         ),  # fmt: skip
         (
+            # not symmetric (the Riccati equation's weights are)
+            lambda: fws.LQRController(
+                _P13, Q=np.array([[1.0, 0.5], [0.0, 1.0]]), R=np.eye(2)
+            ),
+            "Q",
+            ValueError,
+        ),  # fmt: skip
+        (
             lambda: fws.LQRController(_P13, Q=np.eye(2), R=1.0, ratio=[1.0, 2.0]),
             "ratio",
             ValueError,
