@@ -29,6 +29,20 @@ from scipy.integrate import solve_ivp
 
 import fws_control as fws
 from fws_control.mpc import zoh_discretize
+from fws_control.simulation.compiled import available as compiled_available
+
+# both engines run a sampled controller (the compiled one held command by
+# held command, fws_control.simulation.compiled_sampled)
+ENGINES = [
+    "numpy",
+    pytest.param(
+        "compiled",
+        marks=pytest.mark.skipif(
+            not compiled_available(),
+            reason="numba is not installed: no compiled engine",
+        ),
+    ),
+]
 
 VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
 F = VEH.wheelbase
@@ -179,7 +193,8 @@ def test_closed_form_discretisation_keeps_the_expm_plans(monkeypatch):
     np.testing.assert_allclose(closed, expm, rtol=0, atol=10 * mpc.tolerance)
 
 
-def test_delay_prediction_equals_delayed_simulation():
+@pytest.mark.parametrize("engine", ENGINES)
+def test_delay_prediction_equals_delayed_simulation(engine):
     """On a straight path with a small offset (the model's nonlinearity is
     cubic there), the prediction over the 0.24 s delay equals the library's
     delayed nonlinear simulation to 1e-6 m; the samples align with the
@@ -198,8 +213,9 @@ def test_delay_prediction_equals_delayed_simulation():
         duration=float(t[-1]),
         t_eval=t,
         delay=delay,
+        engine=engine,
     )
-    assert res.engine == "numpy" and res.status == "ok"
+    assert res.engine == engine and res.status == "ok"
     replay = mpc.start(VEH, fws.Straight(), speed=V)
     # the samples before the start measure the initial state
     for _ in range(nd):
@@ -294,8 +310,9 @@ class SampledP(fws.LateralController):
         return Run()
 
 
+@pytest.mark.parametrize("engine", ENGINES)
 @pytest.mark.parametrize("delay", [0.0, 0.25])
-def test_zero_order_hold_against_piecewise_solve_ivp(delay):
+def test_zero_order_hold_against_piecewise_solve_ivp(delay, engine):
     """Samples at k Ts measure the state (the initial one before t = 0);
     each command applies from k Ts + delay until the next: the reference
     integrates the kinematic path-frame model piece by piece here."""
@@ -313,8 +330,9 @@ def test_zero_order_hold_against_piecewise_solve_ivp(delay):
         delay=delay,
         rtol=1e-11,
         atol=1e-12,
+        engine=engine,
     )
-    assert res.engine == "numpy"
+    assert res.engine == engine
 
     def rhs(_, z, df, dr):
         s, e, th = z
@@ -389,7 +407,8 @@ def test_static_interfaces_refuse():
         mpc.steering(VEH, fws.Straight(), s=0, e=0, theta=0, curvature=0, speed=5)
     with pytest.raises(TypeError, match="sampled"):
         mpc.system(VEH, fws.Straight(), speed=5.0)
-    with pytest.raises(ValueError, match="compiled"):
+    # the compiled engine holds its commands with DOP853 only
+    with pytest.raises(ValueError, match="engine='compiled' cannot run.*Radau"):
         fws.simulate(
             fws.LateralPlant(VEH, speed=5.0),
             fws.Straight(),
@@ -397,6 +416,7 @@ def test_static_interfaces_refuse():
             initial_state=(0, 1, 0),
             duration=1.0,
             engine="compiled",
+            method="Radau",
         )
 
 

@@ -123,6 +123,7 @@ from ..controllers import steering_command
 from ..dynamics import axle_loads, require_dynamics
 from ..gains import SteeringGains
 from ..hints import RealArrayLike
+from ..lateral_controller import LateralController
 from ..paths import Arc, Clothoid, Path, PathChain, Straight
 from ..validation import check_positive
 from ..vehicle import Vehicle
@@ -223,6 +224,7 @@ __all__ = [
     "solve_run",
     "STATUS_CODES",
     "STAT_FIELDS",
+    "pose_signals",
     "DEFAULT_MARGIN",
     "METHODS",
 ]
@@ -825,7 +827,7 @@ def compiled_support(
 def integrate_compiled(
     vehicle: Vehicle,
     path: Path | CurvatureTable,
-    gains: SteeringGains,
+    gains: SteeringGains | LateralController,
     *,
     speed: np.ndarray,
     feedforward: bool,
@@ -847,6 +849,7 @@ def integrate_compiled(
     body_state: np.ndarray | None = None,
     profile: Any = None,
     schedule: Any = None,
+    actuator_state: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Integrate ``n`` runs, each with its own steps and events.
 
@@ -933,6 +936,10 @@ def integrate_compiled(
     schedule : GainSchedule, optional
         With a `profile`: gains read at the current speed instead of
         `gains` (each run's start gains are the schedule's at its start).
+    actuator_state : ndarray, optional
+        Initial ``(delta_f, delta_r)`` of the actuator per run, shape
+        ``(n, 2)``, with a `time_constant` (default: the initial command,
+        so that the actuator has no transient of its own).
 
     Returns
     -------
@@ -1021,6 +1028,8 @@ def integrate_compiled(
     m = (3 if time_constant is None else 5) + (2 if dyn else 0)
     Y0 = np.empty((n, m))
     Y0[:, :3] = z0
+    if actuator_state is not None and time_constant is None:
+        raise ValueError("actuator_state needs a time_constant (an actuator)")
     if (time_constant is not None or dyn) and code > 0:
         cmd = initial_command(vehicle, path, gains, z0, table(z0[:, 0]), speed)
     elif time_constant is not None or dyn:
@@ -1033,7 +1042,14 @@ def integrate_compiled(
             curvature=kappa,
             feedforward=feedforward,
         )
-    if time_constant is not None:
+    if actuator_state is not None:
+        act = np.asarray(actuator_state, dtype=float)
+        if act.shape != (n, 2):
+            raise ValueError(
+                f"actuator_state must have shape ({n}, 2), got {act.shape}"
+            )
+        Y0[:, 3:5] = act
+    elif time_constant is not None:
         # The actuator starts at the command: no initial transient of its own.
         Y0[:, 3:5] = np.stack(cmd, axis=1)
     if dyn:
@@ -1092,7 +1108,9 @@ def integrate_compiled(
     return np.moveaxis(out, 1, 0), status, message, t_stop, stats
 
 
-def _run_parameters(gains: SteeringGains, speed: np.ndarray) -> np.ndarray:
+def _run_parameters(
+    gains: SteeringGains | LateralController, speed: np.ndarray
+) -> np.ndarray:
     n = speed.size
     P = np.zeros((n, NP))  # clip modes 0
     P[:, P_SPEED] = speed
@@ -1125,7 +1143,7 @@ def _law_arrays(
 def compiled_outputs(
     vehicle: Vehicle,
     path: Path,
-    gains: SteeringGains,
+    gains: SteeringGains | LateralController,
     *,
     speed: np.ndarray,
     feedforward: bool,
@@ -1138,6 +1156,7 @@ def compiled_outputs(
     t_eval: np.ndarray | None = None,
     model: str = "kinematic",
     tyre: str = "linear",
+    pose: bool = True,
 ) -> np.ndarray:
     """All signals of :data:`~fws_control.simulation.engine.SIGNALS`, compiled.
 
@@ -1179,6 +1198,9 @@ def compiled_outputs(
         As given to :func:`integrate_compiled`; with the dynamic model
         ``v_y`` and the yaw rate are its states, the slip angles those of
         its axles and the lateral acceleration ``dv_y/dt + u r``.
+    pose : bool, optional
+        If False, the rows ``x, y, psi`` are left unset (for a caller that
+        fills them once for several calls, :func:`pose_signals`).
 
     Returns
     -------
@@ -1221,15 +1243,16 @@ def compiled_outputs(
             f"out must be a float64 array of shape {(n, NSIG, T)}, got "
             f"{out.dtype} {out.shape}"
         )
-    if isinstance(path, Straight):
-        pose = np.array([1.0, *path.start, path.start_heading, 0.0])
-    elif isinstance(path, Arc):
-        pose = np.array([2.0, *path.start, path.start_heading, path.kappa])
+    # the pose in the kernels for Straight and Arc, else pose_signals (numpy)
+    if pose and isinstance(path, Straight):
+        kind = np.array([1.0, *path.start, path.start_heading, 0.0])
+    elif pose and isinstance(path, Arc):
+        kind = np.array([2.0, *path.start, path.start_heading, path.kappa])
     else:
-        pose = np.zeros(5)
+        kind = np.zeros(5)
     top = _stage_kernels(q)
     with compiling("signals"):
-        top.signals_batch(st, P, q, breaks, coefs, _rear_to_cg(vehicle), pose, out)
+        top.signals_batch(st, P, q, breaks, coefs, _rear_to_cg(vehicle), kind, out)
         if solution is not None and delay > 0.0:  # (a delay: a solution)
             if t_eval is None or t_eval.shape != (T,):
                 raise ValueError(
@@ -1242,30 +1265,74 @@ def compiled_outputs(
                 np.ascontiguousarray(solution.initial_state, dtype=float),
                 np.ascontiguousarray(t_eval, dtype=float), out,
             )  # fmt: skip
+    if pose and kind[0] == 0.0:
+        pose_signals(path, table, out, initial_heading)
+    elif pose:
+        _psi_on_branch(out, initial_heading)
+    return out
+
+
+def pose_signals(
+    path: Path, table: CurvatureTable, signals: np.ndarray, initial_heading: Any
+) -> None:
+    """Fill the rows ``x, y, psi`` of `signals` from its rows ``s, e, theta``.
+
+    In place, on every run and time where ``s`` is finite: the global pose
+    of the rear axle from the path's position and heading at ``s`` (numpy,
+    ``s`` clipped to an open path's ends), ``psi`` unwrapped in time (a
+    stopped run's NaN tail held at its last value) on the branch of each
+    run's `initial_heading`.
+
+    Parameters
+    ----------
+    path : Path
+        The reference path.
+    table : CurvatureTable
+        Its curvature table (its period and open length).
+    signals : ndarray
+        Shape ``(n, len(SIGNALS), T)`` in the order of
+        :data:`~fws_control.simulation.outcomes.SIGNALS`.
+    initial_heading : array_like
+        Per run initial ``psi`` [rad], shape ``(n,)``.
+
+    Examples
+    --------
+    >>> import numpy as np, fws_control as fws
+    >>> from fws_control.simulation.compiled import curvature_table, pose_signals
+    >>> path = fws.Arc(curvature=0.1)
+    >>> sig = np.full((1, 15, 1), np.nan)
+    >>> sig[0, 3:6, 0] = [5 * np.pi, 0.0, 0.0]   # s, e, theta: a quarter turn
+    >>> pose_signals(path, curvature_table(path), sig, [0.0])
+    >>> np.round(sig[0, :3, 0], 9).tolist()        # x, y, psi (radius 10 m)
+    [10.0, 10.0, 1.570796327]
+    """
+    out = signals
+    n, _, T = out.shape
     S = out[:, 3]
     valid = np.isfinite(S)
-    if pose[0] == 0.0:
-        # other paths: position and heading from the path (numpy), psi
-        # unwrapped in time (a stopped run's NaN tail held at its last value)
-        s_path = S[valid]
-        if table.period == 0.0 and math.isfinite(table.open_length):
-            s_path = np.clip(s_path, 0.0, table.open_length)
-        heading = np.asarray(path.heading(s_path), dtype=float)
-        px, py = path.position(s_path)
-        e = out[:, 4][valid]
-        out[:, 0][valid] = px - e * np.sin(heading)
-        out[:, 1][valid] = py + e * np.cos(heading)
-        psi = np.full((n, T), np.nan)
-        psi[valid] = out[:, 5][valid] + heading
-        idx = np.where(valid, np.arange(T), 0)
-        np.maximum.accumulate(idx, axis=1, out=idx)
-        filled = np.nan_to_num(np.take_along_axis(psi, idx, axis=1))
-        out[:, 2] = np.where(valid, np.unwrap(filled, axis=1), np.nan)
-    # psi on the branch of the given initial heading
+    s_path = S[valid]
+    if table.period == 0.0 and math.isfinite(table.open_length):
+        s_path = np.clip(s_path, 0.0, table.open_length)
+    heading = np.asarray(path.heading(s_path), dtype=float)
+    px, py = path.position(s_path)
+    e = out[:, 4][valid]
+    out[:, 0][valid] = px - e * np.sin(heading)
+    out[:, 1][valid] = py + e * np.cos(heading)
+    psi = np.full((n, T), np.nan)
+    psi[valid] = out[:, 5][valid] + heading
+    idx = np.where(valid, np.arange(T), 0)
+    np.maximum.accumulate(idx, axis=1, out=idx)
+    filled = np.nan_to_num(np.take_along_axis(psi, idx, axis=1))
+    out[:, 2] = np.where(valid, np.unwrap(filled, axis=1), np.nan)
+    _psi_on_branch(out, initial_heading)
+
+
+def _psi_on_branch(signals: np.ndarray, initial_heading: Any) -> None:
+    # the row psi of each run shifted by whole turns onto the branch of the
+    # run's initial heading (in place)
     psi0 = np.asarray(initial_heading, dtype=float)
-    shift = 2 * math.pi * np.round((psi0 - out[:, 2, 0]) / (2 * math.pi))
-    out[:, 2] += np.nan_to_num(shift)[:, None]
-    return out
+    shift = 2 * math.pi * np.round((psi0 - signals[:, 2, 0]) / (2 * math.pi))
+    signals[:, 2] += np.nan_to_num(shift)[:, None]
 
 
 @dataclass(frozen=True)
@@ -1311,7 +1378,7 @@ class CompiledSolution:
 def compiled_peaks(
     vehicle: Vehicle,
     path: Path | CurvatureTable,
-    gains: SteeringGains,
+    gains: SteeringGains | LateralController,
     *,
     speed: np.ndarray,
     feedforward: bool,

@@ -15,7 +15,11 @@ law                        parameters (``p[12:]``)
 ``"pure_pursuit"``         look-ahead [m], look-ahead time [s] (0: none), ratio
 ``"stanley"``              gain [1/s], softening [m/s], ratio
 ``"rear_wheel_feedback"``  ``K_e`` [1/m^2], ``K_theta`` [1/m], ratio
+``"held"``                 ``delta_f``, ``delta_r`` [rad]
 =========================  =================================================
+
+``"held"`` is a constant command: a sampled controller's zero-order hold
+between two switches (:mod:`~fws_control.simulation.compiled_sampled`).
 
 Pure pursuit and Stanley need the path's position and heading, which the
 kernels read from a :class:`GeometryTable`: cubic Hermite interpolants of
@@ -79,8 +83,11 @@ __all__ = [
 
 #: Names of the compiled laws; the code of a law is its index (0: the
 #: paper's law of :class:`~fws_control.SteeringGains`).
-LAWS = ("paper", "state_feedback", "pure_pursuit", "stanley", "rear_wheel_feedback")
-_STATE_FEEDBACK, _PURE_PURSUIT, _STANLEY, _REAR_WHEEL = 1, 2, 3, 4
+LAWS = (
+    "paper", "state_feedback", "pure_pursuit", "stanley", "rear_wheel_feedback",
+    "held",
+)  # fmt: skip
+_STATE_FEEDBACK, _PURE_PURSUIT, _STANLEY, _REAR_WHEEL, _HELD = 1, 2, 3, 4, 5
 
 # Slots of the shared parameter vector q (the compiled engine's layout,
 # slots 28-35): the law's code, the number of rows of the curvature table
@@ -434,6 +441,8 @@ def make_law_command(eqs: dict, table_position, table_piece, jit):
         f = q[_Q_WHEELBASE]
         V = p[_P_SPEED]
         a = P_LAW
+        if code == _HELD:
+            return p[a], p[a + 1]
         if code == _STATE_FEEDBACK:
             cf = feedback_angle(e, th, p[a], p[a + 1])
             if p[a + 4] != 0.0:

@@ -28,7 +28,6 @@ subpackage, not part of the top-level API.
 
 from __future__ import annotations
 
-import heapq
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -64,6 +63,7 @@ from .options import (
     output_samples,
     resolve_time_constant,
     run_gains,
+    sample_events,
     split_initial_state,
     time_grid,
 )
@@ -654,34 +654,6 @@ def integrate(
     return out, status, message, t_stop
 
 
-#: Relative slack with which a delay counts as a whole number of samples
-#: (then the commands switch exactly at the sample times).
-_WHOLE_SAMPLES = 1e-9
-
-
-def _sample_events(t0: float, t_end: float, sample_time: float, delay: float):
-    """``(time, kind, k)`` of a sampled run, in the order they happen (lazily).
-
-    Sample ``k`` measures the state at ``t0 + k Ts`` (the initial state for
-    ``k <= 0``: the state is held before ``t0``) and its command is applied
-    from ``t0 + k Ts + delay`` until the next one's; kind 0 is the
-    measurement, kind 1 the switch. The first sample is the one whose command
-    is applied at ``t0``.
-    """
-    ts = sample_time
-    d = delay / ts
-    if abs(d - round(d)) <= _WHOLE_SAMPLES * max(1.0, d):
-        d = round(d)
-    k_first = math.floor(-d)
-    k_last = math.floor((t_end - t0) / ts - d)  # the last switch before t_end
-    samples = range(k_first, k_last + 1)
-    measures = ((t0 + max(k, 0) * ts, 0, k) for k in samples)
-    switches = (
-        (max(t0 + (k + d) * ts, t0), 1, k) for k in samples if t0 + (k + d) * ts < t_end
-    )
-    return heapq.merge(measures, switches)
-
-
 def _integrate_sampled(
     vehicle, path, ctrl, *, speed, feedforward, path_state, t_eval, time_constant,
     method, rtol, atol, delay, solution, model, tyre, body_state,
@@ -689,11 +661,12 @@ def _integrate_sampled(
     """:func:`integrate` with a sampled controller (zero-order hold).
 
     The controller's command is a pair of state rows
-    (:func:`~fws_control.simulation.loop.hold_row`), constant between its switches: the
-    solver restarts at every measurement and switch time (:func:`_sample_events`), where
-    the rows are set to the command of that sample, computed by the run's own
-    ``ctrl.start(...)`` from the state at the measurement time. The delay is in the
-    switch times, so no delayed rows are returned.
+    (:func:`~fws_control.simulation.loop.hold_row`), constant between its
+    switches: the solver restarts at every measurement and switch time
+    (:func:`~fws_control.simulation.options.sample_events`), where the rows
+    are set to the command of that sample, computed by the run's own
+    ``ctrl.start(...)`` from the state at the measurement time. The delay is
+    in the switch times, so no delayed rows are returned.
     """
     tau = time_constant
     n, T = speed.size, t_eval.size
@@ -715,7 +688,7 @@ def _integrate_sampled(
     t0, t_end = float(t_eval[0]), float(t_eval[-1])
     Y = np.zeros((m, n))
     Y[:3] = np.asarray(path_state, dtype=float).T
-    events = _sample_events(t0, t_end, float(ctrl.sample_time), delay)
+    events = sample_events(t0, t_end, float(ctrl.sample_time), delay)
     nxt = next(events, None)
     pending: dict[int, np.ndarray] = {}
     active = np.arange(n)

@@ -14,6 +14,7 @@ these before a run starts; the engines take the checked values.
 
 from __future__ import annotations
 
+import heapq
 import math
 from collections.abc import Iterator, Mapping
 from typing import TYPE_CHECKING, Any
@@ -62,6 +63,8 @@ __all__ = [
     "path_key",
     "MAX_SAMPLES",
     "check_sampling",
+    "WHOLE_SAMPLES",
+    "sample_events",
 ]
 
 
@@ -829,3 +832,40 @@ def check_sampling(controller: Any, duration: float) -> None:
             "(each restarts the solver and calls the controller); a longer "
             "sample_time or a shorter duration"
         )
+
+
+#: Relative slack with which a delay counts as a whole number of samples
+#: (then the commands switch exactly at the sample times).
+WHOLE_SAMPLES = 1e-9
+
+
+def sample_events(
+    t0: float, t_end: float, sample_time: float, delay: float
+) -> Iterator[tuple[float, int, int]]:
+    """``(time, kind, k)`` of a sampled run, in the order they happen (lazily).
+
+    Sample ``k`` measures the state at ``t0 + k Ts`` (the initial state for
+    ``k <= 0``: the state is held before ``t0``) and its command is applied
+    from ``t0 + k Ts + delay`` until the next one's; kind 0 is the
+    measurement, kind 1 the switch. The first sample is the one whose command
+    is applied at ``t0``. Both engines run a sampled controller on these
+    events.
+
+    Examples
+    --------
+    >>> from fws_control.simulation.options import sample_events
+    >>> [(round(t, 9), kind, k) for t, kind, k in sample_events(0.0, 0.1, 0.05, 0.05)]
+    [(0.0, 0, -1), (0.0, 0, 0), (0.0, 1, -1), (0.05, 0, 1), (0.05, 1, 0)]
+    """
+    ts = sample_time
+    d = delay / ts
+    if abs(d - round(d)) <= WHOLE_SAMPLES * max(1.0, d):
+        d = round(d)
+    k_first = math.floor(-d)
+    k_last = math.floor((t_end - t0) / ts - d)  # the last switch before t_end
+    samples = range(k_first, k_last + 1)
+    measures = ((t0 + max(k, 0) * ts, 0, k) for k in samples)
+    switches = (
+        (max(t0 + (k + d) * ts, t0), 1, k) for k in samples if t0 + (k + d) * ts < t_end
+    )
+    return heapq.merge(measures, switches)

@@ -72,7 +72,7 @@ from .chunks import (
 )
 from .cluster import run_on_dask
 from .dense import CompiledDense
-from .loop import scheduled_gains
+from .loop import is_sampled, scheduled_gains
 from .options import (
     LSODA_MAX_RUNS,
     SAFE_STEP,
@@ -126,6 +126,12 @@ def _compiled_reason(
     from .compiled import compiled_support
     from .compiled_speed import compiled_speed_reason
 
+    if is_sampled(gains):
+        # held commands between the samples (compiled_sampled); the delay
+        # is in the switch times
+        from .compiled_sampled import HeldCommand
+
+        gains, delay = HeldCommand(0.0, 0.0), 0.0
     reason = compiled_support(path, gains, delay=delay, method=method, model=model)
     if reason is None and feedforward == "dynamic":
         reason = "feedforward='dynamic' is not compiled"
@@ -262,6 +268,21 @@ def _run_compiled_stages(
         rows = np.ascontiguousarray(x0[:, :3]).view(np.dtype((np.void, 24))).ravel()
         _, first, inverse = np.unique(rows, return_index=True, return_inverse=True)
         path_state = initial_path_state(path, x0[first, :3])[inverse.ravel()]
+    if is_sampled(ctrl):
+        from .compiled_sampled import run_sampled
+
+        *results, peaks, peak_times = run_sampled(
+            vehicle, path, ctrl, speed=speed, path_state=path_state,
+            initial_heading=x0[:, 2], t_eval=t, time_constant=tau, table=table,
+            rtol=opts["rtol"], atol=opts["atol"],
+            max_step=opts.get("max_step", math.inf), delay=opts["delay"],
+            model=opts["model"], tyre=opts["tyre"],
+            body_state=x0[:, 3:] if opts["model"] == "dynamic" else None,
+        )  # fmt: skip
+        if out is not None:
+            out[...] = results[0]
+            results[0] = out
+        return (*results, peaks, peak_times)
     states, status, message, t_stop, _ = integrate_compiled(
         vehicle,
         table if ctrl is None else path,  # (a law may need the path's position)
