@@ -31,15 +31,23 @@ case 1. Cases on the numpy engine cost seconds per run: they run
 ones ``--runs`` (default 100). The machine load is printed before and
 after.
 
+With ``--breakdown``, each compiled case is run once more with the
+compiled engine's three stages timed (the integration, the signals, the
+exact peaks; CPU per run) and the integration's statistics averaged over
+the runs (accepted and rejected steps, right-hand-side evaluations): the
+ratios split into the steps a case takes and the cost of each evaluation
+of its law.
+
 Run: ``python benchmarks/bench_cases.py [--runs 100] [--numpy-runs 2]``
-``[--only "braking lane change"]`` (the cases whose name starts so, and
-the paper's law)
+``[--only "braking lane change"] [--breakdown]`` (the cases whose name
+starts so, and the paper's law)
 (several minutes: the numpy cases dominate).
 """
 
 from __future__ import annotations
 
 import argparse
+import time
 
 import numpy as np
 from timing import best_of_interleaved, machine_line
@@ -134,6 +142,55 @@ def braking(course, n: int, engine: str):
     return run
 
 
+def breakdown(table: dict) -> None:
+    """Print each compiled case's stages and integration statistics."""
+    import fws_control.simulation.compiled as compiled
+
+    stages = ("integrate_compiled", "compiled_outputs", "compiled_peaks")
+    spent: dict[str, float] = {}
+    stats: list[np.ndarray] = []
+    originals = {name: getattr(compiled, name) for name in stages}
+
+    def timed(name):
+        def call(*args, **kwargs):
+            t0 = time.process_time()
+            out = originals[name](*args, **kwargs)
+            spent[name] = spent.get(name, 0.0) + time.process_time() - t0
+            if name == "integrate_compiled":
+                stats.append(out[4])
+            return out
+
+        return call
+
+    print("compiled stages, CPU per run [ms]; integration statistics per run")
+    print(f"  {'case':26s} {'integrate':>9s} {'signals':>8s} {'peaks':>6s}"
+          f" {'steps':>6s} {'rejected':>8s} {'rhs':>6s} {'us/rhs':>7s}")  # fmt: skip
+    try:
+        # (the runners look the stages up in compiled at every call)
+        for name in stages:
+            setattr(compiled, name, timed(name))
+        for name, (n, run, engine) in table.items():
+            if engine != "compiled":
+                continue
+            best: dict[str, float] = {}
+            for _ in range(3):  # best of 3 per stage
+                spent.clear()
+                stats.clear()
+                run()
+                for k, v in spent.items():
+                    best[k] = min(best.get(k, np.inf), v)
+            st = np.concatenate(stats).mean(axis=0)
+            # "-": a stage this case computes otherwise (a varying speed's
+            # signals and peaks are the numpy engine's functions)
+            ms = [f"{1e3 * best[k] / n:.3f}" if k in best else "-" for k in stages]
+            us_rhs = 1e6 * best["integrate_compiled"] / n / st[2]
+            print(f"  {name:26s} {ms[0]:>9s} {ms[1]:>8s} {ms[2]:>6s}"
+                  f" {st[0]:6.0f} {st[1]:8.0f} {st[2]:6.0f} {us_rhs:7.3f}")  # fmt: skip
+    finally:
+        for name, fn in originals.items():
+            setattr(compiled, name, fn)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=100)
@@ -141,6 +198,9 @@ def main() -> None:
     ap.add_argument("--baseline-runs", type=int, default=None)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--only", default="", help="cases whose name starts so")
+    ap.add_argument(
+        "--breakdown", action="store_true", help="time the compiled stages too"
+    )
     args = ap.parse_args()
     print(machine_line())
     n_baseline = args.runs if args.baseline_runs is None else args.baseline_runs
@@ -157,6 +217,8 @@ def main() -> None:
             f"  {name:26s} {engine:9s} {n:4d} runs  {per_run * 1e3:10.2f} ms  "
             f"{per_run / base:8.1f}x"
         )
+    if args.breakdown:
+        breakdown(table)
     print(machine_line())
 
 
