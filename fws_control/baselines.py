@@ -300,10 +300,10 @@ def _lqr(A, B, Q, R, ratio):
 
     ``P`` is the stabilising solution of the continuous algebraic Riccati
     equation (:func:`scipy.linalg.solve_continuous_are`): what
-    :func:`control.lqr` computes without slycot, without python-control's
-    import (0.6 s of CPU, which ``fws-control compare`` would pay for its two
-    LQR rows; ``tests/test_baselines.py`` checks the gains against
-    :func:`control.lqr`).
+    :func:`control.lqr` computes without slycot, without importing
+    python-control, which ``fws-control compare`` would otherwise import for
+    its two LQR rows alone (``tests/test_baselines.py`` checks the gains
+    against :func:`control.lqr`).
     """
     from scipy.linalg import solve_continuous_are
 

@@ -386,8 +386,8 @@ class ControllerComparison:
     def draw(self, *, ax: Sequence[Axes] | np.ndarray | None = None) -> Figure:
         """The panels of :meth:`plot` on a matplotlib figure.
 
-        Without python-control (whose import costs about 0.6 s of CPU):
-        what ``fws-control compare`` saves.
+        Without importing python-control (with its scipy.signal and
+        scipy.stats): what ``fws-control compare`` saves.
 
         Parameters
         ----------
