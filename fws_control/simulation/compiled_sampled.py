@@ -14,9 +14,10 @@ restarts its solver there), computes the segment's signals and exact peaks
 on the segment's dense output, and carries every state, the actuator's and
 the body's included, into the next segment.
 
-An output time within ``1e-9`` sample times of a switch shows the new
-command (the hold is right-continuous), as on the numpy engine; the state
-there is the one at the switch.
+An output time within :data:`~fws_control.simulation.options.AT_SWITCH`
+sample times of a switch shows the new command (the hold is
+right-continuous), as on the numpy engine; the state there is the one at
+the switch.
 """
 
 from __future__ import annotations
@@ -37,14 +38,10 @@ from .compiled import (
     pose_signals,
 )
 from .compiled_layout import NSIG
-from .options import sample_events
+from .options import AT_SWITCH, sample_events
 from .outcomes import PEAK_SIGNALS, STATUS_OK
 
 __all__ = ["HeldCommand", "run_sampled"]
-
-#: An output time this close to a switch, in sample times, shows the new
-#: command (the numpy engine's rule).
-AT_SWITCH = 1e-9
 
 
 @dataclass(frozen=True, eq=False)

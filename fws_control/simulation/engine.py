@@ -44,6 +44,7 @@ from ..vehicle import Vehicle
 from .dense import DenseSolution, History, delayed_rows
 from .loop import ClosedLoop, hold_row, is_sampled, scheduled_gains
 from .options import (
+    AT_SWITCH,
     ATOL_RANGE,
     LONG_RUN_STEPS,
     LSODA_MAX_RUNS,
@@ -712,7 +713,9 @@ def _integrate_sampled(
             if history is not None:
                 # a switch at an output time: that sample shows the new
                 # command (the hold is right-continuous)
-                at = np.flatnonzero(np.abs(t_eval - t_cur) <= 1e-9 * ctrl.sample_time)
+                at = np.flatnonzero(
+                    np.abs(t_eval - t_cur) <= AT_SWITCH * ctrl.sample_time
+                )
                 if at.size:
                     rows = Y[hold : hold + 2, :, None]
                     out[hold : hold + 2, active[:, None], at[None, :]] = rows

@@ -64,6 +64,7 @@ __all__ = [
     "MAX_SAMPLES",
     "check_sampling",
     "WHOLE_SAMPLES",
+    "AT_SWITCH",
     "sample_events",
 ]
 
@@ -837,6 +838,10 @@ def check_sampling(controller: Any, duration: float) -> None:
 #: Relative slack with which a delay counts as a whole number of samples
 #: (then the commands switch exactly at the sample times).
 WHOLE_SAMPLES = 1e-9
+
+#: An output time this close to a switch, in sample times, shows the new
+#: command: a zero-order hold is right-continuous.
+AT_SWITCH = 1e-9
 
 
 def sample_events(
