@@ -121,7 +121,7 @@ class LateralController:
     #: :func:`~fws_control.simulate` calls ``step`` with the state at the
     #: sample times ``k * sample_time`` (the initial state for the samples at
     #: or before the start) and holds each command for one sample time from
-    #: ``k * sample_time + delay`` (zero-order hold), on the numpy engine.
+    #: ``k * sample_time + delay`` (zero-order hold), on either engine.
     sample_time: float | None = None
 
     def compiled_law(self) -> tuple[str, tuple[Any, ...]] | None:

@@ -45,9 +45,10 @@ solution is the command applied at :math:`t_k + \tau_d`.
 Sampling
 --------
 The controller is sampled: :func:`~fws_control.simulate` holds each command
-for one sample time (zero-order hold) and runs it on the numpy engine (see
+for one sample time (zero-order hold), on either engine (see
 :attr:`LateralController.sample_time
-<fws_control.LateralController.sample_time>`).
+<fws_control.LateralController.sample_time>`); the compiled engine
+integrates the held commands (:mod:`~fws_control.simulation.compiled_sampled`).
 """
 
 from __future__ import annotations
@@ -248,7 +249,7 @@ class MPCController(LateralController):
     The formulation, the delay compensation and the solver are described in
     :mod:`fws_control.mpc`. A sampled controller:
     :func:`~fws_control.simulate` calls it every `sample_time` and holds the
-    command in between (zero-order hold), on the numpy engine.
+    command in between (zero-order hold).
 
     Parameters
     ----------
@@ -290,8 +291,8 @@ class MPCController(LateralController):
     >>> mpc = fws.MPCController(sample_time=0.05, horizon=40)
     >>> res = fws.simulate(plant, fws.Straight(), mpc,
     ...                    initial_state=(0.0, 1.0, 0.0), duration=8.0)
-    >>> res.engine, res.status, abs(float(res.e[-1])) < 0.01
-    ('numpy', 'ok', True)
+    >>> res.status, abs(float(res.e[-1])) < 0.01
+    ('ok', True)
     """
 
     sample_time: float = 0.04

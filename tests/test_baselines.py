@@ -11,7 +11,7 @@ written in this file from the original sources.
   geometry written from the definitions (closed forms for lines and arcs,
   Gauss-Legendre quadrature of the clothoid's heading), with the nearest
   path point found by brute force over a dense sampling of the path.
-* LQR against ``control.lqr`` and ``scipy.linalg.solve_continuous_are`` on a
+* LQR against ``control.lqr`` and the Riccati equation's residual on a
   Jacobian of the path-frame equations taken here by finite differences.
 * ISO 3888-1 / ISO 3888-2 gate tables, cones hit by brute force,
   compare()'s metrics recomputed from its own runs.
@@ -29,7 +29,6 @@ from conftest import PAPER_VEHICLE
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
-from scipy.linalg import solve_continuous_are
 from scipy.optimize import brentq
 
 import fws_control as fws
@@ -519,9 +518,11 @@ def test_lqr_independent_rear_matches_control_lqr(V, kappa):
     ctrl = fws.LQRController(plant, Q=Q, R=R)
     K, P, E = ct.lqr(A, B, Q, R)
     np.testing.assert_allclose(ctrl.K, K, rtol=0, atol=1e-10)
-    # Riccati equation solved here: K = R^-1 B^T P
-    P2 = solve_continuous_are(A, B, Q, R)
-    np.testing.assert_allclose(ctrl.K, np.linalg.solve(R, B.T @ P2), atol=1e-8)
+    # K = R^-1 B^T P with control.lqr's Riccati solution P, and P solves
+    # the Riccati equation A^T P + P A - P B R^-1 B^T P + Q = 0
+    np.testing.assert_allclose(R @ ctrl.K, B.T @ P, atol=1e-8)
+    residual = A.T @ P + P @ A - P @ B @ ctrl.K + Q
+    np.testing.assert_allclose(residual, 0.0, atol=1e-8)
     poles = np.sort_complex(np.linalg.eigvals(A - B @ ctrl.K))
     np.testing.assert_allclose(poles, np.sort_complex(E), atol=1e-9)
     assert np.all(poles.real < 0)

@@ -153,8 +153,23 @@ def test_stops_inside_a_segment_end_that_run_only():
     ref = fws.simulate_batch(plant, path, ConstantTurn(), engine="numpy", **kw)
     assert got.engine == "compiled"
     assert got.status.tolist() == ref.status.tolist() == ["end_of_path", "ok"]
-    assert 0.1 < got.t_stop[0] < 2.0 and got.t_stop[0] % 0.1 > 1e-3  # mid-segment
+    assert 0.1 < got.t_stop[0] < 2.0
+    assert 1e-3 < got.t_stop[0] % 0.1 < 0.1 - 1e-3  # inside a held segment
     np.testing.assert_allclose(got.t_stop, ref.t_stop, rtol=0, atol=1e-9)
     np.testing.assert_array_equal(np.isnan(got.e), np.isnan(ref.e))
     np.testing.assert_allclose(got.e, ref.e, rtol=0, atol=1e-9)
     np.testing.assert_allclose(got.delta_f, ref.delta_f, rtol=0, atol=0)
+
+
+@pytest.mark.parametrize("engine", ["compiled", "numpy"])
+def test_a_run_of_one_instant_shows_the_first_command(engine):
+    """A single output time: the run is the initial instant, whose sample
+    shows the command measured there (e = 0.5 > 0: -0.2 rad)."""
+    plant = fws.LateralPlant(VEH, speed=10.0)
+    res = fws.simulate(
+        plant, fws.Straight(), ConstantTurn(), initial_state=(0.0, 0.5, 0.0),
+        duration=1.0, t_eval=[0.0], engine=engine,
+    )  # fmt: skip
+    assert res.engine == engine and res.status == "ok"
+    assert np.ravel(res.e).tolist() == [0.5]
+    assert np.ravel(res.delta_f).tolist() == [-0.2]

@@ -408,7 +408,9 @@ def test_static_interfaces_refuse():
     with pytest.raises(TypeError, match="sampled"):
         mpc.system(VEH, fws.Straight(), speed=5.0)
     # the compiled engine holds its commands with DOP853 only
-    with pytest.raises(ValueError, match="engine='compiled' cannot run.*Radau"):
+    with pytest.raises(
+        ValueError, match="engine='compiled' cannot run.*sampled.*DOP853.*Radau"
+    ):
         fws.simulate(
             fws.LateralPlant(VEH, speed=5.0),
             fws.Straight(),

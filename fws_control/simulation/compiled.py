@@ -125,7 +125,7 @@ from ..gains import SteeringGains
 from ..hints import RealArrayLike
 from ..lateral_controller import LateralController
 from ..paths import Arc, Clothoid, Path, PathChain, Straight
-from ..validation import check_positive
+from ..validation import check_finite, check_positive
 from ..vehicle import Vehicle
 from .compilation import compile_seconds, first_use
 from .compiled_laws import (
@@ -937,9 +937,10 @@ def integrate_compiled(
         With a `profile`: gains read at the current speed instead of
         `gains` (each run's start gains are the schedule's at its start).
     actuator_state : ndarray, optional
-        Initial ``(delta_f, delta_r)`` of the actuator per run, shape
+        Initial ``(delta_f, delta_r)`` of the actuator per run, finite, shape
         ``(n, 2)``, with a `time_constant` (default: the initial command,
-        so that the actuator has no transient of its own).
+        so that the actuator has no transient of its own); the dynamic
+        model's no-slip start is then at these angles.
 
     Returns
     -------
@@ -1029,7 +1030,10 @@ def integrate_compiled(
     Y0 = np.empty((n, m))
     Y0[:, :3] = z0
     if actuator_state is not None and time_constant is None:
-        raise ValueError("actuator_state needs a time_constant (an actuator)")
+        raise ValueError(
+            "actuator_state needs an actuator: a time_constant > 0 s, got "
+            "time_constant=None"
+        )
     if (time_constant is not None or dyn) and code > 0:
         cmd = initial_command(vehicle, path, gains, z0, table(z0[:, 0]), speed)
     elif time_constant is not None or dyn:
@@ -1043,12 +1047,13 @@ def integrate_compiled(
             feedforward=feedforward,
         )
     if actuator_state is not None:
-        act = np.asarray(actuator_state, dtype=float)
+        act = np.asarray(check_finite("actuator_state", actuator_state), dtype=float)
         if act.shape != (n, 2):
             raise ValueError(
                 f"actuator_state must have shape ({n}, 2), got {act.shape}"
             )
         Y0[:, 3:5] = act
+        cmd = (act[:, 0], act[:, 1])  # (the wheels' angles: the body's start)
     elif time_constant is not None:
         # The actuator starts at the command: no initial transient of its own.
         Y0[:, 3:5] = np.stack(cmd, axis=1)

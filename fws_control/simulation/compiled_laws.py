@@ -379,7 +379,7 @@ def make_law_command(eqs: dict, table_position, table_piece, jit):
     the arc length on the path's tables (``compiled_loop.table_position``),
     the search of a table's piece (``compiled_layout.table_piece``) and the
     engine's decorator, for the law whose
-    code is ``q[Q_LAW]`` (1-4); unclipped angles. Called, not inlined: a
+    code is ``q[Q_LAW]`` (1-5); unclipped angles. Called, not inlined: a
     copy of the projection in every kernel multiplied the compilation time.
     """
     feedback_angle = eqs["feedback_angle"]

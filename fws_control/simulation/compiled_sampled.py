@@ -197,7 +197,9 @@ def run_sampled(
             else:  # its switch
                 rows, c = pending.pop(k)
                 cmd[rows] = c
-        if active.size == 0 or t_cur >= t_end:
+        # (one output time: a segment of that instant, whose initial state
+        # is checked against the stops)
+        if active.size == 0 or (t_cur >= t_end and not first_segment):
             break
         last = nxt is None or nxt[0] >= t_end
         seg_end = t_end if nxt is None or last else float(nxt[0])

@@ -856,6 +856,23 @@ def sample_events(
     is applied at ``t0``. Both engines run a sampled controller on these
     events.
 
+    Parameters
+    ----------
+    t0, t_end : float
+        Start and end of the run [s]; switches at or after `t_end` are left
+        out (but those at `t0` of a run that is the instant `t0`).
+    sample_time : float
+        :math:`T_s` [s], > 0.
+    delay : float
+        Input delay [s], >= 0; within :data:`WHOLE_SAMPLES` of a whole
+        number of samples it counts as that number.
+
+    Returns
+    -------
+    iterator of (float, int, int)
+        ``(time, kind, k)`` in time order, a measurement before a switch at
+        the same time.
+
     Examples
     --------
     >>> from fws_control.simulation.options import sample_events
@@ -870,7 +887,10 @@ def sample_events(
     k_last = math.floor((t_end - t0) / ts - d)  # the last switch before t_end
     samples = range(k_first, k_last + 1)
     measures = ((t0 + max(k, 0) * ts, 0, k) for k in samples)
+    # (a switch at t0 also when the run is that instant: its command shows)
     switches = (
-        (max(t0 + (k + d) * ts, t0), 1, k) for k in samples if t0 + (k + d) * ts < t_end
+        (max(t0 + (k + d) * ts, t0), 1, k)
+        for k in samples
+        if t0 + (k + d) * ts < t_end or t0 + (k + d) * ts <= t0
     )
     return heapq.merge(measures, switches)

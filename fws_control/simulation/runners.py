@@ -129,8 +129,14 @@ def _compiled_reason(
     if is_sampled(gains):
         # held commands between the samples (compiled_sampled); the delay
         # is in the switch times
+        from .compiled import compiled_method
         from .compiled_sampled import HeldCommand
 
+        if compiled_method(method) != "DOP853":
+            return (
+                f"a sampled controller is compiled with method='DOP853' only, "
+                f"got {method!r}"
+            )
         gains, delay = HeldCommand(0.0, 0.0), 0.0
     reason = compiled_support(path, gains, delay=delay, method=method, model=model)
     if reason is None and feedforward == "dynamic":
@@ -866,7 +872,7 @@ def simulate(
         sample times ``k * sample_time`` and its command is held from
         ``k * sample_time + delay`` until the next one (zero-order hold; the
         output at a switch time shows the new command, whose rate is zero
-        between switches), on the numpy engine.
+        between switches), on either engine.
     initial_state : array_like
         ``(x_R, y_R, psi)`` of the rear-axle centre [m, m, rad].
     duration : float
