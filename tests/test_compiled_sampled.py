@@ -173,3 +173,25 @@ def test_a_run_of_one_instant_shows_the_first_command(engine):
     assert res.engine == engine and res.status == "ok"
     assert np.ravel(res.e).tolist() == [0.5]
     assert np.ravel(res.delta_f).tolist() == [-0.2]
+
+
+def test_out_receives_the_sampled_runs_signals():
+    """simulate_batch(out=) of a sampled controller on the compiled engine
+    writes the signals into the given array: equal to the run without it,
+    NaN after a stop, and the kept-signals subset alike."""
+    path = fws.Straight(length=12.0)
+    plant = fws.LateralPlant(VEH, speed=5.0)
+    x0 = np.array([[3.3, 0.5, 0.0], [0.0, -0.3, 0.0]])
+    kw = dict(initial_state=x0, duration=2.0, dt=0.05)
+    ref = fws.simulate_batch(plant, path, ConstantTurn(), **kw)
+    out = np.full((2, 15, ref.t.size), 7.0)
+    got = fws.simulate_batch(plant, path, ConstantTurn(), out=out, **kw)
+    assert got.engine == "compiled" and np.shares_memory(got.signals, out)
+    np.testing.assert_array_equal(out, ref.signals)
+    assert np.isnan(out[0, :, -1]).all()  # run 0 left the path before the end
+    one = np.full((2, 1, ref.t.size), 7.0)
+    kept = fws.simulate_batch(
+        plant, path, ConstantTurn(), signals=("e",), out=one, **kw
+    )
+    np.testing.assert_array_equal(one[:, 0], ref.e)
+    np.testing.assert_array_equal(kept.e, ref.e)

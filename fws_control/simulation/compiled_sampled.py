@@ -99,6 +99,7 @@ def run_sampled(
     model: str = "kinematic",
     tyre: str = "linear",
     body_state: np.ndarray | None = None,
+    out: np.ndarray | None = None,
 ) -> tuple[np.ndarray, ...]:
     """Signals, statuses and exact peaks of sampled runs, compiled.
 
@@ -132,6 +133,9 @@ def run_sampled(
     body_state : ndarray, optional
         Initial ``(v_y, r)`` per run of the dynamic model (NaN: the no-slip
         motion at the first command).
+    out : ndarray, optional
+        Float64 array of shape ``(n, 15, T)`` that receives the signals (a
+        chunk's rows of a batch's result, or a memory map).
 
     Returns
     -------
@@ -166,7 +170,16 @@ def run_sampled(
     dyn = model == "dynamic"
     m = (3 if tau is None else 5) + (2 if dyn else 0)
     tol = AT_SWITCH * float(controller.sample_time)
-    signals = np.full((n, NSIG, T), np.nan)
+    if out is None:
+        signals = np.full((n, NSIG, T), np.nan)
+    elif out.shape != (n, NSIG, T) or out.dtype != np.float64:
+        raise ValueError(
+            f"out must be a float64 array of shape {(n, NSIG, T)}, got "
+            f"{out.dtype} {out.shape}"
+        )
+    else:
+        signals = out
+        signals.fill(np.nan)  # (the samples after a stop stay NaN)
     peaks = np.zeros((n, len(PEAK_SIGNALS)))
     peak_times = np.full((n, len(PEAK_SIGNALS)), float(t_eval[0]))
     status = np.full(n, STATUS_OK, dtype=object)

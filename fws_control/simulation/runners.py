@@ -277,18 +277,15 @@ def _run_compiled_stages(
     if is_sampled(ctrl):
         from .compiled_sampled import run_sampled
 
-        *results, peaks, peak_times = run_sampled(
+        return run_sampled(
             vehicle, path, ctrl, speed=speed, path_state=path_state,
             initial_heading=x0[:, 2], t_eval=t, time_constant=tau, table=table,
             rtol=opts["rtol"], atol=opts["atol"],
             max_step=opts.get("max_step", math.inf), delay=opts["delay"],
             model=opts["model"], tyre=opts["tyre"],
             body_state=x0[:, 3:] if opts["model"] == "dynamic" else None,
+            out=out,
         )  # fmt: skip
-        if out is not None:
-            out[...] = results[0]
-            results[0] = out
-        return (*results, peaks, peak_times)
     states, status, message, t_stop, _ = integrate_compiled(
         vehicle,
         table if ctrl is None else path,  # (a law may need the path's position)
