@@ -12,6 +12,9 @@
    rounds (each round times every row in turn, so that a drift of the
    machine's speed is shared). The command's CPU minus the whole call's is
    the interpreter's start, the imports, the figure and the table.
+3. The same rows in condition B of ``docs/comparison.md``: the BMW 320i on
+   the dynamic model (magic tyre) with the 0.24 s delay and the 0.27 s
+   steering lag.
 
 The machine load is printed before and after.
 
@@ -72,22 +75,41 @@ def main() -> None:
 
     veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
     course = fws.double_lane_change(vehicle_width=1.8)
-    plant = fws.LateralPlant(veh, speed=20.0)
-    ctrls = default_controllers(veh, speed=20.0)
-    compare(plant, course, ctrls)  # loads the compiled engine from the cache
-    fns = {
-        label: (lambda c={label: ctrl}: compare(plant, course, c))
-        for label, ctrl in ctrls.items()
-    }
-    fns["(all rows)"] = lambda: compare(plant, course, ctrls)
-    times = best_of_interleaved(fns, repeat=args.repeat)
-    for label, t in times.items():
-        print(f"  {label:32s} {t:6.2f} s CPU")
+    times = row_times(
+        fws.LateralPlant(veh, speed=20.0), course,
+        default_controllers(veh, speed=20.0), 0.0, args.repeat,
+    )  # fmt: skip
     print(
         f"  {'(start, imports, figure, table)':32s} "
         f"{cmd - times['(all rows)']:6.2f} s CPU (the command minus all rows)"
     )
+    # condition B of docs/comparison.md: the dynamic model with the realistic
+    # delay and steering lag (every row compiled, the delay by the method of
+    # steps)
+    bmw = fws.vehicles.BMW_320I
+    print("condition B: BMW 320i, dynamic model, magic tyre, delay 0.24 s, lag 0.27 s")
+    row_times(
+        fws.LateralPlant(bmw, speed=20.0, model="dynamic", tyre="magic",
+                         steering_lag=0.27),
+        fws.double_lane_change(), default_controllers(bmw, speed=20.0, delay=0.24),
+        0.24, args.repeat,
+    )  # fmt: skip
     print(machine_line())
+
+
+def row_times(plant, course, ctrls, delay: float, repeat: int) -> dict[str, float]:
+    """Print and return the CPU of each row of `compare` and of all rows."""
+    # loads the compiled engine's kernels from the cache
+    compare(plant, course, ctrls, delay=delay)
+    fns = {
+        label: (lambda c={label: ctrl}: compare(plant, course, c, delay=delay))
+        for label, ctrl in ctrls.items()
+    }
+    fns["(all rows)"] = lambda: compare(plant, course, ctrls, delay=delay)
+    times = best_of_interleaved(fns, repeat=repeat)
+    for label, t in times.items():
+        print(f"  {label:32s} {t:6.2f} s CPU")
+    return times
 
 
 if __name__ == "__main__":

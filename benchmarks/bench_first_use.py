@@ -141,6 +141,9 @@ def main() -> None:
     parser.add_argument("--cold", type=int, default=1, help="cold runs (each >= 10 s)")
     parser.add_argument("--case", choices=("paper", "stanley"), default="paper")
     args = parser.parse_args()
+    if args.cold < 1:
+        # the warm runs use the cache the best cold run filled
+        parser.error(f"--cold must be >= 1, got {args.cold}")
     code = child_code(args.case)
     print(machine_line())
     with tempfile.TemporaryDirectory(prefix="fws-first-use-") as tmp:

@@ -597,9 +597,13 @@ def test_out_array_and_validation():
     with pytest.raises(ValueError, match="breaks"):
         CurvatureTable([0.0, 1.0, 2.0], [[0, 0, 0, 0]])
     assert compiled_support(fws.Straight(), g) is None
-    # a baseline declares its compiled law; with a delay it is not compiled
+    # a baseline declares its compiled law (with a delay too); with Radau it
+    # is not compiled
     assert compiled_support(fws.Straight(), fws.PurePursuit()) is None
-    assert "delay" in compiled_support(fws.Straight(), fws.PurePursuit(), delay=0.1)
+    assert compiled_support(fws.Straight(), fws.PurePursuit(), delay=0.1) is None
+    assert "DOP853" in compiled_support(
+        fws.Straight(), fws.PurePursuit(), method="Radau"
+    )
     assert "DOP853" in compiled_support(fws.Straight(), g, method="RK45")
     assert compiled_support(fws.Straight(), g, method=DOP853) is None
 

@@ -324,10 +324,13 @@ CURVE = dict(initial_state=(0.0, -5.0, 0.0), duration=5.0)
         (None, {"delay": 0.1, "method": "Radau", "duration": 0.5}, "numpy",
          "Radau"),
         (None, {"method": "RK45", "duration": 1.0}, "numpy", "RK45"),
-        # a baseline: its compiled law with DOP853; on numpy with a delay
+        # a baseline: its compiled law with DOP853 (with a delay too); on
+        # numpy with Radau
         (fws.PurePursuit(lookahead=5.0), {}, "compiled", "DOP853"),
         (fws.PurePursuit(lookahead=5.0), {"delay": 0.1, "duration": 1.0},
-         "numpy", "DOP853"),
+         "compiled", "DOP853"),
+        (fws.PurePursuit(lookahead=5.0), {"method": "Radau", "duration": 0.5},
+         "numpy", "Radau"),
     ],
 )  # fmt: skip
 def test_auto_engine_rule_and_bitwise_results(gains, kwargs, engine, method):
@@ -349,12 +352,16 @@ def test_auto_engine_dynamic_model_and_table_failure(monkeypatch):
     res = fws.simulate(dynamic, ARC, g, **CURVE)
     assert res.engine == "compiled"  # (DOP853, no delay)
     _same(res, fws.simulate(dynamic, ARC, g, **CURVE, engine="compiled"))
-    # with a delay: numpy (over 1 s, ten delays: the rule does not depend on
-    # the duration, and numpy's delayed runs cost seconds per simulated second)
+    # with a delay too (over 1 s, ten delays: the rule does not depend on
+    # the duration)
     short = {**CURVE, "duration": 1.0}
     res = fws.simulate(dynamic, ARC, g, **short, delay=0.1)
+    assert res.engine == "compiled"
+    _same(res, fws.simulate(dynamic, ARC, g, **short, delay=0.1, engine="compiled"))
+    # with Radau: numpy
+    res = fws.simulate(dynamic, ARC, g, **short, method="Radau")
     assert res.engine == "numpy"
-    _same(res, fws.simulate(dynamic, ARC, g, **short, delay=0.1, engine="numpy"))
+    _same(res, fws.simulate(dynamic, ARC, g, **short, method="Radau", engine="numpy"))
     # a path whose curvature table misses its tolerance runs on numpy
     from fws_control.simulation import compiled
 

@@ -166,8 +166,8 @@ DYN = fws.Vehicle(
     [
         (VEH, None, {"delay": 0.1, "method": "Radau"}, "delay"),
         (VEH, None, {"method": "RK45"}, "DOP853"),
-        (VEH, fws.PurePursuit(lookahead=5.0), {"delay": 0.1}, "delay"),
-        (DYN, None, {"model": "dynamic", "delay": 0.1}, "model='dynamic'"),
+        (VEH, fws.PurePursuit(lookahead=5.0), {"method": "Radau"}, "compiled law"),
+        (DYN, None, {"model": "dynamic", "method": "Radau"}, "model='dynamic'"),
         (DYN, None, {"feedforward": "dynamic"}, "feedforward='dynamic'"),
     ],
 )

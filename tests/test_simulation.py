@@ -231,7 +231,7 @@ def test_singular_curvature_when_driving_into_the_centre():
     from fws_control.simulation.compiled import available
 
     engines = [("numpy", 0.998)]
-    if available():  # numba (extra "fast"); the min-versions run has none
+    if available():  # numba (extra "fast")
         engines.append(("compiled", 0.998))
     else:
         print("numba is not installed: the compiled engine's stop not tested")

@@ -74,17 +74,18 @@ does it: the steps are at most the delay, the law acts on the state at
 ``t - delay`` found on the run's own dense output (the initial state
 before the start), DOP853 restarts at ``delay``, ``2 delay`` and ``3
 delay``, where the solution's derivatives jump, and the clips are min/max
-in the right-hand side (DOP853 only; ``tests/test_compiled_delay.py``).
+in the right-hand side (DOP853 only; ``tests/test_compiled_delay.py``);
+with the dynamic model and with a controller's law as well
+(``tests/test_compiled_dynamic.py``, ``tests/test_compiled_baselines.py``).
 
 The dynamic single-track model (linear or saturating tyre) is compiled from
 the same functions of :mod:`fws_control.equations` as
-:func:`~fws_control.dynamics.dynamic_path_derivatives` (DOP853, no delay;
+:func:`~fws_control.dynamics.dynamic_path_derivatives` (DOP853;
 ``tests/test_compiled_dynamic.py``).
 
 A :class:`~fws_control.LateralController` that declares a compiled law
 (the baselines: :mod:`~fws_control.simulation.compiled_laws`) runs in the
-same right-hand side with DOP853 and without a delay
-(``tests/test_compiled_baselines.py``).
+same right-hand side with DOP853 (``tests/test_compiled_baselines.py``).
 
 A speed that varies along the run (a :class:`~fws_control.SpeedProfile`
 table of the time or the arc length) and a
@@ -95,9 +96,8 @@ follow the curvature table's rows in ``breaks`` and ``coefs``).
 Not supported here (the numpy engine remains the general path;
 ``simulate(..., engine="compiled")`` raises for these, and the default
 ``engine="auto"`` runs them on the numpy engine): controllers without a
-compiled law, a controller's law with Radau or a delay, a delay with Radau
-or with the dynamic model, the dynamic model with Radau, and other solvers
-than DOP853 and Radau.
+compiled law, a controller's law, a delay or the dynamic model with Radau,
+and other solvers than DOP853 and Radau.
 A stiff actuator (small time constant) is detected with Hairer's test
 (``stiff`` in the statistics of DOP853, whose step is then limited by
 stability to about :math:`6\,T`); ``method="Radau"`` integrates it with
@@ -662,10 +662,6 @@ def shared_parameters(
         raise ValueError(
             f"model='dynamic' is compiled with method='DOP853' only, got {method!r}"
         )
-    if model == "dynamic" and delay > 0.0:
-        raise ValueError(
-            f"model='dynamic' is compiled without a delay only, got delay={delay!r}"
-        )
     if delay > 0.0 and (method != "DOP853" or switching):
         raise ValueError(
             f"delay={delay!r} is compiled with method='DOP853' and switching=False "
@@ -771,15 +767,14 @@ def compiled_support(
         Reference path (any path with a finite length, or Straight/Arc).
     gains : SteeringGains or LateralController
         :class:`~fws_control.SteeringGains` (the paper's law) or a
-        controller that declares a compiled law (DOP853, no delay).
+        controller that declares a compiled law (DOP853).
     delay : float, optional
         Input delay [s]: compiled with DOP853 (the method of steps).
     method : str or scipy.integrate.OdeSolver, optional
         Only :data:`METHODS` (``"DOP853"``, ``"Radau"`` or their classes)
         are compiled; with a delay only DOP853.
     model : {"kinematic", "dynamic"}, optional
-        Vehicle model: the dynamic one is compiled with DOP853 and without
-        a delay.
+        Vehicle model: the dynamic one is compiled with DOP853.
 
     Returns
     -------
@@ -804,10 +799,10 @@ def compiled_support(
             f"{type(gains).__name__} declares no compiled law "
             "(LateralController.compiled_law)"
         )
-    if code > 0 and (compiled_method(method) != "DOP853" or delay != 0.0):
+    if code > 0 and compiled_method(method) != "DOP853":
         return (
-            "a controller's compiled law runs with method='DOP853' and without "
-            f"an input delay only, got method={method!r}, delay={delay!r}"
+            "a controller's compiled law runs with method='DOP853' only, got "
+            f"method={method!r}"
         )
     if compiled_method(method) is None:
         return f"only method={METHODS} is compiled, got {method!r}"
@@ -815,8 +810,6 @@ def compiled_support(
         return f"an input delay is compiled with method='DOP853' only, got {method!r}"
     if model == "dynamic" and compiled_method(method) != "DOP853":
         return f"model='dynamic' is compiled with method='DOP853' only, got {method!r}"
-    if model == "dynamic" and delay != 0.0:
-        return "model='dynamic' with an input delay is not compiled"
     if model not in ("kinematic", "dynamic"):
         return f"model={model!r} is not compiled"
     if _exact_pieces(path) is None and not math.isfinite(float(path.length)):
@@ -924,7 +917,7 @@ def integrate_compiled(
         ``delay``, ``2 delay`` and ``3 delay``). DOP853 only.
     model, tyre : str, optional
         Vehicle model and tyre (see :func:`shared_parameters`); the dynamic
-        model adds the rows ``v_y, r`` last. DOP853 without a delay only.
+        model adds the rows ``v_y, r`` last. DOP853 only.
     body_state : ndarray, optional
         Initial ``(v_y, r)`` per run of the dynamic model, shape ``(n, 2)``;
         where NaN (or None): the no-slip motion at the initial steering, as
@@ -1130,16 +1123,15 @@ def _run_parameters(
 
 
 def _law_arrays(
-    gains: Any, path: Any, table: CurvatureTable, q: np.ndarray, delay: float
+    gains: Any, path: Any, table: CurvatureTable, q: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     # the law's code into q and the kernels' breaks and coefs (a geometry
     # table after the curvature's for a law that reads the path's position)
     code = law_code(gains)
-    if code < 0 or (code > 0 and delay > 0.0):
+    if code < 0:
         raise ValueError(
-            "gains must be SteeringGains or a controller with a compiled law "
-            f"(without an input delay), got {type(gains).__name__} with "
-            f"delay={delay!r}"
+            "gains must be SteeringGains or a controller with a compiled law, "
+            f"got {type(gains).__name__}"
         )
     q[Q_LAW] = code
     return kernel_arrays(path, table, code, q)
@@ -1234,7 +1226,7 @@ def compiled_outputs(
         vehicle, table, feedforward=feedforward, time_constant=time_constant,
         delay=delay, model=model, tyre=tyre,
     )  # fmt: skip
-    breaks, coefs = _law_arrays(gains, path, table, q, delay)
+    breaks, coefs = _law_arrays(gains, path, table, q)
     speed = np.ascontiguousarray(speed, dtype=float).ravel()
     P = _run_parameters(gains, speed)
     st = np.moveaxis(np.asarray(states, dtype=float), 0, 1)  # (n, m, T)
@@ -1265,7 +1257,7 @@ def compiled_outputs(
                     f"input delay, got {None if t_eval is None else t_eval.shape}"
                 )
             top.delayed_signals_batch(
-                st, P, q, table.breaks, table.coefs, _rear_to_cg(vehicle),
+                st, P, q, breaks, coefs, _rear_to_cg(vehicle),
                 np.ascontiguousarray(solution.records), solution.offsets,
                 np.ascontiguousarray(solution.initial_state, dtype=float),
                 np.ascontiguousarray(t_eval, dtype=float), out,
@@ -1467,7 +1459,7 @@ def compiled_peaks(
         vehicle, table, feedforward=feedforward, time_constant=time_constant,
         delay=solution.delay, model=model, tyre=tyre,
     )  # fmt: skip
-    breaks, coefs = _law_arrays(gains, path, table, q, solution.delay)
+    breaks, coefs = _law_arrays(gains, path, table, q)
     speed = np.ascontiguousarray(speed, dtype=float).ravel()
     n = speed.size
     P = _run_parameters(gains, speed)

@@ -26,6 +26,7 @@ from .compiled_layout import (
 )
 from .compiled_loop import curvature_at, raw_command
 from .compiled_signals import (
+    delayed_dynamic_point_signals,
     delayed_point_signals,
     dynamic_point_signals,
     point_signals,
@@ -96,7 +97,12 @@ def _peak_values(tt, rec, n_pc, y0, m, p, q, br, co, d_cg, ytmp, out):
     df_s, dr_s = 0.0, 0.0
     if q[Q_TAU] > 0.0:
         df_s, dr_s = ytmp[3], ytmp[4]
-    if WITH_DELAY and q[Q_DELAY] > 0.0:
+    if WITH_DELAY and q[Q_DELAY] > 0.0 and WITH_DYNAMIC and q[Q_DYNAMIC] != 0.0:
+        df, dr, rf, rr, lat, _, _, ok = delayed_dynamic_point_signals(
+            tt, ytmp[0], ytmp[1], ytmp[2], df_s, dr_s, ytmp[m - 2], ytmp[m - 1],
+            rec, n_pc, y0, m, p, q, br, co,
+        )  # fmt: skip
+    elif WITH_DELAY and q[Q_DELAY] > 0.0:
         df, dr, rf, rr, lat, _, _, ok = delayed_point_signals(
             tt, df_s, dr_s, rec, n_pc, y0, m, p, q, br, co, d_cg
         )

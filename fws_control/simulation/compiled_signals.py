@@ -31,6 +31,7 @@ from .compiled_layout import (
     Q_WHEELBASE,
     WITH_DYNAMIC,
     cg_lateral_velocity,
+    dynamic_path_kinematics,
     jit_inline,
     lateral_acceleration,
     path_frame_derivatives,
@@ -209,13 +210,89 @@ def delayed_point_signals(tt, df_s, dr_s, rec, n_pc, y0, m, p, q, breaks, coefs,
     return df, dr, rf, rr, lat, vy, psi_dot, True
 
 
+@jit_inline
+def _dense_row(tt, rec, n_pc, y0, m, i):
+    """Row `i` of a run's state at `tt` from its dense output, as
+    :func:`_path_state_at` (the initial state up to the start)."""
+    if n_pc == 0 or tt <= rec[0, 0]:
+        return y0[i]
+    lo, hi = 0, n_pc
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if rec[mid, 0] <= tt:
+            lo = mid
+        else:
+            hi = mid
+    row = rec[lo]
+    x = (tt - row[0]) / row[1]
+    v = 0.0
+    for k in range(NPOW):
+        v += row[2 + m + (NPOW - 1 - k) * m + i]
+        v *= x if k % 2 == 0 else 1 - x
+    return v + row[2 + i]
+
+
+@jit
+def delayed_dynamic_point_signals(tt, s, e, th, df_s, dr_s, vy, r, rec, n_pc, y0,
+                                  m, p, q, breaks, coefs):  # fmt: skip
+    """:func:`dynamic_point_signals` with an input delay, as compute_outputs
+    with the delayed rows: the law acts on the path state at ``tt - delay``
+    (`rec`, `y0`: the run's dense output and initial state), whose rates are
+    the dynamic model's path kinematics there (its body state at ``tt -
+    delay``; 0 before the start). ``s, e, th, df_s, dr_s, vy, r``: the run's
+    state at `tt` (the actuator's rows unused without an actuator).
+
+    Returns ``(delta_f, delta_r, their rates, lateral_accel, slip_front,
+    slip_rear, ok)``. Called, not inlined as the other point functions
+    are: only a delayed run of the dynamic model needs it, and inlined at
+    each of the peaks' call sites it would lengthen the compilation of the
+    kernels of every feature.
+    """
+    V = p[P_SPEED]
+    mf, mr = q[Q_MAX_F], q[Q_MAX_R]
+    tau = q[Q_TAU]
+    td = tt - q[Q_DELAY]
+    s_m, e_m, th_m = _path_state_at(td, rec, n_pc, y0, m)
+    if not tau > 0.0 and rate_needs_curvature_slope(p, q):
+        kappa_m, dkappa_m = curvature_and_rate(s_m, q, breaks, coefs)
+    else:
+        kappa_m, dkappa_m = curvature_at(s_m, q, breaks, coefs), 0.0
+    raw_f, raw_r = raw_command(s_m, e_m, th_m, kappa_m, p, q, breaks, coefs)
+    cf = min(max(raw_f, -mf), mf)
+    cr = min(max(raw_r, -mr), mr)
+    if tau > 0.0:
+        df, dr = df_s, dr_s
+        rf = min(max((cf - df) / tau, -q[Q_RATE_F]), q[Q_RATE_F])
+        rr = min(max((cr - dr) / tau, -q[Q_RATE_R]), q[Q_RATE_R])
+    else:
+        df, dr = cf, cr
+        # the measured state is held before the start: no rate there
+        s_dot, e_dot, th_dot = 0.0, 0.0, 0.0
+        if n_pc > 0 and td > rec[0, 0]:
+            vy_m = _dense_row(td, rec, n_pc, y0, m, m - 2)
+            r_m = _dense_row(td, rec, n_pc, y0, m, m - 1)
+            s_dot, e_dot, th_dot = dynamic_path_kinematics(
+                V, q[Q_L_R], kappa_m, e_m, th_m, vy_m, r_m
+            )
+        rf, rr = command_rate(s_m, e_m, th_m, s_dot, e_dot, th_dot, kappa_m,
+                              dkappa_m, raw_f, raw_r, p, q, breaks, coefs)  # fmt: skip
+    kappa = curvature_at(s, q, breaks, coefs)
+    _, _, _, vy_dot, _ = dynamic_derivatives(V, kappa, e, th, vy, r, df, dr, q)
+    alpha_f, alpha_r = slip_angles(V, q[Q_L_F], q[Q_L_R], vy, r, df, dr)
+    if not abs(df) < 0.5 * math.pi:
+        return df, dr, np.nan, np.nan, np.nan, alpha_f, alpha_r, False
+    return df, dr, rf, rr, vy_dot + V * r, alpha_f, alpha_r, True
+
+
 @jit
 def delayed_signals_batch(states, P, q, breaks, coefs, d_cg, rec, offsets, Y0,
                            t_eval, sig):  # fmt: skip
-    # rows 6-12 of sig (the steering angles, their rates, the lateral
-    # acceleration, v_y, the yaw rate) anew for an input delay: the law on
-    # the state at t - delay, from each run's dense output (rows 0-5 and the
-    # slip angles do not depend on the law)
+    # rows 6-14 of sig anew for an input delay: the law on the state at
+    # t - delay, from each run's dense output. The kinematic model: the
+    # steering angles, their rates, the lateral acceleration, v_y and the
+    # yaw rate (its slip angles are 0); the dynamic model: the angles, the
+    # rates, the acceleration and the slip angles (v_y and the yaw rate are
+    # states). Rows 0-5 do not depend on the law.
     n, m, T = states.shape
     for i in range(n):
         pc = rec[offsets[i] : offsets[i + 1]]
@@ -226,6 +303,23 @@ def delayed_signals_batch(states, P, q, breaks, coefs, d_cg, rec, offsets, Y0,
             df_s, dr_s = 0.0, 0.0
             if q[Q_TAU] > 0.0:
                 df_s, dr_s = states[i, 3, k], states[i, 4, k]
+            if WITH_DYNAMIC and q[Q_DYNAMIC] != 0.0:
+                df, dr, rf, rr, lat, slip_f, slip_r, ok = (
+                    delayed_dynamic_point_signals(
+                        t_eval[k], states[i, 0, k], states[i, 1, k],
+                        states[i, 2, k], df_s, dr_s, states[i, m - 2, k],
+                        states[i, m - 1, k], pc, n_pc, Y0[i], m, P[i], q, breaks,
+                        coefs,
+                    )
+                )  # fmt: skip
+                sig[i, 6, k] = df
+                sig[i, 7, k] = dr
+                sig[i, 8, k] = rf
+                sig[i, 9, k] = rr
+                sig[i, 10, k] = lat
+                sig[i, 13, k] = slip_f
+                sig[i, 14, k] = slip_r
+                continue
             df, dr, rf, rr, lat, vy, psi_dot, ok = delayed_point_signals(
                 t_eval[k], df_s, dr_s, pc, n_pc, Y0[i], m, P[i], q, breaks,
                 coefs, d_cg,

@@ -19,7 +19,11 @@ The kernel sets (:data:`KERNEL_SETS`):
   steering actuator);
 - ``"features-dop853"``: the kernels of every such feature (a call with an
   input delay and a steering lag compiles them: the integration, the
-  signals, the delayed signals and the exact peaks).
+  signals, the delayed signals and the exact peaks);
+- ``"single-run"``: the public one-run drivers
+  :func:`~fws_control.simulation.compiled.solve_run` (DOP853) and
+  :func:`~fws_control.simulation.compiled.radau_run` on the paper's loop,
+  which the batch engine does not call (it steps the same methods itself).
 """
 
 from __future__ import annotations
@@ -32,11 +36,13 @@ from dataclasses import dataclass
 __all__ = ["KERNEL_SETS", "CompiledSet", "precompile"]
 
 #: The kernel sets :func:`precompile` compiles.
-KERNEL_SETS = ("paper-dop853", "paper-radau", "features-dop853")
+KERNEL_SETS = ("paper-dop853", "paper-radau", "features-dop853", "single-run")
 
 # The order precompile starts them in: by their CPU time to compile, longest
-# first (measured with `fws-control compile` on two cores: 198, 58 and 55 s).
-_LONGEST_FIRST = ("features-dop853", "paper-radau", "paper-dop853")
+# first (measured with `fws-control compile --jobs 1` on two cores: 200, 90,
+# 29 and 25 s). With two workers the paper's sets and the one-run drivers
+# together take less than the kernels of every feature.
+_LONGEST_FIRST = ("features-dop853", "paper-radau", "single-run", "paper-dop853")
 
 
 @dataclass(frozen=True)
@@ -65,9 +71,40 @@ def _quiet() -> None:
     os.environ[QUIET_VARIABLE] = "1"
 
 
+def _run_single() -> None:
+    # in a worker process: one short run of each one-run driver, with the
+    # argument types of their documented use (numba compiles per type)
+    import numpy as np
+
+    import fws_control as fws
+
+    from .compiled import curvature_table, radau_run, shared_parameters, solve_run
+    from .compiled_variants import variant
+
+    veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+    tab = curvature_table(fws.Straight())
+    q = shared_parameters(veh, tab, feedforward=False, time_constant=None)
+    t = np.linspace(0.0, 1.0, 3)
+    variant(solve_run, [])(
+        np.array([0.0, 1.0, 0.0]), np.array([5.0, 0.1, 0.5, 0.0]), q, tab.breaks,
+        tab.coefs, t, 1e-10, 1e-12, np.empty((3, t.size)), np.empty(0),
+    )  # fmt: skip
+    q = shared_parameters(veh, tab, feedforward=False, time_constant=0.05)
+    p = np.zeros(8)
+    p[:4] = 5.0, 0.1, 0.5, 0.0
+    m = 100
+    variant(radau_run, [])(
+        np.array([0.0, 1.0, 0.0, 0.0, 0.0]), p, q, tab.breaks, tab.coefs, 0.0,
+        0.1, 1e-3, 1e-8, 1e-10, np.empty(m), np.empty((m, 5)), np.empty((m, 5, 3)),
+    )  # fmt: skip
+
+
 def _run_set(name: str) -> CompiledSet:
     # in a worker process: a short simulation that needs exactly this set
     start = time.process_time()
+    if name == "single-run":
+        _run_single()
+        return CompiledSet(name, time.process_time() - start)
     import fws_control as fws
 
     veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
@@ -135,8 +172,8 @@ def precompile(
         max_workers=min(jobs, len(sets)) or 1, mp_context=context, initializer=_quiet
     ) as pool:
         # the longest first: the kernels of every feature take longer than
-        # both paper sets together, so with two workers they finish when the
-        # features do instead of one paper set later
+        # the other sets together, so with two workers they finish when the
+        # features do instead of one other set later
         started = {
             name: pool.submit(_run_set, name)
             for name in sorted(set(sets), key=_LONGEST_FIRST.index)

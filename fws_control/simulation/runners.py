@@ -23,7 +23,8 @@ That is the numpy engine. By default (``engine="auto"``) the runners use
 the compiled per-run engine of :mod:`~fws_control.simulation.compiled`
 instead wherever numba is installed and it covers the case (the paper's
 law on the kinematic model with DOP853 or Radau, with a delay DOP853; on
-the dynamic model DOP853 without delay): each run then has its own
+the dynamic model and a controller's compiled law DOP853, with or without
+a delay): each run then has its own
 steps, error norm and stop, and its exact peaks come from its own dense
 output.
 """
@@ -922,10 +923,10 @@ def simulate(
         :mod:`fws_control.simulation.compiled` (extra ``fast``), each run
         with its own steps and stop, at compiled speed. It runs the paper's
         law (:class:`~fws_control.SteeringGains`) on the kinematic model
-        (and on the dynamic model with DOP853 and no delay), and a
+        (and on the dynamic model with DOP853), and a
         controller that declares a compiled law
         (:meth:`~fws_control.LateralController.compiled_law`: the
-        baselines, with DOP853 and no delay; their signals and peaks by the
+        baselines, with DOP853; their signals and peaks by the
         numpy engine's formulas on each run's dense output, see
         :mod:`~fws_control.simulation.compiled_laws`),
         with ``method="DOP853"``, ``"Radau"`` or ``"auto"``
