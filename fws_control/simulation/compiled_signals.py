@@ -3,8 +3,8 @@
 The signals of :data:`~fws_control.simulation.engine.SIGNALS` of every run
 and output time, with the operations of
 :func:`~fws_control.simulation.engine.compute_outputs` (the paper's law or
-a controller's compiled law; the kinematic and the dynamic model; an input
-delay's paper law on the delayed state), for
+a controller's compiled law; the kinematic and the dynamic model; with an
+input delay the law on the delayed path state), for
 :func:`~fws_control.simulation.compiled.compiled_outputs`.
 """
 
@@ -131,11 +131,12 @@ def dynamic_point_signals(s, e, th, df_s, dr_s, vy, r, p, q, breaks, coefs):
 
 
 @jit_inline
-def _path_state_at(tt, rec, n_pc, y0, m):
-    """``(s, e, theta)`` of a run at `tt` from its dense output (`rec`: its
-    pieces), the initial state up to the start (engine._History.states_at)."""
+def _path_state_at(tt, rec, n_pc, y0, m, first):
+    """Rows ``first`` to ``first + 2`` of a run's state at `tt` (``first =
+    0``: ``s, e, theta``) from its dense output (`rec`: its pieces), the
+    initial state up to the start (engine._History.states_at)."""
     if n_pc == 0 or tt <= rec[0, 0]:
-        return y0[0], y0[1], y0[2]
+        return y0[first], y0[first + 1], y0[first + 2]
     lo, hi = 0, n_pc
     while hi - lo > 1:
         mid = (lo + hi) // 2
@@ -147,15 +148,15 @@ def _path_state_at(tt, rec, n_pc, y0, m):
     x = (tt - row[0]) / row[1]
     v0, v1, v2 = 0.0, 0.0, 0.0
     for k in range(NPOW):
-        c = NPOW - 1 - k
-        v0 += row[2 + m + c * m]
-        v1 += row[2 + m + c * m + 1]
-        v2 += row[2 + m + c * m + 2]
+        c = 2 + m + (NPOW - 1 - k) * m + first
+        v0 += row[c]
+        v1 += row[c + 1]
+        v2 += row[c + 2]
         w = x if k % 2 == 0 else 1 - x
         v0 *= w
         v1 *= w
         v2 *= w
-    return v0 + row[2], v1 + row[3], v2 + row[4]
+    return v0 + row[2 + first], v1 + row[3 + first], v2 + row[4 + first]
 
 
 @jit_inline
@@ -174,7 +175,7 @@ def delayed_point_signals(tt, df_s, dr_s, rec, n_pc, y0, m, p, q, breaks, coefs,
     tau = q[Q_TAU]
     delay = q[Q_DELAY]
     td = tt - delay
-    s_m, e_m, th_m = _path_state_at(td, rec, n_pc, y0, m)
+    s_m, e_m, th_m = _path_state_at(td, rec, n_pc, y0, m, 0)
     if not tau > 0.0 and rate_needs_curvature_slope(p, q):
         kappa, dkappa = curvature_and_rate(s_m, q, breaks, coefs)
     else:
@@ -191,7 +192,7 @@ def delayed_point_signals(tt, df_s, dr_s, rec, n_pc, y0, m, p, q, breaks, coefs,
         # the measured state is held before the start: no rate there
         s_dot, e_dot, th_dot = 0.0, 0.0, 0.0
         if n_pc > 0 and td > rec[0, 0]:
-            s2, e2, th2 = _path_state_at(td - delay, rec, n_pc, y0, m)
+            s2, e2, th2 = _path_state_at(td - delay, rec, n_pc, y0, m, 0)
             kappa2 = curvature_at(s2, q, breaks, coefs)
             c2f, c2r = raw_command(s2, e2, th2, kappa2, p, q, breaks, coefs)
             c2f = min(max(c2f, -mf), mf)
@@ -208,28 +209,6 @@ def delayed_point_signals(tt, df_s, dr_s, rec, n_pc, y0, m, p, q, breaks, coefs,
     lat = lateral_acceleration(V, d_cg, dr, rr, psi_dot, psi_ddot)
     vy = cg_lateral_velocity(V, d_cg, dr, psi_dot)
     return df, dr, rf, rr, lat, vy, psi_dot, True
-
-
-@jit_inline
-def _dense_row(tt, rec, n_pc, y0, m, i):
-    """Row `i` of a run's state at `tt` from its dense output, as
-    :func:`_path_state_at` (the initial state up to the start)."""
-    if n_pc == 0 or tt <= rec[0, 0]:
-        return y0[i]
-    lo, hi = 0, n_pc
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if rec[mid, 0] <= tt:
-            lo = mid
-        else:
-            hi = mid
-    row = rec[lo]
-    x = (tt - row[0]) / row[1]
-    v = 0.0
-    for k in range(NPOW):
-        v += row[2 + m + (NPOW - 1 - k) * m + i]
-        v *= x if k % 2 == 0 else 1 - x
-    return v + row[2 + i]
 
 
 @jit
@@ -252,7 +231,7 @@ def delayed_dynamic_point_signals(tt, s, e, th, df_s, dr_s, vy, r, rec, n_pc, y0
     mf, mr = q[Q_MAX_F], q[Q_MAX_R]
     tau = q[Q_TAU]
     td = tt - q[Q_DELAY]
-    s_m, e_m, th_m = _path_state_at(td, rec, n_pc, y0, m)
+    s_m, e_m, th_m = _path_state_at(td, rec, n_pc, y0, m, 0)
     if not tau > 0.0 and rate_needs_curvature_slope(p, q):
         kappa_m, dkappa_m = curvature_and_rate(s_m, q, breaks, coefs)
     else:
@@ -269,8 +248,8 @@ def delayed_dynamic_point_signals(tt, s, e, th, df_s, dr_s, vy, r, rec, n_pc, y0
         # the measured state is held before the start: no rate there
         s_dot, e_dot, th_dot = 0.0, 0.0, 0.0
         if n_pc > 0 and td > rec[0, 0]:
-            vy_m = _dense_row(td, rec, n_pc, y0, m, m - 2)
-            r_m = _dense_row(td, rec, n_pc, y0, m, m - 1)
+            # the body's rows v_y, r are the last two (the row before unused)
+            _, vy_m, r_m = _path_state_at(td, rec, n_pc, y0, m, m - 3)
             s_dot, e_dot, th_dot = dynamic_path_kinematics(
                 V, q[Q_L_R], kappa_m, e_m, th_m, vy_m, r_m
             )

@@ -5,9 +5,9 @@ numba compiles a kernel the first time a call needs it and caches it
 an install then waits for the compilation. :func:`precompile` does that
 work at a moment of the user's choosing -- after ``pip install`` in a
 container image, before a sweep on a cluster node, before a test suite --
-by running one short simulation of each kernel set, in worker processes
-that run side by side, and reports the CPU time each took. Later processes
-load the kernels from the cache. The command line runs it as
+by running one short simulation (or one-run call) of each kernel set, in
+worker processes that run side by side, and reports the CPU time each
+took. Later processes load the kernels from the cache. The command line runs it as
 ``fws-control compile``.
 
 The kernel sets (:data:`KERNEL_SETS`):

@@ -1128,8 +1128,8 @@ def simulate_batch(
         Integration engine, as in :func:`simulate` (default ``"auto"``: the
         compiled engine where numba is installed and it runs the case --
         the paper's law, kinematic model, DOP853, Radau or ``"auto"``
-        (with a delay, or on the dynamic model without delay, DOP853 or
-        ``"auto"``) -- else the numpy engine). With
+        (with a delay, on the dynamic model or with a controller's
+        compiled law, DOP853 or ``"auto"``) -- else the numpy engine). With
         ``"compiled"`` each run has its own steps, error norm and stop, so a
         run's result does not depend on the other runs (nor on
         `chunk_size`).
