@@ -39,9 +39,9 @@ __all__ = ["KERNEL_SETS", "CompiledSet", "precompile"]
 KERNEL_SETS = ("paper-dop853", "paper-radau", "features-dop853", "single-run")
 
 # The order precompile starts them in: by their CPU time to compile, longest
-# first (measured with `fws-control compile --jobs 1` on two cores: 200, 90,
-# 29 and 25 s). With two workers the paper's sets and the one-run drivers
-# together take less than the kernels of every feature.
+# first (one run of `fws-control compile` on two cores: 201, 85, 34 and
+# 18 s). With two workers the paper's sets and the one-run drivers together
+# take less than the kernels of every feature.
 _LONGEST_FIRST = ("features-dop853", "paper-radau", "single-run", "paper-dop853")
 
 
