@@ -160,17 +160,20 @@ def _path_state_at(tt, rec, n_pc, y0, m, first):
 
 
 @jit_inline
-def delayed_point_signals(tt, df_s, dr_s, rec, n_pc, y0, m, p, q, breaks, coefs,
-                          d_cg):  # fmt: skip
-    """:func:`point_signals` with an input delay, as compute_outputs with
-    the delayed rows: the law acts on the state at ``tt - delay`` (`rec`,
-    `y0`: the run's dense output and initial state), whose rates are its
-    closed-loop derivative there (the law then on the state at ``tt - 2
-    delay``), 0 before the start; ``df_s, dr_s``: the run's actuator states
-    at `tt`; `p`: the run's parameters.
+def _delayed_steering(tt, df_s, dr_s, rec, n_pc, y0, m, p, q, breaks, coefs,
+                      dynamic):  # fmt: skip
+    """The applied steering and its rates at `tt` with an input delay, as
+    compute_outputs with the delayed rows: the law acts on the path state
+    at ``tt - delay`` (`rec`, `y0`: the run's dense output and initial
+    state). With an actuator (``df_s, dr_s``: its angles at `tt`) the rates
+    are the actuator's; without one the angles are the delayed command and
+    their rates its derivative along the delayed motion, 0 before the
+    start: the path state's derivative at ``tt - delay``, for the kinematic
+    model its closed loop's (the law then on the state at ``tt - 2
+    delay``), for the `dynamic` one the path kinematics of its body state
+    there. Returns ``(delta_f, delta_r, their rates)``.
     """
     V = p[P_SPEED]
-    f = q[Q_WHEELBASE]
     mf, mr = q[Q_MAX_F], q[Q_MAX_R]
     tau = q[Q_TAU]
     delay = q[Q_DELAY]
@@ -184,24 +187,44 @@ def delayed_point_signals(tt, df_s, dr_s, rec, n_pc, y0, m, p, q, breaks, coefs,
     cf = min(max(raw_f, -mf), mf)
     cr = min(max(raw_r, -mr), mr)
     if tau > 0.0:
-        df, dr = df_s, dr_s
-        rf = min(max((cf - df) / tau, -q[Q_RATE_F]), q[Q_RATE_F])
-        rr = min(max((cr - dr) / tau, -q[Q_RATE_R]), q[Q_RATE_R])
-    else:
-        df, dr = cf, cr
-        # the measured state is held before the start: no rate there
-        s_dot, e_dot, th_dot = 0.0, 0.0, 0.0
-        if n_pc > 0 and td > rec[0, 0]:
+        rf = min(max((cf - df_s) / tau, -q[Q_RATE_F]), q[Q_RATE_F])
+        rr = min(max((cr - dr_s) / tau, -q[Q_RATE_R]), q[Q_RATE_R])
+        return df_s, dr_s, rf, rr
+    # the measured state is held before the start: no rate there
+    s_dot, e_dot, th_dot = 0.0, 0.0, 0.0
+    if n_pc > 0 and td > rec[0, 0]:
+        if dynamic:
+            # the body's rows v_y, r are the last two (the row before unused)
+            _, vy_m, r_m = _path_state_at(td, rec, n_pc, y0, m, m - 3)
+            s_dot, e_dot, th_dot = dynamic_path_kinematics(
+                V, q[Q_L_R], kappa, e_m, th_m, vy_m, r_m
+            )
+        else:
             s2, e2, th2 = _path_state_at(td - delay, rec, n_pc, y0, m, 0)
             kappa2 = curvature_at(s2, q, breaks, coefs)
             c2f, c2r = raw_command(s2, e2, th2, kappa2, p, q, breaks, coefs)
             c2f = min(max(c2f, -mf), mf)
             c2r = min(max(c2r, -mr), mr)
             s_dot, e_dot, th_dot = path_frame_derivatives(
-                V, f, kappa, e_m, th_m, c2f, c2r
+                V, q[Q_WHEELBASE], kappa, e_m, th_m, c2f, c2r
             )
-        rf, rr = command_rate(s_m, e_m, th_m, s_dot, e_dot, th_dot, kappa,
-                              dkappa, raw_f, raw_r, p, q, breaks, coefs)  # fmt: skip
+    rf, rr = command_rate(s_m, e_m, th_m, s_dot, e_dot, th_dot, kappa, dkappa,
+                          raw_f, raw_r, p, q, breaks, coefs)  # fmt: skip
+    return cf, cr, rf, rr
+
+
+@jit_inline
+def delayed_point_signals(tt, df_s, dr_s, rec, n_pc, y0, m, p, q, breaks, coefs,
+                          d_cg):  # fmt: skip
+    """:func:`point_signals` with an input delay (:func:`_delayed_steering`);
+    ``df_s, dr_s``: the run's actuator states at `tt`; `p`: the run's
+    parameters.
+    """
+    V = p[P_SPEED]
+    f = q[Q_WHEELBASE]
+    df, dr, rf, rr = _delayed_steering(
+        tt, df_s, dr_s, rec, n_pc, y0, m, p, q, breaks, coefs, False
+    )
     psi_dot = yaw_rate(V, f, df, dr)
     if not abs(df) < 0.5 * math.pi:
         return df, dr, rf, rr, np.nan, np.nan, psi_dot, False
@@ -214,47 +237,21 @@ def delayed_point_signals(tt, df_s, dr_s, rec, n_pc, y0, m, p, q, breaks, coefs,
 @jit
 def delayed_dynamic_point_signals(tt, s, e, th, df_s, dr_s, vy, r, rec, n_pc, y0,
                                   m, p, q, breaks, coefs):  # fmt: skip
-    """:func:`dynamic_point_signals` with an input delay, as compute_outputs
-    with the delayed rows: the law acts on the path state at ``tt - delay``
-    (`rec`, `y0`: the run's dense output and initial state), whose rates are
-    the dynamic model's path kinematics there (its body state at ``tt -
-    delay``; 0 before the start). ``s, e, th, df_s, dr_s, vy, r``: the run's
+    """:func:`dynamic_point_signals` with an input delay
+    (:func:`_delayed_steering`). ``s, e, th, df_s, dr_s, vy, r``: the run's
     state at `tt` (the actuator's rows unused without an actuator).
 
     Returns ``(delta_f, delta_r, their rates, lateral_accel, slip_front,
-    slip_rear, ok)``. Called, not inlined as the other point functions
-    are: only a delayed run of the dynamic model needs it, and inlined at
-    each of the peaks' call sites it would lengthen the compilation of the
-    kernels of every feature.
+    slip_rear, ok)``: the acceleration ``dv_y/dt + u r`` and the slip angles
+    at the current body state with the applied angles. Called, not inlined
+    as the other point functions are: only a delayed run of the dynamic
+    model needs it, and inlined at each of the peaks' call sites it would
+    lengthen the compilation of the kernels of every feature.
     """
     V = p[P_SPEED]
-    mf, mr = q[Q_MAX_F], q[Q_MAX_R]
-    tau = q[Q_TAU]
-    td = tt - q[Q_DELAY]
-    s_m, e_m, th_m = _path_state_at(td, rec, n_pc, y0, m, 0)
-    if not tau > 0.0 and rate_needs_curvature_slope(p, q):
-        kappa_m, dkappa_m = curvature_and_rate(s_m, q, breaks, coefs)
-    else:
-        kappa_m, dkappa_m = curvature_at(s_m, q, breaks, coefs), 0.0
-    raw_f, raw_r = raw_command(s_m, e_m, th_m, kappa_m, p, q, breaks, coefs)
-    cf = min(max(raw_f, -mf), mf)
-    cr = min(max(raw_r, -mr), mr)
-    if tau > 0.0:
-        df, dr = df_s, dr_s
-        rf = min(max((cf - df) / tau, -q[Q_RATE_F]), q[Q_RATE_F])
-        rr = min(max((cr - dr) / tau, -q[Q_RATE_R]), q[Q_RATE_R])
-    else:
-        df, dr = cf, cr
-        # the measured state is held before the start: no rate there
-        s_dot, e_dot, th_dot = 0.0, 0.0, 0.0
-        if n_pc > 0 and td > rec[0, 0]:
-            # the body's rows v_y, r are the last two (the row before unused)
-            _, vy_m, r_m = _path_state_at(td, rec, n_pc, y0, m, m - 3)
-            s_dot, e_dot, th_dot = dynamic_path_kinematics(
-                V, q[Q_L_R], kappa_m, e_m, th_m, vy_m, r_m
-            )
-        rf, rr = command_rate(s_m, e_m, th_m, s_dot, e_dot, th_dot, kappa_m,
-                              dkappa_m, raw_f, raw_r, p, q, breaks, coefs)  # fmt: skip
+    df, dr, rf, rr = _delayed_steering(
+        tt, df_s, dr_s, rec, n_pc, y0, m, p, q, breaks, coefs, True
+    )
     kappa = curvature_at(s, q, breaks, coefs)
     _, _, _, vy_dot, _ = dynamic_derivatives(V, kappa, e, th, vy, r, df, dr, q)
     alpha_f, alpha_r = slip_angles(V, q[Q_L_F], q[Q_L_R], vy, r, df, dr)
