@@ -17,6 +17,12 @@ import tracemalloc
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
+# The tests compile what they need in their own process: engine="auto"
+# with a kernel set not in the cache would otherwise run on the numpy engine
+# while a background process compiles it (a local run without
+# `fws-control compile`). test_background_compile.py sets the default.
+os.environ.setdefault("FWS_CONTROL_COMPILE", "foreground")
+
 import matplotlib  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402

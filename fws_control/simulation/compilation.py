@@ -40,6 +40,14 @@ The first compilation in a process
     ``FWS_CONTROL_QUIET=1``. Standard error, as progress bars: a library
     does not write to standard output, and the notice is no warning about
     the user's code.
+
+In the background
+    A call of ``engine="auto"`` whose kernels are not in the cache does not
+    compile them itself by default: a background process does, and the
+    call runs on the numpy engine (:func:`compile_mode`,
+    :func:`~fws_control.simulation.precompile.ready_or_background`), with
+    one notice per process (:func:`announce_background`).
+    ``FWS_CONTROL_COMPILE=foreground`` makes the call compile and wait.
 """
 
 from __future__ import annotations
@@ -63,10 +71,24 @@ try:  # optional dependency (extra "fast")
 except ImportError:  # pragma: no cover - exercised only without numba
     numba = None
 
-__all__ = ["QUIET_VARIABLE", "jit", "cache_dir", "first_use", "compile_seconds"]
+__all__ = [
+    "QUIET_VARIABLE",
+    "COMPILE_VARIABLE",
+    "compile_mode",
+    "announce_background",
+    "jit",
+    "cache_dir",
+    "first_use",
+    "compile_seconds",
+    "is_compiled",
+]
 
 #: Environment variable that silences the first-use notice (``1``).
 QUIET_VARIABLE = "FWS_CONTROL_QUIET"
+
+#: Environment variable: where a call of ``engine="auto"`` compiles kernels
+#: that are not in the cache: ``background`` (default) or ``foreground``.
+COMPILE_VARIABLE = "FWS_CONTROL_COMPILE"
 
 #: The application name of the user cache folder.
 _APP = "fws_control"
@@ -278,6 +300,39 @@ def cache_dir() -> str | None:
 # The first-use notice
 
 
+def compile_mode() -> str:
+    """Where a call of ``engine="auto"`` compiles the kernels it needs.
+
+    Returns
+    -------
+    str
+        ``"background"`` (default): a background process compiles them
+        into the cache while the calls run on the numpy engine;
+        ``"foreground"``: the call compiles them and waits. From the
+        environment variable ``FWS_CONTROL_COMPILE``.
+
+    Raises
+    ------
+    ValueError
+        If ``FWS_CONTROL_COMPILE`` is set to another value.
+
+    Examples
+    --------
+    >>> from fws_control.simulation.compilation import compile_mode
+    >>> compile_mode() in ("background", "foreground")
+    True
+    """
+    value = os.environ.get(COMPILE_VARIABLE, "").strip().lower()
+    if value in ("", "background"):
+        return "background"
+    if value == "foreground":
+        return "foreground"
+    raise ValueError(
+        f"{COMPILE_VARIABLE} must be 'background' or 'foreground', got "
+        f"{os.environ[COMPILE_VARIABLE]!r}"
+    )
+
+
 def _quiet() -> bool:
     return os.environ.get(QUIET_VARIABLE, "").strip() not in ("", "0")
 
@@ -322,6 +377,41 @@ def _announce() -> None:
     )
     sys.stderr.flush()
     _local.pending_line = True
+
+
+def announce_background(seconds: float) -> None:
+    """Say on standard error, once per process, that the kernels compile in
+    a background process while the calls run on the numpy engine.
+
+    Silent with ``FWS_CONTROL_QUIET=1``, and after any other notice of this
+    module in the process.
+
+    Parameters
+    ----------
+    seconds : float
+        The expected compilation time [s of CPU] (0: not stated).
+
+    Examples
+    --------
+    >>> import os
+    >>> from fws_control.simulation.compilation import announce_background
+    >>> os.environ["FWS_CONTROL_QUIET"] = "1"
+    >>> announce_background(30.0)      # silenced: nothing printed
+    >>> del os.environ["FWS_CONTROL_QUIET"]
+    """
+    if _Notice.announced:
+        return
+    _Notice.announced = True
+    if _quiet():
+        return
+    about = f"about {seconds:.0f} s of CPU; " if seconds > 0 else ""
+    sys.stderr.write(
+        "fws_control: compiling the simulation engine in a background process "
+        f"(once: {about}cached in {cache_dir()}); until it is done, simulations "
+        f"run on the numpy engine ({COMPILE_VARIABLE}=foreground waits for it "
+        f"instead; {QUIET_VARIABLE}=1 silences this)\n"
+    )
+    sys.stderr.flush()
 
 
 def _close() -> None:
@@ -395,10 +485,7 @@ def first_use(estimate: Callable[[], float] | None = None) -> Iterator[None]:
 def compile_seconds(dispatcher: Any, seconds: float) -> float:
     """`seconds` if `dispatcher` still needs compiling, else 0.
 
-    A kernel needs compiling if it has no compiled version in this process
-    and no index file in its cache folder (the file numba writes with the
-    first compilation; a stale one, from an older version of the source, is
-    not told apart: its estimate is then 0).
+    A kernel needs compiling unless :func:`is_compiled`.
 
     Parameters
     ----------
@@ -419,10 +506,40 @@ def compile_seconds(dispatcher: Any, seconds: float) -> float:
     >>> compile_seconds(twice, 5.0)
     0.0
     """
+    return 0.0 if is_compiled(dispatcher) else float(seconds)
+
+
+def is_compiled(dispatcher: Any) -> bool:
+    """Whether `dispatcher` runs without compiling: compiled in this process
+    or in the cache with the current source.
+
+    Parameters
+    ----------
+    dispatcher : numba dispatcher
+        A kernel made by :func:`jit`.
+
+    Returns
+    -------
+    bool
+        True if it has a compiled version in this process, or an index file
+        in its cache folder stamped with the kernels' current source (numba
+        writes the index with the first compilation, and ignores one of an
+        older source).
+
+    Examples
+    --------
+    >>> from fws_control.simulation.compilation import is_compiled, jit
+    >>> twice = jit(lambda x: 2.0 * x)
+    >>> _ = twice(1.0)                 # compiled (or loaded) now
+    >>> is_compiled(twice)
+    True
+    """
+    if numba is None:  # pragma: no cover
+        return False
     if getattr(dispatcher, "overloads", None):
-        return 0.0
+        return True
     cache_file = getattr(getattr(dispatcher, "_cache", None), "_cache_file", None)
-    index = getattr(cache_file, "_index_path", None)
-    if index is not None and os.path.exists(index):
-        return 0.0
-    return float(seconds)
+    if not isinstance(cache_file, _KernelCacheFile):
+        return False
+    # (an empty dict: no index, another numba version or an older source)
+    return bool(cache_file._load_index())

@@ -205,6 +205,7 @@ from .compiled_variants import FEATURES, features_of, kernels
 __all__ = [
     "available",
     "compiling",
+    "compile_estimate",
     "STAGES",
     "CurvatureTable",
     "curvature_table",
@@ -319,6 +320,43 @@ def _stage_seconds(stage: str) -> float:
     }[stage]
     seconds = _FULL_STAGE_SECONDS if features else _STAGE_SECONDS
     return compile_seconds(kernel, seconds[stage])
+
+
+def compile_estimate(*stages: str, features: bool) -> float:
+    """CPU seconds the `stages` take to compile with an empty cache.
+
+    Estimates measured with ``benchmarks/bench_first_use.py`` (the notice's
+    figures): the kernels specialised to the paper's loop, or with
+    `features` those of every feature.
+
+    Parameters
+    ----------
+    *stages : str
+        Names in :data:`STAGES`.
+    features : bool
+        Whether the call uses a feature of
+        :data:`~fws_control.simulation.compiled_variants.FEATURES`.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ValueError
+        For a name not in :data:`STAGES`.
+
+    Examples
+    --------
+    >>> from fws_control.simulation.compiled import compile_estimate
+    >>> compile_estimate("DOP853", "signals", "peaks", features=False)
+    54.0
+    """
+    for stage in stages:
+        if stage not in STAGES:
+            raise ValueError(f"stages must be in {STAGES}, got {stage!r}")
+    seconds = _FULL_STAGE_SECONDS if features else _STAGE_SECONDS
+    return float(sum(seconds[s] for s in stages))
 
 
 def compiling(*stages: str, features: bool | None = None) -> Any:

@@ -582,6 +582,7 @@ def _simulate_batch(
     # _RADAU_FROM_STEPS such steps, also where the numpy engine would take
     # LSODA or Radau: the compiled engine runs every stiff case.
     stiff_auto = auto_method and tau is not None
+    auto_engine = engine == "auto"
     if engine == "auto":
         chosen_for = "DOP853" if stiff_auto else opts["method"]
         engine, table = _choose_engine(
@@ -594,6 +595,7 @@ def _simulate_batch(
             profile=profile,
             schedule=schedule,
         )
+    compiled_method, max_step = opts["method"], None
     if engine == "compiled" and auto_method:
         duration_run = float(t[-1] - t[0])
         # (with a delay or the dynamic model the compiled engine has DOP853
@@ -606,11 +608,26 @@ def _simulate_batch(
             and opts["model"] == "kinematic"
             and profile is None
         ):
-            opts["method"] = "Radau"
+            compiled_method = "Radau"
         else:
-            opts["method"] = "DOP853"
+            compiled_method = "DOP853"
             if tau is not None:
-                opts["max_step"] = _CAPPED_STEP * tau
+                max_step = _CAPPED_STEP * tau
+    if engine == "compiled" and auto_engine:
+        from .precompile import kernel_set, ready_or_background
+
+        # kernels not in the cache: compiled by a background process while
+        # this call runs on the numpy engine (its method as resolved above)
+        name = kernel_set(
+            method=compiled_method, delay=opts["delay"], model=opts["model"],
+            law=law, profile=profile,
+        )  # fmt: skip
+        if not ready_or_background(name):
+            engine, table = "numpy", None
+    if engine == "compiled" and auto_method:
+        opts["method"] = compiled_method
+        if max_step is not None:
+            opts["max_step"] = max_step
     if engine == "compiled":
         if chosen_for is None or opts["method"] != chosen_for:
             # (not yet checked for this method by _choose_engine)

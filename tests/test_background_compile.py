@@ -1,0 +1,251 @@
+"""Kernels not in the cache compile in a background process (the default).
+
+References: the files on disk (the lock a background compilation holds, the
+process id it writes there), the operating system's process table
+(``/proc/<pid>/cmdline`` on Linux, else ``os.kill(pid, 0)``), the result's
+own ``engine`` field, and the kernel sets' rule written out here from the
+module notes of ``fws_control.simulation.precompile`` (a delay, the dynamic
+model, a controller's compiled law or a varying speed: the kernels of every
+feature).
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+import fws_control as fws
+from fws_control.simulation import compilation, precompile
+
+ROOT = Path(__file__).resolve().parents[1]
+
+numba = pytest.importorskip("numba", reason="the extra 'fast' (numba)")
+
+VEH = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+GAINS = fws.SteeringGains(0.04, 0.4, -1.0)
+
+
+def _env(cache: Path, **updates: str) -> dict:
+    """This checkout first on the path, numba's cache in `cache`, the default
+    compile mode."""
+    drop = ("XDG_CACHE_HOME", compilation.QUIET_VARIABLE, compilation.COMPILE_VARIABLE)
+    env = {k: v for k, v in os.environ.items() if k not in drop}
+    env.update(PYTHONPATH=str(ROOT), NUMBA_CACHE_DIR=str(cache))
+    env.update(updates)
+    return env
+
+
+def _python(code: str, env: dict, cwd: Path) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(code)],
+        env=env, cwd=cwd, capture_output=True, text=True, timeout=600, check=False,
+    )  # fmt: skip
+
+
+def _folder(cache: Path) -> Path:
+    # the simulation kernels' cache folder under NUMBA_CACHE_DIR (numba's rule)
+    (folder,) = cache.glob("simulation_*")
+    return folder
+
+
+def _child_pid(lock: Path, parent: int | None = None) -> int:
+    # the pid the background process writes into its lock (waiting for it)
+    for _ in range(600):
+        text = lock.read_text().strip() if lock.exists() else ""
+        if text and int(text) != parent:
+            return int(text)
+        time.sleep(0.05)
+    raise AssertionError(f"no process id in {lock}")
+
+
+def _is_background(pid: int, name: str) -> bool:
+    if sys.platform == "linux":
+        try:
+            cmd = Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0")
+        except FileNotFoundError:
+            return False
+        return b"precompile._background(sys.argv[1], sys.argv[2])\n" in cmd[2] and (
+            cmd[3] == name.encode()
+        )
+    try:
+        os.kill(pid, 0)
+    except OSError:
+        return False
+    return True
+
+
+def _stop(pid: int) -> None:
+    try:
+        os.kill(pid, signal.SIGKILL)
+    except ProcessLookupError:
+        pass
+
+
+# Two calls of the paper's loop, then Stanley's law; the engine of each and
+# whether a notice came.
+_CALLS = """
+import sys
+import fws_control as fws
+veh = fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35)
+plant = fws.LateralPlant(veh, speed=5.0)
+g = fws.SteeringGains(0.04, 0.4, -1.0)
+for law in (g, g, fws.Stanley(gain=2.0)):
+    r = fws.simulate(plant, fws.Arc(curvature=0.1), law,
+                     initial_state=(0.0, -1.0, 0.0), duration=1.0)
+    print(r.engine, flush=True)
+    sys.stderr.write("--\\n")
+"""
+
+
+def test_a_cold_call_runs_on_numpy_and_starts_one_background_compilation(tmp_path):
+    cache = tmp_path / "cache"
+    run = _python(_CALLS, _env(cache), tmp_path)
+    assert run.returncode == 0, run.stderr[-2000:]
+    folder = _folder(cache)
+    paper = folder / "compiling-paper-dop853.lock"
+    features = folder / "compiling-features-dop853.lock"
+    pids = []
+    try:
+        pids = [_child_pid(paper), _child_pid(features)]
+        assert run.stdout.split() == ["numpy", "numpy", "numpy"]
+        # one notice in the process, at its first call
+        blocks = run.stderr.split("--\n")
+        assert blocks[0].count("\n") == 1, run.stderr
+        assert blocks[0].startswith(
+            "fws_control: compiling the simulation engine in a background process"
+        )
+        assert "about 54 s of CPU" in blocks[0]  # compiled._STAGE_SECONDS
+        assert f"cached in {folder}" in blocks[0]
+        assert "FWS_CONTROL_COMPILE=foreground" in blocks[0]
+        assert blocks[1:] == ["", "", ""]
+        # one process per set, each compiling its own set
+        assert pids[0] != pids[1]
+        assert _is_background(pids[0], "paper-dop853")
+        assert _is_background(pids[1], "features-dop853")
+        assert sorted(p.name for p in folder.glob("compiling-*.lock")) == [
+            "compiling-features-dop853.lock",
+            "compiling-paper-dop853.lock",
+        ]
+
+        # another process while they run: the numpy engine, no new process
+        again = _python(_CALLS, _env(cache), tmp_path)
+        assert again.returncode == 0, again.stderr[-2000:]
+        assert again.stdout.split() == ["numpy", "numpy", "numpy"]
+        assert again.stderr.startswith("fws_control: compiling the simulation")
+        assert [_child_pid(paper), _child_pid(features)] == pids
+
+        # quiet: the same, nothing printed
+        quiet = _python(_CALLS, _env(cache, FWS_CONTROL_QUIET="1"), tmp_path)
+        assert quiet.stdout.split() == ["numpy", "numpy", "numpy"]
+        assert quiet.stderr == "--\n--\n--\n"
+    finally:
+        for pid in pids:
+            _stop(pid)
+
+
+def test_a_stale_lock_is_replaced_and_a_fresh_one_kept(tmp_path):
+    cache = tmp_path / "cache"
+    code = """
+    import fws_control as fws
+    from fws_control.simulation.compilation import cache_dir
+    print(cache_dir())
+    r = fws.simulate(fws.LateralPlant(fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35),
+                                      speed=5.0),
+                     fws.Straight(), fws.SteeringGains(0.04, 0.4, -1.0),
+                     initial_state=(0.0, -1.0, 0.0), duration=1.0)
+    print(r.engine)
+    """
+    probe = _python("from fws_control.simulation.compilation import cache_dir\n"
+                    "print(cache_dir())", _env(cache), tmp_path)  # fmt: skip
+    folder = Path(probe.stdout.strip())
+    folder.mkdir(parents=True)
+    lock = folder / "compiling-paper-dop853.lock"
+    # held by a process that is still compiling: left alone
+    lock.write_text("12345\n")
+    run = _python(code, _env(cache), tmp_path)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert run.stdout.split()[-1] == "numpy"
+    assert lock.read_text() == "12345\n"
+    assert "background process" in run.stderr
+    # older than precompile._STALE_SECONDS: a killed process's; replaced
+    old = time.time() - 2 * precompile._STALE_SECONDS
+    os.utime(lock, (old, old))
+    run = _python(code, _env(cache), tmp_path)
+    assert run.returncode == 0, run.stderr[-2000:]
+    pid = _child_pid(lock, parent=12345)
+    try:
+        assert run.stdout.split()[-1] == "numpy"
+        assert _is_background(pid, "paper-dop853")
+    finally:
+        _stop(pid)
+
+
+def test_cached_kernels_run_compiled_without_a_notice(monkeypatch, capsys):
+    plant = fws.LateralPlant(VEH, speed=5.0)
+    kw = dict(initial_state=(0.0, -1.0, 0.0), duration=1.0)
+    # compiled here (or loaded from the cache): the set is then cached
+    ref = fws.simulate(plant, fws.Arc(curvature=0.1), GAINS, engine="compiled", **kw)
+    assert precompile.is_cached("paper-dop853")
+    monkeypatch.delenv(compilation.COMPILE_VARIABLE, raising=False)
+    capsys.readouterr()
+    res = fws.simulate(plant, fws.Arc(curvature=0.1), GAINS, **kw)
+    assert res.engine == "compiled"
+    assert (res.signals == ref.signals).all()
+    assert capsys.readouterr().err == ""
+
+
+def test_a_failed_background_compilation_compiles_in_the_foreground(
+    monkeypatch, tmp_path
+):
+    # the process started one, it ended (no lock) and the set is still not
+    # cached: the call compiles it itself, where an error shows
+    monkeypatch.delenv(compilation.COMPILE_VARIABLE, raising=False)
+    monkeypatch.setattr(precompile, "is_cached", lambda name: False)
+    monkeypatch.setattr(precompile, "_lock_path", lambda name: str(tmp_path / "x"))
+    monkeypatch.setattr(precompile, "_STARTED", {"paper-radau"})
+    monkeypatch.setattr(precompile, "_READY", set())
+    assert precompile.ready_or_background("paper-radau")
+
+
+def test_foreground_mode_and_the_mode_names(monkeypatch):
+    with pytest.raises(ValueError, match="name must be one of .*got 'paper-lsoda'"):
+        precompile.is_cached("paper-lsoda")
+    monkeypatch.setattr(precompile, "is_cached", lambda name: False)
+    monkeypatch.setattr(precompile, "_READY", set())
+    monkeypatch.setenv(compilation.COMPILE_VARIABLE, "Foreground")
+    assert compilation.compile_mode() == "foreground"
+    assert precompile.ready_or_background("paper-dop853")
+    monkeypatch.setenv(compilation.COMPILE_VARIABLE, "later")
+    with pytest.raises(
+        ValueError, match="FWS_CONTROL_COMPILE must be 'background' or "
+        "'foreground', got 'later'"
+    ):  # fmt: skip
+        fws.simulate(
+            fws.LateralPlant(VEH, speed=5.0), fws.Straight(), GAINS,
+            initial_state=(0.0, -1.0, 0.0), duration=1.0,
+        )  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("case", "expected"),
+    [
+        (dict(), "paper-dop853"),
+        (dict(method="Radau"), "paper-radau"),
+        (dict(delay=0.1), "features-dop853"),
+        (dict(model="dynamic"), "features-dop853"),
+        (dict(law=fws.Stanley()), "features-dop853"),
+        (dict(law=fws.PurePursuit()), "features-dop853"),
+        (dict(profile=fws.SpeedProfile.constant(5.0)), "features-dop853"),
+    ],
+)
+def test_kernel_set_of_a_call(case, expected):
+    args = dict(method="DOP853", delay=0.0, model="kinematic", law=GAINS, profile=None)
+    args.update(case)
+    assert precompile.kernel_set(**args) == expected
