@@ -35,7 +35,7 @@ to the first result.
 ``--case stanley`` runs Stanley (gain 2) instead of the paper's law, from
 0.5 m beside an arc of 1/100 m at 20 m/s for 5 s: a call that uses the
 kernels of every feature (a controller's law), whose stages give the
-estimates of ``compiled._FULL_STAGE_SECONDS``.
+estimates of ``compiled.FULL_STAGE_SECONDS``.
 
 Run: ``python benchmarks/bench_first_use.py [--cold 1] [--case stanley]``
 """

@@ -709,7 +709,8 @@ def build_parser() -> argparse.ArgumentParser:
         help="compile the compiled engine's kernels now (extra 'fast')",
         description="Compile the kernels of the compiled simulation engine into "
         "its cache (fws_control.simulation.precompile), as the first simulations "
-        "after an install would: the paper's loop with DOP853 and with Radau, "
+        "after an install would (in a background process, while they run on the "
+        "numpy engine): the paper's loop with DOP853 and with Radau, "
         "the kernels of a delay, the dynamic model, a controller's law or a "
         "varying speed, and the one-run drivers solve_run and radau_run. Prints "
         "the CPU time of each set; a set already cached takes about a second.",

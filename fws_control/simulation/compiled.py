@@ -205,7 +205,8 @@ from .compiled_variants import FEATURES, features_of, kernels
 __all__ = [
     "available",
     "compiling",
-    "compile_estimate",
+    "STAGE_SECONDS",
+    "FULL_STAGE_SECONDS",
     "STAGES",
     "CurvatureTable",
     "curvature_table",
@@ -289,8 +290,11 @@ STAGES = (*METHODS, "signals", "peaks")
 # the kernels of every feature; numba 0.68, two cores shared with other
 # compilations: an idle machine takes less, by up to 2x); Radau's full
 # driver scaled from DOP853's by their earlier ratio.
-_STAGE_SECONDS = {"DOP853": 35.0, "Radau": 30.0, "signals": 3.0, "peaks": 16.0}
-_FULL_STAGE_SECONDS = {"DOP853": 89.0, "Radau": 72.0, "signals": 9.0, "peaks": 84.0}
+#: CPU seconds each stage of :data:`STAGES` takes to compile with an empty
+#: cache, the kernels of the paper's loop (the notices' estimates).
+STAGE_SECONDS = {"DOP853": 35.0, "Radau": 30.0, "signals": 3.0, "peaks": 16.0}
+#: The same for the kernels of every feature.
+FULL_STAGE_SECONDS = {"DOP853": 89.0, "Radau": 72.0, "signals": 9.0, "peaks": 84.0}
 
 # the features of the call a thread runs, for the estimate (set by the
 # kernels' callers below before they enter their stage)
@@ -318,45 +322,8 @@ def _stage_seconds(stage: str) -> float:
         "signals": top.signals_batch,
         "peaks": top.peaks_batch,
     }[stage]
-    seconds = _FULL_STAGE_SECONDS if features else _STAGE_SECONDS
+    seconds = FULL_STAGE_SECONDS if features else STAGE_SECONDS
     return compile_seconds(kernel, seconds[stage])
-
-
-def compile_estimate(*stages: str, features: bool) -> float:
-    """CPU seconds the `stages` take to compile with an empty cache.
-
-    Estimates measured with ``benchmarks/bench_first_use.py`` (the notice's
-    figures): the kernels specialised to the paper's loop, or with
-    `features` those of every feature.
-
-    Parameters
-    ----------
-    *stages : str
-        Names in :data:`STAGES`.
-    features : bool
-        Whether the call uses a feature of
-        :data:`~fws_control.simulation.compiled_variants.FEATURES`.
-
-    Returns
-    -------
-    float
-
-    Raises
-    ------
-    ValueError
-        For a name not in :data:`STAGES`.
-
-    Examples
-    --------
-    >>> from fws_control.simulation.compiled import compile_estimate
-    >>> compile_estimate("DOP853", "signals", "peaks", features=False)
-    54.0
-    """
-    for stage in stages:
-        if stage not in STAGES:
-            raise ValueError(f"stages must be in {STAGES}, got {stage!r}")
-    seconds = _FULL_STAGE_SECONDS if features else _STAGE_SECONDS
-    return float(sum(seconds[s] for s in stages))
 
 
 def compiling(*stages: str, features: bool | None = None) -> Any:

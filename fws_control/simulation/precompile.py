@@ -56,6 +56,7 @@ __all__ = [
     "kernel_set",
     "is_cached",
     "ready_or_background",
+    "compile_estimate",
 ]
 
 #: The kernel sets :func:`precompile` compiles.
@@ -313,6 +314,47 @@ def is_cached(name: str) -> bool:
     return all(is_compiled(kernel) for kernel in _set_kernels(name))
 
 
+def compile_estimate(name: str) -> float:
+    """CPU seconds kernel set `name` takes to compile with an empty cache.
+
+    The sum of its stages' estimates
+    (:data:`~fws_control.simulation.compiled.STAGE_SECONDS`, or
+    :data:`~fws_control.simulation.compiled.FULL_STAGE_SECONDS` for the
+    kernels of every feature), measured with
+    ``benchmarks/bench_first_use.py`` on a busy machine (an idle one takes
+    less, by up to 2x). The one-run drivers: the two methods' drivers.
+
+    Parameters
+    ----------
+    name : str
+        A name of :data:`KERNEL_SETS`.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ValueError
+        For a name not in :data:`KERNEL_SETS`.
+
+    Examples
+    --------
+    >>> from fws_control.simulation.precompile import compile_estimate
+    >>> compile_estimate("paper-dop853")       # DOP853, signals, peaks
+    54.0
+    """
+    from .compiled import FULL_STAGE_SECONDS, STAGE_SECONDS
+
+    if name not in KERNEL_SETS:
+        raise ValueError(f"name must be one of {KERNEL_SETS}, got {name!r}")
+    if name == "single-run":
+        return STAGE_SECONDS["DOP853"] + STAGE_SECONDS["Radau"]
+    seconds = FULL_STAGE_SECONDS if name == "features-dop853" else STAGE_SECONDS
+    method = "Radau" if name == "paper-radau" else "DOP853"
+    return seconds[method] + seconds["signals"] + seconds["peaks"]
+
+
 def _lock_path(name: str) -> str | None:
     from .compilation import cache_dir
 
@@ -442,9 +484,5 @@ def ready_or_background(name: str) -> bool:
             return True  # it ended without the kernels: compile here
         if _start(name, lock):
             _STARTED.add(name)
-    from .compiled import compile_estimate
-
-    features = name == "features-dop853"
-    method = "Radau" if name == "paper-radau" else "DOP853"
-    announce_background(compile_estimate(method, "signals", "peaks", features=features))
+    announce_background(compile_estimate(name))
     return False

@@ -195,6 +195,40 @@ _TABLES: dict = {}
 _TABLES_SIZE = 16
 
 
+def _auto_compiled_method(opts, *, stiff_auto, ctrl, tau, duration, profile) -> dict:
+    """The compiled engine's options under ``method="auto"``: DOP853, with
+    its steps held to half its stability bound for an actuator (see
+    ``_CAPPED_STEP``), or Radau beyond ``_RADAU_FROM_STEPS`` such steps (the
+    paper's kinematic loop only: with a delay, the dynamic model, a
+    controller's law or a varying speed the compiled engine has DOP853
+    only)."""
+    if (
+        stiff_auto
+        and ctrl is None
+        and duration > _RADAU_FROM_STEPS * _CAPPED_STEP * tau
+        and not opts["delay"] > 0.0
+        and opts["model"] == "kinematic"
+        and profile is None
+    ):
+        return {"method": "Radau"}
+    if tau is None:
+        return {"method": "DOP853"}
+    return {"method": "DOP853", "max_step": _CAPPED_STEP * tau}
+
+
+def _kernels_ready(method, opts, law, profile) -> bool:
+    """Whether a call of ``engine="auto"`` runs compiled now: its kernel set
+    cached, or to compile here (see
+    :func:`~fws_control.simulation.precompile.ready_or_background`)."""
+    from .precompile import kernel_set, ready_or_background
+
+    name = kernel_set(
+        method=method, delay=opts["delay"], model=opts["model"], law=law,
+        profile=profile,
+    )  # fmt: skip
+    return ready_or_background(name)
+
+
 def _path_table(path):
     """The compiled engine's curvature table of `path`, or None if it has none.
 
@@ -595,40 +629,23 @@ def _simulate_batch(
             profile=profile,
             schedule=schedule,
         )
-    compiled_method, max_step = opts["method"], None
+    auto_opts: dict[str, Any] = {}  # the compiled engine's under method="auto"
     if engine == "compiled" and auto_method:
-        duration_run = float(t[-1] - t[0])
-        # (with a delay or the dynamic model the compiled engine has DOP853
-        # only; with a delay its steps are at most the delay too)
-        if (
-            stiff_auto
-            and ctrl is None  # (a controller's law: DOP853 only)
-            and duration_run > _RADAU_FROM_STEPS * _CAPPED_STEP * tau
-            and not opts["delay"] > 0.0
-            and opts["model"] == "kinematic"
-            and profile is None
-        ):
-            compiled_method = "Radau"
-        else:
-            compiled_method = "DOP853"
-            if tau is not None:
-                max_step = _CAPPED_STEP * tau
-    if engine == "compiled" and auto_engine:
-        from .precompile import kernel_set, ready_or_background
-
-        # kernels not in the cache: compiled by a background process while
-        # this call runs on the numpy engine (its method as resolved above)
-        name = kernel_set(
-            method=compiled_method, delay=opts["delay"], model=opts["model"],
-            law=law, profile=profile,
+        auto_opts = _auto_compiled_method(
+            opts, stiff_auto=stiff_auto, ctrl=ctrl, tau=tau,
+            duration=float(t[-1] - t[0]), profile=profile,
         )  # fmt: skip
-        if not ready_or_background(name):
-            engine, table = "numpy", None
-    if engine == "compiled" and auto_method:
-        opts["method"] = compiled_method
-        if max_step is not None:
-            opts["max_step"] = max_step
+    compiled_method = auto_opts.get("method", opts["method"])
+    if (
+        engine == "compiled"
+        and auto_engine
+        and not _kernels_ready(compiled_method, opts, law, profile)
+    ):
+        # (a background process compiles them; the numpy engine runs the
+        # method prepare_runs resolved)
+        engine, table = "numpy", None
     if engine == "compiled":
+        opts.update(auto_opts)
         if chosen_for is None or opts["method"] != chosen_for:
             # (not yet checked for this method by _choose_engine)
             _check_compiled(
