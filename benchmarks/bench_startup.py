@@ -84,8 +84,9 @@ def engine_line(env: dict) -> str:
     )  # fmt: skip
     if run.stdout.strip():
         return (
-            f"engine: compiled (numba {run.stdout.strip()}, extra 'fast'; the "
-            "first run of a fresh install also compiles its kernels, once)"
+            f"engine: compiled (numba {run.stdout.strip()}, extra 'fast'; after a "
+            "fresh install the first runs use the numpy engine while its kernels "
+            "compile, once, in a background process)"
         )
     return "engine: numpy (numba not installed: the compiled engine is off)"
 

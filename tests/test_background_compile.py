@@ -11,6 +11,7 @@ feature).
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import subprocess
@@ -23,6 +24,8 @@ import pytest
 
 import fws_control as fws
 from fws_control.simulation import compilation, compiled, precompile
+
+fcntl = pytest.importorskip("fcntl", reason="POSIX: the background compilation's flock")
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -55,11 +58,12 @@ def _folder(cache: Path) -> Path:
     return folder
 
 
-def _child_pid(lock: Path, parent: int | None = None) -> int:
-    # the pid the background process writes into its lock (waiting for it)
-    for _ in range(600):
+def _child_pid(lock: Path, old: int | None = None) -> int:
+    # the pid the background process writes into its lock (waiting for it;
+    # its start, imports included, can take seconds on a busy machine)
+    for _ in range(2400):
         text = lock.read_text().strip() if lock.exists() else ""
-        if text and int(text) != parent:
+        if text and int(text) != old:
             return int(text)
         time.sleep(0.05)
     raise AssertionError(f"no process id in {lock}")
@@ -88,7 +92,7 @@ def _is_background(pid: int, name: str) -> bool:
     cmd = Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0")
     return (
         len(cmd) > 3
-        and b"precompile._background(sys.argv[1], sys.argv[2])\n" in cmd[2]
+        and b"precompile._background(sys.argv[1], int(sys.argv[2]))\n" in cmd[2]
         and cmd[3] == name.encode()
     )
 
@@ -120,16 +124,30 @@ for law in (g, g, fws.Stanley(gain=2.0)):
 """
 
 
+@contextlib.contextmanager
+def _holding(*locks: Path):
+    # the locks' flocks held here, as a running background process holds
+    # its own (acquiring one also proves that no process holds it)
+    fds = [os.open(lock, os.O_RDWR) for lock in locks]
+    try:
+        for fd in fds:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        yield
+    finally:
+        for fd in fds:
+            os.close(fd)
+
+
 def test_a_cold_call_runs_on_numpy_and_starts_one_background_compilation(tmp_path):
     cache = tmp_path / "cache"
-    run = _python(_CALLS, _env(cache), tmp_path)
-    assert run.returncode == 0, run.stderr[-2000:]
-    folder = _folder(cache)
-    paper = folder / "compiling-paper-dop853.lock"
-    features = folder / "compiling-features-dop853.lock"
-    pids = []
+    pids: list[int] = []
     try:
-        pids = [_child_pid(paper), _child_pid(features)]
+        run = _python(_CALLS, _env(cache), tmp_path)
+        assert run.returncode == 0, run.stderr[-2000:]
+        folder = _folder(cache)
+        paper = folder / "compiling-paper-dop853.lock"
+        features = folder / "compiling-features-dop853.lock"
+        pids.extend(_child_pid(lock) for lock in (paper, features))
         assert run.stdout.split() == ["numpy", "numpy", "numpy"]
         # one notice in the process, at its first call
         blocks = run.stderr.split("--\n")
@@ -149,67 +167,64 @@ def test_a_cold_call_runs_on_numpy_and_starts_one_background_compilation(tmp_pat
         assert pids[0] != pids[1]
         assert _is_background(pids[0], "paper-dop853")
         assert _is_background(pids[1], "features-dop853")
-        assert sorted(p.name for p in folder.glob("compiling-*.lock")) == [
-            "compiling-features-dop853.lock",
-            "compiling-paper-dop853.lock",
-        ]
-        # stopped before they finish (killed: their locks stay, as if they
-        # still ran)
+
+        # killed: their locks end with them
         for pid in pids:
             _stop(pid)
+        with _holding(paper, features):
+            # another process while the locks are held: the numpy engine,
+            # no new process (no pid written)
+            again = _python(_CALLS, _env(cache), tmp_path)
+            assert again.returncode == 0, again.stderr[-2000:]
+            assert again.stdout.split() == ["numpy", "numpy", "numpy"]
+            assert again.stderr.startswith("fws_control: compiling the simulation")
+            # quiet: the same, nothing printed
+            quiet = _python(_CALLS, _env(cache, FWS_CONTROL_QUIET="1"), tmp_path)
+            assert quiet.stdout.split() == ["numpy", "numpy", "numpy"]
+            assert quiet.stderr == "--\n--\n--\n"
+            assert [_child_pid(paper), _child_pid(features)] == pids
 
-        # another process while they hold their locks: the numpy engine, no
-        # new process
-        again = _python(_CALLS, _env(cache), tmp_path)
-        assert again.returncode == 0, again.stderr[-2000:]
-        assert again.stdout.split() == ["numpy", "numpy", "numpy"]
-        assert again.stderr.startswith("fws_control: compiling the simulation")
-        assert [_child_pid(paper), _child_pid(features)] == pids
-
-        # quiet: the same, nothing printed
-        quiet = _python(_CALLS, _env(cache, FWS_CONTROL_QUIET="1"), tmp_path)
-        assert quiet.stdout.split() == ["numpy", "numpy", "numpy"]
-        assert quiet.stderr == "--\n--\n--\n"
+        # released (the killed compilation): the next call starts another
+        one = _python(_CALLS.replace("(g, g, fws.Stanley(gain=2.0))", "(g,)"),
+                      _env(cache), tmp_path)  # fmt: skip
+        assert one.stdout.split() == ["numpy"]
+        pids.append(_child_pid(paper, old=pids[0]))
+        assert _is_background(pids[-1], "paper-dop853")
     finally:
         for pid in pids:
             _stop(pid)
 
 
-def test_a_stale_lock_is_replaced_and_a_fresh_one_kept(tmp_path):
-    cache = tmp_path / "cache"
-    code = """
-    import fws_control as fws
-    from fws_control.simulation.compilation import cache_dir
-    print(cache_dir())
-    r = fws.simulate(fws.LateralPlant(fws.Vehicle(wheelbase=2.7, rear_to_cg=1.35),
-                                      speed=5.0),
-                     fws.Straight(), fws.SteeringGains(0.04, 0.4, -1.0),
-                     initial_state=(0.0, -1.0, 0.0), duration=1.0)
-    print(r.engine)
-    """
-    probe = _python("from fws_control.simulation.compilation import cache_dir\n"
-                    "print(cache_dir())", _env(cache), tmp_path)  # fmt: skip
-    folder = Path(probe.stdout.strip())
-    folder.mkdir(parents=True)
-    lock = folder / "compiling-paper-dop853.lock"
-    # held by a process that is still compiling: left alone
-    lock.write_text("12345\n")
-    run = _python(code, _env(cache), tmp_path)
-    assert run.returncode == 0, run.stderr[-2000:]
-    assert run.stdout.split()[-1] == "numpy"
-    assert lock.read_text() == "12345\n"
-    assert "background process" in run.stderr
-    # older than precompile._STALE_SECONDS: a killed process's; replaced
-    old = time.time() - 2 * precompile._STALE_SECONDS
-    os.utime(lock, (old, old))
-    run = _python(code, _env(cache), tmp_path)
-    assert run.returncode == 0, run.stderr[-2000:]
-    pid = _child_pid(lock, parent=12345)
+def test_a_failed_background_compilation_leaves_a_mark(tmp_path, monkeypatch):
+    # the background process's side: its pid into the lock, and on a
+    # failure the .failed file with the error, raised again (into its log)
+    files = {suffix: str(tmp_path / f"set{suffix}") for suffix in (".lock", ".failed")}
+    monkeypatch.setattr(precompile, "_set_file", lambda name, suffix: files[suffix])
+
+    def fails(name):
+        raise RuntimeError(f"no kernels for {name}")
+
+    monkeypatch.setattr(precompile, "_run_set", fails)
+    fd = os.open(files[".lock"], os.O_RDWR | os.O_CREAT)
     try:
-        assert run.stdout.split()[-1] == "numpy"
-        assert _is_background(pid, "paper-dop853")
+        with pytest.raises(RuntimeError, match="no kernels for paper-radau"):
+            precompile._background("paper-radau", fd)
     finally:
-        _stop(pid)
+        os.close(fd)
+    assert Path(files[".lock"]).read_text() == f"{os.getpid()}\n"
+    assert Path(files[".failed"]).read_text() == (
+        "RuntimeError: no kernels for paper-radau\n"
+    )
+    # the calls' side: compiled here (True), no process started
+    monkeypatch.delenv(compilation.COMPILE_VARIABLE, raising=False)
+    monkeypatch.setattr(precompile, "is_cached", lambda name: False)
+    monkeypatch.setattr(precompile, "_READY", set())
+    monkeypatch.setattr(precompile, "_start", lambda name: pytest.fail("started"))
+    assert precompile.ready_or_background("paper-radau")
+    # once the set is cached the mark goes
+    monkeypatch.setattr(precompile, "is_cached", lambda name: True)
+    assert precompile.ready_or_background("paper-radau")
+    assert not os.path.exists(files[".failed"])
 
 
 def test_cached_kernels_run_compiled_without_a_notice(monkeypatch, capsys):
@@ -224,19 +239,6 @@ def test_cached_kernels_run_compiled_without_a_notice(monkeypatch, capsys):
     assert res.engine == "compiled"
     assert (res.signals == ref.signals).all()
     assert capsys.readouterr().err == ""
-
-
-def test_a_failed_background_compilation_compiles_in_the_foreground(
-    monkeypatch, tmp_path
-):
-    # the process started one, it ended (no lock) and the set is still not
-    # cached: the call compiles it itself, where an error shows
-    monkeypatch.delenv(compilation.COMPILE_VARIABLE, raising=False)
-    monkeypatch.setattr(precompile, "is_cached", lambda name: False)
-    monkeypatch.setattr(precompile, "_lock_path", lambda name: str(tmp_path / "x"))
-    monkeypatch.setattr(precompile, "_STARTED", {"paper-radau"})
-    monkeypatch.setattr(precompile, "_READY", set())
-    assert precompile.ready_or_background("paper-radau")
 
 
 def test_foreground_mode_and_the_mode_names(monkeypatch):
@@ -267,7 +269,11 @@ def test_foreground_mode_and_the_mode_names(monkeypatch):
         (dict(model="dynamic"), "features-dop853"),
         (dict(law=fws.Stanley()), "features-dop853"),
         (dict(law=fws.PurePursuit()), "features-dop853"),
-        (dict(profile=fws.SpeedProfile.constant(5.0)), "features-dop853"),
+        (dict(law=fws.StateFeedback(GAINS.K)), "features-dop853"),
+        # sampled: the MPC's held command is a compiled law of its own
+        (dict(law=fws.MPCController()), "features-dop853"),
+        (dict(profile=fws.SpeedProfile.from_time([0, 5], [5, 3])), "features-dop853"),
+        (dict(profile=fws.SpeedProfile.constant(5.0)), "paper-dop853"),
     ],
 )
 def test_kernel_set_of_a_call(case, expected):

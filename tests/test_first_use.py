@@ -168,6 +168,16 @@ def test_compile_seconds_counts_what_is_still_to_compile(tmp_path, monkeypatch):
     again = compilation.jit(cube)  # as in a new process: on disk only
     assert not again.overloads
     assert compilation.compile_seconds(again, 5.0) == 0.0
+    assert compilation.is_compiled(again) and not compilation.is_compiled(cube)
+    # an index of another source (an edit of any kernel source changes the
+    # stamp): numba would compile, and so it counts
+    stamp = compilation._kernel_sources_stamp()
+    monkeypatch.setattr(compilation, "_kernel_sources_stamp", lambda: (*stamp, "x"))
+    edited = compilation.jit(cube)
+    assert compilation.compile_seconds(edited, 5.0) == 5.0
+    assert not compilation.is_compiled(edited)
+    assert edited(2.0) == 8.0  # compiled again, into the same index
+    assert compilation.is_compiled(compilation.jit(cube))
 
 
 def test_the_estimate_is_of_the_kernels_the_call_uses(monkeypatch):

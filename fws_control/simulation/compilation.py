@@ -338,9 +338,11 @@ def _quiet() -> bool:
 
 
 class _Notice:
-    """Whether this process has announced a compilation (once per process)."""
+    """Whether this process has announced a compilation, and a compilation in
+    the background (each once per process)."""
 
     announced = False
+    background = False
 
 
 class _ThreadNotice(threading.local):
@@ -383,8 +385,8 @@ def announce_background(seconds: float) -> None:
     """Say on standard error, once per process, that the kernels compile in
     a background process while the calls run on the numpy engine.
 
-    Silent with ``FWS_CONTROL_QUIET=1``, and after any other notice of this
-    module in the process.
+    Silent with ``FWS_CONTROL_QUIET=1``. A compilation in the foreground
+    later in the process is still announced (:func:`first_use`).
 
     Parameters
     ----------
@@ -399,9 +401,9 @@ def announce_background(seconds: float) -> None:
     >>> announce_background(30.0)      # silenced: nothing printed
     >>> del os.environ["FWS_CONTROL_QUIET"]
     """
-    if _Notice.announced:
+    if _Notice.background:
         return
-    _Notice.announced = True
+    _Notice.background = True
     if _quiet():
         return
     about = f"about {seconds:.0f} s of CPU; " if seconds > 0 else ""

@@ -1,8 +1,9 @@
 """Compile the compiled engine's kernels ahead of their first use.
 
 numba compiles a kernel the first time a call needs it and caches it
-(:mod:`~fws_control.simulation.compilation`); the first simulation after
-an install then waits for the compilation. :func:`precompile` does that
+(:mod:`~fws_control.simulation.compilation`); after an install the first
+simulations run on the numpy engine while a background process compiles
+(below), or wait for the compilation. :func:`precompile` does that
 work at a moment of the user's choosing -- after ``pip install`` in a
 container image, before a sweep on a cluster node, before a test suite --
 by running one short simulation (or one-run call) of each kernel set, in
@@ -28,14 +29,17 @@ The kernel sets (:data:`KERNEL_SETS`):
 Compiling in the background
     A call of ``engine="auto"`` whose kernel set is not in the cache does not
     wait for it (unless ``FWS_CONTROL_COMPILE=foreground``):
-    :func:`ready_or_background` starts one background process that compiles
-    the set into the cache (``python -c``, detached, at a lower priority,
-    one per set at a time over all processes of the install: a lock file in
-    the cache folder), says so once on standard error, and the call runs on
-    the numpy engine. Later calls run compiled once the set is in the
-    cache. The process writes its output to ``compiling-<set>.log`` in the
-    cache folder; if it ends without the set in the cache, the next call
-    compiles in the foreground, where an error shows.
+    :func:`ready_or_background` starts a background process that compiles
+    the set into the cache (``python -c``, detached, at a lower priority),
+    says so once per process on standard error, and the call runs on the
+    numpy engine; the calls after the set is cached run compiled. One
+    process per set for all processes of an install: it holds an exclusive
+    ``flock`` on ``compiling-<set>.lock`` in the cache folder (writing its
+    pid there), which ends with the process however it ends. It writes its
+    output to ``compiling-<set>.log``; if it fails, it leaves
+    ``compiling-<set>.failed``, and the calls then compile the set
+    themselves (where the error shows) until it is cached. On Windows (no
+    ``flock``) the calls compile in the foreground.
 """
 
 from __future__ import annotations
@@ -205,20 +209,11 @@ def precompile(
         return [started[name].result() for name in sets]
 
 
-# A background compilation's lock older than this is stale (its process was
-# killed before it removed the lock): the kernels of every feature compile
-# in 200-300 s of CPU.
-_STALE_SECONDS = 3600.0
-
-# Sets whose background compilation this process started: if one ends
-# without its kernels in the cache, the next call compiles in the
-# foreground (where the error shows) instead of starting another.
-_STARTED: set[str] = set()
-
 # Sets found in the cache by this process.
 _READY: set[str] = set()
 
-# The background processes this process started.
+# The background processes this process started (kept: a Popen object
+# collected while its process runs warns).
 _CHILDREN: list[subprocess.Popen] = []
 
 
@@ -234,16 +229,18 @@ def kernel_set(*, method: str, delay: float, model: str, law: Any, profile: Any)
     model : {"kinematic", "dynamic"}
         The plant's model.
     law : SteeringGains or LateralController
-        The call's control law.
+        The call's control law: a controller (its compiled law, or the held
+        command of a sampled one such as the MPC) runs the kernels of every
+        feature.
     profile : SpeedProfile or None
-        A varying speed.
+        The speed (None or a constant profile: a constant speed).
 
     Returns
     -------
     str
         A name of :data:`KERNEL_SETS`: ``"features-dop853"`` with a delay,
-        the dynamic model, a controller's compiled law or a varying speed,
-        else ``"paper-radau"`` or ``"paper-dop853"``.
+        the dynamic model, a controller or a varying speed, else
+        ``"paper-radau"`` or ``"paper-dop853"``.
 
     Examples
     --------
@@ -256,9 +253,11 @@ def kernel_set(*, method: str, delay: float, model: str, law: Any, profile: Any)
     ...            law=fws.Stanley(), profile=None)
     'features-dop853'
     """
-    from .compiled_laws import law_code
+    from ..gains import SteeringGains
 
-    if delay > 0.0 or model == "dynamic" or profile is not None or law_code(law) > 0:
+    varying = profile is not None and not profile.is_constant
+    controller = not isinstance(law, SteeringGains)
+    if delay > 0.0 or model == "dynamic" or varying or controller:
         return "features-dop853"
     return "paper-radau" if method == "Radau" else "paper-dop853"
 
@@ -355,83 +354,93 @@ def compile_estimate(name: str) -> float:
     return seconds[method] + seconds["signals"] + seconds["peaks"]
 
 
-def _lock_path(name: str) -> str | None:
+def _set_file(name: str, suffix: str) -> str | None:
+    # compiling-<set>.<suffix> in the cache folder (None: no cache folder)
     from .compilation import cache_dir
 
     folder = cache_dir()
-    return None if folder is None else os.path.join(folder, f"compiling-{name}.lock")
+    return None if folder is None else os.path.join(folder, f"compiling-{name}{suffix}")
 
 
-def _running(lock: str) -> bool:
-    # a background compilation holds the lock (removing a stale one)
+def _try_lock(path: str) -> int | None:
+    # an open descriptor of `path` holding its exclusive lock, or None if
+    # another process holds it. flock: the lock belongs to the open file,
+    # which the background process inherits, and ends when the last process
+    # holding it exits, however it exits (no stale lock to clean up).
+    import fcntl
+
+    fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
     try:
-        age = time.time() - os.path.getmtime(lock)
-    except FileNotFoundError:
-        return False
-    if age <= _STALE_SECONDS:
-        return True
-    try:
-        os.remove(lock)
-    except FileNotFoundError:
-        pass
-    return False
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        os.close(fd)
+        return None
+    return fd
 
 
-def _start(name: str, lock: str) -> bool:
-    # take the lock and start the detached process; False if another
-    # process took the lock first
+def _start(name: str) -> bool:
+    # start the background process unless one holds the set's lock; False
+    # if one runs
+    lock = _set_file(name, ".lock")
+    assert lock is not None
     os.makedirs(os.path.dirname(lock), exist_ok=True)
-    try:
-        fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
-    except FileExistsError:
+    fd = _try_lock(lock)
+    if fd is None:
         return False
-    os.close(fd)  # (the background process writes its pid into it)
-    log = lock[: -len(".lock")] + ".log"
-    # at a lower priority: the user's own work first
-    code = (
-        "import os, sys\n"
-        "if hasattr(os, 'nice'): os.nice(10)\n"
-        "from fws_control.simulation import precompile\n"
-        "precompile._background(sys.argv[1], sys.argv[2])\n"
-    )
-    env = dict(os.environ)
-    from .compilation import QUIET_VARIABLE
-
-    env[QUIET_VARIABLE] = "1"
-    detach: dict[str, Any] = {"start_new_session": True}
-    if sys.platform == "win32":  # pragma: no cover - POSIX CI
-        detach = {
-            "creationflags": subprocess.DETACHED_PROCESS
-            | subprocess.CREATE_NEW_PROCESS_GROUP
-        }
     try:
+        os.ftruncate(fd, 0)  # (the background process writes its pid)
+        # at a lower priority: the user's own work first
+        code = (
+            "import os, sys\n"
+            "os.nice(10)\n"
+            "from fws_control.simulation import precompile\n"
+            "precompile._background(sys.argv[1], int(sys.argv[2]))\n"
+        )
+        env = dict(os.environ)
+        from .compilation import QUIET_VARIABLE
+
+        env[QUIET_VARIABLE] = "1"
+        log = _set_file(name, ".log")
+        assert log is not None
         with open(log, "w") as out:
             child = subprocess.Popen(
-                [sys.executable, "-c", code, name, lock],
+                [sys.executable, "-c", code, name, str(fd)],
                 stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT,
-                env=env, close_fds=True, **detach,
+                env=env, pass_fds=(fd,), start_new_session=True,
             )  # fmt: skip
-    except OSError:
-        os.remove(lock)
-        raise
-    # (kept: a Popen object collected while its process runs warns)
+    finally:
+        os.close(fd)  # (the child holds the lock from here)
     _CHILDREN.append(child)
     return True
 
 
-def _background(name: str, lock: str) -> None:
-    # the background process: compile the set, then release the lock (which
-    # names this process meanwhile, for whoever needs to stop it)
+def _running(name: str) -> bool:
+    # a background process holds the set's lock
+    for child in _CHILDREN:
+        child.poll()  # (reaps an ended child of this process)
+    lock = _set_file(name, ".lock")
+    if lock is None or not os.path.exists(lock):
+        return False
+    fd = _try_lock(lock)
+    if fd is None:
+        return True
+    os.close(fd)
+    return False
+
+
+def _background(name: str, fd: int) -> None:
+    # the background process: compile the set while holding the lock on fd;
+    # a failure leaves compiling-<set>.failed for the calls to see
+    failed = _set_file(name, ".failed")
+    assert failed is not None
+    os.write(fd, f"{os.getpid()}\n".encode())
     try:
-        with open(lock, "w") as f:
-            f.write(f"{os.getpid()}\n")
         item = _run_set(name)
-        print(f"{item.name}: {item.cpu_seconds:.1f} s CPU", flush=True)
-    finally:
-        try:
-            os.remove(lock)
-        except FileNotFoundError:
-            pass
+    except BaseException as exc:
+        with open(failed, "w") as f:
+            f.write(f"{type(exc).__name__}: {exc}\n")
+        raise
+    print(f"{item.name}: {item.cpu_seconds:.1f} s CPU", flush=True)
 
 
 def ready_or_background(name: str) -> bool:
@@ -439,11 +448,11 @@ def ready_or_background(name: str) -> bool:
 
     True if the set is cached (:func:`is_cached`), or where the call is to
     compile it itself: with ``FWS_CONTROL_COMPILE=foreground``, where no
-    cache folder is writable, or when a background compilation that this
-    process started has ended without the set in the cache. Otherwise
+    cache folder is writable or no process can be started, after a
+    background compilation of the set failed, and on Windows. Otherwise
     False: a background process compiles the set (this call starts it
-    unless one runs already), announced once on standard error (see the
-    module notes), and the call runs on the numpy engine.
+    unless one runs already), announced once per process on standard error
+    (see the module notes), and the call runs on the numpy engine.
 
     Parameters
     ----------
@@ -471,18 +480,22 @@ def ready_or_background(name: str) -> bool:
     """
     from .compilation import announce_background, compile_mode
 
-    if name in _READY or compile_mode() == "foreground":
+    if compile_mode() == "foreground" or name in _READY:
         return True
+    failed = _set_file(name, ".failed")
     if is_cached(name):
         _READY.add(name)  # (cached once, cached for the process)
+        if failed is not None and os.path.exists(failed):
+            os.remove(failed)  # (compiled since, in the foreground)
         return True
-    lock = _lock_path(name)
-    if lock is None:
+    if failed is None or os.path.exists(failed) or sys.platform == "win32":
+        # no cache folder, a background compilation that failed, or Windows
+        # (no flock there): compiled here, where an error shows
         return True
-    if not _running(lock):
-        if name in _STARTED:
-            return True  # it ended without the kernels: compile here
-        if _start(name, lock):
-            _STARTED.add(name)
+    try:
+        if not _running(name):
+            _start(name)
+    except OSError:
+        return True  # (no background process: compiled here)
     announce_background(compile_estimate(name))
     return False

@@ -26,7 +26,9 @@ law on the kinematic model with DOP853 or Radau, with a delay DOP853; on
 the dynamic model and a controller's compiled law DOP853, with or without
 a delay): each run then has its own
 steps, error norm and stop, and its exact peaks come from its own dense
-output.
+output. Until the kernels a call needs are in the cache, a background
+process compiles them and the calls run on the numpy engine
+(:func:`~fws_control.simulation.precompile.ready_or_background`).
 """
 
 from __future__ import annotations
@@ -984,9 +986,12 @@ def simulate(
         and it runs the case (with ``method="auto"`` and an actuator: DOP853
         held to 3.2 T or Radau, as above; the numpy engine's own choice is
         :func:`~fws_control.simulation.options.choose_method`); the numpy
-        engine otherwise. The result's
-        ``engine`` says which ran, and is bitwise the result of asking for
-        that engine explicitly.
+        engine otherwise, and while a background process compiles the
+        kernels the case needs (``FWS_CONTROL_COMPILE=foreground``: the call
+        compiles them and waits; see
+        :func:`~fws_control.simulation.precompile.ready_or_background`). The
+        result's ``engine`` says which ran, and is bitwise the result of
+        asking for that engine explicitly.
     speed : SpeedProfile, optional
         A speed that varies along the run (:class:`~fws_control.SpeedProfile`:
         a table of the time or of the arc length, a braking manoeuvre, a
@@ -1163,7 +1168,8 @@ def simulate_batch(
         compiled engine where numba is installed and it runs the case --
         the paper's law, kinematic model, DOP853, Radau or ``"auto"``
         (with a delay, on the dynamic model or with a controller's
-        compiled law, DOP853 or ``"auto"``) -- else the numpy engine). With
+        compiled law, DOP853 or ``"auto"``) -- else the numpy engine, and
+        the numpy engine while the kernels compile in the background). With
         ``"compiled"`` each run has its own steps, error norm and stop, so a
         run's result does not depend on the other runs (nor on
         `chunk_size`).
