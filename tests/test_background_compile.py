@@ -17,6 +17,7 @@ import signal
 import subprocess
 import sys
 import textwrap
+import threading
 import time
 from pathlib import Path
 
@@ -280,3 +281,20 @@ def test_kernel_set_of_a_call(case, expected):
     args = dict(method="DOP853", delay=0.0, model="kinematic", law=GAINS, profile=None)
     args.update(case)
     assert precompile.kernel_set(**args) == expected
+
+
+def test_precompile_waits_for_a_background_compilation_of_its_set(
+    tmp_path, monkeypatch
+):
+    lock = tmp_path / "compiling-paper-radau.lock"
+    lock.touch()
+    monkeypatch.setattr(precompile, "_set_file", lambda name, suffix: str(lock))
+    ran = []
+    monkeypatch.setattr(precompile, "_run_set", lambda name: ran.append(name))
+    worker = threading.Thread(target=precompile._run_set_locked, args=("paper-radau",))
+    with _holding(lock):  # a background process compiling the set
+        worker.start()
+        worker.join(0.5)
+        assert worker.is_alive() and ran == []  # waiting for the lock
+    worker.join(10.0)
+    assert not worker.is_alive() and ran == ["paper-radau"]

@@ -39,7 +39,9 @@ Compiling in the background
     output to ``compiling-<set>.log``; if it fails, it leaves
     ``compiling-<set>.failed``, and the calls then compile the set
     themselves (where the error shows) until it is cached. On Windows (no
-    ``flock``) the calls compile in the foreground.
+    ``flock``) the calls compile in the foreground. :func:`precompile`'s
+    workers take the same lock: one waits for a background compilation of
+    its set to end and then loads what it compiled.
 """
 
 from __future__ import annotations
@@ -151,6 +153,24 @@ def _run_set(name: str) -> CompiledSet:
     return CompiledSet(name, time.process_time() - start)
 
 
+def _run_set_locked(name: str) -> CompiledSet:
+    # in a worker process: the set under its lock (see the module notes), so
+    # that a background compilation of the set finishes first and this run
+    # loads what it compiled, and no background one starts meanwhile
+    lock = None if sys.platform == "win32" else _set_file(name, ".lock")
+    if lock is None:
+        return _run_set(name)
+    import fcntl
+
+    os.makedirs(os.path.dirname(lock), exist_ok=True)
+    fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        return _run_set(name)
+    finally:
+        os.close(fd)
+
+
 def precompile(
     sets: tuple[str, ...] = KERNEL_SETS, *, jobs: int = 2
 ) -> list[CompiledSet]:
@@ -203,7 +223,7 @@ def precompile(
         # the other sets together, so with two workers they finish when the
         # features do instead of one other set later
         started = {
-            name: pool.submit(_run_set, name)
+            name: pool.submit(_run_set_locked, name)
             for name in sorted(set(sets), key=_LONGEST_FIRST.index)
         }
         return [started[name].result() for name in sets]
