@@ -8,9 +8,9 @@ ratio -1, pole -1) in fresh interpreters, ``python -c`` as a user would:
   cache in a new empty folder; the call runs on the numpy engine while a
   background process compiles the kernels. Printed: the process's CPU to
   its result and its notice, then (waiting for the background process to
-  release its lock) that process's own CPU for the compilation (from its
-  log) and the wall time until the kernels were cached, and a next
-  process's CPU to its first (compiled) result;
+  release the flock on its lock file) that process's own CPU for the
+  compilation (from its log) and the wall time until the kernels were
+  cached, and a next process's CPU to its first (compiled) result;
 - **cold** (``FWS_CONTROL_COMPILE=foreground``): numba's cache in a new
   empty folder (``NUMBA_CACHE_DIR``, a fresh temporary folder for each
   run), so the call compiles the engine's kernels and waits;
@@ -43,6 +43,7 @@ Run: ``python benchmarks/bench_first_use.py [--cold 1] [--case stanley]``
 from __future__ import annotations
 
 import argparse
+import fcntl
 import json
 import os
 import subprocess
@@ -159,9 +160,11 @@ def first_call(code: str, cache: str) -> float:
     for line in notice.splitlines():
         print(f"    stderr: {line}")
     (folder,) = Path(cache).glob("simulation_*")
-    locks = list(folder.glob("compiling-*.lock"))
-    while any(lock.exists() for lock in locks):
-        time.sleep(0.5)
+    for lock in folder.glob("compiling-*.lock"):
+        # the background process holds the lock's flock until it ends
+        fd = os.open(lock, os.O_RDWR)
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        os.close(fd)
     cached = time.perf_counter() - start
     for log in sorted(folder.glob("compiling-*.log")):
         print(f"    background {log.name}: {log.read_text().strip()}")

@@ -282,6 +282,11 @@ def kernel_set(*, method: str, delay: float, model: str, law: Any, profile: Any)
     return "paper-radau" if method == "Radau" else "paper-dop853"
 
 
+def _check_set(name: str) -> None:
+    if name not in KERNEL_SETS:
+        raise ValueError(f"name must be one of {KERNEL_SETS}, got {name!r}")
+
+
 def _set_kernels(name: str) -> list:
     # the top kernels that a set's run compiles
     from .compiled import radau_run, solve_run
@@ -324,8 +329,7 @@ def is_cached(name: str) -> bool:
     """
     import importlib.util
 
-    if name not in KERNEL_SETS:
-        raise ValueError(f"name must be one of {KERNEL_SETS}, got {name!r}")
+    _check_set(name)
     if importlib.util.find_spec("numba") is None:
         return False
     from .compilation import is_compiled
@@ -365,8 +369,7 @@ def compile_estimate(name: str) -> float:
     """
     from .compiled import FULL_STAGE_SECONDS, STAGE_SECONDS
 
-    if name not in KERNEL_SETS:
-        raise ValueError(f"name must be one of {KERNEL_SETS}, got {name!r}")
+    _check_set(name)
     if name == "single-run":
         return STAGE_SECONDS["DOP853"] + STAGE_SECONDS["Radau"]
     seconds = FULL_STAGE_SECONDS if name == "features-dop853" else STAGE_SECONDS
