@@ -43,7 +43,6 @@ Run: ``python benchmarks/bench_first_use.py [--cold 1] [--case stanley]``
 from __future__ import annotations
 
 import argparse
-import fcntl
 import json
 import os
 import subprocess
@@ -159,6 +158,8 @@ def first_call(code: str, cache: str) -> float:
     )
     for line in notice.splitlines():
         print(f"    stderr: {line}")
+    import fcntl  # (the background mode is POSIX's)
+
     (folder,) = Path(cache).glob("simulation_*")
     for lock in folder.glob("compiling-*.lock"):
         # the background process holds the lock's flock until it ends

@@ -93,20 +93,38 @@ def _is_background(pid: int, name: str) -> bool:
     cmd = Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0")
     return (
         len(cmd) > 3
-        and b"precompile._background(sys.argv[1], int(sys.argv[2]))\n" in cmd[2]
+        and b"precompile._background(sys.argv[1], int(sys.argv[2]))" in cmd[2]
         and cmd[3] == name.encode()
     )
 
 
 def _stop(pid: int) -> None:
-    try:
-        os.kill(pid, signal.SIGKILL)
-    except ProcessLookupError:
+    # kill a background compilation (only one: a pid can be reused)
+    if not _is_background(pid, _set_of(pid)):
         return
+    os.kill(pid, signal.SIGKILL)
     for _ in range(200):  # (a detached process: not our child to wait for)
         if not _alive(pid):
             return
         time.sleep(0.05)
+    raise AssertionError(f"process {pid} still runs")
+
+
+def _set_of(pid: int) -> str:
+    # the kernel set a process's command line names (Linux), else ""
+    try:
+        cmd = Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0")
+    except OSError:
+        return ""
+    return cmd[3].decode() if len(cmd) > 3 else ""
+
+
+def _stop_all(cache: Path) -> None:
+    # every background compilation named in a lock under `cache`
+    for lock in cache.rglob("compiling-*.lock"):
+        text = lock.read_text().strip()
+        if text.isdigit():
+            _stop(int(text))
 
 
 # Two calls of the paper's loop, then Stanley's law; the engine of each and
@@ -194,38 +212,38 @@ def test_a_cold_call_runs_on_numpy_and_starts_one_background_compilation(tmp_pat
     finally:
         for pid in pids:
             _stop(pid)
+        _stop_all(cache)
 
 
 def test_a_failed_background_compilation_leaves_a_mark(tmp_path, monkeypatch):
-    # the background process's side: its pid into the lock, and on a
-    # failure the .failed file with the error, raised again (into its log)
-    files = {suffix: str(tmp_path / f"set{suffix}") for suffix in (".lock", ".failed")}
-    monkeypatch.setattr(precompile, "_set_file", lambda name, suffix: files[suffix])
-
-    def fails(name):
-        raise RuntimeError(f"no kernels for {name}")
-
-    monkeypatch.setattr(precompile, "_run_set", fails)
-    fd = os.open(files[".lock"], os.O_RDWR | os.O_CREAT)
-    try:
-        with pytest.raises(RuntimeError, match="no kernels for paper-radau"):
-            precompile._background("paper-radau", fd)
-    finally:
-        os.close(fd)
-    assert Path(files[".lock"]).read_text() == f"{os.getpid()}\n"
-    assert Path(files[".failed"]).read_text() == (
-        "RuntimeError: no kernels for paper-radau\n"
+    # a background process that fails (here: a set it does not know) writes
+    # its pid, then compiling-<set>.failed with the error, and its log
+    files = {s: tmp_path / f"compiling-x{s}" for s in (".lock", ".failed", ".log")}
+    monkeypatch.setattr(precompile, "_set_file", lambda name, s: str(files[s]))
+    monkeypatch.setattr(precompile, "_CHILDREN", {})
+    assert precompile._start("no-such-set")
+    child = precompile._CHILDREN["no-such-set"]
+    assert child.wait(timeout=300) != 0
+    assert int(files[".lock"].read_text()) == child.pid
+    assert files[".failed"].read_text() == (
+        f"ValueError: name must be one of {precompile.KERNEL_SETS}, got 'no-such-set'\n"
     )
-    # the calls' side: compiled here (True), no process started
+    assert "Traceback" in files[".log"].read_text()
+    # the calls: compiled here (True), no process started
     monkeypatch.delenv(compilation.COMPILE_VARIABLE, raising=False)
     monkeypatch.setattr(precompile, "is_cached", lambda name: False)
     monkeypatch.setattr(precompile, "_READY", set())
     monkeypatch.setattr(precompile, "_start", lambda name: pytest.fail("started"))
     assert precompile.ready_or_background("paper-radau")
+    # without the mark, a process of this one's that ended (killed): the same
+    files[".failed"].unlink()
+    monkeypatch.setattr(precompile, "_CHILDREN", {"paper-radau": child})
+    assert precompile.ready_or_background("paper-radau")
     # once the set is cached the mark goes
+    files[".failed"].write_text("x")
     monkeypatch.setattr(precompile, "is_cached", lambda name: True)
     assert precompile.ready_or_background("paper-radau")
-    assert not os.path.exists(files[".failed"])
+    assert not files[".failed"].exists()
 
 
 def test_cached_kernels_run_compiled_without_a_notice(monkeypatch, capsys):

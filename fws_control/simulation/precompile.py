@@ -38,8 +38,10 @@ Compiling in the background
     pid there), which ends with the process however it ends. It writes its
     output to ``compiling-<set>.log``; if it fails, it leaves
     ``compiling-<set>.failed``, and the calls then compile the set
-    themselves (where the error shows) until it is cached. On Windows (no
-    ``flock``) the calls compile in the foreground. :func:`precompile`'s
+    themselves (where the error shows) until it is cached; if it is killed,
+    the process that started it compiles in the foreground and a later
+    process starts another. Where the file system has no ``flock``, and on
+    Windows, the calls compile in the foreground. :func:`precompile`'s
     workers take the same lock: one waits for a background compilation of
     its set to end and then loads what it compiled.
 """
@@ -47,6 +49,7 @@ Compiling in the background
 from __future__ import annotations
 
 import concurrent.futures
+import contextlib
 import multiprocessing
 import os
 import subprocess
@@ -165,7 +168,8 @@ def _run_set_locked(name: str) -> CompiledSet:
     os.makedirs(os.path.dirname(lock), exist_ok=True)
     fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
     try:
-        fcntl.flock(fd, fcntl.LOCK_EX)
+        with contextlib.suppress(OSError):  # (no flock there: unlocked)
+            fcntl.flock(fd, fcntl.LOCK_EX)
         return _run_set(name)
     finally:
         os.close(fd)
@@ -232,9 +236,9 @@ def precompile(
 # Sets found in the cache by this process.
 _READY: set[str] = set()
 
-# The background processes this process started (kept: a Popen object
-# collected while its process runs warns).
-_CHILDREN: list[subprocess.Popen] = []
+# The background process this process started for each set (kept: a Popen
+# object collected while its process runs warns).
+_CHILDREN: dict[str, subprocess.Popen] = {}
 
 
 def kernel_set(*, method: str, delay: float, model: str, law: Any, profile: Any) -> str:
@@ -395,9 +399,12 @@ def _try_lock(path: str) -> int | None:
     fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
     try:
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError:
+    except BlockingIOError:
         os.close(fd)
         return None
+    except OSError:  # (no flock on this file system: the caller compiles)
+        os.close(fd)
+        raise
     return fd
 
 
@@ -412,35 +419,44 @@ def _start(name: str) -> bool:
         return False
     try:
         os.ftruncate(fd, 0)  # (the background process writes its pid)
-        # at a lower priority: the user's own work first
+        # at a lower priority (the user's own work first); any failure,
+        # the imports' too, leaves the .failed mark
         code = (
             "import os, sys\n"
             "os.nice(10)\n"
-            "from fws_control.simulation import precompile\n"
-            "precompile._background(sys.argv[1], int(sys.argv[2]))\n"
+            "try:\n"
+            "    from fws_control.simulation import precompile\n"
+            "    precompile._background(sys.argv[1], int(sys.argv[2]))\n"
+            "except Exception as exc:\n"
+            "    with open(sys.argv[3], 'w') as f:\n"
+            "        f.write(f'{type(exc).__name__}: {exc}\\n')\n"
+            "    raise\n"
         )
         env = dict(os.environ)
         from .compilation import QUIET_VARIABLE
 
         env[QUIET_VARIABLE] = "1"
-        log = _set_file(name, ".log")
-        assert log is not None
+        # this process's fws_control, wherever it was imported from
+        root = os.path.dirname(os.path.dirname(os.path.dirname(__file__)))
+        env["PYTHONPATH"] = os.pathsep.join(
+            [root, *filter(None, [env.get("PYTHONPATH")])]
+        )
+        log, failed = _set_file(name, ".log"), _set_file(name, ".failed")
+        assert log is not None and failed is not None
         with open(log, "w") as out:
             child = subprocess.Popen(
-                [sys.executable, "-c", code, name, str(fd)],
+                [sys.executable, "-c", code, name, str(fd), failed],
                 stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT,
                 env=env, pass_fds=(fd,), start_new_session=True,
             )  # fmt: skip
     finally:
         os.close(fd)  # (the child holds the lock from here)
-    _CHILDREN.append(child)
+    _CHILDREN[name] = child
     return True
 
 
 def _running(name: str) -> bool:
     # a background process holds the set's lock
-    for child in _CHILDREN:
-        child.poll()  # (reaps an ended child of this process)
     lock = _set_file(name, ".lock")
     if lock is None or not os.path.exists(lock):
         return False
@@ -452,17 +468,12 @@ def _running(name: str) -> bool:
 
 
 def _background(name: str, fd: int) -> None:
-    # the background process: compile the set while holding the lock on fd;
-    # a failure leaves compiling-<set>.failed for the calls to see
-    failed = _set_file(name, ".failed")
-    assert failed is not None
+    # the background process: compile the set while holding the lock on fd
+    # (a failure: the caller's code leaves compiling-<set>.failed)
+    os.set_inheritable(fd, False)  # (not into processes this one starts)
     os.write(fd, f"{os.getpid()}\n".encode())
-    try:
-        item = _run_set(name)
-    except BaseException as exc:
-        with open(failed, "w") as f:
-            f.write(f"{type(exc).__name__}: {exc}\n")
-        raise
+    _check_set(name)
+    item = _run_set(name)
     print(f"{item.name}: {item.cpu_seconds:.1f} s CPU", flush=True)
 
 
@@ -506,19 +517,23 @@ def ready_or_background(name: str) -> bool:
     if compile_mode() == "foreground" or name in _READY:
         return True
     failed = _set_file(name, ".failed")
+    child = _CHILDREN.get(name)
+    ended = child is not None and child.poll() is not None  # (and reaped)
     if is_cached(name):
         _READY.add(name)  # (cached once, cached for the process)
-        if failed is not None and os.path.exists(failed):
-            os.remove(failed)  # (compiled since, in the foreground)
+        if failed is not None:
+            with contextlib.suppress(OSError):
+                os.remove(failed)  # (compiled since, in the foreground)
         return True
-    if failed is None or os.path.exists(failed) or sys.platform == "win32":
-        # no cache folder, a background compilation that failed, or Windows
-        # (no flock there): compiled here, where an error shows
+    if failed is None or os.path.exists(failed) or ended or sys.platform == "win32":
+        # no cache folder, a background compilation that failed (or that
+        # this process started and that ended without the set: killed), or
+        # Windows (no flock there): compiled here, where an error shows
         return True
     try:
         if not _running(name):
             _start(name)
     except OSError:
-        return True  # (no background process: compiled here)
+        return True  # (no flock, no process started: compiled here)
     announce_background(compile_estimate(name))
     return False
