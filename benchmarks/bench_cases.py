@@ -36,7 +36,11 @@ compiled engine's three stages timed (the integration, the signals, the
 exact peaks; CPU per run) and the integration's statistics averaged over
 the runs (accepted and rejected steps, right-hand-side evaluations): the
 ratios split into the steps a case takes and the cost of each evaluation
-of its law.
+of its law. Column ``< 1 ms`` counts the accepted steps shorter than
+1 ms (from each run's kept dense output): the steps DOP853 takes where
+the right-hand side has a corner, at the course's curvature corners (the
+junctions of its clothoids, where the curvature's slope jumps) and, with
+a delay, where the delayed measurement crosses them.
 
 Run: ``python benchmarks/bench_cases.py [--runs 100] [--numpy-runs 2]``
 ``[--only "braking lane change"] [--breakdown]`` (the cases whose name
@@ -149,6 +153,7 @@ def breakdown(table: dict) -> None:
     stages = ("integrate_compiled", "compiled_outputs", "compiled_peaks")
     spent: dict[str, float] = {}
     stats: list[np.ndarray] = []
+    short: list[np.ndarray] = []
     originals = {name: getattr(compiled, name) for name in stages}
 
     def timed(name):
@@ -158,13 +163,18 @@ def breakdown(table: dict) -> None:
             spent[name] = spent.get(name, 0.0) + time.process_time() - t0
             if name == "integrate_compiled":
                 stats.append(out[4])
+                for sol in kwargs.get("solution") or ():
+                    # accepted steps shorter than 1 ms, per run
+                    rec, off = sol.records, sol.offsets
+                    short.append(np.add.reduceat(rec[:, 1] < 1e-3, off[:-1]))
             return out
 
         return call
 
     print("compiled stages, CPU per run [ms]; integration statistics per run")
     print(f"  {'case':26s} {'integrate':>9s} {'signals':>8s} {'peaks':>6s}"
-          f" {'steps':>6s} {'rejected':>8s} {'rhs':>6s} {'us/rhs':>7s}")  # fmt: skip
+          f" {'steps':>6s} {'< 1 ms':>6s} {'rejected':>8s} {'rhs':>6s}"
+          f" {'us/rhs':>7s}")  # fmt: skip
     try:
         # (the runners look the stages up in compiled at every call; a
         # sampled controller's segments, which compiled_sampled runs with
@@ -178,18 +188,21 @@ def breakdown(table: dict) -> None:
             for _ in range(3):  # best of 3 per stage
                 spent.clear()
                 stats.clear()
+                short.clear()
                 run()
                 for k, v in spent.items():
                     best[k] = min(best.get(k, np.inf), v)
             if not stats:  # (no stage of this case was seen)
                 continue
             st = np.concatenate(stats).mean(axis=0)
+            n_short = np.concatenate(short).mean() if short else np.nan
             # "-": a stage this case computes otherwise (a varying speed's
             # signals and peaks are the numpy engine's functions)
             ms = [f"{1e3 * best[k] / n:.3f}" if k in best else "-" for k in stages]
             us_rhs = 1e6 * best["integrate_compiled"] / n / st[2]
             print(f"  {name:26s} {ms[0]:>9s} {ms[1]:>8s} {ms[2]:>6s}"
-                  f" {st[0]:6.0f} {st[1]:8.0f} {st[2]:6.0f} {us_rhs:7.3f}")  # fmt: skip
+                  f" {st[0]:6.0f} {n_short:6.0f} {st[1]:8.0f} {st[2]:6.0f}"
+                  f" {us_rhs:7.3f}")  # fmt: skip
     finally:
         for name, fn in originals.items():
             setattr(compiled, name, fn)

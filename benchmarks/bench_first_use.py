@@ -20,7 +20,13 @@ ratio -1, pole -1) in fresh interpreters, ``python -c`` as a user would:
 - **warm**: three more processes on the cache the cold run filled; the best
   of 3; then three more with ``OPENBLAS_NUM_THREADS=1`` (numpy's and
   scipy's OpenBLAS start a pool of spinning threads when loaded: CPU that
-  the process pays at its start whatever it computes).
+  the process pays at its start whatever it computes);
+- **numba's floor**: alternating with each warm process, a process that
+  imports numpy and numba and calls one trivial cached kernel (a loop
+  summing an array, compiled once beforehand): numba's own start-up
+  (its import, its typing and target registries, and the scipy.linalg
+  import of its BLAS check), which any process that runs a cached numba
+  kernel pays. The warm process's excess over it is fws_control's share.
 
 Each time is the process's own CPU time (user + system, all threads, from
 ``resource.getrusage``) up to its first result, the imports included, and
@@ -133,6 +139,36 @@ def child_code(case: str = "paper") -> str:
     return code
 
 
+# numba's floor: a process that runs one trivial cached kernel
+_FLOOR_KERNEL = """
+import numba
+
+@numba.njit(cache=True)
+def total(x):
+    s = 0.0
+    for i in range(x.size):
+        s += x[i]
+    return s
+"""
+
+_FLOOR = r"""
+import resource, sys
+sys.path.insert(0, FOLDER)
+import numpy as np
+import floor_kernel
+floor_kernel.total(np.ones(3))
+ru = resource.getrusage(resource.RUSAGE_SELF)
+import json
+print(json.dumps({"total": ru.ru_utime + ru.ru_stime}))
+"""
+
+
+def floor_code(folder: str) -> str:
+    """A process's code that runs :data:`_FLOOR_KERNEL` from `folder`."""
+    Path(folder, "floor_kernel.py").write_text(_FLOOR_KERNEL)
+    return _FLOOR.replace("FOLDER", repr(folder))
+
+
 def run(code: str, cache: str, **extra_env: str) -> tuple[dict, str]:
     env = dict(os.environ, **extra_env)
     env["PYTHONPATH"] = os.pathsep.join(
@@ -178,6 +214,17 @@ def first_call(code: str, cache: str) -> float:
     return float(first["total"])
 
 
+def warm_and_floor(
+    code: str, cache: str, floor: str, floor_cache: str, **env: str
+) -> tuple[dict, float]:
+    """Best of 3 warm processes and of 3 floor processes, run in turn."""
+    warm, floors = [], []
+    for _ in range(3):
+        warm.append(run(code, cache, FWS_CONTROL_COMPILE="foreground", **env)[0])
+        floors.append(run(floor, floor_cache, **env)[0]["total"])
+    return min(warm, key=lambda r: r["total"]), min(floors)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cold", type=int, default=1, help="cold runs (each >= 10 s)")
@@ -205,31 +252,26 @@ def main() -> None:
                 print(f"    stderr: {line}")
             if best_cold is None or cold["total"] < best_cold["total"]:
                 best_cold, warm_cache = cold, cache
-        warm = [run(code, warm_cache, FWS_CONTROL_COMPILE="foreground")[0]
-                for _ in range(3)]  # fmt: skip
-        best = min(warm, key=lambda r: r["total"])
+        floor = floor_code(tmp)
+        floor_cache = os.path.join(tmp, "floor")
+        run(floor, floor_cache)  # compiles the trivial kernel once
+        best, floor_best = warm_and_floor(code, warm_cache, floor, floor_cache)
         print(
             f"warm (cached), best of 3: {best['total']:6.3f} s of CPU to the "
-            f"first result, simulate {best['simulate']:6.3f} s (all: "
-            + ", ".join(f"{r['total']:.3f}" for r in warm)
-            + ")"
+            f"first result, simulate {best['simulate']:6.3f} s; numba's floor "
+            f"{floor_best:6.3f} s, fws_control's share "
+            f"{best['total'] - floor_best:6.3f} s"
         )
         # numpy's and scipy's OpenBLAS each start a pool of threads when
         # loaded, which spin for a while: CPU that the process pays but
         # fws_control does not spend
-        single = [
-            run(
-                code,
-                warm_cache,
-                OPENBLAS_NUM_THREADS="1",
-                FWS_CONTROL_COMPILE="foreground",
-            )[0]
-            for _ in range(3)
-        ]
-        one = min(single, key=lambda r: r["total"])
+        one, floor_one = warm_and_floor(
+            code, warm_cache, floor, floor_cache, OPENBLAS_NUM_THREADS="1"
+        )
         print(
             f"warm, OPENBLAS_NUM_THREADS=1, best of 3: {one['total']:6.3f} s of "
-            f"CPU to the first result, simulate {one['simulate']:6.3f} s"
+            f"CPU to the first result, simulate {one['simulate']:6.3f} s; "
+            f"numba's floor {floor_one:6.3f} s"
         )
         print(
             f"targets: first call {first:.2f} / 10 s of CPU; "
