@@ -37,10 +37,13 @@ exact peaks; CPU per run) and the integration's statistics averaged over
 the runs (accepted and rejected steps, right-hand-side evaluations): the
 ratios split into the steps a case takes and the cost of each evaluation
 of its law. Column ``< 1 ms`` counts the accepted steps shorter than
-1 ms (from each run's kept dense output): the steps DOP853 takes where
-the right-hand side has a corner, at the course's curvature corners (the
-junctions of its clothoids, where the curvature's slope jumps) and, with
-a delay, where the delayed measurement crosses them.
+1 ms after each run's first step (from each run's kept dense output): an
+indicator of the steps DOP853 takes where the right-hand side has a
+corner in time, as where the course's curvature has a corner (the
+junctions of its clothoids where the curvature's slope jumps); not every
+such corner shortens a step below 1 ms (``bench_corners.py`` counts what
+the corners cost). The breakdown's stages are the best of 3 rounds, each
+round running every compiled case in turn.
 
 Run: ``python benchmarks/bench_cases.py [--runs 100] [--numpy-runs 2]``
 ``[--only "braking lane change"] [--breakdown]`` (the cases whose name
@@ -164,9 +167,13 @@ def breakdown(table: dict) -> None:
             if name == "integrate_compiled":
                 stats.append(out[4])
                 for sol in kwargs.get("solution") or ():
-                    # accepted steps shorter than 1 ms, per run
+                    # accepted steps shorter than 1 ms per run, each run's
+                    # first step (DOP853's initial step) left out
                     rec, off = sol.records, sol.offsets
-                    short.append(np.add.reduceat(rec[:, 1] < 1e-3, off[:-1]))
+                    mask = rec[:, 1] < 1e-3
+                    mask[off[:-1][np.diff(off) > 0]] = False
+                    counts = np.r_[0, np.cumsum(mask)][off]
+                    short.append(np.diff(counts))
             return out
 
         return call
@@ -181,25 +188,33 @@ def breakdown(table: dict) -> None:
         # the names it imported, would not be seen: none is a case here)
         for name in stages:
             setattr(compiled, name, timed(name))
-        for name, (n, run, engine) in table.items():
-            if engine != "compiled":
-                continue
-            best: dict[str, float] = {}
-            for _ in range(3):  # best of 3 per stage
+        compiled_cases = {k: v for k, v in table.items() if v[2] == "compiled"}
+        best: dict[str, dict[str, float]] = {name: {} for name in compiled_cases}
+        seen: dict[str, tuple[np.ndarray, float]] = {}
+        for _ in range(3):  # best of 3 per stage, the cases in turn
+            for name, (_, run, _) in compiled_cases.items():
                 spent.clear()
                 stats.clear()
                 short.clear()
                 run()
                 for k, v in spent.items():
-                    best[k] = min(best.get(k, np.inf), v)
-            if not stats:  # (no stage of this case was seen)
+                    best[name][k] = min(best[name].get(k, np.inf), v)
+                if stats:  # (else no stage of this case was seen)
+                    seen[name] = (
+                        np.concatenate(stats).mean(axis=0),
+                        np.concatenate(short).mean() if short else np.nan,
+                    )
+        for name, (n, _, _) in compiled_cases.items():
+            if name not in seen:
                 continue
-            st = np.concatenate(stats).mean(axis=0)
-            n_short = np.concatenate(short).mean() if short else np.nan
+            st, n_short = seen[name]
             # "-": a stage this case computes otherwise (a varying speed's
             # signals and peaks are the numpy engine's functions)
-            ms = [f"{1e3 * best[k] / n:.3f}" if k in best else "-" for k in stages]
-            us_rhs = 1e6 * best["integrate_compiled"] / n / st[2]
+            ms = [
+                f"{1e3 * best[name][k] / n:.3f}" if k in best[name] else "-"
+                for k in stages
+            ]
+            us_rhs = 1e6 * best[name]["integrate_compiled"] / n / st[2]
             print(f"  {name:26s} {ms[0]:>9s} {ms[1]:>8s} {ms[2]:>6s}"
                   f" {st[0]:6.0f} {n_short:6.0f} {st[1]:8.0f} {st[2]:6.0f}"
                   f" {us_rhs:7.3f}")  # fmt: skip

@@ -3,27 +3,30 @@
 The ISO 3888-1 course (:func:`fws_control.double_lane_change`, vehicle
 width 1.8 m) is a chain of straights and clothoids: its curvature is
 continuous, its slope jumps where a clothoid starts or ends unless the
-next piece has the same sharpness (a corner of kappa(s)). Where
-a law's input crosses a corner, the closed loop's right-hand side has a
-corner in time; DOP853's error estimate then rejects step after step until
-the step is short enough to straddle it (microseconds at rtol 1e-10, atol
-1e-12).
+next piece has the same sharpness (a corner of kappa(s)). The path-frame
+equations read kappa at the rear axle's arc length s, and so does the
+feedforward; Stanley's law also reads the path at the front axle's
+projection. Where one of these crosses a corner, the closed loop's
+right-hand side has a corner in time; DOP853's error estimate then
+rejects step after step until the step is short enough to straddle it
+(tens of microseconds at rtol 1e-10, atol 1e-12).
 
 For the paper's law (double root -2, ratio 0, feedforward) and Stanley
 (gain 2, ratio 0), at 20 m/s from 0.5 m beside the path, on the compiled
 engine (:func:`fws_control.simulation.compiled.integrate_compiled`):
 
 1. one run over the course, its accepted and rejected steps;
-2. the same run cut at the times where the law's inputs cross a corner
-   (the rear axle's arc length for both; for Stanley also the front axle's
-   projection, from a dense output grid of 400 001 samples, linearly
-   interpolated), each piece integrated alone from the previous piece's
-   end state (the loop is autonomous: each piece starts at t = 0), and the
-   sum of its steps.
+2. the same run cut at the times where s or the front axle's projection
+   (Stanley only) crosses a corner, from a dense output grid of 400 001
+   samples, linearly interpolated; each piece integrated alone from the
+   previous piece's end state (the loop is autonomous: each piece starts
+   at t = 0), and the sums of their steps and evaluations.
 
-Printed: both step counts, their ratio, and each run's error at the end
-in ``s, e, theta`` against the cut run at rtol 1e-13, atol 1e-15. Step
-counts, not times: they do not depend on the machine.
+Printed: both runs' attempted steps (accepted and rejected) and
+right-hand-side evaluations, their ratios, and each run's error at the
+end in ``s, e, theta`` against the cut run at rtol 1e-13, atol 1e-15
+(whose own error in ``s`` may reach about 1e-13 of the 200 m course).
+Counts, not times: they do not depend on the machine.
 
 Run: ``python benchmarks/bench_corners.py`` (a few seconds).
 """
@@ -47,7 +50,9 @@ def crossings(s: np.ndarray, t: np.ndarray, corners: np.ndarray) -> list[float]:
     s, t = s[ok], t[ok]
     out = []
     for c in corners:
-        for i in np.nonzero((s[:-1] - c) * (s[1:] - c) < 0)[0]:
+        # one crossing per interval whose ends lie on either side (a sample
+        # exactly at c counts once)
+        for i in np.nonzero((s[:-1] < c) != (s[1:] < c))[0]:
             out.append(t[i] + (c - s[i]) * (t[i + 1] - t[i]) / (s[i + 1] - s[i]))
     return out
 
@@ -77,14 +82,16 @@ def main() -> None:
         return out[0][:, 0, :], out[4][0]
 
     def cut_run(law, x0, cuts, rtol=1e-10, atol=1e-12):
-        """The end state and the steps of the run cut at `cuts`."""
-        accepted = rejected = 0
+        """The end state and the statistics of the run cut at `cuts`."""
+        total = np.zeros(3, dtype=np.int64)  # accepted, rejected, evaluations
         x, t0 = x0, 0.0
         for t1 in cuts:
+            if t1 <= t0:  # (coincident cuts)
+                continue
             piece, st = run(law, x, np.array([0.0, t1 - t0]), rtol, atol)
-            accepted, rejected = accepted + st[0], rejected + st[1]
+            total += st[:3]
             x, t0 = piece[:, -1], t1
-        return x, accepted, rejected
+        return x, total
 
     x0 = np.array([0.0, 0.5, 0.0])
     t = np.linspace(0.0, float(path.length) / SPEED, SAMPLES)
@@ -110,15 +117,17 @@ def main() -> None:
             sf = path.project(fx, fy, s_guess=sr + veh.wheelbase).s
             times += crossings(np.where(np.isfinite(s), sf, np.nan), t, corners)
         cuts = [*sorted(c for c in times if 0.0 < c < end), end]
-        x, accepted, rejected = cut_run(law, x0, cuts)
+        x, (accepted, rejected, evals) = cut_run(law, x0, cuts)
         ref = cut_run(law, x0, cuts, rtol=1e-13, atol=1e-15)[0]
         whole = states[:, np.searchsorted(t, end)]
         one = stats[0] + stats[1]
         print(
             f"  {name:10s} one run: {stats[0]:4d} accepted + {stats[1]:4d} "
-            f"rejected = {one:4d}; cut at {len(cuts) - 1:2d} corner crossings: "
-            f"{accepted:4d} + {rejected:4d} = {accepted + rejected:4d} "
-            f"({one / (accepted + rejected):.2f}x fewer)"
+            f"rejected = {one:4d} steps, {stats[2]:5d} evaluations; cut at "
+            f"{len(cuts) - 1:2d} corner crossings: {accepted:4d} + {rejected:4d} "
+            f"= {accepted + rejected:4d} steps, {evals:5d} evaluations "
+            f"({one / (accepted + rejected):.2f}x fewer steps, "
+            f"{stats[2] / evals:.2f}x fewer evaluations)"
         )
         for label, value in (("one run", whole), ("cut run", x)):
             err = np.abs(value - ref)

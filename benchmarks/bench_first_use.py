@@ -17,16 +17,18 @@ ratio -1, pole -1) in fresh interpreters, ``python -c`` as a user would:
   printed with the compilation time of each stage (from numba's compile
   events: the stages' top kernels and everything they compile) and the
   first-use notice the process wrote on standard error;
-- **warm**: three more processes on the cache the cold run filled; the best
-  of 3; then three more with ``OPENBLAS_NUM_THREADS=1`` (numpy's and
-  scipy's OpenBLAS start a pool of spinning threads when loaded: CPU that
-  the process pays at its start whatever it computes);
-- **numba's floor**: alternating with each warm process, a process that
-  imports numpy and numba and calls one trivial cached kernel (a loop
-  summing an array, compiled once beforehand): numba's own start-up
-  (its import, its typing and target registries, and the scipy.linalg
-  import of its BLAS check), which any process that runs a cached numba
-  kernel pays. The warm process's excess over it is fws_control's share.
+- **warm**: ``--repeat`` (5) more processes on the cache the cold run
+  filled, the best of them; then as many with ``OPENBLAS_NUM_THREADS=1``
+  (numpy's and scipy's OpenBLAS start a pool of spinning threads when
+  loaded: CPU that the process pays at its start whatever it computes);
+- **the floor**: alternating with the warm processes (which of the two
+  goes first changes every round), a process that imports numpy and numba
+  and calls one trivial cached kernel (a loop summing an array, compiled
+  once beforehand): the start-up of Python, numpy and numba (numba's
+  import, its typing and target registries, and the scipy.linalg import
+  of its BLAS check), which any process that runs a cached numba kernel
+  pays. The warm process's excess over it is fws_control's share. Every
+  value is printed, so that the spread shows.
 
 Each time is the process's own CPU time (user + system, all threads, from
 ``resource.getrusage``) up to its first result, the imports included, and
@@ -215,13 +217,24 @@ def first_call(code: str, cache: str) -> float:
 
 
 def warm_and_floor(
-    code: str, cache: str, floor: str, floor_cache: str, **env: str
+    code: str, cache: str, floor: str, floor_cache: str, repeat: int, **env: str
 ) -> tuple[dict, float]:
-    """Best of 3 warm processes and of 3 floor processes, run in turn."""
+    """Best of `repeat` warm and floor processes, run alternately.
+
+    The two alternate, the first of each round changing from round to
+    round, so that a drift of the machine's speed is shared; every value
+    is printed.
+    """
     warm, floors = [], []
-    for _ in range(3):
-        warm.append(run(code, cache, FWS_CONTROL_COMPILE="foreground", **env)[0])
-        floors.append(run(floor, floor_cache, **env)[0]["total"])
+    for i in range(repeat):
+        for kind in ("warm", "floor") if i % 2 == 0 else ("floor", "warm"):
+            if kind == "warm":
+                res = run(code, cache, FWS_CONTROL_COMPILE="foreground", **env)[0]
+                warm.append(res)
+            else:
+                floors.append(run(floor, floor_cache, **env)[0]["total"])
+    print("    warm:  " + ", ".join(f"{r['total']:.3f}" for r in warm))
+    print("    floor: " + ", ".join(f"{v:.3f}" for v in floors))
     return min(warm, key=lambda r: r["total"]), min(floors)
 
 
@@ -229,6 +242,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cold", type=int, default=1, help="cold runs (each >= 10 s)")
     parser.add_argument("--case", choices=("paper", "stanley"), default="paper")
+    parser.add_argument(
+        "--repeat", type=int, default=5, help="warm and floor processes (5)"
+    )
     args = parser.parse_args()
     if args.cold < 1:
         # the warm runs use the cache the best cold run filled
@@ -255,10 +271,12 @@ def main() -> None:
         floor = floor_code(tmp)
         floor_cache = os.path.join(tmp, "floor")
         run(floor, floor_cache)  # compiles the trivial kernel once
-        best, floor_best = warm_and_floor(code, warm_cache, floor, floor_cache)
+        best, floor_best = warm_and_floor(
+            code, warm_cache, floor, floor_cache, args.repeat
+        )
         print(
-            f"warm (cached), best of 3: {best['total']:6.3f} s of CPU to the "
-            f"first result, simulate {best['simulate']:6.3f} s; numba's floor "
+            f"warm (cached), best of {args.repeat}: {best['total']:6.3f} s of CPU "
+            f"to the first result, simulate {best['simulate']:6.3f} s; numba's floor "
             f"{floor_best:6.3f} s, fws_control's share "
             f"{best['total'] - floor_best:6.3f} s"
         )
@@ -266,12 +284,12 @@ def main() -> None:
         # loaded, which spin for a while: CPU that the process pays but
         # fws_control does not spend
         one, floor_one = warm_and_floor(
-            code, warm_cache, floor, floor_cache, OPENBLAS_NUM_THREADS="1"
+            code, warm_cache, floor, floor_cache, args.repeat, OPENBLAS_NUM_THREADS="1"
         )
         print(
-            f"warm, OPENBLAS_NUM_THREADS=1, best of 3: {one['total']:6.3f} s of "
-            f"CPU to the first result, simulate {one['simulate']:6.3f} s; "
-            f"numba's floor {floor_one:6.3f} s"
+            f"warm, OPENBLAS_NUM_THREADS=1, best of {args.repeat}: "
+            f"{one['total']:6.3f} s of CPU to the first result, simulate "
+            f"{one['simulate']:6.3f} s; numba's floor {floor_one:6.3f} s"
         )
         print(
             f"targets: first call {first:.2f} / 10 s of CPU; "
