@@ -41,6 +41,8 @@ gains and the delay. Three computations build on that:
 
 from __future__ import annotations
 
+import cmath
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -54,7 +56,7 @@ from .linear import (
     check_gains,
     horner,
 )
-from .plant import as_plant, loop_matrices
+from .plant import LateralPlant, as_plant, loop_matrices
 from .validation import check_delay
 
 __all__ = [
@@ -254,8 +256,8 @@ def _cheb(N: int) -> tuple[np.ndarray, np.ndarray]:
 #: Delays [s] the Chebyshev discretisation of :func:`rightmost_roots` takes.
 _MIN_CHEB_DELAY, _MAX_CHEB_DELAY = 1.0e-6, 1.0e3
 #: Most roots asked for, and most starting nodes: the discretisation doubles
-#: the nodes up to five times (100 nodes: 3200, an eigenproblem of 6400 x
-#: 6400 for two states, about 0.3 GB of memory).
+#: the nodes up to five times (100 nodes: 3200, an eigenproblem of 3200 plus
+#: the number of states, about 0.2 GB of memory).
 _MAX_ROOTS, _MAX_NODES = 1000, 100
 #: Most frequency points of the phase grid of :func:`unstable_root_count`
 #: (it grows with delay times the frequency bound).
@@ -291,14 +293,17 @@ def rightmost_roots(
 ) -> np.ndarray:
     r"""The rightmost characteristic roots of the delayed closed loop.
 
-    The loop :math:`\dot x(t) = \mathbf A x(t) - \mathbf b (k_1\mathbf c_e +
-    k_2\mathbf c_\theta) x(t-\tau)` is discretised by Chebyshev collocation
-    of its infinitesimal generator on ``nodes + 1`` points of
-    :math:`[-\tau, 0]`; the eigenvalues of that matrix of size
-    ``n_states * (nodes + 1)`` approximate the characteristic roots, the
-    rightmost first. The rightmost eigenvalues, and the eigenvalues of the
-    undelayed loop (the roots at :math:`\tau = 0`, which a small delay only
-    perturbs), start Newton's method on :math:`D(s) = d(s) +
+    The loop :math:`\dot x(t) = \mathbf A x(t) + \mathbf b\,u(t-\tau)`,
+    :math:`u = -(k_1\mathbf c_e + k_2\mathbf c_\theta) x`, is discretised by
+    Chebyshev collocation of its infinitesimal generator, the history of the
+    scalar :math:`u` on ``nodes + 1`` points of :math:`[-\tau, 0]`; the
+    eigenvalues of that matrix of size ``n_states + nodes`` approximate the
+    characteristic roots, the rightmost first. (They are those of the
+    collocation of the whole state's history, of size ``n_states * (nodes +
+    1)``, less the eigenvalues of the bare transport that the feedback does
+    not reach, which depend on no plant.) The rightmost eigenvalues, and the
+    eigenvalues of the undelayed loop (the roots at :math:`\tau = 0`, which a
+    small delay only perturbs), start Newton's method on :math:`D(s) = d(s) +
     e^{-s\tau}q(s)`; a start that lands on a root already found is restarted
     with that root deflated (Newton on :math:`D(s)/\prod(s - r_i)`), so that
     the two roots a small delay splits off a double root are both found.
@@ -361,16 +366,19 @@ def rightmost_roots(
     k = _check_count("n", n, 1, _MAX_ROOTS)
     N = _check_count("nodes", nodes, 4, _MAX_NODES)
     p = as_plant(plant, speed=speed, curvature=curvature, model=model)
-    lm = loop_matrices(p)
-    A = np.asarray(lm.A, dtype=float)
-    if A.ndim != 2:
-        raise ValueError("rightmost_roots needs one operating point")
-    b = lm.input_vector(g.ratio)
-    A1 = -np.outer(b, g.k1 * lm.c_e + g.k2 * lm.c_theta)
-    lam0 = np.linalg.eigvals(A + A1)
+    # a search (most_stable_gains, pareto_front) asks for the roots of one
+    # plant and ratio at hundreds of gains: a LateralPlant is frozen, so its
+    # matrices and polynomial are computed once (other plants every call)
+    cached = isinstance(p, LateralPlant)
+    ratio = float(g.ratio)
+    loop = _loop_arrays if cached else _loop_arrays.__wrapped__
+    A, b, c_e, c_theta = loop(p, ratio)
+    c = -(g.k1 * c_e + g.k2 * c_theta)  # u = c x, delayed by tau
+    lam0 = np.linalg.eigvals(A + np.outer(b, c))
     if tau == 0.0:
         return lam0[np.argsort(-lam0.real, kind="stable")][:k]
-    cp = affine_characteristic_polynomial(p, ratio=g.ratio)
+    polynomial = _loop_polynomial if cached else _loop_polynomial.__wrapped__
+    cp = polynomial(p, ratio)
     quasi = _Quasi(cp, float(g.k1), float(g.k2), tau)
     m = A.shape[0]
     # start at least so fine that the matrix has a few eigenvalues per root
@@ -378,14 +386,14 @@ def rightmost_roots(
     N = max(N, min(_MAX_NODES, -(-2 * k // m)))
     # the undelayed roots start Newton too: a small delay only moves them a
     # little, and splits a double root into two close ones
-    previous = quasi.polish(_spectrum(A, A1, tau, N), k, extra=lam0)
+    previous = quasi.polish(_spectrum(A, b, c, tau, N), k, extra=lam0)
     for _ in range(5):
         N *= 2
         # the finer discretisation starts from the roots found so far: Newton
         # runs only from its eigenvalues that are no known root and lie right
         # enough to matter; a new root among the k rightmost means the
         # coarser one had missed it
-        roots = quasi.polish(_spectrum(A, A1, tau, N), k, known=previous)
+        roots = quasi.polish(_spectrum(A, b, c, tau, N), k, known=previous)
         if _same_rightmost(previous.roots, roots.roots, k):
             return roots.roots[:k]
         previous = roots
@@ -395,8 +403,30 @@ def rightmost_roots(
     )
 
 
-def _spectrum(A: np.ndarray, A1: np.ndarray, tau: float, N: int):
+@functools.lru_cache(maxsize=64)
+def _loop_arrays(
+    p: Any, ratio: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The loop's A, input column and measurement rows (e, theta)."""
+    lm = loop_matrices(p)
+    A = np.asarray(lm.A, dtype=float)
+    if A.ndim != 2:
+        raise ValueError("rightmost_roots needs one operating point")
+    return A, lm.input_vector(ratio), lm.c_e, lm.c_theta
+
+
+@functools.lru_cache(maxsize=64)
+def _loop_polynomial(p: Any, ratio: float) -> AffinePolynomial:
+    """The loop's characteristic polynomial, affine in the gains."""
+    return affine_characteristic_polynomial(p, ratio=ratio)
+
+
+def _spectrum(A: np.ndarray, b: np.ndarray, c: np.ndarray, tau: float, N: int):
     """Eigenvalues of the Chebyshev discretisation with `N` nodes.
+
+    The state is ``x`` and the history ``U_j = u(t + theta_j)`` of the
+    delayed scalar at the nodes ``theta_j = tau (x_j - 1)/2``, ``j = 1..N``
+    (``U_0 = c x``): ``x' = A x + b U_N``, ``U' = (2/tau) D U`` at the nodes.
 
     Upper half plane and real axis only (the rest are their conjugates),
     rightmost first. They start Newton in batches from the right, past the
@@ -406,10 +436,12 @@ def _spectrum(A: np.ndarray, A1: np.ndarray, tau: float, N: int):
     """
     m = A.shape[0]
     _, Dm = _cheb(N)
-    big = np.kron(Dm * (2.0 / tau), np.eye(m))  # theta = tau (x - 1)/2
-    big[:m, :] = 0.0
+    scale = 2.0 / tau
+    big = np.zeros((m + N, m + N))
     big[:m, :m] = A
-    big[:m, -m:] = A1
+    big[:m, -1] = b
+    big[m:, :m] = np.outer(Dm[1:, 0] * scale, c)
+    big[m:, m:] = Dm[1:, 1:] * scale
     lam = np.linalg.eigvals(big)
     lam = lam[lam.imag >= 0.0]
     return lam[np.argsort(-lam.real, kind="stable")]
@@ -501,28 +533,38 @@ class _Quasi:
         is an eigenvalue of the finer discretisation.
         """
         s = np.array(s, dtype=complex)
-        active = np.ones(s.shape, dtype=bool)
         # a start that runs off this far has left for no root near it
-        far = 1e3 * (1.0 + np.max(np.abs(s), initial=0.0))
-        with np.errstate(all="ignore"):
+        far = 1e3 * (1.0 + float(np.max(np.abs(s), initial=0.0)))
+        deflate = known.tolist() if known is not None and known.size else []
+        # one start at a time in Python's complex arithmetic: a search asks
+        # for a few starts at a time, for which numpy's per-call overhead
+        # cost 4x the arithmetic
+        cols = [tuple(c) for c in self.rows[:, :, 0].T.tolist()]
+        tau = self.tau
+        for i, z in enumerate(s.tolist()):
             for _ in range(steps):
-                if not active.any():
+                d, dd, q, dq = cols[0]
+                for cd, cdd, cq, cdq in cols[1:]:
+                    d, dd, q, dq = d * z + cd, dd * z + cdd, q * z + cq, dq * z + cdq
+                try:
+                    e = cmath.exp(-z * tau)
+                    f = d + e * q
+                    if f == 0:  # an exact root
+                        break
+                    # D'/D: deflation subtracts 1/(s - r) per root r
+                    w = (dd + e * (dq - tau * q)) / f
+                    for r in deflate:
+                        w -= 1.0 / (z - r)
+                    step = 1.0 / w
+                except (OverflowError, ZeroDivisionError):
+                    break  # no finite step: the start stays where it is
+                if not cmath.isfinite(step):
                     break
-                z = s[active]
-                f, df = self.value(z)
-                w = df / f  # D'/D: deflation subtracts 1/(s - r) per root r
-                if known is not None and known.size:
-                    w = w - np.sum(1.0 / (z[:, None] - known[None, :]), axis=1)
-                step = np.where(f == 0, 0.0, 1.0 / w)
-                bad = ~np.isfinite(step)
-                z = z - np.where(bad, 0.0, step)
-                s[active] = z
-                done = (
-                    bad
-                    | (np.abs(step) <= 1e-14 * np.maximum(1.0, np.abs(z)))
-                    | (np.abs(z) > far)
-                )
-                active[np.flatnonzero(active)[done]] = False
+                z -= step
+                if abs(step) <= 1e-14 * max(1.0, abs(z)) or abs(z) > far:
+                    break
+            s[i] = z
+        with np.errstate(all="ignore"):
             f, df = self.value(s)
             err = np.where(f == 0, 0.0, np.abs(f / df))
             # f == 0: an exact root (e.g. s = 0 of a loop without feedback,

@@ -309,6 +309,7 @@ class _Family:
                     f"model={self.template.model!r}"
                 )
         self.axes = {n: r for n, r in box.intervals.items() if n != "delay"}
+        self._plants: dict[tuple, Any] = {}
 
     def fixed(self) -> dict[str, float]:
         """The parameter values that do not vary."""
@@ -322,6 +323,15 @@ class _Family:
     def plant(self, values: dict[str, float]) -> Any:
         if not isinstance(self.template, LateralPlant):
             return self.template
+        # the same point gives the same (frozen) plant object, so that the
+        # search's calls at one point share its matrices and polynomials
+        # (rightmost_roots computes them once per plant and ratio)
+        key = tuple(sorted(values.items()))
+        if key not in self._plants:
+            self._plants[key] = self._new_plant(values)
+        return self._plants[key]
+
+    def _new_plant(self, values: dict[str, float]) -> Any:
         t = self.template
         vals = {**self.fixed(), **values}
         veh = t.vehicle

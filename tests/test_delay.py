@@ -784,12 +784,85 @@ def test_rightmost_roots_lagged_plant_small_discretisation(monkeypatch):
     monkeypatch.setattr(np.linalg, "eigvals", counting_eigvals)
     r = fws.rightmost_roots(loop.plant, loop.gains, delay=0.24)
     monkeypatch.undo()
-    assert max(sizes) <= 4 * 65  # measured: 8, 16, 32, 64 nodes
+    # the history of the delayed scalar only: n_states + nodes, measured 8,
+    # 16, 32, 64 nodes
+    assert max(sizes) <= 4 + 64
     ref = dense_newton_roots(
         d, q, 0.24, np.linspace(-40.0, 2.0, 85), np.linspace(0.0, 60.0, 121)
     )
     ref = ref[np.lexsort((-ref.imag, -ref.real))][:6]
     np.testing.assert_allclose(r, ref, rtol=1e-9, atol=1e-12)
+
+
+def test_rightmost_roots_of_one_plant_at_alternating_ratios_as_fresh_plants():
+    # A search calls rightmost_roots on one plant object at many gains (its
+    # matrices and polynomial are computed once per plant and ratio): the
+    # same object at alternating ratios gives what a new, equal plant gives,
+    # and the roots of D written out in the test.
+    plant = fws.LateralPlant(VEH, speed=20.0, curvature=0.02, steering_lag=0.27)
+    for ratio in (0.0, -0.5, 0.0, 0.4, -0.5):
+        g = fws.SteeringGains(0.002, 0.12, ratio)
+        r = fws.rightmost_roots(plant, g, delay=0.24, n=3)
+        fresh = fws.LateralPlant(VEH, speed=20.0, curvature=0.02, steering_lag=0.27)
+        np.testing.assert_array_equal(r, fws.rightmost_roots(fresh, g, delay=0.24, n=3))
+        loop = make_loop(20.0, 0.02, ratio, k1=0.002, k2=0.12, lag=0.27)
+        d, q = quasi_polynomial(loop.A, loop.b, loop.C)
+        assert np.all(relative_residual(d, q, 0.24, r) <= 1e-9)
+
+
+def chebyshev_collocation(N):
+    """Nodes cos(pi j/N) and Trefethen's differentiation matrix (Spectral
+    Methods in MATLAB, cheb.m), written out from its formula."""
+    x = np.cos(np.pi * np.arange(N + 1) / N)
+    c = np.array([2.0] + [1.0] * (N - 1) + [2.0]) * (-1.0) ** np.arange(N + 1)
+    D = np.zeros((N + 1, N + 1))
+    for i in range(N + 1):
+        for j in range(N + 1):
+            if i != j:
+                D[i, j] = c[i] / c[j] / (x[i] - x[j])
+        D[i, i] = -sum(D[i, j] for j in range(N + 1) if j != i)
+    return x, D
+
+
+@pytest.mark.parametrize(("lag", "tau"), [(None, 0.3), (0.27, 0.24), ((0.1, 0.3), 0.5)])
+def test_discretisation_is_the_full_state_collocation_less_the_bare_transport(
+    monkeypatch, lag, tau
+):
+    # The first eigenproblem rightmost_roots solves (8 nodes) against the
+    # collocation of the whole state's history on the same nodes: x' = A X_0
+    # + A1 X_N, X_j' = (2/tau) sum_l D_jl X_l. Its spectrum is the library's
+    # plus (n - 1) copies of the bare transport's, (2/tau) D[1:, 1:] (the
+    # history components the feedback row does not see). Measured agreement
+    # 2.0e-13 to 2.7e-13 relative (the transport's eigenvalues are
+    # ill-conditioned), asserted 1e-9.
+    loop = make_loop(20.0, 0.0, 0.0, k1=0.002, k2=0.12, lag=lag)
+    n = loop.A.shape[0]
+    captured = []
+    real_eigvals = np.linalg.eigvals
+
+    def capturing_eigvals(M):
+        captured.append(np.array(M))
+        return real_eigvals(M)
+
+    monkeypatch.setattr(np.linalg, "eigvals", capturing_eigvals)
+    fws.rightmost_roots(loop.plant, loop.gains, delay=tau, n=2, nodes=8)
+    monkeypatch.undo()
+    reduced = next(M for M in captured if M.shape[0] == n + 8)
+    _, D = chebyshev_collocation(8)
+    full = np.kron(D * (2.0 / tau), np.eye(n))
+    full[:n, :] = 0.0
+    full[:n, :n] = loop.A
+    full[:n, -n:] = -np.outer(loop.b, loop.C)
+    lam_full = real_eigvals(full)
+    transport = real_eigvals(D[1:, 1:] * (2.0 / tau))
+    expected = np.concatenate([real_eigvals(reduced)] + [transport] * (n - 1))
+    assert lam_full.size == expected.size
+    # match the two multisets greedily, nearest first
+    left = list(expected)
+    for lam in lam_full[np.argsort(-np.abs(lam_full))]:
+        i = int(np.argmin(np.abs(np.array(left) - lam)))
+        assert abs(left[i] - lam) <= 1e-9 * (1.0 + abs(lam)), (lam, left[i])
+        left.pop(i)
 
 
 @pytest.mark.parametrize("tau", [1e-6, 1e-5, 1e-4])
