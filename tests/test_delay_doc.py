@@ -170,8 +170,11 @@ def test_closed_form_numbers(prose):
     assert f"to {closed_form_margin(20.0, 0.01, -1.0):.4f} s" in prose
 
 
-def test_delayed_stable_fractions(prose):
+def test_delayed_stable_fractions(prose, text):
     """10.08 %, 5.08 %, 1.67 % of the default grid: chart and Pade(10).
+
+    The page's code block prints each chart's fraction and undecided
+    points: its comments are those the charts give.
 
     The chart's fraction is the quoted one; the chart's verdicts are checked
     point by point against the eigenvalues of a Pade(10) loop at 4,000 grid
@@ -193,6 +196,11 @@ def test_delayed_stable_fractions(prose):
     for tau, q in zip((0.0, 0.24, 0.5), quoted, strict=True):
         ch = fws.stability_chart(plant, ratio=-1.0, delay=tau)
         assert _matches(f"{q:.2f}", 100.0 * ch.stable_fraction), (tau, q)
+        printed = (
+            f"# delay {tau:4.2f} s: stable fraction {ch.stable_fraction:.4f}, "
+            f"{ch.undecided} undecided points"
+        )
+        assert printed in text, printed
         K = np.stack(np.meshgrid(ch.k1, ch.k2), axis=-1)
         pick = np.random.default_rng(173).choice(K.shape[0] * K.shape[1], 4000)
         rows, cols = np.unravel_index(pick, K.shape[:2])
