@@ -256,8 +256,8 @@ def _cheb(N: int) -> tuple[np.ndarray, np.ndarray]:
 #: Delays [s] the Chebyshev discretisation of :func:`rightmost_roots` takes.
 _MIN_CHEB_DELAY, _MAX_CHEB_DELAY = 1.0e-6, 1.0e3
 #: Most roots asked for, and most starting nodes: the discretisation doubles
-#: the nodes up to five times (100 nodes: 3200, an eigenproblem of 3200 plus
-#: the number of states, about 0.2 GB of memory).
+#: the nodes up to five times (100 nodes: 3200, a matrix of 3204 x 3204 for
+#: four states, 82 MB, whose eigenvalues LAPACK computes in copies of it).
 _MAX_ROOTS, _MAX_NODES = 1000, 100
 #: Most frequency points of the phase grid of :func:`unstable_root_count`
 #: (it grows with delay times the frequency bound).
@@ -412,7 +412,14 @@ def _loop_arrays(
     A = np.asarray(lm.A, dtype=float)
     if A.ndim != 2:
         raise ValueError("rightmost_roots needs one operating point")
-    return A, lm.input_vector(ratio), lm.c_e, lm.c_theta
+    # read-only copies: the cache hands the same arrays to every call
+    b, c_e, c_theta = (
+        np.array(v, dtype=float) for v in (lm.input_vector(ratio), lm.c_e, lm.c_theta)
+    )
+    A = A.copy()
+    for v in (A, b, c_e, c_theta):
+        v.flags.writeable = False
+    return A, b, c_e, c_theta
 
 
 @functools.lru_cache(maxsize=64)
@@ -561,8 +568,11 @@ class _Quasi:
                 if not cmath.isfinite(step):
                     break
                 z -= step
-                if abs(step) <= 1e-14 * max(1.0, abs(z)) or abs(z) > far:
-                    break
+                try:
+                    if abs(step) <= 1e-14 * max(1.0, abs(z)) or abs(z) > far:
+                        break
+                except OverflowError:
+                    break  # |z| beyond the float range: far
             s[i] = z
         with np.errstate(all="ignore"):
             f, df = self.value(s)

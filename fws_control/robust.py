@@ -332,6 +332,7 @@ class _Family:
         return self._plants[key]
 
     def _new_plant(self, values: dict[str, float]) -> Any:
+        """The template with the point's values (and the fixed ones) set."""
         t = self.template
         vals = {**self.fixed(), **values}
         veh = t.vehicle

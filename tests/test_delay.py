@@ -389,7 +389,7 @@ def check_chart_against_rightmost_root(
 
     Two references, both passing over points with |Re| <= 1e-3 (near the
     boundary): the real part of the rightmost root (``rightmost_roots``,
-    about 3-5 ms each, benchmarks/bench_rightmost.py) at `points` random
+    about 1.5-2.5 ms each, benchmarks/bench_rightmost.py) at `points` random
     grid points, and the rightmost pole of the Pade(10) loop (batched
     eigenvalues, milliseconds for thousands) at `pade_points` random grid
     points. Returns the stable fraction of the first sample.
@@ -794,20 +794,27 @@ def test_rightmost_roots_lagged_plant_small_discretisation(monkeypatch):
     np.testing.assert_allclose(r, ref, rtol=1e-9, atol=1e-12)
 
 
-def test_rightmost_roots_of_one_plant_at_alternating_ratios_as_fresh_plants():
+def test_rightmost_roots_of_two_plants_at_alternating_ratios_as_fresh_plants():
     # A search calls rightmost_roots on one plant object at many gains (its
-    # matrices and polynomial are computed once per plant and ratio): the
-    # same object at alternating ratios gives what a new, equal plant gives,
-    # and the roots of D written out in the test.
-    plant = fws.LateralPlant(VEH, speed=20.0, curvature=0.02, steering_lag=0.27)
+    # matrices and polynomial are kept per plant and ratio): two plant
+    # objects at alternating ratios, the same ratio on both in turn, give
+    # what new, equal plants give, and roots of D written out in the test.
+    speeds = (20.0, 12.0)
+    plants = [
+        fws.LateralPlant(VEH, speed=v, curvature=0.02, steering_lag=0.27)
+        for v in speeds
+    ]
     for ratio in (0.0, -0.5, 0.0, 0.4, -0.5):
         g = fws.SteeringGains(0.002, 0.12, ratio)
-        r = fws.rightmost_roots(plant, g, delay=0.24, n=3)
-        fresh = fws.LateralPlant(VEH, speed=20.0, curvature=0.02, steering_lag=0.27)
-        np.testing.assert_array_equal(r, fws.rightmost_roots(fresh, g, delay=0.24, n=3))
-        loop = make_loop(20.0, 0.02, ratio, k1=0.002, k2=0.12, lag=0.27)
-        d, q = quasi_polynomial(loop.A, loop.b, loop.C)
-        assert np.all(relative_residual(d, q, 0.24, r) <= 1e-9)
+        for v, plant in zip(speeds, plants, strict=True):
+            r = fws.rightmost_roots(plant, g, delay=0.24, n=3)
+            fresh = fws.LateralPlant(VEH, speed=v, curvature=0.02, steering_lag=0.27)
+            np.testing.assert_array_equal(
+                r, fws.rightmost_roots(fresh, g, delay=0.24, n=3)
+            )
+            loop = make_loop(v, 0.02, ratio, k1=0.002, k2=0.12, lag=0.27)
+            d, q = quasi_polynomial(loop.A, loop.b, loop.C)
+            assert np.all(relative_residual(d, q, 0.24, r) <= 1e-9)
 
 
 def chebyshev_collocation(N):

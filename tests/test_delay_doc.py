@@ -174,7 +174,7 @@ def test_delayed_stable_fractions(prose, text):
     """10.08 %, 5.08 %, 1.67 % of the default grid: chart and Pade(10).
 
     The page's code block prints each chart's fraction and undecided
-    points: its comments are those the charts give.
+    points: its comment lines are those the charts give.
 
     The chart's fraction is the quoted one; the chart's verdicts are checked
     point by point against the eigenvalues of a Pade(10) loop at 4,000 grid
@@ -188,6 +188,11 @@ def test_delayed_stable_fractions(prose, text):
         prose,
     )
     quoted = [float(v) for v in m.groups()]
+    (block,) = [
+        b
+        for b in re.findall(r"^```python\n(.*?)^```", text, flags=re.S | re.M)
+        if "ch.undecided" in b
+    ]
     plant = fws.LateralPlant(PAPER_VEHICLE, speed=5.0, curvature=0.1)
     # hand-written plant, a = -1: b = B [1, a]
     c = 1.0 + (F * 0.1) ** 2
@@ -200,7 +205,7 @@ def test_delayed_stable_fractions(prose, text):
             f"# delay {tau:4.2f} s: stable fraction {ch.stable_fraction:.4f}, "
             f"{ch.undecided} undecided points"
         )
-        assert printed in text, printed
+        assert printed in block.splitlines(), printed
         K = np.stack(np.meshgrid(ch.k1, ch.k2), axis=-1)
         pick = np.random.default_rng(173).choice(K.shape[0] * K.shape[1], 4000)
         rows, cols = np.unravel_index(pick, K.shape[:2])
