@@ -544,8 +544,8 @@ class _Quasi:
         far = 1e3 * (1.0 + float(np.max(np.abs(s), initial=0.0)))
         deflate = known.tolist() if known is not None and known.size else []
         # one start at a time in Python's complex arithmetic: a search asks
-        # for a few starts at a time, for which numpy's per-call overhead
-        # cost 4x the arithmetic
+        # for a few starts at a time, on which numpy's overhead per call
+        # outweighs the arithmetic
         cols = [tuple(c) for c in self.rows[:, :, 0].T.tolist()]
         tau = self.tau
         for i, z in enumerate(s.tolist()):

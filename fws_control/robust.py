@@ -325,7 +325,7 @@ class _Family:
             return self.template
         # the same point gives the same (frozen) plant object, so that the
         # search's calls at one point share its matrices and polynomials
-        # (rightmost_roots computes them once per plant and ratio)
+        # (rightmost_roots keeps them per plant object and ratio)
         key = tuple(sorted(values.items()))
         if key not in self._plants:
             self._plants[key] = self._new_plant(values)
