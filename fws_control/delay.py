@@ -501,7 +501,8 @@ class _Quasi:
         if q.size > 1:
             dq = np.polyder(q)
             rows[3, n - dq.size :] = dq
-        self.rows = rows[:, :, None]
+        # the columns, for Horner's scheme in Python's complex arithmetic
+        self.cols = [tuple(c) for c in rows.T.tolist()]
         # sizes of the terms, for a residual relative to them (a common root
         # of d and q, e.g. a mode the steering cannot reach, makes both small)
         self.sizes = np.abs(rows[[0, 2]])[:, :, None]
@@ -515,11 +516,31 @@ class _Quasi:
             out += c[:, k]
         return out
 
-    def value(self, s):
-        """D(s) and D'(s) for a 1-d array `s`."""
-        d, dd, q, dq = self._horner(self.rows, s)
-        e = np.exp(-s * self.tau)
+    def value_at(self, z: complex) -> tuple[complex, complex]:
+        """D(z) and D'(z) at one point.
+
+        Raises OverflowError beyond the float range and ValueError at an
+        infinite imaginary part (``cmath.exp``).
+
+        Python's complex arithmetic: Newton asks for a few points at a time,
+        on which numpy's overhead per call outweighs the arithmetic.
+        """
+        d, dd, q, dq = self.cols[0]
+        for cd, cdd, cq, cdq in self.cols[1:]:
+            d, dd, q, dq = d * z + cd, dd * z + cdd, q * z + cq, dq * z + cdq
+        e = cmath.exp(-z * self.tau)
         return d + e * q, dd + e * (dq - self.tau * q)
+
+    def value(self, s):
+        """D(s) and D'(s) for a 1-d array `s` (NaN where :meth:`value_at` raises)."""
+        f = np.empty(s.shape, dtype=complex)
+        df = np.empty(s.shape, dtype=complex)
+        for i, z in enumerate(s.tolist()):
+            try:
+                f[i], df[i] = self.value_at(z)
+            except (OverflowError, ValueError):
+                f[i] = df[i] = complex(math.nan, math.nan)
+        return f, df
 
     def relative_residual(self, s):
         """|D(s)| over the size of its terms (sum of |coefficient| |s|^k)."""
@@ -543,27 +564,18 @@ class _Quasi:
         # a start that runs off this far has left for no root near it
         far = 1e3 * (1.0 + float(np.max(np.abs(s), initial=0.0)))
         deflate = known.tolist() if known is not None and known.size else []
-        # one start at a time in Python's complex arithmetic: a search asks
-        # for a few starts at a time, on which numpy's overhead per call
-        # outweighs the arithmetic
-        cols = [tuple(c) for c in self.rows[:, :, 0].T.tolist()]
-        tau = self.tau
         for i, z in enumerate(s.tolist()):
             for _ in range(steps):
-                d, dd, q, dq = cols[0]
-                for cd, cdd, cq, cdq in cols[1:]:
-                    d, dd, q, dq = d * z + cd, dd * z + cdd, q * z + cq, dq * z + cdq
                 try:
-                    e = cmath.exp(-z * tau)
-                    f = d + e * q
+                    f, df = self.value_at(z)
                     if f == 0:  # an exact root
                         break
                     # D'/D: deflation subtracts 1/(s - r) per root r
-                    w = (dd + e * (dq - tau * q)) / f
+                    w = df / f
                     for r in deflate:
                         w -= 1.0 / (z - r)
                     step = 1.0 / w
-                except (OverflowError, ZeroDivisionError):
+                except (OverflowError, ValueError, ZeroDivisionError):
                     break  # no finite step: the start stays where it is
                 if not cmath.isfinite(step):
                     break
