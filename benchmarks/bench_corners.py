@@ -37,6 +37,7 @@ import numpy as np
 from timing import machine_line
 
 import fws_control as fws
+from fws_control.equations import front_axle_point
 from fws_control.simulation.compiled import curvature_table, integrate_compiled
 
 SPEED = 20.0
@@ -110,10 +111,10 @@ def main() -> None:
             # the front axle, a wheelbase ahead of the rear axle R
             sr = np.nan_to_num(s)
             x, y = path.position(sr)
-            h = path.heading(sr)
-            e0, th0 = np.nan_to_num(e), np.nan_to_num(th)
-            fx = x - e0 * np.sin(h) + veh.wheelbase * np.cos(th0 + h)
-            fy = y + e0 * np.cos(h) + veh.wheelbase * np.sin(th0 + h)
+            fx, fy, _ = front_axle_point(
+                x, y, path.heading(sr), np.nan_to_num(e), np.nan_to_num(th),
+                veh.wheelbase,
+            )  # fmt: skip
             sf = path.project(fx, fy, s_guess=sr + veh.wheelbase).s
             times += crossings(np.where(np.isfinite(s), sf, np.nan), t, corners)
         cuts = [*sorted(c for c in times if 0.0 < c < end), end]
