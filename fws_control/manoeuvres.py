@@ -43,7 +43,6 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.optimize import brentq
 
 from .hints import RealArrayLike
 from .paths import Arc, Clothoid, Path, PathChain, Straight
@@ -152,9 +151,11 @@ def s_bend(offset: float, length: float) -> list[Clothoid]:
 
     Curvature ``0 -> k -> 0 -> -k -> 0`` linear in arc length: the path
     leaves and rejoins straight lines with continuous heading and curvature.
-    The peak curvature and the segment length are solved (``brentq``) so
-    that the lateral shift is `offset` and the longitudinal extent is
-    `length`.
+    The bend's shape depends only on its peak heading ``k * seg`` (``seg``
+    the length of each clothoid) and its size scales with ``seg``: the peak
+    heading is solved so that the ratio of lateral shift to longitudinal
+    extent is ``|offset| / length`` (regula falsi with the Illinois
+    correction, to 1e-15 rad), and ``seg`` then scales the bend to `length`.
 
     Parameters
     ----------
@@ -192,20 +193,62 @@ def s_bend(offset: float, length: float) -> list[Clothoid]:
             Clothoid(-k, 0.0, seg),
         ]
 
-    def end(k, seg):
-        chain = PathChain(pieces(k, seg))
+    def unit_end(theta):
+        # the end of the bend with seg = 1 and peak heading theta
+        chain = PathChain(pieces(theta, 1.0))
         x, y = chain.position(chain.length)
         return float(x), float(y)
 
-    def k_for(seg):
-        # heading at the middle is k * seg; bracket below a quarter turn
-        hi = (0.5 * math.pi) / seg
-        return brentq(lambda k: end(k, seg)[1] - abs(offset), 0.0, hi, xtol=1e-15)
+    def excess(theta):
+        x, y = unit_end(theta)
+        return y / x - ratio
 
-    seg = brentq(
-        lambda s: end(k_for(s), s)[0] - length, length / 4.0, length / 2.0, xtol=1e-13
-    )
-    return pieces(math.copysign(k_for(seg), offset), seg)
+    # the peak heading stays below a quarter turn (the path never turns back)
+    ratio = abs(offset) / length
+    theta = _regula_falsi(excess, 0.0, 0.5 * math.pi, xtol=1e-15)
+    seg = length / unit_end(theta)[0]
+    return pieces(math.copysign(theta / seg, offset), seg)
+
+
+def _regula_falsi(f, lo: float, hi: float, *, xtol: float) -> float:
+    """A root of the continuous `f` between `lo` and `hi`, where it changes sign.
+
+    Regula falsi with the Illinois correction (an end kept twice has its
+    value halved), which converges superlinearly on a smooth monotonic `f`;
+    it stops when a step is below ``xtol + 4 eps |x|``. A few lines here
+    instead of ``scipy.optimize.brentq``, whose import (about 0.3 s beyond
+    scipy.linalg) would be most of a course's cost.
+    """
+    f_lo, f_hi = f(lo), f(hi)
+    if f_lo == 0.0:
+        return lo
+    if f_hi == 0.0:
+        return hi
+    if (f_lo > 0.0) == (f_hi > 0.0):
+        raise ValueError(
+            f"the bend has no solution between {lo!r} and {hi!r} rad of peak "
+            f"heading (the function is {f_lo!r} and {f_hi!r} there)"
+        )
+    x = lo
+    kept = 0  # +1: hi was kept last time, -1: lo was
+    for _ in range(200):
+        x_new = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
+        step = abs(x_new - x)
+        x = x_new
+        f_x = f(x)
+        if f_x == 0.0 or step <= xtol + 4.0 * np.finfo(float).eps * abs(x):
+            return x
+        if (f_x > 0.0) == (f_hi > 0.0):
+            hi, f_hi = x, f_x
+            if kept == -1:
+                f_lo *= 0.5
+            kept = -1
+        else:
+            lo, f_lo = x, f_x
+            if kept == 1:
+                f_hi *= 0.5
+            kept = 1
+    raise RuntimeError(f"regula falsi did not converge between {lo!r} and {hi!r}")
 
 
 @value_repr

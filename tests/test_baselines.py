@@ -1128,6 +1128,43 @@ def test_slalom_amplitude_bound_is_pitch_over_4():
         fws.manoeuvres.s_bend(2 * 4.5, 18.0)
 
 
+@settings(max_examples=40, deadline=None, derandomize=True)
+@given(
+    length=st.floats(1.0, 200.0),
+    fraction=st.floats(1e-3, 0.499).filter(lambda f: f != 0.0),
+    sign=st.sampled_from([1.0, -1.0]),
+)
+def test_s_bend_shift_from_the_heading_integral(length, fraction, sign):
+    # reference: the end of the curvature profile 0 -> k -> 0 -> -k -> 0
+    # (clothoids of length seg), integrated from the heading written here,
+    # phi(s) piecewise quadratic, by scipy.integrate.quad per clothoid
+    from scipy.integrate import quad
+
+    offset = sign * fraction * length
+    pieces = fws.manoeuvres.s_bend(offset, length)
+    seg = pieces[0].length
+    k = pieces[0].curvature_end
+    assert [c.length for c in pieces] == [seg] * 4
+    assert [(c.curvature_start, c.curvature_end) for c in pieces] == [
+        (0.0, k),
+        (k, 0.0),
+        (0.0, -k),
+        (-k, 0.0),
+    ]
+    phi0, x, y = 0.0, 0.0, 0.0
+    for k0, k1 in ((0.0, k), (k, 0.0), (0.0, -k), (-k, 0.0)):
+
+        def phi(u, phi0=phi0, k0=k0, k1=k1):
+            return phi0 + k0 * u + 0.5 * (k1 - k0) / seg * u * u
+
+        x += quad(lambda u: math.cos(phi(u)), 0.0, seg, epsabs=0, epsrel=1e-13)[0]
+        y += quad(lambda u: math.sin(phi(u)), 0.0, seg, epsabs=0, epsrel=1e-13)[0]
+        phi0 = phi(seg)
+    assert abs(phi0) <= 1e-15
+    assert abs(x - length) <= 1e-11 * length
+    assert abs(y - offset) <= 1e-11 * length
+
+
 _P13 = fws.LateralPlant(PAPER_VEHICLE, speed=5.0, curvature=0.1)
 
 
