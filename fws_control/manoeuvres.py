@@ -211,13 +211,14 @@ def s_bend(offset: float, length: float) -> list[Clothoid]:
 
 
 def _regula_falsi(f, lo: float, hi: float, *, xtol: float) -> float:
-    """A root of the continuous `f` between `lo` and `hi`, where it changes sign.
+    """s_bend's peak heading: a root of `f` between `lo` and `hi`.
 
     Regula falsi with the Illinois correction (an end kept twice has its
     value halved), which converges superlinearly on a smooth monotonic `f`;
-    it stops when a step is below ``xtol + 4 eps |x|``. A few lines here
-    instead of ``scipy.optimize.brentq``, whose import (about 0.3 s beyond
-    scipy.linalg) would be most of a course's cost.
+    it stops when a step is below ``xtol + 4 eps |x|``, as brentq's default
+    relative tolerance. A few lines here instead of
+    ``scipy.optimize.brentq``: its import (about 0.3 s of CPU beyond
+    scipy.linalg) cost a process building a course ten times the solve.
     """
     f_lo, f_hi = f(lo), f(hi)
     if f_lo == 0.0:
