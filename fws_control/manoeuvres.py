@@ -39,6 +39,7 @@ and the middle of every gate line.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -155,7 +156,9 @@ def s_bend(offset: float, length: float) -> list[Clothoid]:
     the length of each clothoid) and its size scales with ``seg``: the peak
     heading is solved so that the ratio of lateral shift to longitudinal
     extent is ``|offset| / length`` (regula falsi with the Illinois
-    correction, to 1e-15 rad), and ``seg`` then scales the bend to `length`.
+    correction, to a step of 4 eps relative; below a ratio of 5e-9 the
+    small-angle limit, peak heading twice the ratio, is exact to double
+    precision), and ``seg`` then scales the bend to `length`.
 
     Parameters
     ----------
@@ -167,6 +170,12 @@ def s_bend(offset: float, length: float) -> list[Clothoid]:
     Returns
     -------
     list of Clothoid
+
+    Raises
+    ------
+    ValueError
+        If `offset` is not finite, `length` is not positive and finite, or
+        ``|offset| >= length / 2``.
 
     Examples
     --------
@@ -203,20 +212,35 @@ def s_bend(offset: float, length: float) -> list[Clothoid]:
         x, y = unit_end(theta)
         return y / x - ratio
 
-    # the peak heading stays below a quarter turn (the path never turns back)
+    # y / x = (theta / 2) (1 + theta^2 / 12 + ...) grows with the peak
+    # heading theta to 1 at a quarter turn (there the heading's symmetric
+    # profile makes x = y), and (y / x) / theta stays within [1/2, 2/pi]:
+    # the root lies between ratio and 4 ratio, and below pi/2 for every
+    # ratio below 1/2. Where theta^2 / 12 is below double precision the
+    # limit theta = 2 ratio is exact, and solving the computed y / x, whose
+    # rounding is absolute, would only lose digits.
     ratio = abs(offset) / length
-    theta = _regula_falsi(excess, 0.0, 0.5 * math.pi, xtol=1e-15)
+    if ratio <= _SMALL_BEND:
+        theta = 2.0 * ratio
+    else:
+        theta = _regula_falsi(excess, ratio, min(4.0 * ratio, 0.5 * math.pi))
     seg = length / unit_end(theta)[0]
     return pieces(math.copysign(theta / seg, offset), seg)
 
 
-def _regula_falsi(f, lo: float, hi: float, *, xtol: float) -> float:
-    """s_bend's peak heading: a root of `f` between `lo` and `hi`.
+#: Largest ratio |offset| / length at which s_bend takes the small-angle
+#: limit: there theta^2 / 12 <= 1e-16.
+_SMALL_BEND = 5e-9
+
+
+def _regula_falsi(f: Callable[[float], float], lo: float, hi: float) -> float:
+    """s_bend's peak heading: a root of `f` between `lo` > 0 and `hi`.
 
     Regula falsi with the Illinois correction (an end kept twice has its
     value halved), which converges superlinearly on a smooth monotonic `f`;
-    it stops when a step is below ``xtol + 4 eps |x|``, as brentq's default
-    relative tolerance. A few lines here instead of
+    it stops when a step is below ``4 eps |x|`` (brentq's default relative
+    tolerance, here on the step where brentq tests the bracket's width). A
+    few lines here instead of
     ``scipy.optimize.brentq``: its import (about 0.3 s of CPU beyond
     scipy.linalg) cost a process building a course ten times the solve.
     """
@@ -230,6 +254,7 @@ def _regula_falsi(f, lo: float, hi: float, *, xtol: float) -> float:
             f"the bend has no solution between {lo!r} and {hi!r} rad of peak "
             f"heading (the function is {f_lo!r} and {f_hi!r} there)"
         )
+    rtol = 4.0 * np.finfo(float).eps
     x = lo
     kept = 0  # +1: hi was kept last time, -1: lo was
     for _ in range(200):
@@ -237,7 +262,7 @@ def _regula_falsi(f, lo: float, hi: float, *, xtol: float) -> float:
         step = abs(x_new - x)
         x = x_new
         f_x = f(x)
-        if f_x == 0.0 or step <= xtol + 4.0 * np.finfo(float).eps * abs(x):
+        if f_x == 0.0 or step <= rtol * abs(x):
             return x
         if (f_x > 0.0) == (f_hi > 0.0):
             hi, f_hi = x, f_x

@@ -26,9 +26,9 @@ import control as ct
 import numpy as np
 import pytest
 from conftest import PAPER_VEHICLE
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
-from scipy.integrate import solve_ivp
+from scipy.integrate import quad, solve_ivp
 from scipy.optimize import brentq
 
 import fws_control as fws
@@ -1130,16 +1130,17 @@ def test_slalom_amplitude_bound_is_pitch_over_4():
 
 @settings(max_examples=40, deadline=None, derandomize=True)
 @given(
-    length=st.floats(1.0, 200.0),
-    fraction=st.floats(1e-3, 0.499),
+    length=st.floats(1e-3, 1e4),
+    fraction=st.floats(1e-9, 0.4999999),
     sign=st.sampled_from([1.0, -1.0]),
 )
+@example(length=1.0, fraction=1e-9, sign=1.0)  # the small-angle limit
+@example(length=1e4, fraction=5.0001e-9, sign=-1.0)  # the smallest solved
+@example(length=1e-3, fraction=0.4999999, sign=1.0)  # the largest offset
 def test_s_bend_shift_from_the_heading_integral(length, fraction, sign):
     # reference: the end of the curvature profile 0 -> k -> 0 -> -k -> 0
     # (clothoids of length seg), integrated from the heading written here,
     # phi(s) piecewise quadratic, by scipy.integrate.quad per clothoid
-    from scipy.integrate import quad
-
     offset = sign * fraction * length
     pieces = fws.manoeuvres.s_bend(offset, length)
     seg = pieces[0].length
@@ -1162,6 +1163,8 @@ def test_s_bend_shift_from_the_heading_integral(length, fraction, sign):
         phi0 = phi(seg)
     assert abs(x - length) <= 1e-11 * length
     assert abs(y - offset) <= 1e-11 * length
+    if fraction <= 5e-9:  # the small-angle limit, relative to the offset too
+        assert abs(y / offset - 1.0) <= 1e-12
 
 
 _P13 = fws.LateralPlant(PAPER_VEHICLE, speed=5.0, curvature=0.1)
