@@ -199,14 +199,20 @@ def test_rate_limited_slalom_against_radau_with_switch_events(references, stacke
 
 def test_without_switching_the_kinks_cost_accuracy(references):
     # the same runs with min/max in the right-hand side: further from the
-    # reference than with the switches located (the reason for them)
-    (on, _, _, _), _ = _run(POSES[:1])
-    (off, _, _, _), _ = _run(POSES[:1], switching=False)
+    # reference than with the switches located (the reason for them). At
+    # the default tolerances both errors are about 1e-9, where a change of
+    # the path by 1e-14 relative decides which is larger; at rtol 1e-8 the
+    # steps over the kinks dominate: 20-24x the error with the switches
+    # located (measured on two paths differing by 1e-14)
     ref = references[0][0]
+    (on, _, _, _), _ = _run(POSES[:1])
+    assert np.max(np.abs(on[:, 0, :] - ref)) < TOL
+    coarse = dict(rtol=1e-8, atol=1e-10)
+    (on, _, _, _), _ = _run(POSES[:1], **coarse)
+    (off, _, _, _), _ = _run(POSES[:1], switching=False, **coarse)
     err_on = np.max(np.abs(on[:, 0, :] - ref))
     err_off = np.max(np.abs(off[:, 0, :] - ref))
-    assert err_on < TOL
-    assert err_off > err_on, (err_off, err_on)
+    assert err_off > 5.0 * err_on, (err_off, err_on)
 
 
 def test_engines_agree_on_the_rate_limited_slalom(references, stacked):
