@@ -505,16 +505,8 @@ class _Quasi:
         self.cols = [tuple(c) for c in rows.T.tolist()]
         # sizes of the terms, for a residual relative to them (a common root
         # of d and q, e.g. a mode the steering cannot reach, makes both small)
-        self.sizes = np.abs(rows[[0, 2]])[:, :, None]
+        self.sizes = np.abs(rows[[0, 2]])[:, np.newaxis, :]
         self.tau = tau
-
-    def _horner(self, c, s):
-        out = np.empty((c.shape[0], s.size), dtype=s.dtype)
-        out[...] = c[:, 0]
-        for k in range(1, c.shape[1]):
-            out *= s
-            out += c[:, k]
-        return out
 
     def value_at(self, z: complex) -> tuple[complex, complex]:
         """D(z) and D'(z) at one point.
@@ -546,7 +538,7 @@ class _Quasi:
         """|D(s)| over the size of its terms (sum of |coefficient| |s|^k)."""
         f, _ = self.value(s)
         a = np.abs(s)
-        d_size, q_size = self._horner(self.sizes, a)
+        d_size, q_size = horner(self.sizes, a)
         return np.abs(f) / (d_size + np.abs(np.exp(-s * self.tau)) * q_size)
 
     def newton(self, s, known=None, steps: int = 20):
